@@ -1,0 +1,108 @@
+"""The ``@actor`` decorator and the description of one actor."""
+from __future__ import annotations
+
+import inspect
+from dataclasses import dataclass, field
+from typing import Any, Callable
+
+from .modes import Kind
+
+#: Default depth of a stream's buffer; the oldest value is dropped when it is full.
+DEFAULT_STREAM_BUFFER = 16
+
+
+@dataclass(frozen=True)
+class ActorSpec:
+    """What ``@actor`` records on a function: name, kind and stream buffer depth."""
+
+    name: str | None
+    kind: Kind
+    fn: Callable
+    buffer: int = DEFAULT_STREAM_BUFFER
+
+
+def actor(*args: Any, kind: "str | Kind | None" = None, buffer: int = DEFAULT_STREAM_BUFFER):
+    """Declare a method of a SubSystem or SubNet as an actor.
+
+    Forms, as in the proposal::
+
+        @actor                        # name = function name, kind = sync
+        @actor('name')                # explicit name
+        @actor('name', 'async')       # impl(done, *args): call done(result) later
+        @actor('name', 'multi')       # impl(emit, *args): emit values, return a closer
+        @actor(kind='multi', buffer=1)
+
+    A generator function is a stream actor whatever kind is given.
+    """
+    if len(args) == 1 and callable(args[0]) and kind is None:
+        return _mark(args[0], None, None, buffer)
+    if len(args) > 2:
+        raise TypeError("@actor takes at most a name and a kind")
+    name = args[0] if args else None
+    k = args[1] if len(args) > 1 else kind
+    if name is not None and not isinstance(name, str):
+        raise TypeError(f"@actor name must be a string, not {type(name).__name__}")
+
+    def deco(fn: Callable) -> Callable:
+        return _mark(fn, name, k, buffer)
+    return deco
+
+
+def _mark(fn: Callable, name: str | None, kind: "str | Kind | None", buffer: int) -> Callable:
+    if inspect.isgeneratorfunction(fn):
+        k = Kind.STREAM
+    else:
+        k = Kind.parse(kind) if kind is not None else Kind.SYNC
+    fn._actor_spec = ActorSpec(name or fn.__name__, k, fn, buffer)  # type: ignore[attr-defined]
+    return fn
+
+
+@dataclass
+class ActorRef:
+    """A bound, callable actor as the runtime sees it.
+
+    ``signature`` describes what a caller passes (no ``self``, and no ``done``/``emit``
+    for async and stream implementations).
+    """
+
+    path: str
+    name: str
+    fn: Callable
+    kind: Kind
+    signature: inspect.Signature
+    doc: str
+    owner: Any = None
+    is_tree: bool = False
+    is_generator: bool = False
+    buffer: int = DEFAULT_STREAM_BUFFER
+    meta: dict = field(default_factory=dict)
+
+    @classmethod
+    def build(cls, path: str, name: str, fn: Callable, kind: Kind, owner: Any = None,
+              doc: str | None = None, signature: inspect.Signature | None = None,
+              is_tree: bool = False, buffer: int = DEFAULT_STREAM_BUFFER) -> "ActorRef":
+        is_gen = inspect.isgeneratorfunction(fn)
+        if signature is None:
+            signature = _caller_signature(fn, kind, is_gen)
+        return cls(path=path, name=name, fn=fn, kind=kind, signature=signature,
+                   doc=inspect.cleandoc(doc if doc is not None else (fn.__doc__ or "")),
+                   owner=owner, is_tree=is_tree, is_generator=is_gen, buffer=buffer)
+
+    def check_args(self, args: tuple, kwargs: dict) -> None:
+        """Raise BadArgumentsError when the arguments do not fit the signature."""
+        from .errors import BadArgumentsError
+        try:
+            self.signature.bind(*args, **kwargs)
+        except TypeError as e:
+            raise BadArgumentsError(self.path, self.signature, str(e)) from None
+
+
+def _caller_signature(fn: Callable, kind: Kind, is_gen: bool) -> inspect.Signature:
+    try:
+        sig = inspect.signature(fn)  # bound methods already drop self
+    except (TypeError, ValueError):
+        return inspect.Signature([inspect.Parameter("args", inspect.Parameter.VAR_POSITIONAL)])
+    params = list(sig.parameters.values())
+    if kind in (Kind.ASYNC, Kind.STREAM) and not is_gen and params:
+        params = params[1:]  # done / emit is supplied by the runtime
+    return sig.replace(parameters=params)

@@ -1,0 +1,113 @@
+"""In-process bus: publish/subscribe between actors and the simulator on the hub.
+
+Delivery is deferred to the hub's ready queue in publish order, so a publisher never
+runs subscriber code inside its own call, and a run is deterministic.
+"""
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any, Callable
+
+from ..errors import ActorbtError
+from .transport import Transport
+
+if TYPE_CHECKING:
+    from ..hub import Hub
+
+
+class TopicTypeError(ActorbtError, TypeError):
+    """A topic was used with two different message types."""
+
+
+class _Topic:
+    __slots__ = ("name", "msg_type", "subs")
+
+    def __init__(self, name: str, msg_type: type) -> None:
+        self.name = name
+        self.msg_type = msg_type
+        self.subs: list[LocalSubscription] = []
+
+
+class LocalPublisher:
+    __slots__ = ("topic", "_t", "_bus")
+
+    def __init__(self, bus: "LocalBus", t: _Topic) -> None:
+        self.topic = t.name
+        self._t = t
+        self._bus = bus
+
+    def publish(self, msg: Any) -> None:
+        """Deliver ``msg`` to every current subscriber. Safe from any thread."""
+        if not isinstance(msg, self._t.msg_type):
+            raise TopicTypeError(f"{self.topic} carries {self._t.msg_type.__name__}, "
+                                 f"not {type(msg).__name__}")
+        self._bus._deliver(self._t, msg)
+
+    @property
+    def subscription_count(self) -> int:
+        return len(self._t.subs)
+
+
+class LocalSubscription:
+    __slots__ = ("topic", "callback", "_t", "closed")
+
+    def __init__(self, t: _Topic, callback: Callable[[Any], None]) -> None:
+        self.topic = t.name
+        self._t = t
+        self.callback = callback
+        self.closed = False
+
+    def close(self) -> None:
+        if not self.closed:
+            self.closed = True
+            try:
+                self._t.subs.remove(self)
+            except ValueError:
+                pass
+
+    def _receive(self, msg: Any) -> None:
+        if not self.closed:
+            self.callback(msg)
+
+
+class LocalBus(Transport):
+    """Topics in one process, delivered on the hub."""
+
+    name = "local"
+
+    def __init__(self, hub: "Hub") -> None:
+        self._hub = hub
+        self._topics: dict[str, _Topic] = {}
+
+    def _topic(self, name: str, msg_type: type) -> _Topic:
+        t = self._topics.get(name)
+        if t is None:
+            t = self._topics[name] = _Topic(name, msg_type)
+        elif t.msg_type is not msg_type:
+            raise TopicTypeError(f"topic {name} already carries {t.msg_type.__module__}."
+                                 f"{t.msg_type.__name__}; cannot use it for {msg_type.__name__}")
+        return t
+
+    def publisher(self, topic: str, msg_type: type, qos: int = 10) -> LocalPublisher:
+        return LocalPublisher(self, self._topic(topic, msg_type))
+
+    def subscribe(self, topic: str, msg_type: type, callback: Callable[[Any], None],
+                  qos: int = 10) -> LocalSubscription:
+        t = self._topic(topic, msg_type)
+        sub = LocalSubscription(t, callback)
+        t.subs.append(sub)
+        return sub
+
+    def subscription_count(self, topic: str) -> int:
+        t = self._topics.get(topic)
+        return len(t.subs) if t is not None else 0
+
+    def topics(self) -> dict[str, type]:
+        return {n: t.msg_type for n, t in self._topics.items()}
+
+    def _deliver(self, t: _Topic, msg: Any) -> None:
+        if not t.subs:
+            return
+        hub = self._hub
+        post = hub.call_soon if hub.in_hub_thread() else hub.call_soon_threadsafe
+        for sub in list(t.subs):
+            post(sub._receive, msg)

@@ -1,0 +1,285 @@
+"""SubSystem and SubNet: where actors live, and how names are found.
+
+A SubSystem is a class whose constructor declares persistent values and edges to the
+outside world (publishers, subscribers, child subsystems); its ``@actor`` methods are its
+actors. A SubNet holds actors only, like an ``#include``.
+
+Name lookup from a scope: the scope's own actors, then a unique match among its
+descendants, then the same from its parent, up to the root. A name defined in two
+subsystems below the scope where it is looked up is ambiguous. A dotted name
+(``robot.navigation.goto``) is absolute.
+"""
+from __future__ import annotations
+
+import inspect
+from typing import TYPE_CHECKING, Any, Callable
+
+from .actor import ActorRef, ActorSpec
+from .api import CallApi
+from .errors import ActorbtError, AmbiguousActorError, UnknownActorError
+from .modes import Kind
+
+if TYPE_CHECKING:
+    from .runtime import Runtime
+
+_MISSING = object()
+
+
+class SubSystem(CallApi):
+    """A named scope of actors with persistent values.
+
+    Subclass it, declare values and edges in ``__init__`` (after ``super().__init__()``),
+    and write actors as ``@actor`` methods. The runtime creates instances; do not call
+    the class yourself.
+    """
+
+    def __init__(self) -> None:
+        # The runtime binds _rt/_name/_parent before __init__ runs (see _create), so a
+        # subclass constructor can already call set_value and register_*.
+        pass
+
+    @classmethod
+    def _create(cls, rt: "Runtime", name: str, parent: "SubSystem | None",
+                *args: Any, **kwargs: Any) -> "SubSystem":
+        obj = cls.__new__(cls)
+        obj._bind(rt, name, parent)
+        obj.__init__(*args, **kwargs)
+        obj._collect_actors(obj)
+        return obj
+
+    def _bind(self, rt: "Runtime", name: str, parent: "SubSystem | None") -> None:
+        self._rt = rt
+        self._name = name
+        self._parent = parent
+        self._children: dict[str, SubSystem] = {}
+        self._actors: dict[str, ActorRef] = {}
+        self._values: dict[str, Any] = {}
+        self._cache: dict[str, ActorRef] = {}
+        self._cache_version = -1
+        self._edges: list[Any] = []
+
+    # -- identity ----------------------------------------------------------------------
+    @property
+    def runtime(self) -> "Runtime":
+        return self._rt
+
+    @property
+    def path(self) -> str:
+        """Dotted path from the root ('' for the root)."""
+        if self._parent is None:
+            return ""
+        pp = self._parent.path
+        return f"{pp}.{self._name}" if pp else self._name
+
+    def _actor_path(self, name: str) -> str:
+        p = self.path
+        return f"{p}.{name}" if p else name
+
+    def _call_scope(self) -> "SubSystem":
+        return self
+
+    def __repr__(self) -> str:
+        return f"<{type(self).__name__} {self.path or '(root)'}>"
+
+    # -- structure ---------------------------------------------------------------------
+    def add_subsystem(self, name: str, cls: type["SubSystem"], *args: Any, **kwargs: Any) -> "SubSystem":
+        """Create a child subsystem ``name`` of class ``cls`` and return it."""
+        if not (isinstance(cls, type) and issubclass(cls, SubSystem)):
+            raise ActorbtError(f"add_subsystem({name!r}, ...) needs a SubSystem class, got {cls!r}")
+        if not name or "." in name:
+            raise ActorbtError(f"subsystem name {name!r} must be non-empty and contain no '.'")
+        if name in self._children:
+            raise ActorbtError(f"{self!r} already has a subsystem named {name!r}")
+        child = cls._create(self._rt, name, self, *args, **kwargs)
+        self._children[name] = child
+        self._rt._topology_changed()
+        return child
+
+    register_subsystem = add_subsystem  # the proposal's name
+
+    def add_network(self, net_cls: type["SubNet"]) -> "SubNet":
+        """Include the actors of a SubNet class in this subsystem."""
+        if not (isinstance(net_cls, type) and issubclass(net_cls, SubNet)):
+            raise ActorbtError(f"add_network needs a SubNet class, got {net_cls!r}")
+        net = net_cls.__new__(net_cls)
+        net._subsystem = self
+        net.__init__()
+        self._collect_actors(net)
+        return net
+
+    def add_actor(self, name: str, fn: Callable, kind: "str | Kind" = Kind.SYNC, *,
+                  doc: str | None = None, signature: inspect.Signature | None = None,
+                  is_tree: bool = False, buffer: int | None = None, replace: bool = False) -> ActorRef:
+        """Register a plain callable as an actor of this subsystem (trees, bus edges)."""
+        k = Kind.parse(kind)
+        if inspect.isgeneratorfunction(fn):
+            k = Kind.STREAM
+        if name in self._actors and not replace:
+            raise ActorbtError(f"{self._actor_path(name)} is already defined")
+        ref = ActorRef.build(self._actor_path(name), name, fn, k, owner=self, doc=doc,
+                             signature=signature, is_tree=is_tree,
+                             **({"buffer": buffer} if buffer else {}))
+        self._actors[name] = ref
+        self._rt._topology_changed()
+        return ref
+
+    def _collect_actors(self, holder: Any) -> None:
+        seen: set[str] = set()
+        for klass in type(holder).__mro__:
+            for attr, val in vars(klass).items():
+                spec: ActorSpec | None = getattr(val, "_actor_spec", None)
+                if spec is None or attr in seen:
+                    continue
+                seen.add(attr)
+                bound = getattr(holder, attr)
+                self.add_actor(spec.name or attr, bound, spec.kind, buffer=spec.buffer)
+
+    @property
+    def children(self) -> dict[str, "SubSystem"]:
+        return dict(self._children)
+
+    def actors(self) -> dict[str, ActorRef]:
+        """This subsystem's own actors by name."""
+        return dict(self._actors)
+
+    def walk(self):
+        """Yield this subsystem and every descendant, depth first."""
+        yield self
+        for c in self._children.values():
+            yield from c.walk()
+
+    def all_actors(self) -> list[ActorRef]:
+        """Every actor at or below this subsystem."""
+        return [ref for s in self.walk() for ref in s._actors.values()]
+
+    # -- lookup ------------------------------------------------------------------------
+    def resolve(self, name: str) -> ActorRef:
+        """The actor ``name`` as seen from this scope (see the module docstring)."""
+        if self._cache_version == self._rt._topology_version:
+            ref = self._cache.get(name)
+            if ref is not None:
+                return ref
+        else:
+            self._cache.clear()
+            self._cache_version = self._rt._topology_version
+        ref = self._lookup(name)
+        self._cache[name] = ref
+        return ref
+
+    def _lookup(self, name: str) -> ActorRef:
+        if not isinstance(name, str) or not name:
+            raise UnknownActorError(str(name), [], self.path)
+        if "." in name:
+            return self._lookup_absolute(name)
+        scope: SubSystem | None = self
+        while scope is not None:
+            ref = scope._actors.get(name)
+            if ref is not None:
+                return ref
+            found = [r for s in scope._children.values() for r in s.all_actors() if r.name == name]
+            if len(found) == 1:
+                return found[0]
+            if len(found) > 1:
+                raise AmbiguousActorError(name, [r.path for r in found])
+            scope = scope._parent
+        raise UnknownActorError(name, self._rt.root._known_names(), self.path)
+
+    def _lookup_absolute(self, dotted: str) -> ActorRef:
+        *subs, leaf = dotted.split(".")
+        node = self._rt.root
+        for s in subs:
+            nxt = node._children.get(s)
+            if nxt is None:
+                raise UnknownActorError(dotted, self._rt.root._known_names(), self.path)
+            node = nxt
+        ref = node._actors.get(leaf)
+        if ref is None:
+            raise UnknownActorError(dotted, self._rt.root._known_names(), self.path)
+        return ref
+
+    def _known_names(self) -> list[str]:
+        refs = self.all_actors()
+        return [r.path for r in refs] + [r.name for r in refs]
+
+    # -- persistent values -----------------------------------------------------------
+    def set_value(self, key: str, value: Any) -> None:
+        """Store a persistent value in this subsystem."""
+        self._values[key] = value
+
+    def get_value(self, key: str, default: Any = _MISSING) -> Any:
+        """A persistent value from this subsystem or the nearest parent that has it."""
+        scope: SubSystem | None = self
+        while scope is not None:
+            if key in scope._values:
+                return scope._values[key]
+            scope = scope._parent
+        if default is not _MISSING:
+            return default
+        raise KeyError(f"no value {key!r} in {self!r} or its parents")
+
+    # -- edges to the outside world (bus) --------------------------------------------
+    def register_publisher(self, name: str, msg_type: type, topic: str, qos: int = 10) -> ActorRef:
+        """Make actor ``name(msg)`` that publishes ``msg`` on ``topic``."""
+        pub = self._rt.bus.publisher(_topic(topic), msg_type, qos)
+        self._edges.append(pub)
+
+        def publish(msg: Any) -> None:
+            if not isinstance(msg, msg_type):
+                raise TypeError(f"{name} publishes {msg_type.__name__}, got {type(msg).__name__}")
+            pub.publish(msg)
+        publish.__doc__ = f"Publish a {msg_type.__module__}.{msg_type.__name__} on {_topic(topic)}."
+        return self.add_actor(name, publish, Kind.SYNC, signature=inspect.Signature(
+            [inspect.Parameter("msg", inspect.Parameter.POSITIONAL_OR_KEYWORD, annotation=msg_type)]))
+
+    def register_subscriber(self, name: str, msg_type: type, topic: str, qos: int = 10) -> ActorRef:
+        """Make stream actor ``name`` that emits each message arriving on ``topic``;
+        its buffer keeps the latest ``qos`` messages."""
+        bus = self._rt.bus
+        t = _topic(topic)
+
+        def subscribe(emit: Callable[[Any], None]) -> Callable[[], None]:
+            return bus.subscribe(t, msg_type, emit, qos).close
+        subscribe.__doc__ = f"Messages ({msg_type.__module__}.{msg_type.__name__}) arriving on {t}."
+        return self.add_actor(name, subscribe, Kind.STREAM, buffer=max(1, qos),
+                              signature=inspect.Signature([]))
+
+    def register_action(self, name: str, action_type: type, server: str) -> ActorRef:
+        """Make async actor ``name(goal)`` that sends a goal to action ``server``."""
+        return self._rt.bus.register_action(self, name, action_type, server)
+
+    def register_service(self, name: str, srv_type: type, server: str) -> ActorRef:
+        """Make async actor ``name(request)`` that calls service ``server``."""
+        return self._rt.bus.register_service(self, name, srv_type, server)
+
+
+def _topic(topic: str) -> str:
+    return topic if topic.startswith("/") else "/" + topic
+
+
+class SubNet(CallApi):
+    """A group of actors included into a SubSystem with ``add_network``.
+
+    It keeps no state of its own: values, calls and edges go to its SubSystem.
+    """
+
+    _subsystem: SubSystem
+
+    def __init__(self) -> None:
+        pass
+
+    @property
+    def _rt(self) -> "Runtime":  # type: ignore[override]
+        return self._subsystem._rt
+
+    def _call_scope(self) -> SubSystem:
+        return self._subsystem
+
+    @property
+    def subsystem(self) -> SubSystem:
+        return self._subsystem
+
+    def get_value(self, key: str, default: Any = _MISSING) -> Any:
+        return self._subsystem.get_value(key, default)
+
+    def set_value(self, key: str, value: Any) -> None:
+        self._subsystem.set_value(key, value)
