@@ -99,7 +99,12 @@ class ActorRef:
 
 def _caller_signature(fn: Callable, kind: Kind, is_gen: bool) -> inspect.Signature:
     try:
-        sig = inspect.signature(fn)  # bound methods already drop self
+        # Bound methods already drop self. eval_str resolves the actor module's own
+        # postponed annotations (source code, never user input) for the catalog.
+        try:
+            sig = inspect.signature(fn, eval_str=True)
+        except Exception:
+            sig = inspect.signature(fn)
     except (TypeError, ValueError):
         return inspect.Signature([inspect.Parameter("args", inspect.Parameter.VAR_POSITIONAL)])
     params = list(sig.parameters.values())

@@ -45,8 +45,9 @@ class CallApi:
         m = Mode.parse(mode)
         cb = seconds = None
         if m in (Mode.ASYNC, Mode.MULTI):
-            if not args or not callable(args[0]):
-                raise BadModeError(f"mode {m.value!r} needs a callback before the actor's arguments")
+            if not args or not (args[0] is None or callable(args[0])):
+                raise BadModeError(f"mode {m.value!r} needs a callback (or None) before the "
+                                   "actor's arguments")
             cb, args = args[0], args[1:]
         elif m in (Mode.TIMED, Mode.TIMED_ITERATOR):
             if not args or not isinstance(args[0], (int, float)) or isinstance(args[0], bool):

@@ -11,6 +11,7 @@ import concurrent.futures
 import logging
 import queue
 import threading
+import time
 from typing import Any, Callable, Iterator
 
 import greenlet
@@ -198,14 +199,11 @@ class Runtime(CallApi):
             return
         try:
             self.run_on_hub(self._cancel_all, "runtime closing")
-            deadline = 0.0
-            import time
             t0 = time.monotonic()
             while self.run_on_hub(lambda: bool(self._live or self.hub.tasks_alive)):
                 if time.monotonic() - t0 > grace:
                     log.warning("runtime closing with %d live transactions", len(self._live))
                     break
-                deadline += 1
                 time.sleep(0.001)
         finally:
             self._closed = True
@@ -215,7 +213,10 @@ class Runtime(CallApi):
             if self._watchdog is not None:
                 self._watchdog.stop()
             if self._executor is not None:
+                # Offloaded work cannot be interrupted; give it the grace period to end.
                 self._executor.shutdown(wait=False, cancel_futures=True)
+                for worker in list(getattr(self._executor, "_threads", ())):
+                    worker.join(timeout=grace)
 
     def _cancel_all(self, reason: str) -> None:
         for txn in list(self._live.values()):

@@ -1,0 +1,96 @@
+"""``actorbt.yaml``: what the ``actorbt`` command starts.
+
+    subsystems:            # name: python path of a SubSystem class
+      robot: actors.robot:Robot
+    trees: trees           # folder of YAML missions, each registered as an actor
+    world: {name: house, seed: 0}   # or null: nothing simulated
+    simulator: sim:start_world      # how a world is started (python path)
+    transport: local       # or ros
+    clock: virtual         # default clock for run/call/shell/eval (serve uses wall)
+    plugins: [sim.cli]     # modules adding `actorbt` sub-commands (register(subparsers))
+"""
+from __future__ import annotations
+
+import importlib
+import pathlib
+from dataclasses import dataclass, field
+from typing import Any
+
+import yaml
+
+from ..errors import ActorbtError
+
+
+class ConfigError(ActorbtError):
+    """actorbt.yaml is missing a piece or names something that does not exist."""
+
+
+@dataclass
+class Config:
+    path: pathlib.Path | None = None
+    subsystems: dict[str, str] = field(default_factory=dict)
+    trees: str | None = "trees"
+    world: dict[str, Any] | None = None
+    simulator: str | None = None
+    transport: str = "local"
+    clock: str = "virtual"
+    plugins: list[str] = field(default_factory=list)
+
+    @property
+    def base(self) -> pathlib.Path:
+        return self.path.parent if self.path else pathlib.Path.cwd()
+
+    def trees_dir(self) -> pathlib.Path | None:
+        return (self.base / self.trees) if self.trees else None
+
+
+_FIELDS = {"subsystems", "trees", "world", "simulator", "transport", "clock", "plugins"}
+
+
+def find_config(start: pathlib.Path | None = None) -> pathlib.Path | None:
+    """``actorbt.yaml`` in ``start`` or the nearest parent folder."""
+    here = (start or pathlib.Path.cwd()).resolve()
+    for d in (here, *here.parents):
+        f = d / "actorbt.yaml"
+        if f.is_file():
+            return f
+    return None
+
+
+def load_config(path: "str | pathlib.Path | None" = None) -> Config:
+    p = pathlib.Path(path) if path else find_config()
+    if p is None:
+        return Config()
+    try:
+        data = yaml.safe_load(p.read_text()) or {}
+    except yaml.YAMLError as e:
+        mark = getattr(e, "problem_mark", None)
+        where = f"{p}:{mark.line + 1}:{mark.column + 1}" if mark else str(p)
+        raise ConfigError(f"{where}: invalid YAML: {getattr(e, 'problem', e)}") from None
+    if not isinstance(data, dict):
+        raise ConfigError(f"{p}: expected a mapping of settings")
+    unknown = set(data) - _FIELDS
+    if unknown:
+        raise ConfigError(f"{p}: unknown settings {sorted(unknown)}; expected {sorted(_FIELDS)}")
+    world = data.get("world")
+    if isinstance(world, str):
+        world = {"name": world}
+    return Config(path=p, subsystems=dict(data.get("subsystems") or {}),
+                  trees=data.get("trees", "trees"), world=world,
+                  simulator=data.get("simulator"), transport=data.get("transport", "local"),
+                  clock=data.get("clock", "virtual"), plugins=list(data.get("plugins") or []))
+
+
+def import_object(spec: str, what: str) -> Any:
+    """``package.module:Name`` -> the object, with an error that says what was wanted."""
+    mod_name, _, attr = spec.partition(":")
+    try:
+        mod = importlib.import_module(mod_name)
+    except ImportError as e:
+        raise ConfigError(f"cannot import {what} {spec!r}: {e}") from None
+    if not attr:
+        return mod
+    try:
+        return getattr(mod, attr)
+    except AttributeError:
+        raise ConfigError(f"{what} {spec!r}: module {mod_name} has no {attr!r}") from None
