@@ -32,11 +32,11 @@ class CallApi:
         return rt._external(self._call_scope(), name, mode, args, kwargs, cb, seconds)
 
     # -- the proposal's API ----------------------------------------------------------
-    def run_actor(self, name: str, *args: Any, **kwargs: Any) -> Any:
+    def run_actor(self, name: str, /, *args: Any, **kwargs: Any) -> Any:
         """Call actor ``name`` synchronously and return its result."""
         return self._dispatch(name, Mode.SYNC, args, kwargs)
 
-    def run_actor_mode(self, name: str, mode: "str | Mode", *args: Any, **kwargs: Any) -> Any:
+    def run_actor_mode(self, name: str, mode: "str | Mode", /, *args: Any, **kwargs: Any) -> Any:
         """Call actor ``name`` in ``mode``.
 
         ``'async'`` and ``'multi'`` take the callback first; ``'timed'`` and
@@ -55,7 +55,7 @@ class CallApi:
             seconds, args = float(args[0]), args[1:]
         return self._dispatch(name, m, args, kwargs, cb, seconds)
 
-    def run_actor_async(self, name: str, callback: Callable[[Any], Any] | None, *args: Any,
+    def run_actor_async(self, name: str, callback: Callable[[Any], Any] | None, /, *args: Any,
                         **kwargs: Any) -> "Transaction":
         """Start actor ``name``; ``callback(result)`` (or a Failure) when it finishes."""
         return self._dispatch(name, Mode.ASYNC, args, kwargs, callback)
@@ -74,18 +74,18 @@ class CallApi:
         return self._rt.transactions()
 
     # -- keyword-only API --------------------------------------------------------------
-    def call(self, name: str, *args: Any, timeout: float | None = None, **kwargs: Any) -> Any:
+    def call(self, name: str, /, *args: Any, timeout: float | None = None, **kwargs: Any) -> Any:
         """Call ``name`` and return its result; with ``timeout`` [s] raise ActorTimeout."""
         mode = Mode.SYNC if timeout is None else Mode.TIMED
         return self._dispatch(name, mode, args, kwargs, None, timeout)
 
-    def start(self, name: str, *args: Any, on_done: Callable[[Any], Any] | None = None,
+    def start(self, name: str, /, *args: Any, on_done: Callable[[Any], Any] | None = None,
               **kwargs: Any) -> "Transaction":
         """Start ``name`` and return its Transaction; ``on_done(result | Failure)``."""
         return self._dispatch(name, Mode.ASYNC, args, kwargs, on_done)
 
     @contextlib.contextmanager
-    def stream(self, name: str, *args: Any, timeout: float | None = None,
+    def stream(self, name: str, /, *args: Any, timeout: float | None = None,
                **kwargs: Any) -> Iterator[Iterator[Any]]:
         """``with x.stream(name) as it: for v in it: ...``; ``timeout`` [s] ends it."""
         mode = Mode.ITERATOR if timeout is None else Mode.TIMED_ITERATOR
