@@ -1,0 +1,27 @@
+"""`make bench`: run every bench/bench_*.py in its own process, one after another."""
+from __future__ import annotations
+
+import pathlib
+import subprocess
+import sys
+
+HERE = pathlib.Path(__file__).resolve().parent
+
+
+def main() -> int:
+    only = sys.argv[1:]
+    failed = []
+    for script in sorted(HERE.glob("bench_*.py")):
+        if only and not any(o in script.stem for o in only):
+            continue
+        print(f"\n=== {script.stem} ===", flush=True)
+        rc = subprocess.call([sys.executable, str(script)], cwd=HERE.parent)
+        if rc:
+            failed.append(script.stem)
+    if failed:
+        print(f"\nbenchmarks that failed to run: {', '.join(failed)}")
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
