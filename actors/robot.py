@@ -1,0 +1,16 @@
+"""The whole robot: navigation and manipulator under one SubSystem (``robot``)."""
+from __future__ import annotations
+
+from bt_engine import SubSystem
+
+from .manipulator import Manipulator
+from .navigation import Navigation
+
+
+class Robot(SubSystem):
+    """A TurtleBot3-like base with an OpenManipulator-X-like arm, reached through topics."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.add_subsystem("navigation", Navigation)
+        self.add_subsystem("arm", Manipulator)

@@ -1,0 +1,148 @@
+"""Missions: YAML behaviour trees, their loader and validator.
+
+Layering (see DESIGN.md, "Layout and layering"): this package is part of ``bt_engine``
+and imports none of ``actors``, ``planning`` or ``sim``. It reaches actors only through
+a resolver (``rt.root.resolve``) handed to it. Inside the package::
+
+    _errors    MissionError and friends, Pos
+    _yaml      position-keeping safe YAML
+    _expr      the check: language (tokenizer, parser, evaluator; never eval)
+    _model     the typed mission model
+    _parse     YAML -> model, local checks
+    _validate  model vs. actors, behaviours and trees
+    _library   a folder of trees validated together
+    _blackboard  one run's namespace on py_trees' global blackboard
+    _behaviours  the py_trees behaviours (actor leaf, set, check, wait, decorators)
+    _run       one run: build, event-driven tick loop, halt, observers
+    _host      trees as actors of a runtime (register_tree_folder)
+    _progress  live progress printing and --arg parsing for the CLI
+    testing    fake resolver for tests
+"""
+
+from ._errors import (
+    ArgumentMismatchError,
+    CheckEvaluationError,
+    CheckExpressionError,
+    DuplicateKeyError,
+    DuplicateTreeError,
+    InputError,
+    InvalidValueError,
+    MissionError,
+    MissionSyntaxError,
+    Pos,
+    SubtreeCycleError,
+    UnknownBehaviourError,
+    UnknownBlackboardKeyError,
+    UnknownFieldError,
+    UnknownNodeError,
+    TreeFailure,
+    UnresolvedActorError,
+)
+from ._expr import evaluate, parse_expression
+from ._host import STANDARD_BEHAVIOURS, BehaviourFactory, TreeHost, register_tree_folder, tree_host
+from ._library import TreeInfo, TreeLibrary, check_files, load_mission
+from ._model import (
+    REQUIRED,
+    Check,
+    Composite,
+    Decorator,
+    Do,
+    ForceFailure,
+    ForceSuccess,
+    InputSpec,
+    Invert,
+    Mission,
+    Node,
+    OutputSpec,
+    Parallel,
+    ParallelPolicy,
+    ReactiveSelector,
+    ReactiveSequence,
+    Ref,
+    Repeat,
+    Retry,
+    Selector,
+    Sequence,
+    SetValues,
+    Timeout,
+    UseBehaviour,
+    ValueType,
+    Wait,
+    children_of,
+    resolve_value,
+    walk,
+)
+from ._parse import NODE_TYPES, parse_mission, read_mission
+from ._progress import ProgressPrinter, parse_inputs
+from ._run import TreeObserver, TreeRun
+from ._validate import ActorInfo, Resolver, validate_mission
+
+__all__ = [
+    "NODE_TYPES",
+    "REQUIRED",
+    "STANDARD_BEHAVIOURS",
+    "ActorInfo",
+    "ArgumentMismatchError",
+    "BehaviourFactory",
+    "Check",
+    "CheckEvaluationError",
+    "CheckExpressionError",
+    "Composite",
+    "Decorator",
+    "Do",
+    "DuplicateKeyError",
+    "DuplicateTreeError",
+    "ForceFailure",
+    "ForceSuccess",
+    "InputError",
+    "InputSpec",
+    "InvalidValueError",
+    "Invert",
+    "Mission",
+    "MissionError",
+    "MissionSyntaxError",
+    "Node",
+    "OutputSpec",
+    "Parallel",
+    "ParallelPolicy",
+    "ProgressPrinter",
+    "Pos",
+    "ReactiveSelector",
+    "ReactiveSequence",
+    "Ref",
+    "Repeat",
+    "Resolver",
+    "Retry",
+    "Selector",
+    "Sequence",
+    "SetValues",
+    "SubtreeCycleError",
+    "Timeout",
+    "TreeFailure",
+    "TreeHost",
+    "TreeInfo",
+    "TreeLibrary",
+    "TreeObserver",
+    "TreeRun",
+    "UnknownBehaviourError",
+    "UnknownBlackboardKeyError",
+    "UnknownFieldError",
+    "UnknownNodeError",
+    "UnresolvedActorError",
+    "UseBehaviour",
+    "ValueType",
+    "Wait",
+    "check_files",
+    "children_of",
+    "evaluate",
+    "load_mission",
+    "parse_expression",
+    "parse_inputs",
+    "parse_mission",
+    "read_mission",
+    "register_tree_folder",
+    "resolve_value",
+    "tree_host",
+    "validate_mission",
+    "walk",
+]

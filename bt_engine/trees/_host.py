@@ -1,0 +1,198 @@
+"""Trees as actors: the trees of one runtime, registered under their names.
+
+``register_tree_folder(rt, "trees")`` parses and validates every mission of the folder
+(all at load time, before anything runs) and registers each as a sync actor of the root
+SubSystem, with its inputs as parameters and its outputs as result. Calling that actor
+builds a fresh tree with its own blackboard namespace and ticks it in the caller's
+greenlet until it finishes. So trees call trees with ``do:``, actors call trees with
+``run_actor`` in every call mode, and a Python program calls one through the runtime.
+"""
+
+from __future__ import annotations
+
+import weakref
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Callable, Mapping
+
+import py_trees
+import py_trees.behaviours
+
+from ._library import TreeLibrary
+from ._model import Mission, UseBehaviour, walk
+from ._run import TreeObserver, TreeRun
+
+if TYPE_CHECKING:
+    from ..runtime import Runtime
+
+__all__ = ["STANDARD_BEHAVIOURS", "BehaviourFactory", "TreeHost", "register_tree_folder", "tree_host"]
+
+#: Makes a py_trees Behaviour for ``behaviour:``; called with the ``with:`` arguments,
+#: plus ``name=`` and ``blackboard_namespace=`` when it accepts them.
+BehaviourFactory = Callable[..., py_trees.behaviour.Behaviour]
+
+_hosts: "weakref.WeakKeyDictionary[Any, TreeHost]" = weakref.WeakKeyDictionary()
+
+#: py_trees' own behaviours, available to ``behaviour:`` in every host.
+STANDARD_BEHAVIOURS: dict[str, BehaviourFactory] = {
+    "Success": py_trees.behaviours.Success,
+    "Failure": py_trees.behaviours.Failure,
+    "Running": py_trees.behaviours.Running,
+    "Periodic": py_trees.behaviours.Periodic,
+    "SuccessEveryN": py_trees.behaviours.SuccessEveryN,
+}
+
+
+class TreeHost:
+    """The trees of one runtime: their library, their actors, and their runs.
+
+    Args:
+        rt: the runtime whose root SubSystem receives the tree actors.
+        behaviours: factories ``behaviour:`` nodes may name, besides
+            :data:`STANDARD_BEHAVIOURS`.
+        max_period: the longest time [s, runtime clock] between two ticks of a run;
+            ``None`` ticks on events only.
+        behaviour_period: the longest time between ticks for trees that contain
+            ``behaviour:`` nodes, which may poll and so cannot wake the loop.
+
+    Attributes:
+        library: the parsed, validated missions.
+        observers: told about every run (progress display, trace recorder).
+    """
+
+    def __init__(self, rt: Runtime, *, behaviours: Mapping[str, BehaviourFactory] | None = None,
+                 max_period: float | None = None, behaviour_period: float = 0.1) -> None:
+        self.rt = rt
+        self.behaviours: dict[str, BehaviourFactory] = {**STANDARD_BEHAVIOURS, **(behaviours or {})}
+        self.max_period = max_period
+        self.behaviour_period = behaviour_period
+        self.library = TreeLibrary(resolver=self._resolve, behaviours=self.behaviours)
+        self.observers: list[TreeObserver] = []
+        self._runs_by_txn: dict[int, TreeRun] = {}
+        self._live: dict[int, TreeRun] = {}
+
+    # ------------------------------------------------------------ loading and registration
+
+    def _resolve(self, name: str) -> Any:
+        return self.rt.run_on_hub(self.rt.root.resolve, name)
+
+    def load_folder(self, folder: str | Path) -> list[Mission]:
+        """Parse, validate and register every ``*.yaml`` of a folder.
+
+        Raises:
+            MissionError: the first problem in any file; nothing is registered then.
+        """
+        missions = self.library.load_folder(folder)
+        self.library.check([m.name for m in missions])
+        for mission in missions:
+            self.register(mission)
+        return missions
+
+    def load_file(self, path: str | Path) -> Mission:
+        """Parse, validate and register one mission file.
+
+        Raises:
+            MissionError: the first problem in the file.
+        """
+        mission = self.library.load_file(path)
+        self.library.check([mission.name])
+        self.register(mission)
+        return mission
+
+    def register(self, mission: Mission) -> None:
+        """Register a (validated) mission as a sync actor of the root, under its name."""
+        name = mission.name
+
+        def run_tree(*args: Any, **kwargs: Any) -> dict[str, Any]:
+            return self.run(name, *args, **kwargs)
+
+        run_tree.__name__ = name
+        run_tree.__doc__ = mission.doc
+        self.rt.run_on_hub(
+            self.rt.root.add_actor, name, run_tree, "sync",
+            doc=mission.doc or f"Tree {name} ({mission.file}).", signature=mission.signature(),
+            is_tree=True, replace=True,
+        )
+
+    # ------------------------------------------------------------ running
+
+    def period_for(self, mission: Mission) -> float | None:
+        """The max tick period of a run of ``mission``."""
+        if any(isinstance(node, UseBehaviour) for node in walk(mission.root)):
+            return self.behaviour_period if self.max_period is None else min(self.max_period, self.behaviour_period)
+        return self.max_period
+
+    def actor_path(self, name: str) -> str:
+        """The path a ``do:`` name starts (library trees are root actors by name)."""
+        return self.library.resolve(name).path
+
+    def start_actor(self, run: TreeRun, path: str, args: tuple, kwargs: dict,
+                    on_done: Callable[[Any], None]) -> Any:
+        """Start an actor for an actor leaf; replay overrides this to answer from a record."""
+        return self.rt.start(path, *args, on_done=on_done, **kwargs)
+
+    def prepare(self, name: str, *args: Any, **kwargs: Any) -> TreeRun:
+        """Build a run of tree ``name`` without ticking it (for ticking by hand on the hub).
+
+        Raises:
+            InputError: the arguments do not fit the tree's inputs.
+        """
+        mission = self.library[name]
+        inputs = mission.bind_inputs(*args, **kwargs)
+        return self.rt.run_on_hub(self._new_run, mission, inputs)
+
+    def _new_run(self, mission: Mission, inputs: dict[str, Any]) -> TreeRun:
+        task = self.rt.hub.current_task()
+        txn = task.txns[-1] if task is not None and task.txns else None
+        parent = None
+        if txn is not None and txn.parent is not None:
+            parent = self._runs_by_txn.get(txn.parent.id)
+        run = TreeRun(self, mission, inputs, parent)
+        self._live[run.id] = run
+        if txn is not None:
+            self._runs_by_txn[txn.id] = run
+            run.txn_id = txn.id  # type: ignore[attr-defined]
+        return run
+
+    def _run_closed(self, run: TreeRun) -> None:
+        self._live.pop(run.id, None)
+        txn_id = getattr(run, "txn_id", None)
+        if txn_id is not None:
+            self._runs_by_txn.pop(txn_id, None)
+
+    def run(self, name: str, *args: Any, **kwargs: Any) -> dict[str, Any]:
+        """Run tree ``name`` to the end in the calling actor (the tree actor's body).
+
+        Returns:
+            the outputs, ``{name: value}``.
+
+        Raises:
+            InputError: the arguments do not fit the tree's inputs.
+            TreeFailure: the tree failed.
+        """
+        mission = self.library[name]
+        inputs = mission.bind_inputs(*args, **kwargs)
+        return self._new_run(mission, inputs).run()
+
+    def live_runs(self) -> list[TreeRun]:
+        """Runs built and not closed yet (leak checks)."""
+        return list(self._live.values())
+
+
+def tree_host(rt: Runtime) -> TreeHost | None:
+    """The TreeHost of a runtime, if trees were registered on it."""
+    return _hosts.get(rt)
+
+
+def register_tree_folder(rt: Runtime, folder: str | Path, **options: Any) -> TreeHost:
+    """Parse, validate and register every mission in ``folder`` as an actor of ``rt``.
+
+    ``options`` go to :class:`TreeHost` the first time; the runtime keeps one host.
+
+    Raises:
+        MissionError: the first problem found, ``file:line:column: message``.
+    """
+    host = _hosts.get(rt)
+    if host is None:
+        host = _hosts[rt] = TreeHost(rt, **options)
+    host.load_folder(folder)
+    return host

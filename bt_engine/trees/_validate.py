@@ -1,0 +1,329 @@
+"""Load-time validation of a parsed mission against the actors, behaviours and trees it
+uses: names, signatures, blackboard data flow and subtree cycles.
+
+The validator takes the actor resolver as a parameter, so tests can pass a tiny fake
+one (see :mod:`bt_engine.trees.testing`) and the engine passes ``rt.root.resolve``.
+"""
+
+from __future__ import annotations
+
+import inspect
+import typing
+from collections.abc import Collection, Mapping
+from typing import Any, Callable, Iterator, Protocol
+
+from ._errors import (
+    ActorbtError,
+    ArgumentMismatchError,
+    InvalidValueError,
+    MissionError,
+    Pos,
+    SubtreeCycleError,
+    UnknownBehaviourError,
+    UnknownBlackboardKeyError,
+    UnresolvedActorError,
+)
+from ._model import (
+    Check,
+    Do,
+    Mission,
+    Ref,
+    Repeat,
+    Retry,
+    SetValues,
+    Timeout,
+    UseBehaviour,
+    ValueType,
+    Wait,
+    refs_in,
+    walk,
+)
+from ._parse import suggest
+
+__all__ = ["ActorInfo", "Resolver", "annotation_type", "validate_mission"]
+
+
+class ActorInfo(Protocol):
+    """What the validator needs to know about an actor (``rt.root.resolve(name)``)."""
+
+    path: str
+    signature: inspect.Signature
+    is_tree: bool
+
+
+#: ``name -> ActorInfo``; raises an error with ``.suggestions`` for unknown names.
+Resolver = Callable[[str], ActorInfo]
+
+_BUILTIN_TYPES = {str: ValueType.STR, int: ValueType.INT, float: ValueType.FLOAT, bool: ValueType.BOOL,
+                  list: ValueType.LIST, tuple: ValueType.LIST, dict: ValueType.DICT}
+_TYPE_NAMES = {"str": ValueType.STR, "int": ValueType.INT, "float": ValueType.FLOAT, "bool": ValueType.BOOL,
+               "list": ValueType.LIST, "dict": ValueType.DICT}
+
+
+def annotation_type(annotation: Any) -> ValueType | None:
+    """The :class:`ValueType` a parameter annotation demands, or ``None`` if it cannot
+    be checked statically (no annotation, unions, classes of our own...)."""
+    if annotation is inspect.Parameter.empty or annotation is Any:
+        return None
+    if isinstance(annotation, str):
+        return _TYPE_NAMES.get(annotation.split("[", 1)[0].strip())
+    if annotation in _BUILTIN_TYPES:
+        return _BUILTIN_TYPES[annotation]
+    origin = typing.get_origin(annotation)
+    if origin in (list, tuple, dict):
+        return _BUILTIN_TYPES[origin]
+    return None
+
+
+def _a(vtype: ValueType) -> str:
+    """'an int', 'a str'..."""
+    return ("an " if vtype.value[0] in "aeiou" else "a ") + vtype.value
+
+
+def _fits(expected: ValueType, actual: ValueType) -> bool:
+    if ValueType.ANY in (expected, actual) or expected is actual:
+        return True
+    return expected is ValueType.FLOAT and actual is ValueType.INT
+
+
+class _Validator:
+    def __init__(
+        self,
+        mission: Mission,
+        resolver: Resolver | None,
+        behaviours: Collection[str] | None,
+        trees: Mapping[str, Mission] | None,
+    ) -> None:
+        self.mission = mission
+        self.resolver = resolver
+        self.behaviours = behaviours
+        self.trees = trees
+        self.errors: list[MissionError] = []
+        self.resolved: dict[int, ActorInfo] = {}
+        self.key_types: dict[str, ValueType] = {}  # every key written, with its static type
+
+    def run(self) -> list[MissionError]:
+        self.resolve_actors()
+        self.collect_writers()
+        for node in walk(self.mission.root):
+            if isinstance(node, Do):
+                self.check_do(node)
+            elif isinstance(node, SetValues):
+                for value in node.values.values():
+                    self.check_refs(value)
+            elif isinstance(node, Check):
+                for key, pos in node.key_pos:
+                    self.check_key(key, pos)
+            elif isinstance(node, Wait):
+                self.check_number(node.seconds, ValueType.FLOAT, "wait seconds")
+            elif isinstance(node, Timeout):
+                self.check_number(node.seconds, ValueType.FLOAT, "timeout seconds")
+            elif isinstance(node, (Retry, Repeat)):
+                self.check_number(node.times, ValueType.INT, f"{node.kind} times")
+            elif isinstance(node, UseBehaviour):
+                self.check_behaviour(node)
+        for spec in self.mission.outputs:
+            if spec.name not in self.key_types:
+                self.errors.append(UnknownBlackboardKeyError(
+                    spec.pos,
+                    f"output {spec.name!r} is never written, expected a key set by out:, set: or writes: in the tree"
+                    f"{suggest(spec.name, self.key_types)}",
+                ))
+        self.check_cycles()
+        return sorted(self.errors, key=lambda e: (e.pos.line, e.pos.column))
+
+    # ------------------------------------------------------------ actors
+
+    def resolve_actors(self) -> None:
+        if self.resolver is None:
+            return
+        for node in walk(self.mission.root):
+            if not isinstance(node, Do):
+                continue
+            try:
+                self.resolved[id(node)] = self.resolver(node.actor)
+            except (LookupError, ActorbtError) as exc:
+                suggestions = getattr(exc, "suggestions", None)
+                if suggestions is not None:
+                    hint = f" (did you mean {' or '.join(repr(s) for s in suggestions)}?)" if suggestions else ""
+                    message = f"unknown actor {node.actor!r}{hint}, expected a registered actor or tree name"
+                else:
+                    message = f"cannot resolve actor {node.actor!r}: {exc}"
+                self.errors.append(UnresolvedActorError(node.at("do"), message))
+
+    def check_do(self, node: Do) -> None:
+        for value in (*node.args, *node.kwargs.values()):
+            self.check_refs(value)
+        info = self.resolved.get(id(node))
+        if info is None:
+            return
+        sig = info.signature
+        shown = f"{node.actor}{sig}"
+        params = sig.parameters
+        var_kw = any(p.kind is p.VAR_KEYWORD for p in params.values())
+        for name in node.kwargs:
+            param = params.get(name)
+            if (param is None and not var_kw) or (param is not None and param.kind in (param.POSITIONAL_ONLY, param.VAR_POSITIONAL, param.VAR_KEYWORD)):
+                names = [p.name for p in params.values() if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)]
+                self.errors.append(ArgumentMismatchError(
+                    node.arg_key_pos.get(name, node.at("with")),
+                    f"actor {node.actor!r} has no parameter {name!r}{suggest(name, names)}, expected {shown}",
+                ))
+                return
+        try:
+            bound = sig.bind(*node.args, **node.kwargs)
+        except TypeError as exc:
+            self.errors.append(ArgumentMismatchError(
+                node.at("with") if "with" in node.field_pos else node.at("do"),
+                f"arguments do not fit actor {node.actor!r}: {exc}, expected {shown}",
+            ))
+            return
+        for name, value in bound.arguments.items():
+            param = params[name]
+            if param.kind in (param.VAR_POSITIONAL, param.VAR_KEYWORD):
+                continue
+            expected = annotation_type(param.annotation)
+            if expected is None:
+                continue
+            pos = node.arg_pos.get(name)
+            if pos is None:
+                index = list(params).index(name)
+                pos = node.arg_pos.get(str(index), node.at("with"))
+            self.check_type(value, expected, pos, f"argument {name!r} of actor {node.actor!r}")
+
+    def check_type(self, value: Any, expected: ValueType, pos: Pos, what: str) -> None:
+        if isinstance(value, Ref):
+            actual = self.ref_type(value)
+            if not _fits(expected, actual):
+                self.errors.append(ArgumentMismatchError(
+                    value.pos, f"{what} expects {_a(expected)}, but {value} holds {_a(actual)}"
+                ))
+        elif not any(refs_in(value)) and not expected.accepts(value):
+            self.errors.append(ArgumentMismatchError(
+                pos, f"{what} expects {_a(expected)}, got {type(value).__name__} {value!r}"
+            ))
+
+    # ------------------------------------------------------------ blackboard
+
+    def collect_writers(self) -> None:
+        types: dict[str, set[ValueType]] = {}
+
+        def wrote(key: str, vtype: ValueType) -> None:
+            types.setdefault(key, set()).add(vtype)
+
+        for spec in self.mission.inputs:
+            wrote(spec.name, spec.type)
+        for node in walk(self.mission.root):
+            if isinstance(node, Do) and node.out is not None:
+                info = self.resolved.get(id(node))
+                vtype = ValueType.ANY
+                if info is not None:
+                    vtype = ValueType.DICT if info.is_tree else (
+                        annotation_type(info.signature.return_annotation) or ValueType.ANY)
+                wrote(node.out, vtype)
+            elif isinstance(node, SetValues):
+                for key, value in node.values.items():
+                    wrote(key, ValueType.ANY if list(refs_in(value)) else ValueType.of(value))
+            elif isinstance(node, UseBehaviour):
+                for key in node.writes:
+                    wrote(key, ValueType.ANY)
+        self.key_types = {k: (next(iter(v)) if len(v) == 1 else ValueType.ANY) for k, v in types.items()}
+
+    def ref_type(self, ref: Ref) -> ValueType:
+        if ref.fields:
+            return ValueType.ANY
+        return self.key_types.get(ref.key, ValueType.ANY)
+
+    def check_key(self, key: str, pos: Pos) -> bool:
+        if key in self.key_types:
+            return True
+        self.errors.append(UnknownBlackboardKeyError(
+            pos,
+            f"blackboard key {key!r} is never written{suggest(key, self.key_types)}, "
+            "expected an input or a key set by out:, set: or writes:",
+        ))
+        return False
+
+    def check_refs(self, value: Any) -> None:
+        for ref in refs_in(value):
+            self.check_key(ref.key, ref.pos)
+
+    def check_number(self, value: Any, expected: ValueType, what: str) -> None:
+        if isinstance(value, Ref) and self.check_key(value.key, value.pos):
+            actual = self.ref_type(value)
+            if not _fits(expected, actual):
+                self.errors.append(InvalidValueError(
+                    value.pos, f"{what} {value} holds {_a(actual)}, expected {'an int' if expected is ValueType.INT else 'a number'}"
+                ))
+
+    # ------------------------------------------------------------ behaviours and trees
+
+    def check_behaviour(self, node: UseBehaviour) -> None:
+        inputs = {spec.name for spec in self.mission.inputs}
+        for value in node.kwargs.values():
+            for ref in refs_in(value):
+                # A behaviour is built when the run starts, before anything else is written.
+                if ref.key not in inputs:
+                    self.errors.append(UnknownBlackboardKeyError(
+                        ref.pos,
+                        f"behaviour arguments are fixed when the tree starts, so {ref} must name an input, "
+                        f"expected one of: {', '.join(sorted(inputs)) or '(no inputs declared)'}",
+                    ))
+        if self.behaviours is None or node.behaviour in self.behaviours:
+            return
+        known = sorted(self.behaviours)
+        self.errors.append(UnknownBehaviourError(
+            node.at("behaviour"),
+            f"unknown behaviour {node.behaviour!r}{suggest(node.behaviour, known)}, "
+            f"expected a registered behaviour: {', '.join(known) or '(none registered)'}",
+        ))
+
+    def tree_calls(self, mission: Mission) -> Iterator[tuple[str, Do]]:
+        assert self.trees is not None
+        for node in walk(mission.root):
+            if isinstance(node, Do) and node.actor in self.trees:
+                yield node.actor, node
+
+    def check_cycles(self) -> None:
+        if self.trees is None:
+            return
+        start = self.mission.name
+
+        def path_back(name: str, seen: set[str]) -> list[str] | None:
+            if name == start:
+                return [name]
+            if name in seen or name not in self.trees:
+                return None
+            seen.add(name)
+            for callee, _ in self.tree_calls(self.trees[name]):
+                rest = path_back(callee, seen)
+                if rest is not None:
+                    return [name, *rest]
+            return None
+
+        for callee, node in self.tree_calls(self.mission):
+            cycle = path_back(callee, set())
+            if cycle is not None:
+                self.errors.append(SubtreeCycleError(
+                    node.at("do"),
+                    f"subtree cycle {' -> '.join([start, *cycle])}, expected trees that do not call "
+                    "themselves directly or through other trees",
+                ))
+
+
+def validate_mission(
+    mission: Mission,
+    resolver: Resolver | None = None,
+    *,
+    behaviours: Collection[str] | None = None,
+    trees: Mapping[str, Mission] | None = None,
+) -> list[MissionError]:
+    """Every load-time problem of a parsed mission, sorted by position (empty if none).
+
+    Args:
+        mission: from :func:`parse_mission`.
+        resolver: ``name -> ActorInfo`` for ``do:`` targets; ``None`` skips actor checks.
+        behaviours: names accepted by ``behaviour:``; ``None`` skips that check.
+        trees: missions by name, to follow ``do:`` calls between trees for cycles.
+    """
+    return _Validator(mission, resolver, behaviours, trees).run()

@@ -1,0 +1,408 @@
+"""World descriptions: YAML in sim/worlds/, validated with file:line errors, objects placed
+at random in free floor space from a seed (same seed -> same world).
+
+Format (all lengths in metres, angles in radians)::
+
+    name: house
+    bounds: [xmin, ymin, xmax, ymax]       # extent of the map
+    wall: {height: 0.5, thickness: 0.1}    # defaults for walls
+    walls:                                 # centre lines [x0, y0, x1, y1]
+      - [0, 0, 10, 0]
+    rooms:                                 # named areas [xmin, ymin, xmax, ymax] for placement
+      kitchen: [6, 0, 10, 4.5]
+    furniture:                             # static boxes
+      - {name: sofa, center: [1, 3], size: [1.8, 0.8, 0.45], yaw: 0, color: [r, g, b]}
+    place_location: {name: pallet, center: [8, 7], size: [0.6, 0.4, 0.1], yaw: 0}
+    robot: {start: [1, 1, 0]}
+    placement: {clearance: 0.3, tries: 500}
+    objects:
+      - {category: can, count: 1, room: kitchen}   # random, seeded
+      - {category: box, name: crate, pose: [2, 1, 0]}   # fixed pose [x, y, yaw]
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+from .objects import CATEGORIES
+
+WORLDS_DIR = Path(__file__).resolve().parent / "worlds"
+ROBOT_RADIUS = 0.26     # circle around base_footprint that covers the Waffle Pi chassis
+DOOR_CLEARANCE = 0.6    # random objects keep this far from wall ends (doorways, corners)
+
+
+class WorldError(ValueError):
+    """A world description is invalid or cannot be realised; the message names file:line."""
+
+
+@dataclass(frozen=True)
+class Box:
+    """A static box: centre (x, y) on the floor, size (sx, sy, sz), yaw."""
+    name: str
+    x: float
+    y: float
+    sx: float
+    sy: float
+    sz: float
+    yaw: float = 0.0
+    rgba: tuple = (0.8, 0.8, 0.8, 1.0)
+
+    def distance(self, px, py):
+        """Distance from point(s) to the box footprint (0 inside)."""
+        c, s = math.cos(self.yaw), math.sin(self.yaw)
+        dx, dy = np.asarray(px) - self.x, np.asarray(py) - self.y
+        u, v = c * dx + s * dy, -s * dx + c * dy
+        qu = np.maximum(np.abs(u) - self.sx / 2, 0.0)
+        qv = np.maximum(np.abs(v) - self.sy / 2, 0.0)
+        return np.hypot(qu, qv)
+
+    def corners(self):
+        c, s = math.cos(self.yaw), math.sin(self.yaw)
+        out = []
+        for u, v in ((-1, -1), (1, -1), (1, 1), (-1, 1)):
+            u, v = u * self.sx / 2, v * self.sy / 2
+            out.append((self.x + c * u - s * v, self.y + s * u + c * v))
+        return out
+
+
+@dataclass(frozen=True)
+class PlacedObject:
+    name: str
+    category: str
+    x: float
+    y: float
+    yaw: float
+
+
+@dataclass
+class WorldSpec:
+    name: str
+    source: str
+    bounds: tuple
+    walls: list = field(default_factory=list)        # [Box]
+    rooms: dict = field(default_factory=dict)        # name -> (xmin, ymin, xmax, ymax)
+    furniture: list = field(default_factory=list)    # [Box]
+    place: Box | None = None
+    robot_start: tuple = (0.0, 0.0, 0.0)
+    objects: list = field(default_factory=list)      # [PlacedObject]
+    seed: int = 0
+
+    @property
+    def obstacles(self):
+        """Everything static that stands on the floor (walls, furniture, place location)."""
+        return list(self.walls) + list(self.furniture) + ([self.place] if self.place else [])
+
+    def room_of(self, x, y):
+        for name, (x0, y0, x1, y1) in self.rooms.items():
+            if x0 <= x <= x1 and y0 <= y <= y1:
+                return name
+        return None
+
+
+# ---------------------------------------------------------------------------------------
+# YAML with line numbers: we walk yaml's node graph (compose) so every value keeps its mark.
+
+class _Ctx:
+    def __init__(self, path: str):
+        self.path = path
+
+    def err(self, node, msg):
+        line = node.start_mark.line + 1 if node is not None else 1
+        return WorldError(f"{self.path}:{line}: {msg}")
+
+    def mapping(self, node, what):
+        if not isinstance(node, yaml.MappingNode):
+            raise self.err(node, f"{what} must be a mapping")
+        out = {}
+        for k, v in node.value:
+            if not isinstance(k, yaml.ScalarNode):
+                raise self.err(k, f"{what}: keys must be plain names")
+            if k.value in out:
+                raise self.err(k, f"{what}: duplicate key '{k.value}'")
+            out[k.value] = (k, v)
+        return out
+
+    def keys(self, m, allowed, what):
+        for key, (knode, _) in m.items():
+            if key not in allowed:
+                raise self.err(knode, f"{what}: unknown key '{key}' (allowed: {', '.join(sorted(allowed))})")
+
+    def seq(self, node, what):
+        if not isinstance(node, yaml.SequenceNode):
+            raise self.err(node, f"{what} must be a list")
+        return node.value
+
+    def num(self, node, what, positive=False, nonneg=False):
+        if not isinstance(node, yaml.ScalarNode):
+            raise self.err(node, f"{what} must be a number")
+        try:
+            v = float(node.value)
+        except ValueError:
+            raise self.err(node, f"{what} must be a number, got '{node.value}'") from None
+        if not math.isfinite(v):
+            raise self.err(node, f"{what} must be finite")
+        if positive and v <= 0:
+            raise self.err(node, f"{what} must be > 0, got {v}")
+        if nonneg and v < 0:
+            raise self.err(node, f"{what} must be >= 0, got {v}")
+        return v
+
+    def int_(self, node, what, minimum=0):
+        v = self.num(node, what)
+        if v != int(v) or v < minimum:
+            raise self.err(node, f"{what} must be an integer >= {minimum}, got {node.value}")
+        return int(v)
+
+    def vec(self, node, n, what, **kw):
+        items = self.seq(node, what)
+        if len(items) != n:
+            raise self.err(node, f"{what} must have {n} numbers, got {len(items)}")
+        return tuple(self.num(i, what, **kw) for i in items)
+
+    def str_(self, node, what):
+        if not isinstance(node, yaml.ScalarNode) or not node.value:
+            raise self.err(node, f"{what} must be a non-empty string")
+        return node.value
+
+
+def _rgba(ctx, node, default):
+    if node is None:
+        return default
+    items = ctx.seq(node, "color")
+    if len(items) not in (3, 4):
+        raise ctx.err(node, "color must be [r, g, b] or [r, g, b, a] in 0..1")
+    vals = [ctx.num(i, "color", nonneg=True) for i in items]
+    return tuple(vals) + ((1.0,) if len(vals) == 3 else ())
+
+
+def _box(ctx, node, what, default_rgba, default_name):
+    m = ctx.mapping(node, what)
+    ctx.keys(m, {"name", "center", "size", "yaw", "color"}, what)
+    for req in ("center", "size"):
+        if req not in m:
+            raise ctx.err(node, f"{what}: missing '{req}'")
+    name = ctx.str_(m["name"][1], f"{what}.name") if "name" in m else default_name
+    cx, cy = ctx.vec(m["center"][1], 2, f"{what}.center")
+    sx, sy, sz = ctx.vec(m["size"][1], 3, f"{what}.size", positive=True)
+    yaw = ctx.num(m["yaw"][1], f"{what}.yaw") if "yaw" in m else 0.0
+    return Box(name, cx, cy, sx, sy, sz, yaw, _rgba(ctx, m.get("color", (None, None))[1], default_rgba))
+
+
+WALL_RGBA = (0.82, 0.80, 0.74, 1.0)
+FURNITURE_RGBA = (0.55, 0.42, 0.30, 1.0)
+PLACE_RGBA = (0.76, 0.60, 0.35, 1.0)
+
+
+def parse_world(text: str, path: str = "<string>", seed: int = 0) -> WorldSpec:
+    """Parse and validate a world description, then place its objects from ``seed``."""
+    try:
+        root = yaml.compose(text)
+    except yaml.MarkedYAMLError as e:
+        mark = e.problem_mark or e.context_mark
+        line = mark.line + 1 if mark else 1
+        raise WorldError(f"{path}:{line}: YAML syntax error: {e.problem or e}") from None
+    ctx = _Ctx(path)
+    if root is None:
+        raise WorldError(f"{path}:1: empty world description")
+    top = ctx.mapping(root, "world")
+    ctx.keys(top, {"name", "bounds", "wall", "walls", "rooms", "furniture", "place_location",
+                   "robot", "objects", "placement", "description"}, "world")
+    if "bounds" not in top:
+        raise ctx.err(root, "world: missing 'bounds' [xmin, ymin, xmax, ymax]")
+    name = ctx.str_(top["name"][1], "name") if "name" in top else Path(path).stem
+    bnode = top["bounds"][1]
+    bounds = ctx.vec(bnode, 4, "bounds")
+    if bounds[2] <= bounds[0] or bounds[3] <= bounds[1]:
+        raise ctx.err(bnode, "bounds: need xmin < xmax and ymin < ymax")
+
+    wall_h, wall_t = 0.5, 0.1
+    if "wall" in top:
+        wm = ctx.mapping(top["wall"][1], "wall")
+        ctx.keys(wm, {"height", "thickness"}, "wall")
+        if "height" in wm:
+            wall_h = ctx.num(wm["height"][1], "wall.height", positive=True)
+        if "thickness" in wm:
+            wall_t = ctx.num(wm["thickness"][1], "wall.thickness", positive=True)
+
+    spec = WorldSpec(name=name, source=path, bounds=bounds, seed=seed)
+    for i, wn in enumerate(ctx.seq(top["walls"][1], "walls") if "walls" in top else []):
+        x0, y0, x1, y1 = ctx.vec(wn, 4, f"walls[{i}]")
+        length = math.hypot(x1 - x0, y1 - y0)
+        if length <= 0:
+            raise ctx.err(wn, f"walls[{i}]: zero-length wall")
+        # extend by half a thickness at both ends so corners close
+        spec.walls.append(Box(f"wall_{i}", (x0 + x1) / 2, (y0 + y1) / 2, length + wall_t, wall_t,
+                              wall_h, math.atan2(y1 - y0, x1 - x0), WALL_RGBA))
+
+    if "rooms" in top:
+        for rname, (knode, rnode) in ctx.mapping(top["rooms"][1], "rooms").items():
+            r = ctx.vec(rnode, 4, f"rooms.{rname}")
+            if r[2] <= r[0] or r[3] <= r[1]:
+                raise ctx.err(rnode, f"rooms.{rname}: need xmin < xmax and ymin < ymax")
+            spec.rooms[rname] = r
+
+    for i, fn in enumerate(ctx.seq(top["furniture"][1], "furniture") if "furniture" in top else []):
+        spec.furniture.append(_box(ctx, fn, f"furniture[{i}]", FURNITURE_RGBA, f"furniture_{i}"))
+
+    if "place_location" in top:
+        spec.place = _box(ctx, top["place_location"][1], "place_location", PLACE_RGBA, "place_location")
+
+    if "robot" in top:
+        rm = ctx.mapping(top["robot"][1], "robot")
+        ctx.keys(rm, {"start"}, "robot")
+        if "start" in rm:
+            spec.robot_start = ctx.vec(rm["start"][1], 3, "robot.start")
+
+    clearance, tries = 0.30, 500
+    if "placement" in top:
+        pm = ctx.mapping(top["placement"][1], "placement")
+        ctx.keys(pm, {"clearance", "tries"}, "placement")
+        if "clearance" in pm:
+            clearance = ctx.num(pm["clearance"][1], "placement.clearance", nonneg=True)
+        if "tries" in pm:
+            tries = ctx.int_(pm["tries"][1], "placement.tries", minimum=1)
+
+    # robot start must be in free space
+    sx, sy, _ = spec.robot_start
+    for ob in spec.obstacles:
+        if ob.distance(sx, sy) < ROBOT_RADIUS:
+            raise ctx.err(top["robot"][1] if "robot" in top else root,
+                          f"robot.start ({sx}, {sy}) overlaps '{ob.name}'")
+
+    entries = []   # (node, category, name, room, pose or None)
+    counters: dict[str, int] = {}
+    for i, on in enumerate(ctx.seq(top["objects"][1], "objects") if "objects" in top else []):
+        what = f"objects[{i}]"
+        om = ctx.mapping(on, what)
+        ctx.keys(om, {"category", "count", "room", "name", "pose"}, what)
+        if "category" not in om:
+            raise ctx.err(on, f"{what}: missing 'category' (one of: {', '.join(CATEGORIES)})")
+        cnode = om["category"][1]
+        cat = ctx.str_(cnode, f"{what}.category")
+        if cat not in CATEGORIES:
+            raise ctx.err(cnode, f"{what}: unknown category '{cat}' (one of: {', '.join(CATEGORIES)})")
+        count = ctx.int_(om["count"][1], f"{what}.count", minimum=1) if "count" in om else 1
+        room = None
+        if "room" in om:
+            rnode = om["room"][1]
+            room = ctx.str_(rnode, f"{what}.room")
+            if room not in spec.rooms:
+                raise ctx.err(rnode, f"{what}: unknown room '{room}' (rooms: {', '.join(spec.rooms) or 'none'})")
+        pose = ctx.vec(om["pose"][1], 3, f"{what}.pose") if "pose" in om else None
+        base = ctx.str_(om["name"][1], f"{what}.name") if "name" in om else None
+        if pose is not None and count != 1:
+            raise ctx.err(on, f"{what}: 'pose' fixes one object; drop 'count'")
+        for _ in range(count):
+            if base is not None and count == 1:
+                oname = base
+            else:
+                stem = base or cat
+                counters[stem] = counters.get(stem, 0) + 1
+                oname = f"{stem}_{counters[stem]}"
+            entries.append((on, cat, oname, room, pose))
+    names = [e[2] for e in entries]
+    for e in entries:
+        if names.count(e[2]) > 1:
+            raise ctx.err(e[0], f"duplicate object name '{e[2]}'")
+
+    _place_objects(ctx, spec, entries, seed, clearance, tries)
+    return spec
+
+
+def _place_objects(ctx, spec, entries, seed, clearance, tries):
+    rng = np.random.default_rng(seed)
+    placed: list[tuple[float, float, float]] = []     # x, y, footprint radius
+    statics = spec.obstacles
+    rx, ry, _ = spec.robot_start
+    # wall ends: doorways are the gaps between them; keep random objects out of doorways
+    ends = []
+    for w in spec.walls:
+        c, s = math.cos(w.yaw), math.sin(w.yaw)
+        h = w.sx / 2
+        ends += [(w.x - c * h, w.y - s * h), (w.x + c * h, w.y + s * h)]
+
+    def free(x, y, r, margin, random=False):
+        for ob in statics:
+            if ob.distance(x, y) < r + margin:
+                return False
+        if random:
+            for ex, ey in ends:
+                if math.hypot(x - ex, y - ey) < DOOR_CLEARANCE + r:
+                    return False
+        if math.hypot(x - rx, y - ry) < ROBOT_RADIUS + r + margin:
+            return False
+        for px, py, pr in placed:
+            if math.hypot(x - px, y - py) < r + pr + margin:
+                return False
+        return True
+
+    # fixed poses first, so random ones avoid them
+    for node, cat, name, room, pose in entries:
+        if pose is None:
+            continue
+        r = CATEGORIES[cat].radius
+        x0, y0, x1, y1 = spec.bounds
+        if not (x0 + r <= pose[0] <= x1 - r and y0 + r <= pose[1] <= y1 - r):
+            raise ctx.err(node, f"object '{name}': pose ({pose[0]}, {pose[1]}) is outside bounds {spec.bounds}")
+        if not free(pose[0], pose[1], r, 0.0):
+            raise ctx.err(node, f"object '{name}': pose ({pose[0]}, {pose[1]}) collides with a wall, "
+                                f"furniture, the robot start or another object")
+        placed.append((pose[0], pose[1], r))
+    out = {}
+    for node, cat, name, room, pose in entries:
+        r = CATEGORIES[cat].radius
+        if pose is not None:
+            out[name] = PlacedObject(name, cat, pose[0], pose[1], pose[2])
+            continue
+        area = spec.rooms[room] if room else spec.bounds
+        ax0, ay0, ax1, ay1 = area
+        lo_x, hi_x = ax0 + r + clearance, ax1 - r - clearance
+        lo_y, hi_y = ay0 + r + clearance, ay1 - r - clearance
+        found = None
+        if lo_x <= hi_x and lo_y <= hi_y:
+            for _ in range(tries):
+                x, y = rng.uniform(lo_x, hi_x), rng.uniform(lo_y, hi_y)
+                if free(x, y, r, clearance, random=True):
+                    found = (x, y)
+                    break
+        if found is None:
+            where = f"room '{room}' {tuple(area)}" if room else f"bounds {tuple(area)}"
+            raise ctx.err(node, f"cannot place object '{name}' ({cat}) in {where}: no free floor "
+                                f"space after {tries} tries (needs {clearance} m clearance from walls, "
+                                f"furniture, the robot start and the {len(placed)} objects already "
+                                f"placed, and {DOOR_CLEARANCE} m from doorways and wall ends); lower 'count' or 'placement.clearance', or enlarge the area")
+        yaw = float(rng.uniform(-math.pi, math.pi))
+        placed.append((found[0], found[1], r))
+        out[name] = PlacedObject(name, cat, float(found[0]), float(found[1]), yaw)
+    # keep file order
+    spec.objects = [out[e[2]] for e in entries]
+
+
+def world_path(world: str | Path) -> Path:
+    """Resolve a world name ('house') or a path to its YAML file."""
+    p = Path(world)
+    if p.suffix in (".yaml", ".yml") or p.exists():
+        if not p.exists():
+            raise WorldError(f"{p}: no such world file")
+        return p
+    cand = WORLDS_DIR / f"{world}.yaml"
+    if not cand.exists():
+        known = ", ".join(sorted(x.stem for x in WORLDS_DIR.glob("*.yaml")))
+        raise WorldError(f"unknown world '{world}' (known: {known})")
+    return cand
+
+
+def load_world(world: str | Path | WorldSpec = "house", seed: int = 0) -> WorldSpec:
+    """Load a world by name or path (a WorldSpec passes through unchanged)."""
+    if isinstance(world, WorldSpec):
+        return world
+    p = world_path(world)
+    return parse_world(p.read_text(), str(p), seed)
+
+
+def list_worlds() -> list[str]:
+    return sorted(x.stem for x in WORLDS_DIR.glob("*.yaml"))

@@ -1,0 +1,148 @@
+"""Camera rendering: pybullet's EGL plugin (headless OpenGL) when it loads, TinyRenderer otherwise."""
+from __future__ import annotations
+
+import contextlib
+import importlib.util
+import logging
+import os
+import queue
+import sys
+import threading
+
+import numpy as np
+import pybullet as p
+
+log = logging.getLogger("sim.renderer")
+
+
+@contextlib.contextmanager
+def _quiet_stdout():
+    """The EGL plugin chats from C on fds 1 and 2; keep the CLI's output clean."""
+    try:
+        sys.stdout.flush()
+        sys.stderr.flush()
+        saved = [os.dup(1), os.dup(2)]
+    except (OSError, ValueError):
+        yield
+        return
+    try:
+        with open(os.devnull, "w") as null:
+            os.dup2(null.fileno(), 1)
+            os.dup2(null.fileno(), 2)
+            yield
+    finally:
+        os.dup2(saved[0], 1)
+        os.dup2(saved[1], 2)
+        for fd in saved:
+            os.close(fd)
+
+
+class Renderer:
+    """Renders RGB + depth buffer for one pybullet client.
+
+    ``name`` is "egl" (hardware OpenGL path through the EGL plugin, Mesa llvmpipe when there
+    is no GPU) or "tiny" (pybullet's software TinyRenderer)."""
+
+    def __init__(self, cid: int, prefer_egl: bool = True):
+        self.cid = cid
+        self.name = "tiny"
+        self.plugin = -1
+        self.why_not_egl = "not requested"
+        self._sizes_seen = set()
+        if prefer_egl and os.environ.get("ACTORBT_SIM_NO_EGL") != "1":
+            self._try_egl()
+
+    def _try_egl(self):
+        spec = importlib.util.find_spec("eglRenderer")
+        if spec is None or not spec.origin:
+            self.why_not_egl = "pybullet's eglRenderer module is not installed"
+            return
+        with _quiet_stdout():
+            plugin = p.loadPlugin(spec.origin, "_eglRendererPlugin", physicsClientId=self.cid)
+        if plugin < 0:
+            self.why_not_egl = "eglRenderer plugin failed to load (libegl1/libegl-mesa0 missing?)"
+            return
+        self.plugin = plugin
+        # prove it renders: a 2x2 frame must come back
+        try:
+            with _quiet_stdout():
+                w, h, rgb, _, _ = p.getCameraImage(
+                    4, 4, renderer=p.ER_BULLET_HARDWARE_OPENGL, flags=p.ER_NO_SEGMENTATION_MASK,
+                    physicsClientId=self.cid)
+            ok = (w, h) == (4, 4) and np.asarray(rgb).size == 64
+        except Exception as e:   # pragma: no cover - depends on the machine
+            ok, self.why_not_egl = False, f"EGL render failed: {e}"
+        if not ok:
+            self.close()
+            self.why_not_egl = getattr(self, "why_not_egl", "") or "EGL render returned nothing"
+            return
+        self.name = "egl"
+        self.why_not_egl = ""
+
+    def render(self, width, height, view, projection):
+        """-> (rgb uint8 [h, w, 3], depth buffer float32 [h, w] in 0..1)."""
+        renderer = p.ER_BULLET_HARDWARE_OPENGL if self.name == "egl" else p.ER_TINY_RENDERER
+        first = (width, height) not in self._sizes_seen     # the plugin chats on a new size
+        self._sizes_seen.add((width, height))
+        with _quiet_stdout() if first and self.name == "egl" else contextlib.nullcontext():
+            _, _, rgba, depth, _ = p.getCameraImage(
+                width, height, view, projection, renderer=renderer,
+                flags=p.ER_NO_SEGMENTATION_MASK, shadow=0, physicsClientId=self.cid)
+        rgba = np.asarray(rgba, dtype=np.uint8).reshape(height, width, 4)
+        depth = np.asarray(depth, dtype=np.float32).reshape(height, width)
+        return np.ascontiguousarray(rgba[:, :, :3]), depth
+
+    def close(self):
+        if self.plugin >= 0:
+            try:
+                with _quiet_stdout():
+                    p.unloadPlugin(self.plugin, physicsClientId=self.cid)
+            except p.error:
+                pass
+            self.plugin = -1
+
+
+class GLThread:
+    """A thread that owns a world's OpenGL (EGL) context.
+
+    EGL contexts are current on one thread only, and the EGL plugin registers visual shapes
+    with OpenGL as they are created: so loading the plugin, creating anything visible and
+    rendering must all happen on the same thread. Physics steps may run elsewhere (callers
+    wait for their call, so pybullet is never used by two threads at once)."""
+
+    def __init__(self, name="actorbt-sim-gl"):
+        self._q = queue.SimpleQueue()
+        self._thread = threading.Thread(target=self._run, name=name, daemon=True)
+        self._thread.start()
+
+    def _run(self):
+        while True:
+            item = self._q.get()
+            if item is None:
+                return
+            fn, args, kwargs, box, done = item
+            try:
+                box.append((True, fn(*args, **kwargs)))
+            except BaseException as e:     # handed to the caller
+                box.append((False, e))
+            done.set()
+
+    def call(self, fn, *args, **kwargs):
+        if threading.current_thread() is self._thread:
+            return fn(*args, **kwargs)
+        if not self._thread.is_alive():
+            raise RuntimeError("the simulator's GL thread has stopped")
+        box: list = []
+        done = threading.Event()
+        self._q.put((fn, args, kwargs, box, done))
+        done.wait()
+        ok, value = box[0]
+        if not ok:
+            raise value
+        return value
+
+    def stop(self):
+        if self._thread.is_alive():
+            self._q.put(None)
+            if threading.current_thread() is not self._thread:
+                self._thread.join(timeout=5.0)

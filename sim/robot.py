@@ -1,0 +1,140 @@
+"""The mobile manipulator in a pybullet client: loading, joint maps, low-level actuation."""
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pybullet as p
+
+URDF = Path(__file__).resolve().parent / "models" / "mobile_manipulator.urdf"
+
+WHEEL_RADIUS = 0.033
+WHEEL_SEPARATION = 0.287
+# TurtleBot3 Waffle Pi limits (turtlebot3_teleop / firmware)
+MAX_LINEAR = 0.26     # m/s
+MAX_ANGULAR = 1.82    # rad/s
+WHEEL_TORQUE = 1.5    # N m per wheel motor (XM430-W210 continuous; stall is ~3 N m)
+WHEEL_ACCEL = 1.0 / WHEEL_RADIUS   # rad/s^2: 1 m/s^2 at the rim, like the firmware's velocity profile
+
+WHEELS = ("wheel_left_joint", "wheel_right_joint")
+ARM = ("joint1", "joint2", "joint3", "joint4")
+GRIPPER = ("gripper_left_joint", "gripper_right_joint")
+JOINT_STATE_NAMES = WHEELS + ARM + GRIPPER
+# OpenManipulator-X "home": folded up, out of the camera's view
+ARM_HOME = (0.0, -1.0, 0.3, 0.7)
+GRIPPER_FORCE = 10.0      # N per finger
+GRIPPER_SPEED = 0.05      # m/s per finger
+GRIPPER_MAX_OPENING = 0.09
+
+
+class Robot:
+    def __init__(self, cid: int, start=(0.0, 0.0, 0.0), arm_home=ARM_HOME):
+        self.cid = cid
+        x, y, yaw = start
+        flags = (p.URDF_USE_INERTIA_FROM_FILE | p.URDF_USE_IMPLICIT_CYLINDER | p.URDF_USE_SELF_COLLISION
+                 | p.URDF_USE_SELF_COLLISION_EXCLUDE_PARENT)
+        self.body = p.loadURDF(str(URDF), [x, y, 0.0], p.getQuaternionFromEuler([0, 0, yaw]),
+                               flags=flags, physicsClientId=cid)
+        self.joint: dict[str, int] = {}
+        self.link: dict[str, int] = {"base_footprint": -1}
+        self.limits: dict[str, tuple] = {}
+        for j in range(p.getNumJoints(self.body, physicsClientId=cid)):
+            info = p.getJointInfo(self.body, j, physicsClientId=cid)
+            name = info[1].decode()
+            self.joint[name] = j
+            self.link[info[12].decode()] = j
+            self.limits[name] = (info[8], info[9], info[10], info[11])   # lower, upper, effort, vel
+        b = self.body
+        # fingers are siblings: their inner faces touch when closed, they must not collide
+        p.setCollisionFilterPair(b, b, self.joint["gripper_left_joint"], self.joint["gripper_right_joint"],
+                                 0, physicsClientId=cid)
+        self.state_idx = [self.joint[n] for n in JOINT_STATE_NAMES]
+        self.wheel_idx = [self.joint[n] for n in WHEELS]
+        self.arm_idx = [self.joint[n] for n in ARM]
+        self.grip_idx = [self.joint[n] for n in GRIPPER]
+        # every non-fixed joint starts with a default velocity motor; we set our own below
+        for n, q in zip(ARM, arm_home):
+            p.resetJointState(b, self.joint[n], q, physicsClientId=cid)
+        self.arm_target = list(arm_home)
+        self.arm_target_vel = [0.0] * 4
+        self.gripper_width = GRIPPER_MAX_OPENING
+        for j in self.grip_idx:
+            p.resetJointState(b, j, self.gripper_width / 2, physicsClientId=cid)
+        self.wheel_target = [0.0, 0.0]
+        self.wheel_setpoint = [0.0, 0.0]
+        self.apply(0.0)
+
+    # ---------------- commands ----------------
+    def set_base_velocity(self, v: float, w: float):
+        """Twist -> wheel speeds, clamped to the TurtleBot3 Waffle Pi limits."""
+        v = float(np.clip(v, -MAX_LINEAR, MAX_LINEAR))
+        w = float(np.clip(w, -MAX_ANGULAR, MAX_ANGULAR))
+        wl = (v - w * WHEEL_SEPARATION / 2) / WHEEL_RADIUS
+        wr = (v + w * WHEEL_SEPARATION / 2) / WHEEL_RADIUS
+        self.wheel_target = [wl, wr]
+
+    def set_arm(self, positions, velocities=None):
+        lo_hi = [self.limits[n][:2] for n in ARM]
+        self.arm_target = [float(np.clip(q, lo, hi)) for q, (lo, hi) in zip(positions, lo_hi)]
+        self.arm_target_vel = list(velocities) if velocities is not None else [0.0] * 4
+
+    def set_gripper(self, width: float):
+        self.gripper_width = float(np.clip(width, 0.0, GRIPPER_MAX_OPENING))
+
+    def apply(self, dt: float):
+        """Push the current targets into pybullet's joint motors (they run every substep).
+        Wheel speeds ramp towards their targets at WHEEL_ACCEL, so the tyres do not skid."""
+        cid, b = self.cid, self.body
+        step = WHEEL_ACCEL * dt
+        self.wheel_setpoint = [sp + float(np.clip(tg - sp, -step, step))
+                               for sp, tg in zip(self.wheel_setpoint, self.wheel_target)]
+        p.setJointMotorControlArray(b, self.wheel_idx, p.VELOCITY_CONTROL,
+                                    targetVelocities=self.wheel_setpoint,
+                                    forces=[WHEEL_TORQUE] * 2, physicsClientId=cid)
+        p.setJointMotorControlArray(b, self.arm_idx, p.POSITION_CONTROL,
+                                    targetPositions=self.arm_target,
+                                    targetVelocities=self.arm_target_vel,
+                                    forces=[self.limits[n][2] for n in ARM],
+                                    positionGains=[0.3] * 4, velocityGains=[1.0] * 4,
+                                    physicsClientId=cid)
+        for j in self.grip_idx:
+            p.setJointMotorControl2(b, j, p.POSITION_CONTROL, targetPosition=self.gripper_width / 2,
+                                    force=GRIPPER_FORCE, maxVelocity=GRIPPER_SPEED, positionGain=0.3,
+                                    physicsClientId=cid)
+
+    # ---------------- state ----------------
+    def joint_states(self):
+        """(positions, velocities, efforts) in JOINT_STATE_NAMES order."""
+        st = p.getJointStates(self.body, self.state_idx, physicsClientId=self.cid)
+        return [s[0] for s in st], [s[1] for s in st], [s[3] for s in st]
+
+    def base_pose(self):
+        """(x, y, yaw) of base_footprint in the world (map) frame, plus the full 3-D pose."""
+        pos, orn = p.getBasePositionAndOrientation(self.body, physicsClientId=self.cid)
+        yaw = p.getEulerFromQuaternion(orn)[2]
+        return (pos[0], pos[1], yaw), pos, orn
+
+    def base_twist(self):
+        lin, ang = p.getBaseVelocity(self.body, physicsClientId=self.cid)
+        return lin, ang
+
+    def link_pose(self, name):
+        """World pose (pos, quat) of a named link's frame."""
+        if name == "base_footprint":
+            _, pos, orn = self.base_pose()
+            return pos, orn
+        s = p.getLinkState(self.body, self.link[name], computeForwardKinematics=True,
+                           physicsClientId=self.cid)
+        return s[4], s[5]
+
+    def arm_positions(self):
+        return [s[0] for s in p.getJointStates(self.body, self.arm_idx, physicsClientId=self.cid)]
+
+    def gripper_opening(self):
+        return sum(s[0] for s in p.getJointStates(self.body, self.grip_idx, physicsClientId=self.cid))
+
+
+def yaw_of(quat) -> float:
+    x, y, z, w = quat
+    return math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))

@@ -1,0 +1,359 @@
+"""SimWorld: one pybullet world (own DIRECT client), stepped by a periodic timer on the
+runtime clock, speaking ROS topics on the runtime's bus (see sim/topics.py)."""
+from __future__ import annotations
+
+import functools
+import logging
+import math
+import os
+
+import numpy as np
+import pybullet as p
+
+from .actuators import TrajectoryError, trajectory_from_msg
+from .description import PlacedObject, WorldSpec, load_world
+from .gridmap import RESOLUTION, build_grid
+from .objects import CATEGORIES
+from .renderer import GLThread, Renderer
+from .robot import ARM, Robot
+from .scene import Scene
+from .sensors import CameraModel, OdomNoise, WheelOdometry
+
+log = logging.getLogger("sim")
+
+
+def _on_hub(fn):
+    """With a runtime, only the hub thread touches this world's pybullet client (and its EGL
+    context, which is bound to the thread that made it): calls from other threads (tests,
+    the CLI) are handed to the hub and wait for the result."""
+    @functools.wraps(fn)
+    def wrapper(self, *args, **kwargs):
+        return self._on_hub_call(fn, self, *args, **kwargs)
+    return wrapper
+
+
+class SimWorld:
+    """A simulated house (or other world) with the mobile manipulator in it.
+
+    SimWorld(runtime, world="house", seed=0, gui=False) builds the world at once; ``start()``
+    puts it on the runtime (physics timer + bus topics), ``close()`` takes it off and frees
+    the pybullet client. Without a runtime (``runtime=None``) the world can still be stepped
+    with ``advance(seconds)``: the CLI helpers and tests use that.
+
+    Timing: physics runs at ``physics_hz`` in ``control_hz`` timer ticks (each tick applies
+    the controllers, then steps ``physics_hz/control_hz`` substeps). Robot state topics go out
+    at ``publish_hz``, the camera at ``camera_hz`` while someone subscribes.
+    """
+
+    def __init__(self, runtime=None, world: str | WorldSpec = "house", seed: int = 0, gui: bool = False,
+                 *, physics_hz: int = 240, control_hz: int = 60, publish_hz: float = 30.0,
+                 camera_hz: float = 5.0, camera_size=(320, 240), odom_noise: OdomNoise | None = None,
+                 prefer_egl: bool = True, camera: bool = True, cmd_vel_timeout: float = 0.0,
+                 map_resolution: float = RESOLUTION):
+        if physics_hz % control_hz:
+            raise ValueError(f"physics_hz ({physics_hz}) must be a multiple of control_hz ({control_hz})")
+        self.runtime = runtime
+        self.seed = int(seed)
+        self.spec = load_world(world, self.seed)
+        self.dt = 1.0 / control_hz
+        self.substeps = physics_hz // control_hz
+        self.publish_every = max(1, round(control_hz / publish_hz))
+        self.camera_hz = camera_hz
+        self.cmd_vel_timeout = cmd_vel_timeout
+        self.prefer_egl = prefer_egl
+        self.gui = False
+        self.cid = None
+        self._gui_requested = gui
+        self._camera_enabled = camera
+        self._camera_size = camera_size
+        self._odom_noise = odom_noise
+        self._map_resolution = map_resolution
+        # the OpenGL context lives on its own thread (see GLThread): build the world there
+        self._gl = GLThread() if camera else None
+        try:
+            self._gl_call(self._build)
+        except BaseException:
+            if self._gl is not None:
+                self._gl.stop()
+            raise
+
+    def _gl_call(self, fn, *args, **kwargs):
+        if self._gl is None:
+            return fn(*args, **kwargs)
+        return self._gl.call(fn, *args, **kwargs)
+
+    def _on_hub_call(self, fn, *args, **kwargs):
+        rt = self.runtime
+        if rt is None:
+            return fn(*args, **kwargs)
+        from bt_engine.errors import RuntimeClosedError
+        try:
+            return rt.run_on_hub(fn, *args, **kwargs)
+        except RuntimeClosedError:
+            return fn(*args, **kwargs)       # the hub is gone: nothing else touches the client
+
+    def _build(self):
+        if self._gui_requested:
+            if os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"):
+                self.cid = p.connect(p.GUI)
+                self.gui = self.cid >= 0
+            else:
+                log.warning("--gui: no display found; running headless")
+        if not self.gui:
+            self.cid = p.connect(p.DIRECT)
+        if self.cid < 0:
+            raise RuntimeError("pybullet: could not connect a physics client")
+        cid = self.cid
+        p.resetSimulation(physicsClientId=cid)
+        p.setGravity(0, 0, -9.81, physicsClientId=cid)
+        p.setPhysicsEngineParameter(fixedTimeStep=self.dt, numSubSteps=self.substeps,
+                                    numSolverIterations=50, deterministicOverlappingPairs=1,
+                                    physicsClientId=cid)
+        if self.gui:
+            p.configureDebugVisualizer(p.COV_ENABLE_GUI, 0, physicsClientId=cid)
+        # the EGL plugin only sees visual shapes created after it loads: load it first
+        self._renderer: Renderer | None = (Renderer(cid, prefer_egl=self.prefer_egl)
+                                           if self._camera_enabled else None)
+        self.scene = Scene(cid, self.spec)
+        self.robot = Robot(cid, self.spec.robot_start)
+        self.odometry = WheelOdometry(self._odom_noise or OdomNoise(), np.random.default_rng([self.seed, 7]))
+        self.camera = CameraModel(*self._camera_size)
+        self.grid = build_grid(self.spec, self._map_resolution)
+        self.t = 0.0                 # simulated seconds since construction
+        self._t_offset = 0.0         # runtime clock - self.t (set by start())
+        self.ticks = 0
+        self._traj = None
+        self._last_cmd_vel = -math.inf
+        self.topics = None
+        self._timers = []
+        self.frames_rendered = 0
+        self.render_seconds = 0.0
+        js = self.robot.joint_states()[0]
+        self.odometry.update(js[0], js[1], 0.0)
+
+    # ------------------------------------------------------------------ runtime glue
+    def start(self):
+        """Register the physics timer, the camera timer and the bus endpoints on the runtime."""
+        if self.runtime is None:
+            raise RuntimeError("SimWorld.start() needs a runtime (SimWorld(runtime, ...))")
+        if not self._timers:
+            self.runtime.run_on_hub(self._start_on_hub)
+        return self
+
+    def _start_on_hub(self):
+        from .topics import SimTopics
+
+        rt = self.runtime
+        self._t_offset = rt.now() - self.t
+        self.topics = SimTopics(self, rt)
+        self._timers = [rt.call_every(self.dt, self._tick),
+                        rt.call_every(1.0 / self.camera_hz, self.topics.camera_tick)]
+
+    def _stop_on_hub(self):
+        for h in self._timers:
+            h.cancel()
+        self._timers = []
+        if self.topics is not None:
+            self.topics.close()
+            self.topics = None
+
+    def close(self):
+        """Take the world off the runtime and free its pybullet client."""
+        if self.cid is not None:
+            self._on_hub_call(self._close_on_hub)
+
+    def _close_on_hub(self):
+        self._stop_on_hub()
+        self._gl_call(self._disconnect)
+        if self._gl is not None:
+            self._gl.stop()
+            self._gl = None
+
+    def _disconnect(self):
+        if self._renderer is not None:
+            self._renderer.close()
+            self._renderer = None
+        if self.cid is not None and self.cid >= 0:
+            try:
+                p.disconnect(physicsClientId=self.cid)
+            except p.error:
+                pass
+        self.cid = None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    def now(self) -> float:
+        """Time on the runtime clock that corresponds to the simulated state."""
+        return self.t + self._t_offset
+
+    def _tick(self):
+        self.step()
+        if self.topics is not None:
+            self.topics.after_step()
+
+    # ------------------------------------------------------------------ physics
+    def step(self):
+        """One control period: controllers, then physics substeps, then odometry."""
+        t_next = (self.ticks + 1) * self.dt
+        if self.cmd_vel_timeout > 0 and self.now() - self._last_cmd_vel > self.cmd_vel_timeout:
+            self.robot.set_base_velocity(0.0, 0.0)
+        if self._traj is not None:
+            pos, vel = self._traj.sample(t_next + self._t_offset)
+            self.robot.set_arm(pos, vel)
+        self.robot.apply(self.dt)
+        p.stepSimulation(physicsClientId=self.cid)
+        self.t = t_next
+        self.ticks += 1
+        q = self.robot.joint_states()[0]
+        self.odometry.update(q[0], q[1], self.dt)
+
+    @_on_hub
+    def advance(self, seconds: float):
+        """Step the world for ``seconds`` without a runtime (tests, CLI helpers)."""
+        if self._timers:
+            raise RuntimeError("advance() steps the world by hand; this world runs on a runtime timer")
+        for _ in range(max(0, round(seconds / self.dt))):
+            self.step()
+
+    # ------------------------------------------------------------------ commands
+    @_on_hub
+    def apply_cmd_vel(self, v: float, w: float):
+        self._last_cmd_vel = self.now()
+        self.robot.set_base_velocity(v, w)
+
+    @_on_hub
+    def apply_joint_trajectory(self, msg):
+        """trajectory_msgs/JointTrajectory for the arm joints (subset allowed)."""
+        try:
+            self._traj = trajectory_from_msg(msg, ARM, self.now(), self.robot.arm_positions())
+        except TrajectoryError as e:
+            log.warning("ignored /arm_controller/joint_trajectory: %s", e)
+            return False
+        return True
+
+    @_on_hub
+    def set_arm_positions(self, positions, duration: float = 2.0):
+        """Convenience: a straight-line (joint space) move over ``duration`` seconds."""
+        from builtin_interfaces.msg import Duration
+        from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
+
+        msg = JointTrajectory()
+        msg.joint_names = list(ARM)
+        pt = JointTrajectoryPoint()
+        pt.positions = [float(x) for x in positions]
+        pt.time_from_start = Duration(sec=int(duration), nanosec=int((duration % 1) * 1e9))
+        msg.points = [pt]
+        return self.apply_joint_trajectory(msg)
+
+    @_on_hub
+    def set_gripper(self, width: float):
+        """Finger opening in metres (0 closed .. 0.09 open); fingers push with 10 N each."""
+        self.robot.set_gripper(width)
+
+    # ------------------------------------------------------------------ ground truth
+    @_on_hub
+    def robot_pose(self):
+        """(x, y, yaw) of base_footprint in the map (world) frame."""
+        return self.robot.base_pose()[0]
+
+    @_on_hub
+    def odom_pose(self):
+        """(x, y, yaw) from wheel odometry, in the odom frame (= the start pose)."""
+        o = self.odometry
+        return (o.x, o.y, o.yaw)
+
+    def object_names(self):
+        return list(self.scene.objects)
+
+    def object_category(self, name):
+        return self.scene.categories[name]
+
+    @_on_hub
+    def object_pose(self, name):
+        """(x, y, z, qx, qy, qz, qw): frame at the centre of the object's bounding box."""
+        return self.scene.object_pose(name)
+
+    @_on_hub
+    def object_poses(self):
+        return {n: self.scene.object_pose(n) for n in self.scene.objects}
+
+    @property
+    def place_location(self):
+        return self.spec.place
+
+    @_on_hub
+    def add_object(self, category: str, x: float, y: float, yaw: float = 0.0, name: str | None = None):
+        if category not in CATEGORIES:
+            raise ValueError(f"unknown category '{category}' (one of: {', '.join(CATEGORIES)})")
+        if name is None:
+            k = 1
+            while f"{category}_{k}" in self.scene.objects:
+                k += 1
+            name = f"{category}_{k}"
+        self._gl_call(self.scene.add_object, PlacedObject(name, category, x, y, yaw))
+        return name
+
+    @_on_hub
+    def set_object_pose(self, name, x, y, yaw=0.0, z=None):
+        self.scene.set_object_pose(name, x, y, yaw, z)
+
+    @_on_hub
+    def link_pose(self, link: str):
+        """World pose (pos, quat) of a robot link (names as in the URDF)."""
+        return self.robot.link_pose(link)
+
+    @_on_hub
+    def in_gripper(self, name) -> bool:
+        """True if the object touches both fingers (a grasp, as physics sees it)."""
+        b, body = self.robot.body, self.scene.objects[name]
+        touching = set()
+        for c in p.getContactPoints(bodyA=b, bodyB=body, physicsClientId=self.cid):
+            touching.add(c[3])
+        return all(self.robot.joint[j] in touching for j in ("gripper_left_joint", "gripper_right_joint"))
+
+    @_on_hub
+    def state_vector(self) -> np.ndarray:
+        """Every body's pose and velocity and every joint's state: for determinism checks."""
+        out = []
+        bodies = [self.robot.body] + list(self.scene.objects.values())
+        for body in bodies:
+            pos, orn = p.getBasePositionAndOrientation(body, physicsClientId=self.cid)
+            lin, ang = p.getBaseVelocity(body, physicsClientId=self.cid)
+            out += list(pos) + list(orn) + list(lin) + list(ang)
+        q, v, _ = self.robot.joint_states()
+        out += list(q) + list(v) + list(self.odom_pose())
+        return np.array(out)
+
+    # ------------------------------------------------------------------ camera
+    @property
+    def renderer(self) -> Renderer:
+        if self._renderer is None:
+            # built without camera=True: the EGL plugin would miss the existing shapes
+            self._renderer = Renderer(self.cid, prefer_egl=False)
+        return self._renderer
+
+    @property
+    def renderer_name(self) -> str:
+        """"egl" or "tiny"."""
+        return self.renderer.name
+
+    @_on_hub
+    def render_camera(self):
+        """(rgb uint8 [h, w, 3], depth float32 [h, w] metres, NaN = no return)."""
+        return self._gl_call(self._render_camera)
+
+    def _render_camera(self):
+        import time
+
+        t0 = time.perf_counter()
+        pos, orn = self.robot.link_pose("camera_optical_frame")
+        cam = self.camera
+        rgb, buf = self.renderer.render(cam.width, cam.height, cam.view(pos, orn), cam.projection())
+        depth = cam.linearize(buf)
+        self.frames_rendered += 1
+        self.render_seconds += time.perf_counter() - t0
+        return rgb, depth

@@ -1,0 +1,201 @@
+"""The simulator's ROS topics on the runtime's bus (real ROS 2 message classes).
+
+Subscribed (actuators):
+  /cmd_vel                          geometry_msgs/Twist       linear.x, angular.z; TB3 limits
+  /arm_controller/joint_trajectory  trajectory_msgs/JointTrajectory  joint1..joint4
+  /gripper/command                  std_msgs/Float64          finger opening [m], 0 .. 0.09
+Published (sensors):
+  /odom                             nav_msgs/Odometry         wheel odometry, odom -> base_footprint
+  /ground_truth/pose                geometry_msgs/PoseStamped map -> base_footprint, exact
+  /joint_states                     sensor_msgs/JointState    wheels, arm, fingers
+  /camera/color/image_raw           sensor_msgs/Image         rgb8
+  /camera/depth/image_raw           sensor_msgs/Image         32FC1, metres, NaN = no return
+  /camera/camera_info               sensor_msgs/CameraInfo    (colour and depth share it)
+  /map                              nav_msgs/OccupancyGrid    5 cm; sent to each new subscriber
+                                                              and every 10 s while subscribed
+State topics go out only while subscribed; the camera renders only while subscribed.
+"""
+from __future__ import annotations
+
+import array
+import math
+
+from builtin_interfaces.msg import Time
+from geometry_msgs.msg import PoseStamped, Twist
+from nav_msgs.msg import OccupancyGrid, Odometry
+from sensor_msgs.msg import CameraInfo, Image, JointState
+from std_msgs.msg import Float64
+from trajectory_msgs.msg import JointTrajectory
+
+from .gridmap import occupancy_grid_msg
+from .robot import JOINT_STATE_NAMES
+
+CMD_VEL = "/cmd_vel"
+ARM_TRAJECTORY = "/arm_controller/joint_trajectory"
+GRIPPER_COMMAND = "/gripper/command"
+ODOM = "/odom"
+GROUND_TRUTH = "/ground_truth/pose"
+JOINT_STATES = "/joint_states"
+COLOR = "/camera/color/image_raw"
+DEPTH = "/camera/depth/image_raw"
+CAMERA_INFO = "/camera/camera_info"
+MAP = "/map"
+MAP_REPUBLISH = 10.0   # s
+
+CAMERA_FRAME = "camera_optical_frame"
+
+
+def stamp(t: float) -> Time:
+    sec, nsec = divmod(int(round(t * 1e9)), 1_000_000_000)
+    return Time(sec=sec, nanosec=nsec)
+
+
+def _yaw_quat(q, yaw):
+    q.z = math.sin(yaw / 2)
+    q.w = math.cos(yaw / 2)
+
+
+class SimTopics:
+    def __init__(self, sim, rt):
+        self.sim = sim
+        self.bus = bus = rt.bus
+        self.pub_odom = bus.publisher(ODOM, Odometry)
+        self.pub_gt = bus.publisher(GROUND_TRUTH, PoseStamped)
+        self.pub_js = bus.publisher(JOINT_STATES, JointState)
+        self.pub_rgb = bus.publisher(COLOR, Image)
+        self.pub_depth = bus.publisher(DEPTH, Image)
+        self.pub_info = bus.publisher(CAMERA_INFO, CameraInfo)
+        self.pub_map = bus.publisher(MAP, OccupancyGrid)
+        self.subs = [
+            bus.subscribe(CMD_VEL, Twist, self._on_cmd_vel),
+            bus.subscribe(ARM_TRAJECTORY, JointTrajectory, sim.apply_joint_trajectory),
+            bus.subscribe(GRIPPER_COMMAND, Float64, self._on_gripper),
+        ]
+        self._map_msg = None
+        self._map_subs = 0
+        self._map_sent = -math.inf
+        self._ticks = 0
+
+    def close(self):
+        for s in self.subs:
+            s.close()
+        self.subs = []
+
+    # ---------------- actuators ----------------
+    def _on_cmd_vel(self, msg: Twist):
+        self.sim.apply_cmd_vel(msg.linear.x, msg.angular.z)
+
+    def _on_gripper(self, msg: Float64):
+        self.sim.set_gripper(msg.data)
+
+    # ---------------- sensors ----------------
+    def after_step(self):
+        sim, count = self.sim, self.bus.subscription_count
+        self._ticks += 1
+        now = sim.now()
+        if self._ticks % sim.publish_every == 0:
+            st = None
+            if count(ODOM):
+                self.pub_odom.publish(self.odom_msg(now))
+            if count(GROUND_TRUTH):
+                self.pub_gt.publish(self.ground_truth_msg(now))
+            if count(JOINT_STATES):
+                st = st or sim.robot.joint_states()
+                self.pub_js.publish(self.joint_state_msg(now, st))
+        n = count(MAP)
+        if n > self._map_subs or (n and now - self._map_sent >= MAP_REPUBLISH):
+            self.publish_map(now)
+        self._map_subs = n
+
+    def publish_map(self, now):
+        if self._map_msg is None:
+            self._map_msg = occupancy_grid_msg(self.sim.grid)
+        self._map_msg.header.stamp = stamp(now)
+        self._map_msg.info.map_load_time = self._map_msg.header.stamp
+        self.pub_map.publish(self._map_msg)
+        self._map_sent = now
+
+    def odom_msg(self, now) -> Odometry:
+        o = self.sim.odometry
+        msg = Odometry()
+        msg.header.stamp = stamp(now)
+        msg.header.frame_id = "odom"
+        msg.child_frame_id = "base_footprint"
+        msg.pose.pose.position.x = o.x
+        msg.pose.pose.position.y = o.y
+        _yaw_quat(msg.pose.pose.orientation, o.yaw)
+        msg.twist.twist.linear.x = o.v
+        msg.twist.twist.angular.z = o.w
+        cov = [0.0] * 36
+        cov[0] = cov[7] = 1e-3
+        cov[14] = cov[21] = cov[28] = 1e6
+        cov[35] = 1e-3
+        msg.pose.covariance = cov
+        msg.twist.covariance = cov
+        return msg
+
+    def ground_truth_msg(self, now) -> PoseStamped:
+        _, pos, orn = self.sim.robot.base_pose()
+        msg = PoseStamped()
+        msg.header.stamp = stamp(now)
+        msg.header.frame_id = "map"
+        msg.pose.position.x, msg.pose.position.y, msg.pose.position.z = pos
+        q = msg.pose.orientation
+        q.x, q.y, q.z, q.w = orn
+        return msg
+
+    def joint_state_msg(self, now, st) -> JointState:
+        q, v, e = st
+        msg = JointState()
+        msg.header.stamp = stamp(now)
+        msg.name = list(JOINT_STATE_NAMES)
+        msg.position = [float(x) for x in q]
+        msg.velocity = [float(x) for x in v]
+        msg.effort = [float(x) for x in e]
+        return msg
+
+    def camera_info_msg(self, st: Time) -> CameraInfo:
+        cam = self.sim.camera
+        msg = CameraInfo()
+        msg.header.stamp = st
+        msg.header.frame_id = CAMERA_FRAME
+        msg.width, msg.height = cam.width, cam.height
+        msg.distortion_model = "plumb_bob"
+        msg.d = [0.0] * 5
+        k = cam.K()
+        msg.k = k
+        msg.r = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]
+        msg.p = [k[0], 0.0, k[2], 0.0, 0.0, k[4], k[5], 0.0, 0.0, 0.0, 1.0, 0.0]
+        return msg
+
+    def camera_tick(self):
+        count = self.bus.subscription_count
+        want_rgb, want_depth, want_info = count(COLOR) > 0, count(DEPTH) > 0, count(CAMERA_INFO) > 0
+        if not (want_rgb or want_depth or want_info):
+            return
+        st = stamp(self.sim.now())
+        if want_rgb or want_depth:
+            rgb, depth = self.sim.render_camera()
+            h, w = depth.shape
+            if want_rgb:
+                im = Image()
+                im.header.stamp = st
+                im.header.frame_id = CAMERA_FRAME
+                im.height, im.width = h, w
+                im.encoding = "rgb8"
+                im.is_bigendian = 0
+                im.step = w * 3
+                im.data = array.array("B", rgb.tobytes())
+                self.pub_rgb.publish(im)
+            if want_depth:
+                im = Image()
+                im.header.stamp = st
+                im.header.frame_id = CAMERA_FRAME
+                im.height, im.width = h, w
+                im.encoding = "32FC1"
+                im.is_bigendian = 0
+                im.step = w * 4
+                im.data = array.array("B", depth.astype("<f4").tobytes())
+                self.pub_depth.publish(im)
+        if want_info:
+            self.pub_info.publish(self.camera_info_msg(st))

@@ -1,0 +1,135 @@
+"""Manipulator and navigation actors driving the simulated robot through topics."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from bt_engine import Runtime
+from tests.conftest import run_in_actor
+
+sim_mod = pytest.importorskip("sim")
+
+
+@pytest.fixture(scope="module")
+def open_floor():
+    from actors.robot import Robot
+    rt = Runtime()
+    world = sim_mod.SimWorld(rt, world="open_floor", seed=0)
+    world.start()
+    rt.add_subsystem("robot", Robot)
+    yield rt, world
+    rt.run_on_hub(world.close)
+    rt.close()
+
+
+def tool_in_base_frame(world) -> np.ndarray:
+    """Ground truth: end_effector_link position in base_footprint [m]."""
+    (x, y, yaw) = world.robot_pose()
+    pos, _ = world.link_pose("end_effector_link")
+    dx, dy = pos[0] - x, pos[1] - y
+    return np.array([math.cos(yaw) * dx + math.sin(yaw) * dy,
+                     -math.sin(yaw) * dx + math.cos(yaw) * dy, pos[2]])
+
+
+@pytest.mark.parametrize("target", [(0.24, 0.0, 0.07, 0.0), (0.20, 0.08, 0.12, 0.5),
+                                    (0.15, -0.10, 0.05, 1.2)])
+def test_move_to_pose_ends_within_one_centimetre(open_floor, target):
+    rt, world = open_floor
+    rt.call("home")
+    rt.call("move_to_pose", *target)
+    err = np.linalg.norm(tool_in_base_frame(world) - np.array(target[:3]))
+    assert err < 0.01, f"tool {err * 1000:.1f} mm from {target}"
+
+
+def test_joint_moves_and_status(open_floor):
+    rt, _ = open_floor
+    q = rt.call("move_joint_degree", 20, -30, 20, 10)
+    assert np.allclose(q, np.radians([20, -30, 20, 10]), atol=0.01)
+    q2 = rt.call("adjust_joint", -20, 0, 0, 0)
+    assert q2[0] == pytest.approx(0.0, abs=0.01)
+    status = rt.call("get_status")
+    assert set(status) == {"joints", "velocities", "gripper", "pose"}
+
+
+def test_unreachable_pose_is_a_clean_failure(open_floor):
+    from bt_engine import ActorError
+    rt, _ = open_floor
+    with pytest.raises(ActorError) as e:
+        rt.call("move_to_pose", 1.5, 0.0, 0.1, 0.0)
+    assert "unreachable" in str(e.value)
+
+
+def test_gripper_opens_and_closes(open_floor):
+    rt, _ = open_floor
+    assert rt.call("open") == pytest.approx(0.085, abs=0.003)
+    assert rt.call("close") == pytest.approx(0.0, abs=0.003)
+
+
+def test_cancelling_a_trajectory_stops_the_arm_smoothly(open_floor):
+    rt, world = open_floor
+    rt.call("home")
+
+    def body():
+        txn = rt.start("move_joint", 1.5, 0.3, -0.2, 0.4)
+        rt.sleep(0.6)  # mid-way
+        txn.cancel("operator stop")
+        t_cancel = rt.now()
+        speeds = []
+        while rt.now() - t_cancel < 1.0:
+            rt.sleep(0.05)
+            speeds.append(max(abs(v) for v in rt.call("get_status")["velocities"]))
+        return txn, speeds
+    txn, speeds = run_in_actor(rt, body)
+    assert txn.cancelled
+    assert max(speeds[:2]) > 0.02, "the stop is a ramp, not a freeze"
+    assert speeds[-1] < 0.02, f"joint speeds after 1 s: {speeds[-1]:.3f} rad/s"
+
+
+def test_mini_walk_and_turn(open_floor):
+    rt, world = open_floor
+    x0, y0, _ = world.robot_pose()
+    driven = rt.call("mini_walk", 0.3)
+    assert driven == pytest.approx(0.3, abs=0.01)
+    yaw = rt.call("mini_turn", math.pi / 2)
+    _, _, true_yaw = world.robot_pose()
+    assert abs(math.remainder(yaw - true_yaw, 2 * math.pi)) < 0.01
+
+
+def test_cancelling_goto_stops_the_base(open_floor):
+    rt, world = open_floor
+    x, y, _ = world.robot_pose()
+
+    def body():
+        txn = rt.start("goto", x + 2.0, y, 0.0)
+        rt.sleep(3.0)
+        txn.cancel("operator stop")
+        rt.sleep(1.0)
+        return txn
+    txn = run_in_actor(rt, body)
+    odom = rt.call("odom")
+    assert txn.cancelled
+    assert abs(odom.twist.twist.linear.x) < 0.01 and abs(odom.twist.twist.angular.z) < 0.02
+
+
+def test_goto_across_two_rooms_of_the_house():
+    from actors.robot import Robot
+    with Runtime() as rt:
+        world = sim_mod.SimWorld(rt, world="house", seed=0)
+        world.start()
+        rt.add_subsystem("robot", Robot)
+        goal = (2.6, 5.4, math.pi / 2)  # living room -> bedroom, through a doorway
+        rt.call("goto", *goal)
+        x, y, yaw = world.robot_pose()
+        rt.run_on_hub(world.close)
+    assert math.hypot(x - goal[0], y - goal[1]) < 0.10
+    assert abs(math.degrees(math.remainder(yaw - goal[2], 2 * math.pi))) < 5.0
+
+
+def test_goto_into_a_wall_fails_cleanly(open_floor):
+    from bt_engine import ActorError
+    rt, _ = open_floor
+    with pytest.raises(ActorError) as e:
+        rt.call("goto", 100.0, 100.0, 0.0)
+    assert "no path" in str(e.value)
