@@ -22,7 +22,7 @@ LOOKAHEAD = 0.25        # pure-pursuit look-ahead distance [m]
 ROBOT_RADIUS = 0.20     # footprint radius used to inflate the map [m]
 INFLATION = 0.45        # distance over which the map cost decays [m]
 XY_TOLERANCE = 0.04     # goal position tolerance [m]
-YAW_TOLERANCE = math.radians(1.5)
+YAW_TOLERANCE = math.radians(0.5)
 
 
 class NavigationError(ActorbtError):
@@ -61,6 +61,15 @@ class Navigation(SubSystem):
             planner = GridPlanner(inflate(grid, ROBOT_RADIUS, inflation_radius=INFLATION))
             self.set_value("planner", planner)
         return planner
+
+    @actor
+    def clearance(self, x: float, y: float) -> float:
+        """Distance from (x, y) [m] to the nearest obstacle on the map [m] (0 outside it)."""
+        costmap = self._planner().costmap
+        row, col = costmap.grid.cell_of(x, y)
+        if not costmap.grid.contains(row, col):
+            return 0.0
+        return float(costmap.clearance[row, col])
 
     @actor
     def plan_path(self, x: float, y: float) -> list[tuple[float, float]]:
@@ -178,7 +187,7 @@ class Navigation(SubSystem):
                     return
                 if self.runtime.now() > deadline:
                     raise NavigationError(f"turn timed out {math.degrees(err):.1f} deg short")
-                w = math.copysign(min(MAX_TURN, max(0.12, 2.0 * abs(err))), err)
+                w = math.copysign(min(MAX_TURN, max(0.05, 2.0 * abs(err))), err)
                 self.run_actor("cmd_vel", _twist(0.0, w))
 
 

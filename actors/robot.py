@@ -3,6 +3,7 @@ from __future__ import annotations
 
 from bt_engine import SubSystem
 
+from .catch import Catcher
 from .manipulator import Manipulator
 from .navigation import Navigation
 
@@ -14,3 +15,4 @@ class Robot(SubSystem):
         super().__init__()
         self.add_subsystem("navigation", Navigation)
         self.add_subsystem("arm", Manipulator)
+        self.add_subsystem("catch", Catcher)

@@ -105,7 +105,7 @@ def bench_arm(n: int, seed: int) -> dict[str, float]:
     exact = PlanningScene(padding=0.0, acm_samples=0)  # real geometry, to verify the paths
     assert scene.is_valid(HOME), scene.check(HOME).describe()
     plan_pose_motion(HOME, (0.2, 0.0, 0.15, 0.5), scene)  # warm-up (first OMPL use)
-    times, raw, simp, planners, failures = [], [], [], {}, []
+    times, raw, simp, planners, failures, ompl_times = [], [], [], {}, [], []
     paths, blocked = [], 0
     for i in range(n):
         pose, block = random_query(scene, rng)
@@ -117,6 +117,8 @@ def bench_arm(n: int, seed: int) -> dict[str, float]:
             simp.append(result.length)
             paths.append(result.path)
             planners[result.planner] = planners.get(result.planner, 0) + 1
+            if result.planner != "straight":
+                ompl_times.append(result.planning_time)
             exact.clear()
             for ob in scene.obstacles.values():
                 if ob.name != "floor":
@@ -138,6 +140,11 @@ def bench_arm(n: int, seed: int) -> dict[str, float]:
         f"arm: planning time median {1e3 * statistics.median(times):.2f} ms, "
         f"p95 {1e3 * pct(times, 95):.2f} ms, max {1e3 * max(times):.2f} ms"
     )
+    if ompl_times:
+        print(
+            f"arm: queries that needed OMPL: median {1e3 * statistics.median(ompl_times):.2f} ms, "
+            f"p95 {1e3 * pct(ompl_times, 95):.2f} ms"
+        )
     print(
         f"arm: path length median {statistics.median(raw):.3f} rad before simplification, "
         f"{statistics.median(simp):.3f} rad after (mean {statistics.mean(raw):.3f} -> {statistics.mean(simp):.3f})"

@@ -27,7 +27,7 @@ from .errors import InvalidInputError
 __all__ = ["OccupancyGrid", "Costmap", "inflate"]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)  # holds arrays: compared by identity
 class OccupancyGrid:
     """A 2-D occupancy grid in the map frame.
 

@@ -9,12 +9,15 @@ when joint 1 allows it, the "reversed" solutions that reach over the shoulder.
 Frames and conventions
 ----------------------
 * Poses are expressed in the model's **root frame**, ``base_footprint`` by
-  default (on the floor under the base centre, x forward, z up). Pass
+  default (on the floor under the wheel axle centre, x forward, z up). Pass
   ``root="link1"`` (or any link above ``joint1``) for the arm base frame.
 * A target pose is ``(x, y, z, pitch)``: the position of ``end_effector_link``
   [m] and the tool pitch [rad], the angle of the tool x axis *below* the
   horizontal (0 = pointing forward, +pi/2 = pointing straight down). The tool
-  yaw is set by ``joint1`` and is not a free variable of a 4-DOF arm.
+  yaw is set by ``joint1`` and is not a free variable of a 4-DOF arm; by
+  default IK keeps the tool pointing away from the joint1 axis (``heading``).
+* Joint values follow the URDF axes: for this robot joint2..4 turn about +y,
+  so a positive value tips the arm forward and down.
 
 Nothing here copies the robot's dimensions: link offsets, axes and limits come
 from the URDF's ``<joint>`` elements.
@@ -157,7 +160,7 @@ def _wrap(a: float) -> float:
     return (a + math.pi) % (2.0 * math.pi) - math.pi
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)  # holds arrays: compared by identity
 class ArmKinematics:
     """Kinematic model of the arm chain ``root`` -> ``tip`` of a URDF.
 
@@ -229,6 +232,8 @@ class ArmKinematics:
         lower = np.where(np.isfinite(lower), lower, -math.pi)
         upper = np.where(np.isfinite(upper), upper, math.pi)
         vmax = np.array([j.velocity for j in movable], dtype=float)
+        for arr in (lower, upper, vmax):
+            arr.setflags(write=False)
 
         c_frame, planar = cls._analyse(tuple(segments), robot.name)
         return cls(
@@ -314,7 +319,8 @@ class ArmKinematics:
         return c, planar
 
     # -------------------------------------------------------------- forward
-    def _check_q(self, q: Sequence[float]) -> np.ndarray:
+    def check_joints(self, q: Sequence[float]) -> np.ndarray:
+        """``q`` as an array (4,) [rad]; :class:`InvalidInputError` unless 4 finite values."""
         arr = np.asarray(q, dtype=float)
         if arr.shape != (4,) or not np.all(np.isfinite(arr)):
             raise InvalidInputError(f"q must be 4 finite joint positions {self.joint_names}, got {q!r}")
@@ -322,7 +328,7 @@ class ArmKinematics:
 
     def fk(self, q: Sequence[float]) -> np.ndarray:
         """Transform (4, 4) of the tip frame in the root frame for joints ``q`` [rad]."""
-        return self._frames(self._segments, self._check_q(q))[-1]
+        return self._frames(self._segments, self.check_joints(q))[-1]
 
     def fk_pose(self, q: Sequence[float]) -> ArmPose:
         """Tool pose (x, y, z [m], pitch [rad]) for joints ``q`` [rad]."""
@@ -333,7 +339,7 @@ class ArmKinematics:
 
     def within_limits(self, q: Sequence[float], tol: float = _LIMIT_TOL) -> bool:
         """True when every joint of ``q`` [rad] is inside its limits (+- ``tol``)."""
-        arr = self._check_q(q)
+        arr = self.check_joints(q)
         return bool(np.all(arr >= self.lower - tol) and np.all(arr <= self.upper + tol))
 
     # -------------------------------------------------------------- inverse
@@ -379,7 +385,7 @@ class ArmKinematics:
         if not all(math.isfinite(v) for v in (x, y, z, pitch)):
             return IKResult(target, (), FailureReason.INVALID_INPUT, f"non-finite target {target}")
         try:
-            seed_q = np.zeros(4) if seed is None else self._check_q(seed)
+            seed_q = np.zeros(4) if seed is None else self.check_joints(seed)
         except InvalidInputError as exc:
             return IKResult(target, (), FailureReason.INVALID_INPUT, str(exc))
 

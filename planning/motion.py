@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Literal
 
@@ -139,13 +139,16 @@ def _tuple_path(path: list[np.ndarray]) -> tuple[tuple[float, ...], ...]:
     return tuple(tuple(float(v) for v in p) for p in path)
 
 
-def _greedy_shortcut(path: list[np.ndarray], scene: PlanningScene, resolution: float) -> list[np.ndarray]:
+SegmentCheck = Callable[[np.ndarray, np.ndarray], bool]
+
+
+def _greedy_shortcut(path: list[np.ndarray], valid: SegmentCheck) -> list[np.ndarray]:
     """Fewest waypoints: from each kept point jump to the farthest one in sight."""
     out = [path[0]]
     i = 0
     while i < len(path) - 1:
         j = len(path) - 1
-        while j > i + 1 and not scene.segment_valid(path[i], path[j], resolution):
+        while j > i + 1 and not valid(path[i], path[j]):
             j -= 1
         out.append(path[j])
         i = j
@@ -163,27 +166,40 @@ def _point_at(path: list[np.ndarray], cum: np.ndarray, t: float) -> tuple[int, n
 
 def _random_shortcut(
     path: list[np.ndarray],
-    scene: PlanningScene,
-    resolution: float,
+    valid: SegmentCheck,
     rng: np.random.Generator,
     attempts: int,
     deadline: float,
+    patience: int = 10,
 ) -> list[np.ndarray]:
     """OMPL-style shortcutting: join two random points of the path by a straight
-    segment whenever that segment is valid."""
+    segment whenever that segment is valid; stop after ``patience`` misses in a row."""
+    misses = 0
     for _ in range(attempts):
-        if len(path) < 3 or time.perf_counter() > deadline:
+        if len(path) < 3 or misses >= patience or time.perf_counter() > deadline:
             break
         cum = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(path, axis=0), axis=1))])
         t1, t2 = np.sort(rng.uniform(0.0, cum[-1], 2))
         i1, p1 = _point_at(path, cum, t1)
         i2, p2 = _point_at(path, cum, t2)
         if i1 == i2:
+            misses += 1
             continue
-        if scene.segment_valid(p1, p2, resolution):
+        if valid(p1, p2):
             path = path[: i1 + 1] + [p1, p2] + path[i2 + 1 :]
             path = [p for j, p in enumerate(path) if j == 0 or np.max(np.abs(p - path[j - 1])) > 1e-9]
+            misses = 0
+        else:
+            misses += 1
     return path
+
+
+def _simplify(
+    reduced: list[np.ndarray], valid: SegmentCheck, attempts: int, deadline: float
+) -> list[np.ndarray]:
+    path = _greedy_shortcut(reduced, valid)
+    path = _random_shortcut(path, valid, np.random.default_rng(0), attempts, deadline)
+    return _greedy_shortcut(path, valid)
 
 
 def _plan(
@@ -262,27 +278,38 @@ def _plan(
     raw = [np.array([st[0], st[1], st[2], st[3]]) for st in solution.getStates()]
     length_raw = path_length(raw)
 
-    # 4. simplification
-    path = raw
+    # 4. simplification. Shortcuts are checked at twice the re-check step (as
+    # OMPL's own simplifier uses its coarser motion checks), the result densely.
+    def fine(a: np.ndarray, b: np.ndarray) -> bool:
+        return scene.segment_valid(a, b, recheck_resolution)
+
+    def coarse(a: np.ndarray, b: np.ndarray) -> bool:
+        return scene.segment_valid(a, b, 2 * recheck_resolution, max_step=2 * scene.max_step)
+
+    def dense_ok(p: list[np.ndarray]) -> bool:
+        return all(fine(a, b) for a, b in zip(p[:-1], p[1:]))
+
+    candidates: list[Callable[[], list[np.ndarray]]] = []
     if simplify and len(raw) > 2:
         simplifier = og.PathSimplifier(si)
         simplifier.reduceVertices(solution)
         reduced = [np.array([st[0], st[1], st[2], st[3]]) for st in solution.getStates()]
         deadline = time.perf_counter() + max(0.0, min(simplify_time, timeout - (time.perf_counter() - t0)))
-        path = _greedy_shortcut(reduced, scene, recheck_resolution)
-        path = _random_shortcut(path, scene, recheck_resolution, np.random.default_rng(0), shortcut_attempts, deadline)
-        path = _greedy_shortcut(path, scene, recheck_resolution)
+        candidates.append(lambda: _simplify(reduced, coarse, shortcut_attempts, deadline))
+        candidates.append(lambda: _simplify(reduced, fine, shortcut_attempts, deadline))
+    candidates.append(lambda: raw)
 
-    # 5. dense re-check; fall back to the raw path if the simplified one fails
-    if not scene.path_valid(path, recheck_resolution):
-        if path is not raw and scene.path_valid(raw, recheck_resolution):
-            path = raw
-        else:
-            return _fail(
-                t0, FailureReason.RECHECK_FAILED,
-                f"{planner} returned a path that collides when re-checked every {recheck_resolution} rad",
-                planner, start,
-            )
+    # 5. dense re-check of the final path; fall back to a more careful candidate
+    for make in candidates:
+        path = make()
+        if dense_ok(path):
+            break
+    else:
+        return _fail(
+            t0, FailureReason.RECHECK_FAILED,
+            f"{planner} returned a path that collides when re-checked every {recheck_resolution} rad",
+            planner, start,
+        )
     return MotionPlan(
         path=_tuple_path(path),
         planner=planner,

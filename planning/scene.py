@@ -19,13 +19,15 @@ Collision rules (the allowed-collision matrix):
 * World obstacles are padded by ``padding`` [m] on every side; self-collision has
   no padding.
 
-A scene is not thread-safe: use it from one thread at a time.
+Checks are serialised by a lock (OMPL's PRM checks states from two threads);
+changing obstacles while a query runs in another thread is not supported.
 """
 
 from __future__ import annotations
 
 import math
 import os
+import threading
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Literal
@@ -35,7 +37,6 @@ import pybullet
 
 from .errors import InvalidInputError, SceneError
 from .kinematics import ArmKinematics
-from .urdf import default_urdf_path
 
 __all__ = ["Obstacle", "Contact", "CollisionReport", "PlanningScene"]
 
@@ -133,6 +134,9 @@ class PlanningScene:
             raise InvalidInputError(f"padding must be >= 0 m, got {padding!r}")
         self.kinematics = kinematics or ArmKinematics.from_urdf(urdf)
         self.padding = float(padding)
+        # OMPL planners that grow roadmaps in a second thread (PRM) check states
+        # concurrently; one pybullet client holds one configuration at a time.
+        self._lock = threading.RLock()
         #: Largest motion of any robot point between two checked samples of a
         #: segment [m]: the padding, so that sampled checks are conservative.
         self.max_step = self.padding if self.padding > 0 else 0.005
@@ -150,6 +154,11 @@ class PlanningScene:
                 physicsClientId=c,
             )
             self._index_links()
+            if self.kinematics.root != self._link_names[-1]:
+                raise SceneError(
+                    f"the scene works in the URDF root frame {self._link_names[-1]!r}; "
+                    f"build its kinematics with root={self._link_names[-1]!r}, not {self.kinematics.root!r}"
+                )
             self._obstacles: dict[str, Obstacle] = {}
             self._bodies: dict[str, int] = {}
             self._body_names: dict[int, str] = {}
@@ -308,7 +317,11 @@ class PlanningScene:
             raise SceneError(f"no settable joint {name!r}; choices: {sorted(self._other_movable)}")
         if not math.isfinite(value):
             raise InvalidInputError(f"{name} must be finite, got {value!r}")
-        pybullet.resetJointState(self._robot, self._other_movable[name], float(value), physicsClientId=self._client)
+        with self._lock:
+            pybullet.resetJointState(self._robot, self._other_movable[name], float(value), physicsClientId=self._client)
+            if hasattr(self, "_reach_links"):  # after construction: open fingers reach farther
+                self._reach_links = self._link_reach()
+                self._update_reach()
 
     # --------------------------------------------------------------- obstacles
     @property
@@ -439,7 +452,7 @@ class PlanningScene:
         if link not in self._link_index or self._link_index[link] < 0:
             raise SceneError(f"cannot attach to {link!r}; links: {sorted(k for k in self._link_index if k)}")
         li = self._link_index[link]
-        self._set_arm(self.kinematics._check_q(q))
+        self._set_arm(self.kinematics.check_joints(q))
         state = pybullet.getLinkState(self._robot, li, computeForwardKinematics=True, physicsClientId=self._client)
         ob = self._obstacles[name]
         rel = np.linalg.inv(_pose_matrix(state[4], state[5])) @ _pose_matrix(ob.position, ob.orientation)
@@ -498,17 +511,20 @@ class PlanningScene:
         for v, lo, hi in zip(q, self._lower, self._upper):
             if not lo <= v <= hi:  # also False for NaN
                 return False
-        self._set_arm(q)
-        return not self._contacts()
+        with self._lock:
+            self._set_arm(q)
+            return not self._contacts()
 
     def check(self, q: Sequence[float]) -> CollisionReport:
         """Like :meth:`is_valid`, with the colliding pairs for messages."""
         k = self.kinematics
-        arr = k._check_q(q)
+        arr = k.check_joints(q)
         limits = k.within_limits(arr)
-        self._set_arm(arr)
+        with self._lock:
+            self._set_arm(arr)
+            found = self._contacts()
         deepest: dict[tuple[str, str], float] = {}
-        for a, b, d in self._contacts():
+        for a, b, d in found:
             key = (a, b) if a <= b else (b, a)
             deepest[key] = min(d, deepest.get(key, 0.0))
         contacts = tuple(Contact(a, b, d) for (a, b), d in sorted(deepest.items(), key=lambda kv: kv[1]))

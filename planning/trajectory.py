@@ -98,7 +98,7 @@ class JointLimits:
         )
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)  # holds arrays: compared by identity
 class SampledTrajectory:
     """A trajectory sampled at a fixed step.
 
@@ -132,7 +132,7 @@ class TimedTrajectory:
     durations: tuple[float, ...]
     duration: float
     limits: JointLimits
-    _segments: tuple[Trajectory, ...] = field(repr=False, compare=False)
+    _segments: tuple[Trajectory, ...] = field(repr=False, compare=False)  # objects with at_time(t)
 
     @property
     def dofs(self) -> int:
@@ -249,6 +249,18 @@ def time_trajectory(path: Sequence[Sequence[float]], limits: JointLimits) -> Tim
     )
 
 
+class _OnLine:
+    """A 1-DOF ruckig trajectory s(t) mapped onto the line q0 + u s."""
+
+    def __init__(self, q0: np.ndarray, u: np.ndarray, traj: Trajectory) -> None:
+        self.q0, self.u, self.traj = q0, u, traj
+        self.duration = traj.duration
+
+    def at_time(self, t: float) -> tuple[list[float], list[float], list[float]]:
+        s, sd, sdd = (v[0] for v in self.traj.at_time(t))
+        return (self.q0 + self.u * s).tolist(), (self.u * sd).tolist(), (self.u * sdd).tolist()
+
+
 def stop_trajectory(
     q: Sequence[float],
     qd: Sequence[float],
@@ -258,30 +270,64 @@ def stop_trajectory(
     """The jerk-limited stop from state (``q`` [rad], ``qd`` [rad/s], ``qdd``
     [rad/s^2]) to rest, under the acceleration and jerk limits.
 
-    Phase synchronisation keeps the stop on the current straight segment when
-    velocity and acceleration are parallel (as on a timed path); ruckig falls
-    back to time synchronisation otherwise. Joint position limits are not
-    enforced: the stopping distance is the physics of braking.
+    When velocity and acceleration are parallel, as anywhere on a trajectory
+    from :func:`time_trajectory`, the stop brakes along that straight line (a
+    1-DOF ruckig stop along the direction, under the tightest per-joint limits
+    projected on it), so it stays on the collision-checked segment. Otherwise
+    every joint brakes with ruckig's velocity interface, phase-synchronised
+    where ruckig can. Joint position limits are not enforced: the stopping
+    distance is the physics of braking.
     """
     state = []
     for name, v in (("q", q), ("qd", qd), ("qdd", qdd)):
         arr = np.asarray(v, dtype=float)
         if arr.shape != (limits.dofs,) or not np.all(np.isfinite(arr)):
             raise InvalidInputError(f"{name} must be {limits.dofs} finite values, got {v!r}")
-        state.append(arr.tolist())
+        state.append(arr)
+    q0, v0, a0 = state
+    speed = float(np.linalg.norm(v0))
+    if speed > 1e-12:
+        u = v0 / speed
+        along = float(a0 @ u)
+        if np.linalg.norm(a0 - along * u) <= 1e-9 * (1.0 + float(np.linalg.norm(a0))):
+            return _stop_on_line(q0, u, speed, along, limits)
     otg = Ruckig(limits.dofs)
     inp = _input(limits)
     inp.control_interface = ControlInterface.Velocity
-    inp.current_position, inp.current_velocity, inp.current_acceleration = state
+    inp.current_position, inp.current_velocity, inp.current_acceleration = (x.tolist() for x in state)
     inp.target_velocity = [0.0] * limits.dofs
     inp.target_acceleration = [0.0] * limits.dofs
     traj = _calculate(otg, inp, "the stop")
     end = tuple(float(v) for v in traj.at_time(traj.duration)[0])
     return TimedTrajectory(
-        waypoints=(tuple(state[0]), end),
+        waypoints=(tuple(float(v) for v in q0), end),
         start_times=(0.0,),
         durations=(traj.duration,),
         duration=traj.duration,
         limits=limits,
         _segments=(traj,),
+    )
+
+
+def _stop_on_line(q0: np.ndarray, u: np.ndarray, speed: float, acc: float, limits: JointLimits) -> TimedTrajectory:
+    nz = np.abs(u) > 1e-12
+    a_max = float(np.min(np.array(limits.acceleration)[nz] / np.abs(u[nz])))
+    j_max = float(np.min(np.array(limits.jerk)[nz] / np.abs(u[nz])))
+    v_max = float(np.min(np.array(limits.velocity)[nz] / np.abs(u[nz])))
+    otg = Ruckig(1)
+    inp = InputParameter(1)
+    inp.control_interface = ControlInterface.Velocity
+    inp.current_position, inp.current_velocity, inp.current_acceleration = [0.0], [speed], [acc]
+    inp.target_velocity, inp.target_acceleration = [0.0], [0.0]
+    inp.max_velocity, inp.max_acceleration, inp.max_jerk = [max(v_max, speed)], [a_max], [j_max]
+    traj = _calculate(otg, inp, "the stop")
+    seg = _OnLine(q0, u, traj)
+    end = tuple(float(v) for v in seg.at_time(traj.duration)[0])
+    return TimedTrajectory(
+        waypoints=(tuple(float(v) for v in q0), end),
+        start_times=(0.0,),
+        durations=(traj.duration,),
+        duration=traj.duration,
+        limits=limits,
+        _segments=(seg,),  # type: ignore[arg-type]
     )

@@ -76,6 +76,8 @@ class Renderer:
             self.close()
             self.why_not_egl = getattr(self, "why_not_egl", "") or "EGL render returned nothing"
             return
+        # no shadows: cheaper, and the same look as the TinyRenderer fallback
+        p.configureDebugVisualizer(p.COV_ENABLE_SHADOWS, 0, physicsClientId=self.cid)
         self.name = "egl"
         self.why_not_egl = ""
 

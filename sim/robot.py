@@ -1,7 +1,6 @@
 """The mobile manipulator in a pybullet client: loading, joint maps, low-level actuation."""
 from __future__ import annotations
 
-import math
 from pathlib import Path
 
 import numpy as np
@@ -134,7 +133,3 @@ class Robot:
     def gripper_opening(self):
         return sum(s[0] for s in p.getJointStates(self.body, self.grip_idx, physicsClientId=self.cid))
 
-
-def yaw_of(quat) -> float:
-    x, y, z, w = quat
-    return math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))

@@ -12,9 +12,11 @@ from .robot import WHEEL_RADIUS, WHEEL_SEPARATION
 
 @dataclass
 class OdomNoise:
-    """Wheel-encoder noise: each wheel's travel per step is scaled by (1 + N(0, wheel_std))
-    plus a constant ``radius_bias`` (a mis-calibrated wheel radius, e.g. 0.002 = 0.2 %)."""
-    wheel_std: float = 0.01
+    """Wheel-encoder noise. Each wheel's travel picks up a random walk of ``wheel_noise``
+    metres per square-root metre travelled (independent of the update rate: after 1 m a
+    wheel is off by ``wheel_noise`` m, 1 sigma), plus a constant scale error
+    ``radius_bias`` (a mis-calibrated wheel radius: 0.002 = 0.2 % too long)."""
+    wheel_noise: float = 0.005
     radius_bias: float = 0.0
 
 
@@ -36,10 +38,10 @@ class WheelOdometry:
         dr = (wheel_right - self._last[1]) * WHEEL_RADIUS
         self._last = (wheel_left, wheel_right)
         n = self.noise
-        if n.wheel_std > 0:
-            e = self.rng.normal(0.0, n.wheel_std, 2)
-            dl *= 1.0 + e[0]
-            dr *= 1.0 + e[1]
+        if n.wheel_noise > 0:
+            e = self.rng.normal(0.0, 1.0, 2)
+            dl += e[0] * n.wheel_noise * math.sqrt(abs(dl))
+            dr += e[1] * n.wheel_noise * math.sqrt(abs(dr))
         dl *= 1.0 + n.radius_bias
         dr *= 1.0 + n.radius_bias
         ds = (dl + dr) / 2

@@ -112,7 +112,7 @@ class SimWorld:
         if self.gui:
             p.configureDebugVisualizer(p.COV_ENABLE_GUI, 0, physicsClientId=cid)
         # the EGL plugin only sees visual shapes created after it loads: load it first
-        self._renderer: Renderer | None = (Renderer(cid, prefer_egl=self.prefer_egl)
+        self._renderer: Renderer | None = (Renderer(cid, prefer_egl=self.prefer_egl and not self.gui)
                                            if self._camera_enabled else None)
         self.scene = Scene(cid, self.spec)
         self.robot = Robot(cid, self.spec.robot_start)

@@ -11,8 +11,9 @@ Published (sensors):
   /camera/color/image_raw           sensor_msgs/Image         rgb8
   /camera/depth/image_raw           sensor_msgs/Image         32FC1, metres, NaN = no return
   /camera/camera_info               sensor_msgs/CameraInfo    (colour and depth share it)
-  /map                              nav_msgs/OccupancyGrid    5 cm; sent to each new subscriber
-                                                              and every 10 s while subscribed
+  /map                              nav_msgs/OccupancyGrid    5 cm; sent when the subscriber
+                                                              count grows and every 2 s while
+                                                              subscribed (a latched topic's stand-in)
 State topics go out only while subscribed; the camera renders only while subscribed.
 """
 from __future__ import annotations
@@ -40,7 +41,7 @@ COLOR = "/camera/color/image_raw"
 DEPTH = "/camera/depth/image_raw"
 CAMERA_INFO = "/camera/camera_info"
 MAP = "/map"
-MAP_REPUBLISH = 10.0   # s
+MAP_REPUBLISH = 2.0    # s
 
 CAMERA_FRAME = "camera_optical_frame"
 

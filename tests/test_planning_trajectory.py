@@ -108,6 +108,15 @@ def test_stop_is_jerk_limited_and_ends_at_rest():
     assert stop_trajectory(q, np.zeros(4), np.zeros(4), LIMITS).duration == pytest.approx(0.0, abs=1e-9)
 
 
+def test_stop_from_an_arbitrary_state_uses_every_joint():
+    q, qd, qdd = np.zeros(4), np.array([0.8, -0.5, 0.2, 1.0]), np.array([-1.0, 1.5, 0.5, 0.0])
+    stop = stop_trajectory(q, qd, qdd, LIMITS)
+    samples = stop.sample(DT)
+    assert np.allclose(samples.velocities[-1], 0, atol=1e-9)
+    jerk = np.abs(np.diff(samples.accelerations, axis=0) / DT).max(axis=0)
+    assert np.all(jerk <= np.array(LIMITS.jerk) * (1 + 1e-4) + 1e-4)
+
+
 def test_degenerate_and_bad_inputs():
     single = time_trajectory([(0.1, 0.2, 0.3, 0.4)], LIMITS)
     assert single.duration == 0 and np.allclose(single.at(1.0)[0], (0.1, 0.2, 0.3, 0.4))

@@ -193,3 +193,36 @@ def test_same_seed_same_state_after_n_steps():
     assert np.array_equal(state_a, state_b)
     objs_c, state_c, _ = _scripted_run(5)
     assert objs_c != objs_a
+
+
+def test_odometry_noise_model_is_configurable():
+    from sim.sensors import OdomNoise
+    ends = {}
+    for name, noise in (("exact", OdomNoise(0.0, 0.0)), ("biased", OdomNoise(0.0, 0.05))):
+        sim = SimWorld(None, "open_floor", seed=0, camera=False, odom_noise=noise)
+        try:
+            sim.apply_cmd_vel(0.2, 0.0)
+            sim.advance(5.0)
+            sim.apply_cmd_vel(0.0, 0.0)
+            sim.advance(1.0)
+            ends[name] = (sim.odom_pose()[0], sim.robot_pose()[0])
+        finally:
+            sim.close()
+    odom, truth = ends["exact"]
+    assert odom == pytest.approx(truth, abs=0.005)
+    odom, truth = ends["biased"]
+    assert odom == pytest.approx(1.05 * truth, abs=0.005)      # 5 % long wheel radius
+
+
+def test_wall_clock_runs_in_real_time():
+    import time
+    with Runtime(clock="wall") as rt:
+        sim = SimWorld(rt, "open_floor", seed=0, camera=False).start()
+        try:
+            t0 = time.perf_counter()
+            rt.call("sleep", 0.5)
+            wall = time.perf_counter() - t0
+            assert sim.now() == pytest.approx(rt.now(), abs=0.05)
+            assert sim.ticks == pytest.approx(60 * wall, abs=6)
+        finally:
+            sim.close()

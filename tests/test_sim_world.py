@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from sim import WorldError, list_worlds, load_world, snapshot, write_map
-from sim.description import parse_world, world_path
+from sim.description import world_path
 from sim.gridmap import build_grid, read_pgm_yaml
 from sim.objects import CATEGORIES
 from sim.robot import URDF
@@ -154,3 +154,8 @@ def test_snapshot_writes_top_view_and_camera(tmp_path):
     top, cam = cv2.imread(str(out[0])), cv2.imread(str(out[1]))
     assert top.shape[0] > 400 and top.shape[1] > 400
     assert cam.shape == (120, 320, 3)
+
+
+def test_urdf_is_what_its_generator_writes():
+    from sim.models import build_urdf
+    assert build_urdf.build() == URDF.read_text(), "run `python -m sim.models.build_urdf`"

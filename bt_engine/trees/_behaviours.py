@@ -34,8 +34,8 @@ class RunContext(Protocol):
     def wake(self) -> None:
         """Ask for a tick soon (something changed)."""
 
-    def start_actor(self, path: str, args: tuple, kwargs: dict, on_done: Callable[[Any], None]) -> Any:
-        """Start an actor asynchronously; returns its Transaction."""
+    def start_actor(self, leaf: ActorLeaf, args: tuple, kwargs: dict, on_done: Callable[[Any], None]) -> Any:
+        """Start the leaf's actor asynchronously; returns its Transaction."""
 
     def halt_reason(self, node_path: str) -> str:
         """Why a halted node's transaction is being cancelled."""
@@ -81,7 +81,7 @@ class ActorLeaf(py_trees.behaviour.Behaviour):
                 self.ctx.wake()
 
         try:
-            self.txn = self.ctx.start_actor(self.actor_path, args, kwargs, done)
+            self.txn = self.ctx.start_actor(self, args, kwargs, done)
         except ActorbtError as exc:
             self.error = str(exc)
 

@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, Any, Callable, Mapping
 import py_trees
 import py_trees.behaviours
 
+from ._behaviours import ActorLeaf
 from ._library import TreeLibrary
 from ._model import Mission, UseBehaviour, walk
 from ._run import TreeObserver, TreeRun
@@ -125,10 +126,11 @@ class TreeHost:
         """The path a ``do:`` name starts (library trees are root actors by name)."""
         return self.library.resolve(name).path
 
-    def start_actor(self, run: TreeRun, path: str, args: tuple, kwargs: dict,
+    def start_actor(self, run: TreeRun, leaf: ActorLeaf, args: tuple, kwargs: dict,
                     on_done: Callable[[Any], None]) -> Any:
-        """Start an actor for an actor leaf; replay overrides this to answer from a record."""
-        return self.rt.start(path, *args, on_done=on_done, **kwargs)
+        """Start the actor of an actor leaf and return its Transaction; replay overrides
+        this to answer from a recording."""
+        return self.rt.start(leaf.actor_path, *args, on_done=on_done, **kwargs)
 
     def prepare(self, name: str, *args: Any, **kwargs: Any) -> TreeRun:
         """Build a run of tree ``name`` without ticking it (for ticking by hand on the hub).
@@ -178,9 +180,12 @@ class TreeHost:
         return list(self._live.values())
 
 
-def tree_host(rt: Runtime) -> TreeHost | None:
-    """The TreeHost of a runtime, if trees were registered on it."""
-    return _hosts.get(rt)
+def tree_host(rt: Runtime, create: bool = False) -> TreeHost | None:
+    """The TreeHost of a runtime (made now with ``create``), or None."""
+    host = _hosts.get(rt)
+    if host is None and create:
+        host = _hosts[rt] = TreeHost(rt)
+    return host
 
 
 def register_tree_folder(rt: Runtime, folder: str | Path, **options: Any) -> TreeHost:

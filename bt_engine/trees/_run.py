@@ -77,6 +77,12 @@ class TreeObserver:
     def tick_finished(self, run: TreeRun) -> None:
         """Tick ``run.ticks`` is over and its status changes were reported."""
 
+    def actor_started(self, run: TreeRun, leaf: ActorLeaf, args: tuple, kwargs: dict, txn: Any) -> None:
+        """An actor leaf (``leaf.path``, ``leaf.node.actor``) started transaction ``txn``."""
+
+    def actor_finished(self, run: TreeRun, leaf: ActorLeaf, txn: Any) -> None:
+        """That transaction finished (``txn.state``, ``txn.result``, ``txn.error``)."""
+
     def blackboard_write(self, run: TreeRun, key: str, value: Any) -> None:
         """``key`` was written (inputs seeding included)."""
 
@@ -152,8 +158,12 @@ class TreeRun:
         """Ask for a tick soon."""
         self.signal.set()
 
-    def start_actor(self, path: str, args: tuple, kwargs: dict, on_done: Callable[[Any], None]) -> Any:
-        return self.host.start_actor(self, path, args, kwargs, on_done)
+    def start_actor(self, leaf: ActorLeaf, args: tuple, kwargs: dict, on_done: Callable[[Any], None]) -> Any:
+        txn = self.host.start_actor(self, leaf, args, kwargs, on_done)
+        if self.observers:
+            self._notify("actor_started", leaf, args, kwargs, txn)
+            txn.add_done_callback(lambda t: self._notify("actor_finished", leaf, t))
+        return txn
 
     def halt_reason(self, node_path: str) -> str:
         if self._halt_reason is not None:

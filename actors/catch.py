@@ -1,0 +1,204 @@
+"""Approach, pick and place with the category's strategy, as actors.
+
+A target is a dict with at least ``x``, ``y`` (the object's axis in the map frame [m])
+and ``category``, as perception reports it. These actors call the robot's actors by name
+(``goto``, ``mini_turn``, ``move_to_pose``, ...), so they run unchanged on any robot that
+provides them.
+"""
+from __future__ import annotations
+
+import math
+from typing import Any
+
+from bt_engine import ActorbtError, SubSystem, actor
+
+from .ros_conv import wrap
+from .strategies import Strategy, strategy_for
+
+#: place surface height and the part of the object held decide the release height
+RELEASE_CLEARANCE = 0.008   # [m] above the surface when the fingers open
+STANDOFF_CLEARANCE = 0.26   # room the base needs around a standoff pose [m]
+PLACE_INSET = 0.12          # how far inside a surface's edge the object is put down [m]
+
+
+class GraspError(ActorbtError):
+    """The grasp missed or the object slipped out."""
+
+
+class ApproachError(ActorbtError):
+    """The robot could not line up with the object."""
+
+
+def _target_xy(target: Any) -> tuple[float, float]:
+    try:
+        return float(target["x"]), float(target["y"])
+    except (TypeError, KeyError, ValueError):
+        raise ActorbtError(f"a target needs numeric 'x' and 'y' (map frame), got {target!r}") from None
+
+
+class Catcher(SubSystem):
+    """Per-category approach, pick and place."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.set_value("holding", None)
+
+    def _strategy(self, target: Any, category: str | None) -> Strategy:
+        cat = category or (target.get("category") if isinstance(target, dict) else None)
+        if not cat:
+            raise ActorbtError("no category given and the target names none")
+        return strategy_for(cat)
+
+    def _face(self, xy: tuple[float, float], strategy: Strategy) -> float:
+        """Turn until the object is straight ahead; returns its distance [m]."""
+        for _ in range(3):
+            x, y, yaw = self.run_actor("get_pose")
+            bearing = wrap(math.atan2(xy[1] - y, xy[0] - x) - yaw)
+            if abs(bearing) <= strategy.approach.max_bearing:
+                return math.hypot(xy[0] - x, xy[1] - y)
+            self.run_actor("mini_turn", bearing)
+        raise ApproachError(f"could not face the object: {math.degrees(bearing):.1f} deg off")
+
+    def _free_standoff(self, robot_xy: tuple[float, float], xy: tuple[float, float],
+                       strategy: Strategy, extra: float = 0.0) -> tuple[float, float, float]:
+        """The first standoff pose with room for the base around it."""
+        for pose in strategy.standoff_poses(robot_xy, xy, extra):
+            if self.run_actor("clearance", pose[0], pose[1]) >= STANDOFF_CLEARANCE:
+                return pose
+        raise ApproachError(f"no free standoff around ({xy[0]:.2f}, {xy[1]:.2f}): the object "
+                            "is too close to walls or furniture on every side")
+
+    def _refine(self, target: dict, category: str) -> dict:
+        """Look again from close by, when a perception actor is available."""
+        if not self.check_actor("get_found"):
+            return target
+        seen = self.run_actor("get_found", category)
+        if not seen:
+            return target
+        if math.dist(_target_xy(seen), _target_xy(target)) > 0.3:
+            return target  # a different object came into view: keep ours
+        return {**target, **seen}
+
+    @actor
+    def approach_object(self, target: dict, category: str | None = None) -> dict:
+        """Drive to the category's standoff in front of ``target`` and face it; returns the
+        target, re-measured from close by when perception is available."""
+        strategy = self._strategy(target, category)
+        cat = strategy.category
+        xy = _target_xy(target)
+        rx, ry, _ = self.run_actor("get_pose")
+        if strategy.approach.look_distance and math.dist((rx, ry), xy) > strategy.approach.look_distance + 0.3:
+            lx, ly, lyaw = self._free_standoff((rx, ry), xy, strategy, strategy.approach.look_distance
+                                               - strategy.approach.reach - strategy.approach.standoff)
+            self.run_actor("goto", lx, ly, lyaw)
+            self._face(xy, strategy)
+            target = self._refine(target, cat)
+            xy = _target_xy(target)
+            rx, ry, _ = self.run_actor("get_pose")
+        sx, sy, syaw = self._free_standoff((rx, ry), xy, strategy)
+        self.run_actor("goto", sx, sy, syaw)
+        self._face(xy, strategy)
+        return {**target, "category": cat}
+
+    @actor
+    def pick(self, target: dict, category: str | None = None) -> dict:
+        """Grasp ``target`` with the category's strategy and lift it.
+
+        Fails with GraspError when the fingers close on nothing (and backs off first).
+        Returns what is held: category and finger opening [m].
+        """
+        strategy = self._strategy(target, category)
+        g, a = strategy.grasp, strategy.approach
+        xy = _target_xy(target)
+        self.run_actor("open", g.open_width)
+        self.run_actor("move_to_pose", a.reach, 0.0, g.height, g.pitch)
+        distance = self._face(xy, strategy)
+        driven = self.run_actor("mini_walk", distance - a.reach)
+        width = self.run_actor("close")
+        if not strategy.holding(width):
+            self._back_off(driven, g.open_width)
+            raise GraspError(f"{strategy.category} grasp missed: fingers closed to "
+                             f"{width * 1000:.0f} mm, expected {g.closed_min * 1000:.0f}.."
+                             f"{g.closed_max * 1000:.0f} mm")
+        self.run_actor("move_to_pose", a.reach - 0.02, 0.0, g.height + g.lift, g.pitch)
+        width = self.run_actor("gripper_width")
+        if not strategy.holding(width):
+            self._back_off(driven, g.open_width)
+            raise GraspError(f"{strategy.category} slipped out while lifting "
+                             f"(fingers at {width * 1000:.0f} mm)")
+        held = {"category": strategy.category, "width": width}
+        self.set_value("holding", held)
+        return held
+
+    @actor
+    def gripper_width(self) -> float:
+        """The finger opening now [m]."""
+        return float(self.run_actor("get_status")["gripper"])
+
+    @actor
+    def verify_grasp(self) -> bool:
+        """True while the gripper holds what the last pick took (by finger opening)."""
+        held = self.get_value("holding")
+        if not held:
+            return False
+        return strategy_for(held["category"]).holding(self.run_actor("gripper_width"))
+
+    def _back_off(self, distance: float, open_width: float) -> None:
+        self.run_actor("open", open_width)
+        self.run_actor("mini_walk", -max(0.05, distance))
+        self.run_actor("home")
+
+    @actor
+    def carry_pose(self) -> None:
+        """Fold the arm with the object held, for driving."""
+        self.run_actor("home")
+
+    @actor
+    def place(self, x: float, y: float, surface: float = 0.0, heading: float | None = None) -> dict:
+        """Put the held object down with its axis at (x, y) [m] on a surface ``surface`` [m]
+        high, the base facing ``heading`` [rad] (default: from where it is). Returns where
+        the hand released it."""
+        held = self.get_value("holding")
+        if not held:
+            raise GraspError("place: nothing is held")
+        strategy = strategy_for(held["category"])
+        g, a = strategy.grasp, strategy.approach
+        if heading is None:
+            rx, ry, _ = self.run_actor("get_pose")
+            sx, sy, syaw = self._free_standoff((rx, ry), (x, y), strategy)
+        else:
+            d = a.reach + a.standoff
+            sx, sy, syaw = x - d * math.cos(heading), y - d * math.sin(heading), heading
+        self.run_actor("goto", sx, sy, syaw)
+        release_z = surface + g.height + RELEASE_CLEARANCE
+        self.run_actor("move_to_pose", a.reach, 0.0, release_z + 0.03, g.pitch)
+        distance = self._face((x, y), strategy)
+        driven = self.run_actor("mini_walk", distance - a.reach)
+        self.run_actor("move_to_pose", a.reach, 0.0, release_z, g.pitch)
+        self.run_actor("open", g.open_width)
+        self.set_value("holding", None)
+        # Back the open hand out the way it came in: lifting or folding first could catch
+        # an object that tilted in the fingers.
+        self.run_actor("mini_walk", -max(0.1, driven))
+        self.run_actor("home")
+        return {"x": x, "y": y, "z": release_z}
+
+    @actor
+    def place_on(self, x: float, y: float, size_x: float, size_y: float, height: float) -> dict:
+        """Place the held object on a box-shaped surface (a pallet) centred at (x, y) [m],
+        ``size_x`` by ``size_y`` [m], ``height`` [m] high: near the edge the robot can reach
+        best, since the base cannot drive over the surface."""
+        rx, ry, _ = self.run_actor("get_pose")
+        sides = []
+        for nx, ny, half in ((1, 0, size_x / 2), (-1, 0, size_x / 2), (0, 1, size_y / 2), (0, -1, size_y / 2)):
+            px, py = x + nx * (half - PLACE_INSET), y + ny * (half - PLACE_INSET)
+            heading = math.atan2(-ny, -nx)  # facing the surface across this edge
+            held = self.get_value("holding")
+            reach = strategy_for(held["category"]).approach.reach if held else 0.27
+            standoff = reach + strategy_for(held["category"]).approach.standoff if held else 0.4
+            sx, sy = px - standoff * math.cos(heading), py - standoff * math.sin(heading)
+            sides.append((math.hypot(sx - rx, sy - ry), px, py, heading, sx, sy))
+        for _, px, py, heading, sx, sy in sorted(sides):
+            if self.run_actor("clearance", sx, sy) >= STANDOFF_CLEARANCE:
+                return self.run_actor("place", px, py, height, heading)
+        raise ApproachError(f"no side of the surface at ({x:.2f}, {y:.2f}) has room for the base")

@@ -1,0 +1,223 @@
+"""The ROS 2 transport: the bus over rclpy and Fast DDS.
+
+``Runtime(bus=RosTransport)`` (``transport: ros`` in actorbt.yaml, or ``--ros``) keeps
+the actor-facing API of the local bus: ``register_publisher`` / ``register_subscriber``
+make the same actors, and ``register_action`` / ``register_service`` make async actors
+that send goals and requests to servers in this or other processes.
+
+Threads: one private rclpy Context per transport, one node, one executor thread
+(:class:`bt_engine.ros.host.RosHost`). Message callbacks hand over to the hub with
+``call_soon_threadsafe``; goals are sent from the executor thread.
+
+Under the virtual clock, a goal or service request in flight counts as outside work
+(like ``offload``): virtual time does not jump past it. Waiting on a topic does not.
+"""
+from __future__ import annotations
+
+import inspect
+import logging
+import os
+from typing import TYPE_CHECKING, Any, Callable
+
+from ..modes import Kind
+from ..ros.client import (ActionGoalError, GoalCall, GoalRejectedError, ServerUnavailableError,
+                          ServerWait, ServiceCall, build_message)
+from ..ros.host import RosClosedError, RosHost
+from ..ros.qos import qos_profile
+from .transport import Transport
+
+if TYPE_CHECKING:
+    from ..runtime import Runtime
+
+log = logging.getLogger("actorbt.ros")
+
+__all__ = ["ActionGoalError", "GoalRejectedError", "RosClosedError", "RosPublisher",
+           "RosSubscription", "RosTransport", "ServerUnavailableError"]
+
+
+class RosPublisher:
+    """``publish(msg)`` on a ROS topic; safe from any thread."""
+
+    __slots__ = ("topic", "_pub", "_host")
+
+    def __init__(self, host: RosHost, pub: Any, topic: str) -> None:
+        self.topic = topic
+        self._pub = pub
+        self._host = host
+
+    def publish(self, msg: Any) -> None:
+        if self._host.closed:
+            raise RosClosedError(f"cannot publish on {self.topic}: the ROS transport is closed")
+        self._pub.publish(msg)
+
+    @property
+    def subscription_count(self) -> int:
+        """Subscriptions matched to this publisher, in any process."""
+        return 0 if self._host.closed else self._pub.get_subscription_count()
+
+
+class RosSubscription:
+    """A ROS subscription whose messages are delivered on the hub; ``close()`` ends it."""
+
+    __slots__ = ("topic", "callback", "closed", "_sub", "_transport")
+
+    def __init__(self, transport: "RosTransport", topic: str, callback: Callable[[Any], None]) -> None:
+        self.topic = topic
+        self.callback = callback
+        self.closed = False
+        self._sub: Any = None
+        self._transport = transport
+
+    def _on_message(self, msg: Any) -> None:  # executor thread
+        if not self.closed:
+            self._transport._rt.call_soon_threadsafe(self._receive, msg)
+
+    def _receive(self, msg: Any) -> None:  # hub
+        if not self.closed:
+            self.callback(msg)
+
+    def close(self) -> None:
+        if self.closed:
+            return
+        self.closed = True
+        self._transport._subs.discard(self)
+        t = self._transport
+        if not t.host.closed and self._sub is not None:
+            try:
+                t.node.destroy_subscription(self._sub)
+            except Exception:
+                log.exception("destroying the subscription to %s failed", self.topic)
+
+
+class RosTransport(Transport):
+    """Topics, actions and services over rclpy.
+
+    Args:
+        rt: the runtime whose hub receives callbacks.
+        node_name: the node's name (default ``actorbt_<pid>_<n>``).
+        server_timeout: how long an action or service actor waits for its server to be
+            discovered [s, wall] before failing with ServerUnavailableError.
+    """
+
+    name = "ros"
+
+    def __init__(self, rt: "Runtime", node_name: str | None = None, *,
+                 server_timeout: float = 10.0) -> None:
+        self._rt = rt
+        self.server_timeout = server_timeout
+        self.host = RosHost("bus")
+        try:
+            self.node = self.host.create_node(node_name or f"actorbt_{os.getpid()}_{self.host.id}")
+        except BaseException:
+            self.host.close()
+            raise
+        self._waiter = ServerWait(self.node)
+        self._subs: set[RosSubscription] = set()
+        self._closed = False
+
+    # -- topics --------------------------------------------------------------------------
+    def publisher(self, topic: str, msg_type: type, qos: Any = 10) -> RosPublisher:
+        pub = self.node.create_publisher(msg_type, topic, qos_profile(qos))
+        return RosPublisher(self.host, pub, topic)
+
+    def subscribe(self, topic: str, msg_type: type, callback: Callable[[Any], None],
+                  qos: Any = 10) -> RosSubscription:
+        """``callback(msg)`` runs on the hub, in arrival order."""
+        sub = RosSubscription(self, topic, callback)
+        sub._sub = self.node.create_subscription(msg_type, topic, sub._on_message, qos_profile(qos))
+        self._subs.add(sub)
+        return sub
+
+    def subscription_count(self, topic: str) -> int:
+        """Subscriptions to ``topic`` in the ROS graph (every process, this one included)."""
+        if self.host.closed:
+            return 0
+        return self.node.count_subscribers(topic)
+
+    # -- actions and services ----------------------------------------------------------
+    def register_action(self, scope: Any, name: str, action_type: type, server: str) -> Any:
+        """Make async actor ``name(goal=None, **fields)`` sending goals to ``server``.
+
+        ``goal`` is an ``action_type.Goal`` or a mapping of its fields; keyword fields
+        override. The result is the ``action_type.Result`` of a succeeded goal; an
+        aborted or canceled goal fails with ActionGoalError, a rejected one with
+        GoalRejectedError. Cancelling the transaction cancels the goal.
+        """
+        from rclpy.action import ActionClient
+        client = ActionClient(self.node, action_type, server)
+        rt, host, waiter = self._rt, self.host, self._waiter
+        goal_type = action_type.Goal
+
+        def send_goal(done: Any, goal: Any = None, **fields: Any) -> Callable[[], None]:
+            msg = build_message(goal_type, goal, fields)
+            call = GoalCall(client, server, waiter, msg, server_timeout=self.server_timeout,
+                            on_result=done, on_error=done.fail)
+            self._count_outside(done)
+            host.post(call.start)
+            return lambda: self._post_quietly(call.cancel)
+
+        doc = (f"Send a {action_type.__module__}.{action_type.__name__} goal to action "
+               f"{server} and return its result.")
+        return scope.add_actor(name, send_goal, Kind.ASYNC, doc=doc,
+                               signature=_message_signature("goal", goal_type))
+
+    def register_service(self, scope: Any, name: str, srv_type: type, server: str) -> Any:
+        """Make async actor ``name(request=None, **fields)`` calling service ``server``;
+        the result is the response. Cancelling drops the pending request."""
+        client = self.node.create_client(srv_type, server)
+        host, waiter = self.host, self._waiter
+        req_type = srv_type.Request
+
+        def call_service(done: Any, request: Any = None, **fields: Any) -> Callable[[], None]:
+            msg = build_message(req_type, request, fields)
+            call = ServiceCall(client, server, waiter, msg, server_timeout=self.server_timeout,
+                               on_result=done, on_error=done.fail)
+            self._count_outside(done)
+            host.post(call.start)
+            return lambda: self._post_quietly(call.cancel)
+
+        doc = (f"Call service {server} ({srv_type.__module__}.{srv_type.__name__}) and "
+               "return the response.")
+        return scope.add_actor(name, call_service, Kind.ASYNC, doc=doc,
+                               signature=_message_signature("request", req_type))
+
+    def _count_outside(self, done: Any) -> None:
+        """Under the virtual clock, hold time still while the request is in flight."""
+        rt = self._rt
+        if not rt.clock.virtual:
+            return
+        hub = rt.hub
+        hub.outside_pending += 1
+
+        def release(_txn: Any) -> None:
+            hub.outside_pending -= 1
+        done.txn.add_done_callback(release)
+
+    def _post_quietly(self, fn: Callable[[], Any]) -> None:
+        try:
+            self.host.post(fn)
+        except RosClosedError:
+            pass
+
+    # -- lifecycle -----------------------------------------------------------------------
+    def close(self) -> None:
+        """Destroy the node, stop the executor thread, shut the context down."""
+        if self._closed:
+            return
+        self._closed = True
+        for sub in list(self._subs):
+            sub.closed = True
+        self._subs.clear()
+        self.host.close()
+
+
+def _message_signature(first: str, msg_type: type) -> inspect.Signature:
+    """``(first: msg_type = None, *, field=default, ...)`` for a goal or request type."""
+    P = inspect.Parameter
+    params = [P(first, P.POSITIONAL_OR_KEYWORD, default=None, annotation=msg_type)]
+    default = msg_type()
+    for field in msg_type.get_fields_and_field_types():
+        if field == first:
+            continue
+        params.append(P(field, P.KEYWORD_ONLY, default=getattr(default, field)))
+    return inspect.Signature(params)

@@ -1,0 +1,224 @@
+"""One rclpy Context, its nodes, and the one executor thread that serves them.
+
+Each :class:`RosHost` owns a private ``rclpy.context.Context`` (never the global default
+one), so several runtimes in one process coexist and shut down independently, and no
+signal handlers are installed: Ctrl-C stays a ``KeyboardInterrupt`` of the main thread.
+
+Threads:
+- The executor thread runs every rclpy callback. Callbacks hand their work to the
+  runtime hub with ``rt.call_soon_threadsafe``.
+- Code on other threads (the hub, a CLI) hands work to the executor thread with
+  :meth:`RosHost.post`, in FIFO order, or :meth:`RosHost.call` to wait for a result.
+  rclpy's action client keeps no lock around its request tables, so goals, cancels and
+  result requests are always sent from the executor thread.
+
+Discovery: ``ROS_AUTOMATIC_DISCOVERY_RANGE`` defaults to ``LOCALHOST`` (set before the
+context is created, unless the environment already says otherwise), so no discovery
+traffic leaves the machine.
+"""
+from __future__ import annotations
+
+import collections
+import itertools
+import logging
+import os
+import threading
+from typing import Any, Callable
+
+from ..errors import ActorbtError
+
+log = logging.getLogger("actorbt.ros")
+
+_host_ids = itertools.count(1)
+
+
+class RosClosedError(ActorbtError, RuntimeError):
+    """The ROS host (context, executor) was closed."""
+
+
+def default_environment() -> None:
+    """Keep DDS discovery on this machine unless the environment chose otherwise."""
+    os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+
+
+class RosHost:
+    """A private rclpy Context with a single-threaded executor spinning in its own thread.
+
+    Args:
+        name: used for the thread name and in log messages.
+        domain_id: ROS domain; ``None`` takes ``ROS_DOMAIN_ID`` (or 0).
+    """
+
+    def __init__(self, name: str = "actorbt", *, domain_id: int | None = None) -> None:
+        default_environment()
+        from rclpy.context import Context
+        from rclpy.executors import SingleThreadedExecutor
+
+        self.name = name
+        self.id = next(_host_ids)
+        self.context = Context()
+        # Context.init (not rclpy.init): no signal handlers, no ROS args from sys.argv.
+        self.context.init(args=[], domain_id=domain_id)
+        self.executor = SingleThreadedExecutor(context=self.context)
+        self._nodes: list[Any] = []
+        self._lock = threading.Lock()
+        self._queue: collections.deque = collections.deque()
+        self._drain_scheduled = False
+        self._stopping = False
+        self._closed = False
+        self._thread = threading.Thread(target=self._spin, name=f"actorbt-ros-{name}-{self.id}",
+                                        daemon=True)
+        self._thread.start()
+
+    # -- nodes -------------------------------------------------------------------------
+    def create_node(self, name: str, namespace: str | None = None) -> Any:
+        """A node in this context, spun by this host's executor."""
+        import rclpy
+        self._check_open()
+        node = rclpy.create_node(name, context=self.context, namespace=namespace,
+                                 start_parameter_services=False)
+        with self._lock:
+            self._nodes.append(node)
+        self.executor.add_node(node)
+        return node
+
+    def destroy_node(self, node: Any) -> None:
+        """Remove ``node`` from the executor and destroy it (on the executor thread)."""
+        with self._lock:
+            if node not in self._nodes:
+                return
+            self._nodes.remove(node)
+
+        def destroy() -> None:
+            self.executor.remove_node(node)
+            node.destroy_node()
+        if self._stopping:
+            destroy()
+        else:
+            self.call(destroy)
+
+    # -- hand-over to the executor thread ------------------------------------------
+    @property
+    def thread(self) -> threading.Thread:
+        return self._thread
+
+    def in_executor_thread(self) -> bool:
+        return threading.current_thread() is self._thread
+
+    def post(self, fn: Callable, *args: Any) -> None:
+        """Run ``fn(*args)`` on the executor thread soon, after earlier posts. Any thread.
+
+        Raises:
+            RosClosedError: the host is closing.
+        """
+        with self._lock:
+            if self._stopping:
+                raise RosClosedError(f"ROS host {self.name} is closed")
+            self._queue.append((fn, args))
+            if self._drain_scheduled:
+                return
+            self._drain_scheduled = True
+            self.executor.create_task(self._drain)
+
+    def call(self, fn: Callable, *args: Any, timeout: float = 10.0) -> Any:
+        """Run ``fn(*args)`` on the executor thread and return its result."""
+        if self.in_executor_thread():
+            return fn(*args)
+        done = threading.Event()
+        box: list = [None, None]
+
+        def run() -> None:
+            try:
+                box[0] = fn(*args)
+            except BaseException as e:  # handed to the caller
+                box[1] = e
+            finally:
+                done.set()
+        self.post(run)
+        if not done.wait(timeout):
+            raise RosClosedError(f"ROS host {self.name}: executor did not answer in {timeout:g} s")
+        if box[1] is not None:
+            raise box[1]
+        return box[0]
+
+    def flush(self, timeout: float = 1.0) -> bool:
+        """Wait until everything posted so far has run. False on timeout or when closed."""
+        try:
+            self.call(lambda: None, timeout=timeout)
+        except RosClosedError:
+            return False
+        return True
+
+    def _drain(self) -> None:
+        while True:
+            with self._lock:
+                if not self._queue:
+                    self._drain_scheduled = False
+                    return
+                fn, args = self._queue.popleft()
+            try:
+                fn(*args)
+            except Exception:
+                log.exception("ROS host %s: posted call %s failed", self.name,
+                              getattr(fn, "__qualname__", fn))
+
+    def _spin(self) -> None:
+        from rclpy.executors import ExternalShutdownException, ShutdownException
+        ex = self.executor
+        while not self._stopping:
+            try:
+                ex.spin_once()
+            except (ExternalShutdownException, ShutdownException):
+                break
+            except Exception:
+                # One failing callback must not take the executor thread down.
+                log.exception("ROS host %s: callback failed", self.name)
+
+    # -- lifecycle -----------------------------------------------------------------------
+    def _check_open(self) -> None:
+        if self._stopping:
+            raise RosClosedError(f"ROS host {self.name} is closed")
+
+    @property
+    def closed(self) -> bool:
+        return self._stopping
+
+    def close(self, timeout: float = 5.0) -> None:
+        """Run what was posted, stop the executor thread, destroy every node, shut the
+        context down. Idempotent. Fast DDS removes its shared-memory segments then."""
+        if self._closed:
+            return
+        self._closed = True
+        if threading.current_thread() is not self._thread:
+            self.flush(timeout=1.0)
+        with self._lock:
+            self._stopping = True
+            # A task is work: spin_once returns after it and the loop sees _stopping.
+            self.executor.create_task(lambda: None)
+        if threading.current_thread() is not self._thread:
+            self._thread.join(timeout)
+            if self._thread.is_alive():
+                log.warning("ROS host %s: executor thread did not stop in %g s", self.name, timeout)
+        with self._lock:
+            nodes, self._nodes = self._nodes, []
+        for node in nodes:
+            try:
+                self.executor.remove_node(node)
+                node.destroy_node()
+            except Exception:
+                log.exception("ROS host %s: destroying node failed", self.name)
+        try:
+            self.executor.shutdown(timeout_sec=0)
+        except Exception:
+            log.exception("ROS host %s: executor shutdown failed", self.name)
+        self.context.try_shutdown()
+        self.context.destroy()
+
+    def __enter__(self) -> "RosHost":
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        self.close()
+
+    def __repr__(self) -> str:
+        return f"<RosHost {self.name} {'closed' if self._stopping else 'open'}>"

@@ -1,0 +1,342 @@
+"""Replaying a recorded trace: the tree runs again, every actor call answered from the
+recording, with no actors, simulator or ROS. The node statuses and the calls must come
+out as recorded; the first event that differs is reported.
+
+Calls to other *trees* are not answered from the recording: those trees run again too,
+so an edited subtree is caught as well. Each answered call finishes after the recorded
+duration on the virtual clock, with the recorded value or failure; a call that was
+cancelled in the recording waits until the replayed tree halts it.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import threading
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable
+
+from ..errors import ActorbtError, Failure
+from ..runtime import Runtime
+from ..transaction import TxnState
+from ._behaviours import ActorLeaf
+from ._errors import MissionError
+from ._host import TreeHost
+from ._library import TreeLibrary
+from ._parse import read_mission
+from ._run import TreeRun
+from ._trace import TRACE_FORMAT, TRACE_VERSION, EventBuilder
+
+__all__ = ["Divergence", "ReplayError", "ReplayReport", "describe_event", "read_trace", "replay"]
+
+#: Event types that must match; ``log`` and ``txn`` events are informative only.
+COMPARED = ("run", "tick", "status", "call", "return", "write", "end")
+_KEYS = {
+    "run": ("run", "tree", "parent"),
+    "tick": ("run", "n"),
+    "status": ("run", "path", "old", "new"),
+    "call": ("run", "path", "call", "actor", "args", "kwargs"),
+    "return": ("run", "path", "call", "actor", "state", "value"),
+    "write": ("run", "key", "value"),
+    "end": ("run", "status", "outputs"),
+}
+_TIME_TOLERANCE = 1e-6
+
+
+class ReplayError(ActorbtError):
+    """A trace cannot be replayed: unreadable, wrong format, or tree files missing."""
+
+
+class ReplayedError(ActorbtError):
+    """The failure a replayed actor call reports: the recorded error text."""
+
+
+@dataclass(frozen=True)
+class Divergence:
+    """The first event where the replay differs from the recording (1-based ``index``
+    among the compared events); ``None`` on one side means that side had ended."""
+
+    index: int
+    expected: dict[str, Any] | None
+    got: dict[str, Any] | None
+
+    def __str__(self) -> str:
+        return (f"first divergence at event {self.index}: expected {describe_event(self.expected)}, "
+                f"got {describe_event(self.got)}")
+
+
+@dataclass
+class ReplayReport:
+    """What a replay found."""
+
+    tree: str
+    compared: int
+    divergence: Divergence | None
+    notes: list[str] = field(default_factory=list)
+
+    @property
+    def ok(self) -> bool:
+        return self.divergence is None
+
+    def __str__(self) -> str:
+        lines = [f"note: {n}" for n in self.notes]
+        if self.ok:
+            lines.append(f"replay of {self.tree}: OK, {self.compared} events match")
+        else:
+            lines.append(f"replay of {self.tree}: DIVERGED, {self.divergence}")
+        return "\n".join(lines)
+
+
+def describe_event(event: dict[str, Any] | None) -> str:
+    """One line about a trace event, with its time, run and node path."""
+    if event is None:
+        return "nothing (the run had ended)"
+    kind = event.get("type")
+    where = f"t={event.get('t', 0):.3f}s run {event.get('run')}"
+    if kind == "status":
+        what = f"{event['path']}: {event['old']} -> {event['new']}"
+    elif kind == "call":
+        args = [json.dumps(a) for a in event.get("args", [])]
+        args += [f"{k}={json.dumps(v)}" for k, v in event.get("kwargs", {}).items()]
+        what = f"{event['path']}: call #{event['call']} {event['actor']}({', '.join(args)})"
+    elif kind == "return":
+        outcome = {"done": f"-> {json.dumps(event.get('value'))}", "failed": f"failed ({event.get('error')})",
+                   "cancelled": f"cancelled ({event.get('reason')})"}.get(event.get("state"), event.get("state"))
+        what = f"{event['path']}: call #{event['call']} {event['actor']} {outcome}"
+    elif kind == "tick":
+        what = f"tick {event['n']}"
+    elif kind == "write":
+        what = f"write {event['key']} = {json.dumps(event.get('value'))}"
+    elif kind == "run":
+        what = f"start of tree {event['tree']}"
+    elif kind == "end":
+        what = f"end {event['status']}" + (f" {json.dumps(event['outputs'])}" if "outputs" in event else "")
+    else:
+        what = json.dumps(event)
+    return f"[{where}] {kind} {what}"
+
+
+def _same(expected: dict[str, Any], got: dict[str, Any]) -> bool:
+    kind = expected.get("type")
+    if kind != got.get("type"):
+        return False
+    if abs(float(expected.get("t", 0.0)) - float(got.get("t", 0.0))) > _TIME_TOLERANCE:
+        return False
+    return all(expected.get(k) == got.get(k) for k in _KEYS.get(kind, ()))
+
+
+def read_trace(path: str | Path) -> tuple[dict[str, Any], list[dict[str, Any]]]:
+    """The header and the events of a trace file.
+
+    Raises:
+        ReplayError: unreadable file, bad JSON, or not an actorbt trace of this version.
+    """
+    try:
+        lines = Path(path).read_text(encoding="utf-8").splitlines()
+    except OSError as exc:
+        raise ReplayError(f"{path}: cannot read trace: {exc.strerror or exc}") from None
+    records = []
+    for number, line in enumerate(lines, 1):
+        if not line.strip():
+            continue
+        try:
+            records.append(json.loads(line))
+        except json.JSONDecodeError as exc:
+            raise ReplayError(f"{path}:{number}:{exc.colno}: not JSON: {exc.msg}") from None
+    if not records or records[0].get("type") != "header" or records[0].get("format") != TRACE_FORMAT:
+        raise ReplayError(f"{path}:1:1: not an actorbt trace, expected a header line with format {TRACE_FORMAT!r}")
+    header = records[0]
+    if header.get("version") != TRACE_VERSION:
+        raise ReplayError(f"{path}:1:1: trace version {header.get('version')}, expected {TRACE_VERSION}")
+    return header, records[1:]
+
+
+def _from_json(value: Any) -> Any:
+    if isinstance(value, dict):
+        if set(value) == {"__float__"}:
+            return float(value["__float__"])
+        return {k: _from_json(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_from_json(v) for v in value]
+    return value
+
+
+class ReplayTxn:
+    """Stands in for an actor call's Transaction; ends as the recorded call did."""
+
+    def __init__(self, rt: Runtime, number: int, actor: str, call: dict | None, ret: dict | None,
+                 on_done: Callable[[Any], None]) -> None:
+        self.rt = rt
+        self.id = number
+        self.path = actor
+        self.state = TxnState.RUNNING
+        self.result: Any = None
+        self.error: BaseException | None = None
+        self.reason: str | None = None
+        self._listeners: list[Callable[[Any], None]] = [lambda t: on_done(t.outcome())]
+        self._timer: Any = None
+        if call is None or call.get("actor") != actor:
+            recorded = f"call #{number} was {call.get('actor')!r}" if call else f"there is no call #{number}"
+            self._timer = rt.call_later(0.0, self._finish, TxnState.FAILED, None,
+                                        ReplayedError(f"not in the recording: {recorded}"))
+        elif ret is not None and ret.get("state") == "done":
+            self._timer = rt.call_later(ret["t"] - call["t"], self._finish, TxnState.DONE, _from_json(ret.get("value")))
+        elif ret is not None and ret.get("state") == "failed":
+            self._timer = rt.call_later(ret["t"] - call["t"], self._finish, TxnState.FAILED, None,
+                                        ReplayedError(ret.get("error", "failed")))
+        # cancelled, or still running when the recording ended: the tree must halt it
+
+    @property
+    def done(self) -> bool:
+        return self.state is not TxnState.RUNNING
+
+    def outcome(self) -> Any:
+        if self.state is TxnState.DONE:
+            return self.result
+        return Failure(self.error or ReplayedError(self.reason or "cancelled"), self)
+
+    def add_done_callback(self, fn: Callable[[Any], None]) -> None:
+        if self.done:
+            fn(self)
+        else:
+            self._listeners.append(fn)
+
+    def cancel(self, reason: str = "cancelled") -> None:
+        if not self.done:
+            self.reason = reason
+            self._finish(TxnState.CANCELLED)
+
+    def _finish(self, state: TxnState, result: Any = None, error: BaseException | None = None) -> None:
+        if self.done:
+            return
+        if self._timer is not None:
+            self._timer.cancel()
+        self.state, self.result, self.error = state, result, error
+        listeners, self._listeners = self._listeners, []
+        for fn in listeners:
+            fn(self)
+
+
+class ReplayHost(TreeHost):
+    """A TreeHost whose actor leaves are answered from recorded calls."""
+
+    def __init__(self, rt: Runtime, calls: dict[int, tuple[dict, dict | None]]) -> None:
+        super().__init__(rt)
+        self.library = TreeLibrary(None, self.behaviours)  # no actors: structure-only checks
+        self.calls = calls
+        self._count = 0
+
+    def actor_path(self, name: str) -> str:
+        return name
+
+    def start_actor(self, run: TreeRun, leaf: ActorLeaf, args: tuple, kwargs: dict,
+                    on_done: Callable[[Any], None]) -> Any:
+        self._count += 1
+        if leaf.node.actor in self.library:  # a tree: run it again
+            return super().start_actor(run, leaf, args, kwargs, on_done)
+        call, ret = self.calls.get(self._count, (None, None))
+        return ReplayTxn(self.rt, self._count, leaf.node.actor, call, ret, on_done)
+
+
+class _Comparer:
+    def __init__(self, expected: list[dict[str, Any]]) -> None:
+        self.expected = expected
+        self.got: list[dict[str, Any]] = []
+        self.divergence: Divergence | None = None
+        self.on_divergence: Callable[[], None] = lambda: None
+
+    def check(self, event: dict[str, Any]) -> None:
+        self.got.append(event)
+        if self.divergence is not None:
+            return
+        i = len(self.got) - 1
+        want = self.expected[i] if i < len(self.expected) else None
+        if want is None or not _same(want, event):
+            self.divergence = Divergence(i + 1, want, event)
+            self.on_divergence()
+
+    def finish(self) -> None:
+        if self.divergence is None and len(self.got) < len(self.expected):
+            self.divergence = Divergence(len(self.got) + 1, self.expected[len(self.got)], None)
+
+
+def _locate(header: dict[str, Any], trace: Path, trees: str | Path | None) -> tuple[dict[str, Path], list[str]]:
+    files: dict[str, Path] = {}
+    notes: list[str] = []
+    by_name: dict[str, Path] = {}
+    if trees is not None:
+        for path in sorted(Path(trees).glob("*.y*ml")):
+            try:
+                by_name.setdefault(read_mission(path).name, path)
+            except MissionError:
+                continue
+    for name, info in header.get("trees", {}).items():
+        recorded = Path(info.get("file", f"{name}.yaml"))
+        if trees is not None:
+            candidates = [by_name[name]] if name in by_name else []
+        else:
+            candidates = [recorded, trace.parent / recorded, trace.parent / recorded.name]
+        found = next((p for p in candidates if p.is_file()), None)
+        if found is None:
+            where = f"in {trees}" if trees is not None else f"at {recorded} (recorded path)"
+            raise ReplayError(f"{trace}: tree {name!r} not found {where}; pass --trees DIR with the tree files")
+        files[name] = found
+        current = read_mission(found).source_hash
+        if current != info.get("sha256"):
+            notes.append(f"tree {name} ({found}) changed since the recording")
+    return files, notes
+
+
+def replay(trace: str | Path, *, trees: str | Path | None = None, wall_timeout: float = 120.0) -> ReplayReport:
+    """Re-execute a recorded tree run and compare it with the recording.
+
+    Args:
+        trace: the ``.jsonl`` file.
+        trees: a folder to find the tree files in by name; by default the paths the
+            header recorded (relative to the current directory, or the trace's folder).
+        wall_timeout: give up after this many real seconds.
+
+    Raises:
+        ReplayError: the trace cannot be read or its trees cannot be found.
+        MissionError: a tree file no longer loads.
+    """
+    trace = Path(trace)
+    header, events = read_trace(trace)
+    expected = [e for e in events if e.get("type") in COMPARED]
+    tree = header["tree"]
+    files, notes = _locate(header, trace, trees)
+    calls: dict[int, tuple[dict, dict | None]] = {}
+    returns = {e["call"]: e for e in expected if e["type"] == "return"}
+    for e in expected:
+        if e["type"] == "call":
+            calls[e["call"]] = (e, returns.get(e["call"]))
+    comparer = _Comparer(expected)
+    with Runtime(clock="virtual") as rt:
+        host = ReplayHost(rt, calls)
+        for path in files.values():
+            host.library.load_file(path)
+        host.library.check()
+        for mission in host.library:
+            host.register(mission)
+        host.observers.append(EventBuilder(comparer.check))
+        finished = threading.Event()
+        limit = (expected[-1]["t"] if expected else 0.0) + 1.0
+        inputs = _from_json(header.get("inputs") or {})
+
+        def start() -> Any:
+            txn = rt.start(tree, on_done=lambda _: finished.set(), **inputs)
+            comparer.on_divergence = lambda: rt.call_later(0.0, txn.cancel, "replay diverged from the recording")
+            rt.call_later(limit, txn.cancel, "replay ran past the end of the recording")
+            return txn
+
+        rt.run_on_hub(start)
+        if not finished.wait(wall_timeout):
+            notes.append(f"the replay did not finish within {wall_timeout:g} s of real time")
+            if comparer.divergence is None:
+                comparer.divergence = Divergence(len(comparer.got) + 1, None, None)
+        rt.run_on_hub(lambda: None)  # let the last events land
+        comparer.finish()
+    if not math.isfinite(limit):  # pragma: no cover - defensive
+        notes.append("the recording has no end time")
+    return ReplayReport(tree, len(expected), comparer.divergence, notes)

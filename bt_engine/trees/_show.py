@@ -1,0 +1,152 @@
+"""Pictures of a mission: an ASCII tree for the terminal and Graphviz DOT for drawings.
+
+``actorbt show TREE`` prints :func:`ascii_tree`; ``--out x.dot`` writes :func:`dot_tree`,
+and ``--out x.png`` / ``x.svg`` renders it with Graphviz' ``dot`` (installed by
+``make deps``; without it, write ``.dot`` and run ``dot -Tpng x.dot -o x.png``).
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+import subprocess
+from pathlib import Path
+
+from ..errors import ActorbtError
+from ._model import (
+    Check,
+    Decorator,
+    Do,
+    Mission,
+    Node,
+    Parallel,
+    ReactiveSelector,
+    ReactiveSequence,
+    Selector,
+    Sequence,
+    SetValues,
+    UseBehaviour,
+    Wait,
+    children_of,
+)
+
+__all__ = ["RenderError", "ascii_tree", "describe", "dot_tree", "render"]
+
+
+class RenderError(ActorbtError):
+    """A drawing could not be made (unknown format, Graphviz missing or failing)."""
+
+
+def _value(value: object) -> str:
+    text = str(value) if not isinstance(value, (dict, list)) else json.dumps(value, default=str)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+def describe(node: Node) -> str:
+    """One line about a node: its kind and what it does."""
+    if isinstance(node, Do):
+        args = [_value(a) for a in node.args] + [f"{k}={_value(v)}" for k, v in node.kwargs.items()]
+        text = f"do {node.actor}({', '.join(args)})"
+        return text + (f" -> {node.out}" if node.out else "")
+    if isinstance(node, SetValues):
+        return "set " + ", ".join(f"{k}={_value(v)}" for k, v in node.values.items())
+    if isinstance(node, Check):
+        return f"check {node.source}"
+    if isinstance(node, Wait):
+        return f"wait {node.seconds}s"
+    if isinstance(node, UseBehaviour):
+        return f"behaviour {node.behaviour}"
+    if isinstance(node, Parallel):
+        selected = f" {list(node.selected)}" if node.selected else ""
+        return f"parallel {node.policy.value}{selected}"
+    return node.default_label()
+
+
+def _line(node: Node) -> str:
+    what = describe(node)
+    return f"{node.name}  [{what}]" if node.name is not None else what
+
+
+def ascii_tree(mission: Mission) -> str:
+    """The mission as an indented tree, one node per line."""
+    inputs = ", ".join(
+        f"{i.name}: {i.type.value}" + ("" if i.required else f" = {i.default!r}") for i in mission.inputs
+    )
+    outputs = ", ".join(o.name for o in mission.outputs)
+    lines = [f"{mission.name}({inputs}) -> {{{outputs}}}"]
+
+    def emit(node: Node, prefix: str, last: bool) -> None:
+        lines.append(f"{prefix}{'└── ' if last else '├── '}{_line(node)}")
+        kids = children_of(node)
+        for i, child in enumerate(kids):
+            emit(child, prefix + ("    " if last else "│   "), i == len(kids) - 1)
+
+    emit(mission.root, "", True)
+    return "\n".join(lines)
+
+
+_SHAPES = [
+    (ReactiveSequence, 'shape=box, style="rounded,filled", fillcolor="#fde9c8", label="⟳→ {}"'),
+    (Sequence, 'shape=box, style=filled, fillcolor="#fde9c8", label="→ {}"'),
+    (ReactiveSelector, 'shape=octagon, style=filled, fillcolor="#d4e8fc", label="⟳? {}"'),
+    (Selector, 'shape=octagon, style=filled, fillcolor="#d4e8fc", label="? {}"'),
+    (Parallel, 'shape=parallelogram, style=filled, fillcolor="#e3d7f5", label="⇉ {}"'),
+    (Decorator, 'shape=ellipse, style=filled, fillcolor="#eeeeee", label="{}"'),
+    (Do, 'shape=box, style="rounded,filled", fillcolor="#d8f3d8", label="{}"'),
+    (Check, 'shape=ellipse, style=filled, fillcolor="#fff7b3", label="{}"'),
+]
+
+
+def _dot_label(text: str) -> str:
+    return text.replace("\\", "\\\\").replace('"', '\\"')
+
+
+def dot_tree(mission: Mission) -> str:
+    """The mission as a Graphviz digraph (top-down)."""
+    out = [
+        f'digraph "{_dot_label(mission.name)}" {{',
+        "  graph [rankdir=TB, fontname=Helvetica];",
+        '  node [fontname=Helvetica, fontsize=11, shape=box, style="rounded,filled", fillcolor=white];',
+    ]
+    ids: dict[int, str] = {}
+
+    def visit(node: Node) -> str:
+        nid = ids.setdefault(id(node), f"n{len(ids)}")
+        desc = _dot_label(describe(node))
+        label = desc if node.name is None else f"{_dot_label(node.name)}\\n{desc}"
+        style = next((fmt for cls, fmt in _SHAPES if isinstance(node, cls)), 'label="{}"')
+        out.append(f"  {nid} [{style.format(label)}];")
+        for child in children_of(node):
+            out.append(f"  {nid} -> {visit(child)};")
+        return nid
+
+    visit(mission.root)
+    out.append("}")
+    return "\n".join(out) + "\n"
+
+
+def render(mission: Mission, path: str | Path) -> Path:
+    """Write the drawing; the suffix picks the format (.dot, .png, .svg, .pdf).
+
+    Raises:
+        RenderError: unknown suffix, or Graphviz is missing or fails.
+    """
+    path = Path(path)
+    dot = dot_tree(mission)
+    fmt = path.suffix.lstrip(".").lower()
+    if fmt in ("dot", "gv"):
+        path.write_text(dot, encoding="utf-8")
+        return path
+    if fmt not in ("png", "svg", "pdf"):
+        raise RenderError(f"cannot draw {path.name}: unknown format {fmt!r}, expected .dot, .png, .svg or .pdf")
+    exe = shutil.which("dot")
+    if exe is None:
+        raise RenderError(
+            f"Graphviz 'dot' is not installed, so {path.name} cannot be drawn; "
+            f"install graphviz (make deps) or write {path.with_suffix('.dot').name} and render it yourself"
+        )
+    proc = subprocess.run([exe, f"-T{fmt}", "-o", str(path)], input=dot.encode("utf-8"),
+                          capture_output=True, timeout=60)
+    if proc.returncode != 0:
+        raise RenderError(f"dot failed on {path.name}: {proc.stderr.decode(errors='replace').strip()}")
+    return path

@@ -1,0 +1,170 @@
+"""The tree layer's ``actorbt`` commands: run, check, show, replay, plot.
+
+``bt_engine.cli.main`` imports this module and calls :func:`register`; each command is
+``func(args, app) -> exit status``. Errors derive from ActorbtError, which the main
+program prints on one line (exit status 2).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import pprint
+import sys
+from pathlib import Path
+from typing import Any, Callable
+
+from ..errors import ActorbtError, ActorError
+from ._errors import MissionError, TreeFailure
+from ._host import STANDARD_BEHAVIOURS, TreeHost, tree_host
+from ._library import TreeLibrary, check_files
+from ._model import Mission
+from ._parse import suggest
+from ._progress import ProgressPrinter, parse_inputs
+
+__all__ = ["register"]
+
+
+def _is_file(spec: str) -> bool:
+    return spec.endswith((".yaml", ".yml")) and Path(spec).is_file()
+
+
+def _mission(host: TreeHost, spec: str) -> Mission:
+    """A tree by name, or by file (loaded, validated and registered now)."""
+    if _is_file(spec):
+        return host.load_file(spec)
+    if spec in host.library:
+        return host.library[spec]
+    names = sorted(host.library.names)
+    raise ActorbtError(
+        f"unknown tree {spec!r}{suggest(spec, names)}, expected a tree name ({', '.join(names) or 'none loaded'}) "
+        "or a mission file"
+    )
+
+
+def cmd_run(args: argparse.Namespace, app: Any) -> int:
+    rt = app.runtime()
+    try:
+        host = tree_host(rt, create=True)
+        assert host is not None
+        if args.max_period is not None:
+            host.max_period = args.max_period
+        mission = _mission(host, args.tree)
+        inputs = parse_inputs(mission, args.arg)
+        if not args.quiet:
+            host.observers.append(ProgressPrinter(sys.stdout, ticks=args.ticks))
+        recorder = None
+        if args.record:
+            from ._trace import TraceRecorder
+            recorder = TraceRecorder(args.record, host, tree=mission.name, inputs=inputs,
+                                     seed=getattr(args, "seed", None))
+        try:
+            result = rt.call(mission.name, **inputs)
+        except ActorError as exc:
+            if isinstance(exc.__cause__, TreeFailure):
+                print(f"actorbt: {exc.__cause__}", file=sys.stderr)
+                return 1
+            raise
+        finally:
+            if recorder is not None:
+                recorder.close()
+    finally:
+        app.close(rt)
+    print(json.dumps(result, default=str) if args.json else pprint.pformat(result))
+    return 0
+
+
+def cmd_check(args: argparse.Namespace, app: Any) -> int:
+    folder = app.cfg.trees_dir()
+    app.cfg.trees = None  # validate the folder here, with the files, instead of failing on load
+    rt = app.runtime(with_world=False)
+    try:
+        files = [Path(f) for f in args.files]
+        folder_files = sorted(folder.glob("*.y*ml")) if folder is not None and folder.is_dir() else []
+        if not files:
+            files = folder_files
+        library = TreeLibrary(rt.root.resolve, STANDARD_BEHAVIOURS)
+        given = {f.resolve() for f in files}
+        for path in folder_files:  # trees the checked files may call
+            if path.resolve() not in given:
+                try:
+                    library.load_file(path)
+                except MissionError:
+                    pass  # reported when that file is checked itself
+        errors = check_files(files, library=library)
+    finally:
+        app.close(rt)
+    for error in errors:
+        print(error, file=sys.stderr)
+    if errors:
+        return 1
+    print(f"{len(files)} mission file{'s' if len(files) != 1 else ''} OK")
+    return 0
+
+
+def _load_for_show(app: Any, spec: str) -> Mission:
+    from ._parse import read_mission
+    if _is_file(spec):
+        return read_mission(spec)
+    library = TreeLibrary()
+    folder = app.cfg.trees_dir()
+    if folder is not None and folder.is_dir():
+        library.load_folder(folder)
+    host_like = type("_Lib", (), {"library": library})()
+    return _mission(host_like, spec)  # type: ignore[arg-type]
+
+
+def cmd_show(args: argparse.Namespace, app: Any) -> int:
+    from ._show import ascii_tree, render
+    mission = _load_for_show(app, args.tree)
+    print(ascii_tree(mission))
+    if args.out:
+        print(f"wrote {render(mission, args.out)}")
+    return 0
+
+
+def cmd_replay(args: argparse.Namespace, app: Any) -> int:
+    from ._replay import replay
+    report = replay(args.trace, trees=args.trees)
+    print(report)
+    return 0 if report.ok else 1
+
+
+def cmd_plot(args: argparse.Namespace, app: Any) -> int:
+    from ._plot import plot_trace
+    print(f"wrote {plot_trace(args.trace, args.out)}")
+    return 0
+
+
+def register(sub: argparse._SubParsersAction, common: Callable[[argparse.ArgumentParser], None]) -> None:
+    """Add the tree commands to the ``actorbt`` parser."""
+    p = sub.add_parser("run", help="run a tree with live progress: TREE [--arg k=v ...]")
+    p.add_argument("tree", help="tree name, or a mission file")
+    p.add_argument("--arg", action="append", default=[], metavar="NAME=VALUE",
+                   help="an input, parsed by its declared type (repeatable)")
+    p.add_argument("--record", metavar="FILE.jsonl", help="record a trace for replay and plot")
+    p.add_argument("--max-period", type=float, metavar="S", help="tick at least every S seconds")
+    p.add_argument("--quiet", action="store_true", help="no progress, only the result")
+    p.add_argument("--ticks", action="store_true", help="also print every tick")
+    p.add_argument("--json", action="store_true", help="print the outputs as JSON")
+    common(p)
+    p.set_defaults(func=cmd_run)
+
+    p = sub.add_parser("check", help="validate mission files without running them (default: the trees folder)")
+    p.add_argument("files", nargs="*", help="mission YAML files")
+    p.set_defaults(func=cmd_check)
+
+    p = sub.add_parser("show", help="draw a tree: ASCII here, --out x.png|svg|pdf|dot for a picture")
+    p.add_argument("tree", help="tree name, or a mission file")
+    p.add_argument("--out", metavar="FILE", help="write a drawing (format from the suffix)")
+    p.set_defaults(func=cmd_show)
+
+    p = sub.add_parser("replay", help="re-run a recorded tree against its recording; exit 1 on a divergence")
+    p.add_argument("trace", help="a .jsonl trace from run --record")
+    p.add_argument("--trees", metavar="DIR", help="find the tree files here (default: the recorded paths)")
+    p.set_defaults(func=cmd_replay)
+
+    p = sub.add_parser("plot", help="draw the timeline of a recorded run")
+    p.add_argument("trace", help="a .jsonl trace from run --record")
+    p.add_argument("--out", required=True, metavar="FILE.png", help="the picture (png, svg or pdf)")
+    p.set_defaults(func=cmd_plot)
