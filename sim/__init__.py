@@ -10,7 +10,7 @@ Helpers for the CLI: write_map(world, seed, out_pgm), snapshot(world, seed, out_
 from .description import WorldError, WorldSpec, list_worlds, load_world
 from .simworld import SimWorld
 
-__all__ = ["SimWorld", "WorldError", "WorldSpec", "list_worlds", "load_world", "write_map", "snapshot"]
+__all__ = ["SimWorld", "start_world", "WorldError", "WorldSpec", "list_worlds", "load_world", "write_map", "snapshot"]
 
 
 def write_map(world="house", seed=0, out_pgm="map.pgm", resolution=0.05):
@@ -26,3 +26,9 @@ def snapshot(world="house", seed=0, out_png="world.png", camera=False, camera_si
     from .topview import snapshot as _snapshot
 
     return _snapshot(world, seed, out_png, camera=camera, camera_size=camera_size)
+
+
+def start_world(runtime, world="house", seed=0, gui=False):
+    """Build ``world`` with ``seed`` and put it on ``runtime`` (what actorbt.yaml's
+    ``simulator: sim:start_world`` names). Returns the started SimWorld."""
+    return SimWorld(runtime, world=world, seed=seed, gui=gui).start()

@@ -1,7 +1,9 @@
 """Tick-by-tick status tables for every composite, decorator and leaf, with scripted
-actors (``act(tag)`` runs until the test finishes it). Columns are node names; each row
-is: what the test does before the tick, then the statuses after it
-(R running, S success, F failure, I invalid / not ticked)."""
+actors (``act(tag)`` runs until the test finishes it) and a manual clock.
+
+Columns are node names. Each row is what the test does before the tick (an action on
+the hub, a number of seconds passing, or None), then the statuses after the tick:
+R running, S success, F failure, I invalid (not ticked, or halted)."""
 
 from __future__ import annotations
 

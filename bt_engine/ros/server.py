@@ -36,6 +36,7 @@ executor thread; otherwise the server makes its own :class:`RosHost`.
 """
 from __future__ import annotations
 
+import functools
 import logging
 import re
 import time
@@ -262,7 +263,7 @@ class Server:
                 for ep in self.endpoints:
                     ep.server = ActionServer(
                         self.node, ep.action_type, ep.action,
-                        execute_callback=lambda gh, ep=ep: self._execute(ep, gh),
+                        execute_callback=functools.partial(self._execute, ep),
                         goal_callback=lambda goal, ep=ep: self._on_goal(ep, goal),
                         cancel_callback=lambda gh, ep=ep: self._on_cancel(ep, gh))
             self.host.call(create)

@@ -16,7 +16,12 @@ a resolver (``rt.root.resolve``) handed to it. Inside the package::
     _run       one run: build, event-driven tick loop, halt, observers
     _host      trees as actors of a runtime (register_tree_folder)
     _progress  live progress printing and --arg parsing for the CLI
-    testing    fake resolver for tests
+    _trace     JSON Lines trace recording (TraceRecorder, also rt.recorder)
+    _replay    headless replay of a trace, first divergence
+    _plot      timeline picture of a trace (matplotlib)
+    _show      ASCII and Graphviz pictures of a mission
+    cli        the actorbt commands run, check, show, replay, plot
+    testing    fake resolver, scripted actors, manual clock for tests
 """
 
 from ._errors import (
@@ -73,8 +78,12 @@ from ._model import (
     walk,
 )
 from ._parse import NODE_TYPES, parse_mission, read_mission
+from ._plot import plot_trace
 from ._progress import ProgressPrinter, parse_inputs
+from ._replay import Divergence, ReplayError, ReplayReport, read_trace, replay
 from ._run import TreeObserver, TreeRun
+from ._show import RenderError, ascii_tree, dot_tree, render
+from ._trace import TraceRecorder, to_json
 from ._validate import ActorInfo, Resolver, validate_mission
 
 __all__ = [
@@ -89,6 +98,7 @@ __all__ = [
     "CheckExpressionError",
     "Composite",
     "Decorator",
+    "Divergence",
     "Do",
     "DuplicateKeyError",
     "DuplicateTreeError",
@@ -110,7 +120,10 @@ __all__ = [
     "ReactiveSelector",
     "ReactiveSequence",
     "Ref",
+    "RenderError",
     "Repeat",
+    "ReplayError",
+    "ReplayReport",
     "Resolver",
     "Retry",
     "Selector",
@@ -118,6 +131,7 @@ __all__ = [
     "SetValues",
     "SubtreeCycleError",
     "Timeout",
+    "TraceRecorder",
     "TreeFailure",
     "TreeHost",
     "TreeInfo",
@@ -132,16 +146,23 @@ __all__ = [
     "UseBehaviour",
     "ValueType",
     "Wait",
+    "ascii_tree",
     "check_files",
     "children_of",
+    "dot_tree",
     "evaluate",
     "load_mission",
     "parse_expression",
     "parse_inputs",
     "parse_mission",
+    "plot_trace",
     "read_mission",
+    "read_trace",
     "register_tree_folder",
+    "render",
+    "replay",
     "resolve_value",
+    "to_json",
     "tree_host",
     "validate_mission",
     "walk",

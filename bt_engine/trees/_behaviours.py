@@ -53,11 +53,13 @@ class ActorLeaf(py_trees.behaviour.Behaviour):
     fails on ``False``, on an exception, or when the transaction was cancelled elsewhere.
     """
 
-    def __init__(self, name: str, ctx: RunContext, node: Do, actor_path: str, path: str) -> None:
+    def __init__(self, name: str, ctx: RunContext, node: Do, actor_path: str, actor_kind: str = "sync",
+                 path: str = "") -> None:
         super().__init__(name)
         self.ctx = ctx
         self.node = node
         self.actor_path = actor_path
+        self.actor_kind = actor_kind
         self.path = path
         self.txn: Any = None
         self.error: str | None = None
@@ -84,6 +86,8 @@ class ActorLeaf(py_trees.behaviour.Behaviour):
             self.txn = self.ctx.start_actor(self, args, kwargs, done)
         except ActorbtError as exc:
             self.error = str(exc)
+            return
+        self.feedback_message = f"running {self.actor_path} (transaction {self.txn.id})"
 
     def update(self) -> Status:
         if self.error is not None:
@@ -91,7 +95,6 @@ class ActorLeaf(py_trees.behaviour.Behaviour):
             return Status.FAILURE
         txn = self.txn
         if not txn.done:
-            self.feedback_message = f"running {self.actor_path} (transaction {txn.id})"
             return Status.RUNNING
         self._token = None
         if txn.state is TxnState.DONE:

@@ -122,9 +122,12 @@ class TreeHost:
             return self.behaviour_period if self.max_period is None else min(self.max_period, self.behaviour_period)
         return self.max_period
 
-    def actor_path(self, name: str) -> str:
-        """The path a ``do:`` name starts (library trees are root actors by name)."""
-        return self.library.resolve(name).path
+    def actor_target(self, name: str) -> tuple[str, str]:
+        """The path a ``do:`` name starts (library trees are root actors by name), and
+        the actor's kind (``sync``, ``async``, ``multi``)."""
+        info = self.library.resolve(name)
+        kind = getattr(info, "kind", "sync")
+        return info.path, getattr(kind, "value", kind)
 
     def start_actor(self, run: TreeRun, leaf: ActorLeaf, args: tuple, kwargs: dict,
                     on_done: Callable[[Any], None]) -> Any:
@@ -152,14 +155,13 @@ class TreeHost:
         self._live[run.id] = run
         if txn is not None:
             self._runs_by_txn[txn.id] = run
-            run.txn_id = txn.id  # type: ignore[attr-defined]
+            run.txn_id = txn.id
         return run
 
     def _run_closed(self, run: TreeRun) -> None:
         self._live.pop(run.id, None)
-        txn_id = getattr(run, "txn_id", None)
-        if txn_id is not None:
-            self._runs_by_txn.pop(txn_id, None)
+        if run.txn_id is not None:
+            self._runs_by_txn.pop(run.txn_id, None)
 
     def run(self, name: str, *args: Any, **kwargs: Any) -> dict[str, Any]:
         """Run tree ``name`` to the end in the calling actor (the tree actor's body).

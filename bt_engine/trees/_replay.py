@@ -95,15 +95,15 @@ def describe_event(event: dict[str, Any] | None) -> str:
     kind = event.get("type")
     where = f"t={event.get('t', 0):.3f}s run {event.get('run')}"
     if kind == "status":
-        what = f"{event['path']}: {event['old']} -> {event['new']}"
+        what = f"status of {event['path']}: {event['old']} -> {event['new']}"
     elif kind == "call":
         args = [json.dumps(a) for a in event.get("args", [])]
         args += [f"{k}={json.dumps(v)}" for k, v in event.get("kwargs", {}).items()]
-        what = f"{event['path']}: call #{event['call']} {event['actor']}({', '.join(args)})"
+        what = f"call #{event['call']} {event['actor']}({', '.join(args)}) by {event['path']}"
     elif kind == "return":
-        outcome = {"done": f"-> {json.dumps(event.get('value'))}", "failed": f"failed ({event.get('error')})",
+        outcome = {"done": f"returned {json.dumps(event.get('value'))}", "failed": f"failed ({event.get('error')})",
                    "cancelled": f"cancelled ({event.get('reason')})"}.get(event.get("state"), event.get("state"))
-        what = f"{event['path']}: call #{event['call']} {event['actor']} {outcome}"
+        what = f"call #{event['call']} {event['actor']} {outcome} to {event['path']}"
     elif kind == "tick":
         what = f"tick {event['n']}"
     elif kind == "write":
@@ -114,7 +114,7 @@ def describe_event(event: dict[str, Any] | None) -> str:
         what = f"end {event['status']}" + (f" {json.dumps(event['outputs'])}" if "outputs" in event else "")
     else:
         what = json.dumps(event)
-    return f"[{where}] {kind} {what}"
+    return f"[{where}] {what}"
 
 
 def _same(expected: dict[str, Any], got: dict[str, Any]) -> bool:
@@ -127,7 +127,7 @@ def _same(expected: dict[str, Any], got: dict[str, Any]) -> bool:
 
 
 def read_trace(path: str | Path) -> tuple[dict[str, Any], list[dict[str, Any]]]:
-    """The header and the events of a trace file.
+    """The header and the events of a trace file, event times relative to its start.
 
     Raises:
         ReplayError: unreadable file, bad JSON, or not an actorbt trace of this version.
@@ -149,7 +149,11 @@ def read_trace(path: str | Path) -> tuple[dict[str, Any], list[dict[str, Any]]]:
     header = records[0]
     if header.get("version") != TRACE_VERSION:
         raise ReplayError(f"{path}:1:1: trace version {header.get('version')}, expected {TRACE_VERSION}")
-    return header, records[1:]
+    start = float(header.get("start", 0.0))
+    events = records[1:]
+    if start:  # times relative to the start of the recording
+        events = [{**e, "t": float(e.get("t", start)) - start} for e in events]
+    return header, events
 
 
 def _from_json(value: Any) -> Any:
@@ -174,6 +178,7 @@ class ReplayTxn:
         self.result: Any = None
         self.error: BaseException | None = None
         self.reason: str | None = None
+        self.kind = (call or {}).get("kind", "sync")
         self._listeners: list[Callable[[Any], None]] = [lambda t: on_done(t.outcome())]
         self._timer: Any = None
         if call is None or call.get("actor") != actor:
@@ -203,9 +208,14 @@ class ReplayTxn:
             self._listeners.append(fn)
 
     def cancel(self, reason: str = "cancelled") -> None:
-        if not self.done:
-            self.reason = reason
-            self._finish(TxnState.CANCELLED)
+        if self.done or self.reason is not None:
+            return
+        self.reason = reason
+        if self.kind == "sync":
+            # A sync actor ends when its greenlet next runs and meets Cancelled.
+            self.rt.hub.call_soon(self._finish, TxnState.CANCELLED)
+        else:
+            self._finish(TxnState.CANCELLED)  # async and stream actors: the closer runs at once
 
     def _finish(self, state: TxnState, result: Any = None, error: BaseException | None = None) -> None:
         if self.done:
@@ -227,8 +237,8 @@ class ReplayHost(TreeHost):
         self.calls = calls
         self._count = 0
 
-    def actor_path(self, name: str) -> str:
-        return name
+    def actor_target(self, name: str) -> tuple[str, str]:
+        return name, "sync"  # the kind that matters is the recorded one
 
     def start_actor(self, run: TreeRun, leaf: ActorLeaf, args: tuple, kwargs: dict,
                     on_done: Callable[[Any], None]) -> Any:

@@ -129,6 +129,7 @@ class TreeRun:
         self.parent = parent
         self.depth = 0 if parent is None else parent.depth + 1
         self.id = next(_run_ids)
+        self.txn_id: int | None = None  # the transaction running it, when run as an actor
         self.ticks = 0
         self.status = Status.INVALID
         self.observers = list(host.observers)
@@ -189,7 +190,7 @@ class TreeRun:
         label = path.rsplit("/", 1)[-1]
         b: py_trees.behaviour.Behaviour
         if isinstance(node, Do):
-            b = ActorLeaf(label, self, node, self.host.actor_path(node.actor), path)
+            b = ActorLeaf(label, self, node, *self.host.actor_target(node.actor), path=path)
         elif isinstance(node, SetValues):
             b = SetLeaf(label, self, node)
         elif isinstance(node, Check):

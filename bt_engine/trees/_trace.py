@@ -1,15 +1,15 @@
 """Recording tree runs as JSON Lines traces.
 
-A trace starts with a header (tree, inputs, seed, versions, and the file and sha256 of
-every tree the run may use), followed by one event per line, each stamped with the
-runtime clock (``t``, seconds):
+A trace starts with a header (tree, inputs, seed, versions, the runtime-clock time the
+recording started, and the file and sha256 of every tree the run may use), followed by
+one event per line, each stamped with the runtime clock (``t``, seconds):
 
 =========  ===============================================================
 ``run``     a tree run started: ``run`` (ordinal), ``tree``, ``parent``
 ``tick``    tick ``n`` of run ``run``
 ``status``  node ``path`` of run ``run`` went ``old`` -> ``new``
 ``call``    actor leaf ``path`` started ``actor`` (call ordinal ``call``)
-            with ``args``/``kwargs``
+            with ``args``/``kwargs``; ``target`` is its path, ``kind`` its kind
 ``return``  call ``call`` ended: ``state`` done (``value``), failed
             (``error``) or cancelled (``reason``)
 ``write``   blackboard ``key`` := ``value``
@@ -151,7 +151,7 @@ class EventBuilder(TreeObserver):
         number = self._calls[id(txn)] = self._call_count
         self._emit(run, {
             "type": "call", "run": self._run(run), "path": leaf.path, "call": number,
-            "actor": leaf.node.actor, "target": leaf.actor_path,
+            "actor": leaf.node.actor, "target": leaf.actor_path, "kind": leaf.actor_kind,
             "args": to_json(list(args)), "kwargs": to_json(kwargs),
         })
 
@@ -218,8 +218,8 @@ class TraceRecorder:
             rt.call("demo_patrol")
 
     While open it is one of ``host.observers``, it is ``rt.recorder`` (the runtime's
-    recorder service: ``rt.recorder.emit(event)`` adds an event), and it records log
-    records of level INFO and above.
+    recorder service: ``rt.recorder.emit(event)`` adds an event), and it records the
+    log records of level INFO and above that the logging configuration lets through.
 
     Args:
         sink: a path or an open text stream.
@@ -245,7 +245,7 @@ class TraceRecorder:
         self._lock = threading.Lock()  # log records may come from other threads
         header = {
             "type": "header", "format": TRACE_FORMAT, "version": TRACE_VERSION, "tree": tree,
-            "inputs": to_json(dict(inputs or {})), "seed": seed,
+            "inputs": to_json(dict(inputs or {})), "seed": seed, "start": self.rt.now(),
             "clock": "virtual" if getattr(self.rt.clock, "virtual", False) else "wall",
             "recorded": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
             "versions": _versions(), "trees": tree_files(host, tree),

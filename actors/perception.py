@@ -1,0 +1,611 @@
+"""Perception: find cans, bottles and other objects in RGB-D frames with OpenCV.
+
+Pipeline (one frame, :func:`detect`; ``docs/perception.md`` explains each step):
+
+1. **Colour**: every saturated pixel gets a named colour of :data:`PALETTE` (by hue).
+2. **Segments**: connected regions of one colour; where two regions of the same colour
+   overlap in the image, the depth jump between them cuts the farther one off.
+3. **Geometry**: each segment's pixels are back-projected with the depth and the
+   intrinsics and put into the map frame with the camera pose of the frame. The support
+   height (the floor) comes from the pixels just below the segment; heights are measured
+   from it. The object's metric width profile is measured in height bands, across the
+   viewing direction.
+4. **Category**: an :class:`Appearance` (colour + profile of radius against height) whose
+   colour matches is checked against the measured height, width profile and the fit of a
+   cylinder of its body radius to the body's surface points. The best match above
+   ``min_confidence`` names the segment; otherwise it is ``unknown`` (a distractor).
+5. **Position**: the object's vertical axis is the centre of the circle of the known body
+   radius fitted (least squares, robust) to the visible surface points of the body: the
+   visible-surface centroid lies a few cm in front of the axis, the fit does not.
+   ``z`` is the base (the support height).
+
+Actors (``Perception`` SubSystem; the camera streams are in ``actors/camera.py``):
+``object_glance``, ``find_object``, ``pic_find``, ``get_found``, ``measure_distance``
+(stream), ``measure_center`` (stream). Detections are plain dicts (see :func:`detect`).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Iterator
+
+import cv2
+import numpy as np
+
+from bt_engine import ActorbtError, SubSystem, actor
+
+from .camera import Camera, RGBDFrame
+
+# ----------------------------------------------------------------------------- appearance
+#: Named colours by OpenCV hue (0..180). A pixel has a colour when saturated enough.
+PALETTE: dict[str, tuple[tuple[int, int], ...]] = {
+    "red": ((0, 8), (165, 181)),
+    "orange": ((8, 22),),
+    "yellow": ((22, 35),),
+    "green": ((35, 85),),
+    "cyan": ((85, 100),),
+    "blue": ((100, 130),),
+    "purple": ((130, 165),),
+}
+MIN_SATURATION = 80     # HSV S (0..255): floor, walls and shadows are below ~40
+MIN_VALUE = 20          # HSV V (0..255): darker pixels have no reliable hue
+
+MIN_PIXELS = 40         # smaller segments are ignored
+MAX_RANGE = 4.0         # [m] farther segments are ignored
+MAX_UNKNOWN_SIZE = (0.35, 0.60)   # [m] width, height: larger coloured things are structure
+OCCLUSION_JUMP = 0.03   # [m] (and 4 % of the range) depth step that separates two objects
+DEPTH_NOISE = 0.0015    # [m] RMS a true cylinder's surface may deviate from the fitted one;
+                        # the simulator's depth is exact (~0.3 mm); raise it for a real sensor
+
+
+@dataclass(frozen=True)
+class Appearance:
+    """How a category looks: a colour and a body of revolution standing upright.
+
+    ``sections`` go bottom-up: ``(top height above the base [m], radius [m])``; the first
+    section is the body whose radius is fitted to find the axis. A can is one section; a
+    wine bottle is body, shoulder and neck.
+    """
+    name: str
+    colour: str
+    sections: tuple[tuple[float, float], ...]
+    min_confidence: float = 0.3
+    description: str = ""
+
+    @property
+    def height(self) -> float:
+        return self.sections[-1][0]
+
+    @property
+    def body_radius(self) -> float:
+        return self.sections[0][1]
+
+    @property
+    def body_top(self) -> float:
+        return self.sections[0][0]
+
+    def radius_at(self, h: float) -> float:
+        """Radius at height ``h`` above the base (0 above the top)."""
+        for top, r in self.sections:
+            if h <= top:
+                return r
+        return 0.0
+
+
+APPEARANCES: dict[str, Appearance] = {
+    "can": Appearance("can", "red", ((0.122, 0.033),),
+                      description="red cylinder, 66 mm x 122 mm"),
+    "bottle": Appearance("bottle", "green", ((0.200, 0.035), (0.230, 0.024), (0.305, 0.0135)),
+                         description="green wine bottle: body 70 mm x 200 mm, shoulder, neck 27 mm"),
+}
+
+UNKNOWN = "unknown"
+
+
+class PerceptionError(ActorbtError):
+    """A perception request could not be served (no camera frames, bad category)."""
+
+
+# ----------------------------------------------------------------------------- geometry
+def _hue_lut() -> tuple[np.ndarray, list[str]]:
+    names = list(PALETTE)
+    lut = np.zeros(256, np.uint8)
+    for i, name in enumerate(names, 1):
+        for lo, hi in PALETTE[name]:
+            lut[lo:min(hi, 256)] = i
+    return lut, names
+
+
+def colour_labels(bgr: np.ndarray) -> tuple[np.ndarray, list[str]]:
+    """Per-pixel palette index (0 = no colour) and the palette's names (index - 1)."""
+    hsv = cv2.cvtColor(bgr, cv2.COLOR_BGR2HSV)
+    lut, names = _hue_lut()
+    lab = lut[hsv[:, :, 0]]
+    lab[(hsv[:, :, 1] < MIN_SATURATION) | (hsv[:, :, 2] < MIN_VALUE)] = 0
+    return lab, names
+
+
+def _occlusion_cuts(lab: np.ndarray, depth: np.ndarray) -> np.ndarray:
+    """Pixels on the far side of a depth step between two pixels of the same colour."""
+    D = np.where(np.isfinite(depth), depth, np.inf)
+    cut = np.zeros(lab.shape, bool)
+    for axis in (0, 1):
+        a = D[:-1, :] if axis == 0 else D[:, :-1]
+        b = D[1:, :] if axis == 0 else D[:, 1:]
+        la = lab[:-1, :] if axis == 0 else lab[:, :-1]
+        lb = lab[1:, :] if axis == 0 else lab[:, 1:]
+        with np.errstate(invalid="ignore"):
+            jump = (la == lb) & (la > 0) & (np.abs(a - b) > np.maximum(OCCLUSION_JUMP, 0.04 * np.minimum(a, b)))
+        if axis == 0:
+            cut[1:, :] |= jump & (b > a)
+            cut[:-1, :] |= jump & (a > b)
+        else:
+            cut[:, 1:] |= jump & (b > a)
+            cut[:, :-1] |= jump & (a > b)
+    return cut
+
+
+def backproject(frame: RGBDFrame) -> np.ndarray:
+    """Map-frame points (H, W, 3) of every pixel (NaN where there is no depth)."""
+    k = frame.intrinsics
+    h, w = frame.depth.shape
+    z = frame.depth.astype(np.float64)
+    u = (np.arange(w) - k.cx) / k.fx
+    v = (np.arange(h) - k.cy) / k.fy
+    cam = np.stack([u[None, :] * z, v[:, None] * z, z], axis=-1)
+    R, t = frame.T_map_cam[:3, :3], frame.T_map_cam[:3, 3]
+    return cam @ R.T + t
+
+
+def fit_circle_fixed(xy: np.ndarray, r: float, c0: np.ndarray, iters: int = 12) -> tuple[np.ndarray, float]:
+    """Centre of the circle of radius ``r`` through 2-D points ``xy`` (Gauss-Newton from
+    ``c0``, Huber-weighted); returns (centre, RMS residual [m])."""
+    c = np.asarray(c0, float).copy()
+    for _ in range(iters):
+        d = xy - c
+        dist = np.hypot(d[:, 0], d[:, 1])
+        dist = np.maximum(dist, 1e-9)
+        e = dist - r
+        J = -d / dist[:, None]
+        k = 1.5 * max(1e-3, 1.4826 * float(np.median(np.abs(e - np.median(e)))))
+        wts = np.where(np.abs(e) <= k, 1.0, k / np.maximum(np.abs(e), 1e-12))
+        A = (J * wts[:, None]).T @ J
+        g = (J * wts[:, None]).T @ e
+        try:
+            step = np.linalg.solve(A + 1e-9 * np.eye(2), -g)
+        except np.linalg.LinAlgError:
+            break
+        c += step
+        if np.hypot(*step) < 1e-6:
+            break
+    e = np.hypot(*(xy - c).T) - r
+    return c, float(np.sqrt(np.mean(e * e)))
+
+
+@dataclass
+class _Segment:
+    """Measurements of one coloured region (internal)."""
+    colour: str
+    pixels: int
+    u: float                  # centroid [px]
+    v: float
+    bbox: tuple[int, int, int, int]
+    truncated: dict           # sides of the image the segment touches
+    pts: np.ndarray           # (N, 3) map-frame surface points
+    hts: np.ndarray           # (N,) height above the base [m]
+    base: float               # support height [m]
+    top: float                # highest surface point [m]
+    cam_xy: np.ndarray
+    ray: np.ndarray           # unit horizontal viewing direction
+    lateral: np.ndarray       # (N,) coordinate across the viewing direction [m]
+    m_per_px: float           # metres per pixel at the segment
+    range: float              # median horizontal distance camera -> surface [m]
+
+    @property
+    def height(self) -> float:
+        return self.top - self.base
+
+    def band_widths(self, band: float) -> list[tuple[float, float]]:
+        """(mid height, width) of the silhouette in height bands of ``band`` [m]."""
+        out = []
+        if self.height <= 0:
+            return out
+        n = max(1, int(math.ceil(self.height / band)))
+        idx = np.clip((self.hts / band).astype(int), 0, n - 1)
+        order = np.argsort(idx, kind="stable")
+        idx_s, lat_s = idx[order], self.lateral[order]
+        starts = np.searchsorted(idx_s, np.arange(n))
+        ends = np.searchsorted(idx_s, np.arange(n), side="right")
+        for i in range(n):
+            if ends[i] - starts[i] >= 2:
+                seg = lat_s[starts[i]:ends[i]]
+                out.append(((i + 0.5) * band, float(seg.max() - seg.min()) + self.m_per_px))
+        return out
+
+
+def _measure(colour: str, comp: np.ndarray, x0: int, y0: int, P: np.ndarray, depth: np.ndarray,
+             lab: np.ndarray, frame: RGBDFrame) -> _Segment | None:
+    h, w = lab.shape
+    ys, xs = np.nonzero(comp)
+    ys = ys + y0
+    xs = xs + x0
+    pts = P[ys, xs]
+    ok = np.isfinite(pts).all(axis=1)
+    if ok.sum() < MIN_PIXELS // 2:
+        return None
+    pts = pts[ok]
+    # the support: pixels 2..4 rows below the lowest pixel of each column, not coloured
+    low = np.full(w, -1, np.int64)
+    np.maximum.at(low, xs, ys)
+    cols = np.nonzero(low >= 0)[0]
+    sup = []
+    for dy in (2, 3, 4):
+        yy = low[cols] + dy
+        inside = yy < h
+        cx, cy = cols[inside], yy[inside]
+        zz = P[cy, cx, 2]
+        sup.append(zz[(lab[cy, cx] == 0) & np.isfinite(zz)])
+    sup = np.concatenate(sup)
+    zmin = float(np.min(pts[:, 2]))
+    base = zmin
+    if len(sup) >= 3:
+        s = float(np.median(sup))
+        if zmin - 0.03 <= s <= zmin + 0.005:
+            base = s
+    cam_xy = frame.T_map_cam[:2, 3]
+    rel = pts[:, :2] - cam_xy
+    mean = rel.mean(axis=0)
+    ray = mean / (np.hypot(*mean) or 1.0)
+    perp = np.array([-ray[1], ray[0]])
+    lateral = rel @ perp
+    rng = float(np.median(rel @ ray))
+    m_per_px = float(np.median(depth[ys, xs][ok])) / frame.intrinsics.fx
+    x1, y1 = int(xs.max()) + 1, int(ys.max()) + 1
+    bx0, by0 = int(xs.min()), int(ys.min())
+    trunc = {"left": bx0 <= 0, "right": x1 >= w, "top": by0 <= 0, "bottom": y1 >= h}
+    return _Segment(colour=colour, pixels=int(len(xs)), u=float(xs.mean()), v=float(ys.mean()),
+                    bbox=(bx0, by0, x1, y1), truncated=trunc, pts=pts, hts=pts[:, 2] - base,
+                    base=base, top=float(pts[:, 2].max()), cam_xy=cam_xy, ray=ray, lateral=lateral,
+                    m_per_px=m_per_px, range=rng)
+
+
+def _segments(frame: RGBDFrame, P: np.ndarray) -> list[_Segment]:
+    lab, names = colour_labels(frame.bgr)
+    cut = _occlusion_cuts(lab, frame.depth)
+    out = []
+    for i, name in enumerate(names, 1):
+        m = ((lab == i) & ~cut).astype(np.uint8)
+        if int(m.sum()) < MIN_PIXELS:
+            continue
+        n, cc, stats, _ = cv2.connectedComponentsWithStats(m, connectivity=4)
+        for j in range(1, n):
+            x0, y0, bw, bh, area = (int(a) for a in stats[j])
+            if area < MIN_PIXELS:
+                continue
+            roi = cc[y0:y0 + bh, x0:x0 + bw] == j
+            # fill holes left by specular highlights, but only where the depth agrees
+            contours, _ = cv2.findContours(roi.astype(np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
+            filled = np.zeros(roi.shape, np.uint8)
+            cv2.drawContours(filled, contours, -1, 1, thickness=cv2.FILLED)
+            holes = (filled > 0) & ~roi
+            if holes.any():
+                d = frame.depth[y0:y0 + bh, x0:x0 + bw]
+                dm = float(np.nanmedian(d[roi]))
+                roi = roi | (holes & (np.abs(d - dm) < 0.1))
+            seg = _measure(name, roi, x0, y0, P, frame.depth, lab, frame)
+            if seg is not None and seg.range <= MAX_RANGE:
+                out.append(seg)
+    return out
+
+
+# ----------------------------------------------------------------------------- classify
+def _score(seg: _Segment, app: Appearance) -> tuple[float, dict]:
+    """Confidence in [0, 1] that ``seg`` is ``app``, and the evidence."""
+    if seg.colour != app.colour:
+        return 0.0, {"reason": "colour"}
+    px = seg.m_per_px
+    band = max(0.01, 1.6 * px)
+    rho = seg.range + app.body_radius
+    tangent = math.sqrt(max(0.0, 1.0 - (app.body_radius / max(rho, 1e-3)) ** 2))
+    tol_w = max(0.008, 1.6 * px)
+    tol_h = max(0.012, 2.0 * px)
+    widths = seg.band_widths(band)
+    side_cut = seg.truncated["left"] or seg.truncated["right"]
+    # width profile: measured band widths against the appearance's diameter at that height
+    errs = []
+    for hmid, wm in widths:
+        if hmid < band or hmid > seg.height - band:   # bottom rim and top rim bands are partial
+            continue
+        we = 2 * app.radius_at(hmid) * tangent
+        if side_cut:
+            errs.append(max(0.0, wm - we))           # a cut segment is only narrower
+        else:
+            errs.append(wm - we)
+    if len(errs) < 2:
+        return 0.0, {"reason": "too few height bands"}
+    e_prof = float(np.sqrt(np.mean(np.square(errs))))
+    # height: exact when the top is in the image, an upper bound otherwise
+    if seg.truncated["top"]:
+        e_h = max(0.0, seg.height - app.height)
+    else:
+        e_h = seg.height - app.height
+    # body: a cylinder of the body radius must fit the body's surface
+    body = seg.pts[(seg.hts > 0.15 * app.body_top) & (seg.hts < 0.9 * app.body_top)]
+    if len(body) < 10:
+        return 0.0, {"reason": "body not visible"}
+    c0 = body[:, :2].mean(axis=0) + app.body_radius * seg.ray
+    _, rms = fit_circle_fixed(body[:, :2], app.body_radius, c0)
+    tol_r = DEPTH_NOISE
+    z = np.array([e_prof / tol_w, e_h / tol_h, rms / tol_r])
+    conf = float(math.exp(-0.5 * float(np.mean(z * z))))
+    if np.any(np.abs(z) > 2.5):
+        conf = min(conf, 0.1)
+    if seg.truncated["top"] or side_cut:
+        conf *= 0.85                                 # part of the evidence is out of view
+    return conf, {"profile_err": e_prof, "height_err": e_h, "cylinder_rms": rms}
+
+
+def _axis(seg: _Segment, app: Appearance | None) -> tuple[np.ndarray, float]:
+    """(x, y) of the vertical axis, and the radius used."""
+    if app is not None:
+        body = seg.pts[(seg.hts > 0.08 * app.body_top) & (seg.hts < 0.92 * app.body_top)]
+        if len(body) < 10:
+            body = seg.pts
+        r = app.body_radius
+    else:
+        body = seg.pts
+        widths = [wd for _, wd in seg.band_widths(max(0.01, 1.6 * seg.m_per_px))]
+        r = 0.5 * float(np.median(widths)) if widths else 0.03
+    c0 = body[:, :2].mean(axis=0) + r * seg.ray
+    c, rms = fit_circle_fixed(body[:, :2], r, c0)
+    if app is None and rms > 2 * DEPTH_NOISE:
+        c = _box_centre(body[:, :2], seg.ray)
+    # a fit that wandered off (too few or degenerate points): visible centroid + r along the ray
+    if not np.all(np.isfinite(c)) or np.hypot(*(c - c0)) > 2 * r:
+        c = c0
+    return c, r
+
+
+def _box_centre(xy: np.ndarray, ray: np.ndarray) -> np.ndarray:
+    """Centre of a box-like footprint from its visible faces (top view).
+
+    The orientation is the one whose rectangle's sides the points hug most closely (the
+    "closeness" criterion of L-shape fitting); the rectangle spans the points. When only
+    one face shows (a thin rectangle) it is pushed back by half its width along the
+    viewing direction: a square footprint is assumed.
+    """
+    o = xy.mean(axis=0)
+    q = xy - o
+    th = np.radians(np.arange(0.0, 90.0, 1.0))
+    c1 = q @ np.stack([np.cos(th), np.sin(th)])           # (N, A)
+    c2 = q @ np.stack([-np.sin(th), np.cos(th)])
+    d1 = np.minimum(c1.max(axis=0) - c1, c1 - c1.min(axis=0))
+    d2 = np.minimum(c2.max(axis=0) - c2, c2 - c2.min(axis=0))
+    score = (1.0 / np.maximum(np.minimum(d1, d2), 0.002)).sum(axis=0)
+    k = int(np.argmax(score))
+    e1 = np.array([math.cos(th[k]), math.sin(th[k])])
+    e2 = np.array([-e1[1], e1[0]])
+    m1 = 0.5 * (c1[:, k].max() + c1[:, k].min())
+    m2 = 0.5 * (c2[:, k].max() + c2[:, k].min())
+    s1 = c1[:, k].max() - c1[:, k].min()
+    s2 = c2[:, k].max() - c2[:, k].min()
+    c = o + m1 * e1 + m2 * e2
+    long, short = max(s1, s2), min(s1, s2)
+    if short < 0.35 * long:
+        c = c + 0.5 * (long - short) * ray
+    return c
+
+
+def detect(frame: RGBDFrame, appearances: dict[str, Appearance] | None = None) -> list[dict]:
+    """Every object in one RGB-D frame, nearest first.
+
+    Each detection is a dict:
+      category    ``can``, ``bottle``, ... or ``unknown``
+      x, y        the object's vertical axis in the map frame [m]
+      z           its base (the support height) in the map frame [m]
+      height      visible height above the base [m] (a lower bound when ``truncated``)
+      width       body width [m]
+      distance    horizontal distance from the robot base to the axis [m]
+      bearing     direction of the axis in the robot's frame [rad], positive left
+      confidence  in [0, 1]
+      pixel       [u, v] centroid of the object's pixels
+      colour, truncated (sides of the image it touches), stamp [s], frame ("map")
+    """
+    apps = APPEARANCES if appearances is None else appearances
+    P = backproject(frame)
+    T_base_map = np.linalg.inv(frame.T_map_base)
+    out = []
+    for seg in _segments(frame, P):
+        best, best_conf, evidence = None, 0.0, {}
+        for app in apps.values():
+            conf, ev = _score(seg, app)
+            if conf > best_conf:
+                best, best_conf, evidence = app, conf, ev
+        if best is not None and best_conf >= best.min_confidence:
+            category, conf, app = best.name, best_conf, best
+        else:
+            category, app = UNKNOWN, None
+            conf = 1.0 - best_conf
+        c, r = _axis(seg, app)
+        widths = [wd for hm, wd in seg.band_widths(max(0.01, 1.6 * seg.m_per_px))
+                  if app is None or hm < app.body_top]
+        width = float(np.median(widths)) if widths else 2 * r
+        if app is not None and (seg.truncated["left"] or seg.truncated["right"]):
+            width = 2 * r                              # partly out of view: the model's width
+        if app is None and (width > MAX_UNKNOWN_SIZE[0] or seg.height > MAX_UNKNOWN_SIZE[1]):
+            continue                                   # a wall, furniture: not an object
+        b = T_base_map @ np.array([c[0], c[1], seg.base, 1.0])
+        out.append({
+            "category": category,
+            "x": float(c[0]), "y": float(c[1]), "z": float(seg.base),
+            "height": float(seg.height), "width": width,
+            "distance": float(math.hypot(b[0], b[1])), "bearing": float(math.atan2(b[1], b[0])),
+            "confidence": round(float(conf), 3),
+            "pixel": [round(seg.u, 1), round(seg.v, 1)],
+            "colour": seg.colour,
+            "truncated": [k for k, v in seg.truncated.items() if v],
+            "stamp": frame.stamp, "frame": "map",
+        })
+    out.sort(key=lambda d: d["distance"])
+    return out
+
+
+def _targets(dets: list[dict], category: str | None, apps: dict) -> list[dict]:
+    if category is None:
+        return [d for d in dets if d["category"] in apps]
+    return [d for d in dets if d["category"] == category]
+
+
+def combine_sightings(sightings: list[dict], looks: int, gate: float = 0.08) -> dict | None:
+    """One estimate from several detections of possibly several objects.
+
+    Detections are grouped by position (within ``gate`` [m] of a group's median); the group
+    seen most often (then the nearest) wins. Its position is the median after dropping
+    sightings more than max(2 cm, 3 MAD) from the first median; its category the majority.
+    """
+    if not sightings:
+        return None
+    groups: list[list[dict]] = []
+    for d in sightings:
+        for g in groups:
+            if math.hypot(d["x"] - np.median([s["x"] for s in g]), d["y"] - np.median([s["y"] for s in g])) < gate:
+                g.append(d)
+                break
+        else:
+            groups.append([d])
+    groups.sort(key=lambda g: (-len(g), float(np.median([s["distance"] for s in g]))))
+    g = groups[0]
+    xy = np.array([[s["x"], s["y"]] for s in g])
+    med = np.median(xy, axis=0)
+    dev = np.hypot(*(xy - med).T)
+    mad = 1.4826 * float(np.median(dev))
+    keep = dev <= max(0.02, 3 * mad)
+    kept = [s for s, k in zip(g, keep) if k]
+    cats = [s["category"] for s in kept]
+    category = max(set(cats), key=cats.count)
+    kept_c = [s for s in kept if s["category"] == category] or kept
+    xyz = np.array([[s["x"], s["y"], s["z"]] for s in kept_c])
+    m = np.median(xyz, axis=0)
+    last = max(kept_c, key=lambda s: s["stamp"])
+    est = dict(last)
+    est.update({
+        "category": category,
+        "x": float(m[0]), "y": float(m[1]), "z": float(m[2]),
+        "height": float(np.median([s["height"] for s in kept_c])),
+        "width": float(np.median([s["width"] for s in kept_c])),
+        "confidence": round(float(np.median([s["confidence"] for s in kept_c])) * len(kept_c) / max(looks, 1), 3),
+        "sightings": len(kept_c), "looks": looks,
+        "spread": float(np.max(np.hypot(*(xyz[:, :2] - m[:2]).T))) if len(kept_c) > 1 else 0.0,
+    })
+    return est
+
+
+# ----------------------------------------------------------------------------- subsystem
+GLANCE_TIMEOUT = 3.0    # [s] how long one look may wait for a frame
+
+
+class Perception(SubSystem):
+    """Object detection, classification and localisation on the robot's RGB-D camera.
+
+    A ``camera`` child subsystem holds the camera's stream actors (``pic``, ``depth``,
+    ``camera_info``, ``rgbd``). ``appearances`` maps category names to
+    :class:`Appearance` (default :data:`APPEARANCES`); other keyword arguments go to
+    :class:`actors.camera.Camera` (topics, base frame, URDF).
+    """
+
+    def __init__(self, appearances: dict[str, Appearance] | None = None, **camera: object) -> None:
+        super().__init__()
+        self.add_subsystem("camera", Camera, **camera)
+        self.set_value("appearances", dict(APPEARANCES if appearances is None else appearances))
+
+    def _apps(self) -> dict[str, Appearance]:
+        return self.get_value("appearances")
+
+    def _check_category(self, category: str | None) -> None:
+        if category is not None and category != UNKNOWN and category not in self._apps():
+            raise PerceptionError(f"unknown category {category!r}; known: "
+                                  f"{', '.join(sorted(self._apps()))}, {UNKNOWN}")
+
+    def _frame(self) -> RGBDFrame:
+        return self.run_actor_mode("rgbd", "timed", GLANCE_TIMEOUT)
+
+    @actor
+    def object_glance(self) -> list[dict]:
+        """One quick look: every object in the next RGB-D frame (targets and ``unknown``
+        distractors), nearest first. See ``detect`` for the fields of a detection."""
+        return detect(self._frame(), self._apps())
+
+    @actor
+    def find_object(self, category: str | None = None) -> dict | None:
+        """The nearest object of ``category`` (any known category when None) in the next
+        RGB-D frame, or None: {category, x, y, z, height, width, distance, bearing,
+        confidence, pixel, ...}; x, y is the object's axis and z its base, map frame [m]."""
+        self._check_category(category)
+        found = _targets(detect(self._frame(), self._apps()), category, self._apps())
+        return found[0] if found else None
+
+    @actor
+    def pic_find(self, category: str | None = None, seconds: float = 10.0) -> dict | None:
+        """Watch the camera for up to ``seconds`` until an object of ``category`` (any known
+        category when None) is seen; the nearest such detection, or None on timeout."""
+        self._check_category(category)
+        ret = None
+        with self.run_actor_mode("rgbd", "timed_iterator", seconds) as frames:
+            for frame in frames:
+                found = _targets(detect(frame, self._apps()), category, self._apps())
+                if found:
+                    ret = found[0]
+                    break
+        return ret
+
+    @actor
+    def get_found(self, category: str | None = None, looks: int = 5) -> dict | None:
+        """A reliable estimate from ``looks`` consecutive frames: sightings are grouped by
+        position, outliers dropped, and the median kept. Adds ``sightings``, ``looks`` and
+        ``spread`` [m] to the detection fields; None when nothing was seen."""
+        self._check_category(category)
+        looks = max(1, int(looks))
+        sightings: list[dict] = []
+        n = 0
+        with self.run_actor_mode("rgbd", "timed_iterator", GLANCE_TIMEOUT + looks * 0.5) as frames:
+            for frame in frames:
+                sightings += _targets(detect(frame, self._apps()), category, self._apps())
+                n += 1
+                if n >= looks:
+                    break
+        if n == 0:
+            raise PerceptionError("no camera frames")
+        return combine_sightings(sightings, n)
+
+    @actor
+    def measure_distance(self, category: str | None = None) -> Iterator[dict | None]:
+        """Per frame, the range and bearing to the nearest target (for visual servoing):
+        {distance [m], bearing [rad, + left], x, y, category, stamp}, or None when no
+        target is in view."""
+        self._check_category(category)
+        with self.run_actor_mode("rgbd", "iterator") as frames:
+            for frame in frames:
+                found = _targets(detect(frame, self._apps()), category, self._apps())
+                if not found:
+                    yield None
+                    continue
+                d = found[0]
+                yield {"distance": d["distance"], "bearing": d["bearing"], "x": d["x"], "y": d["y"],
+                       "category": d["category"], "stamp": d["stamp"]}
+
+    @actor
+    def measure_center(self, category: str | None = None) -> Iterator[dict | None]:
+        """Per frame, where the nearest target is in the image: {dx, dy} its pixel offset
+        from the principal point normalised by half the image size (-1 left/top .. +1
+        right/bottom), pixel, category, stamp; None when no target is in view."""
+        self._check_category(category)
+        with self.run_actor_mode("rgbd", "iterator") as frames:
+            for frame in frames:
+                found = _targets(detect(frame, self._apps()), category, self._apps())
+                if not found:
+                    yield None
+                    continue
+                d, k = found[0], frame.intrinsics
+                u, v = d["pixel"]
+                yield {"dx": (u - k.cx) / (k.width / 2), "dy": (v - k.cy) / (k.height / 2),
+                       "pixel": d["pixel"], "category": d["category"], "stamp": d["stamp"]}

@@ -1,0 +1,100 @@
+"""The tree commands of ``actorbt``: run, check, show, replay, plot."""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import pytest
+
+from bt_engine.cli.main import main
+
+REPO = Path(__file__).resolve().parents[1]
+
+
+@pytest.fixture
+def config(tmp_path: Path) -> str:
+    trees = tmp_path / "trees"
+    trees.mkdir()
+    shutil.copy(REPO / "trees" / "demo_patrol.yaml", trees)
+    (trees / "fails.yaml").write_text("name: fails\nroot: {sequence: [{set: {n: 1}}, {name: too small, check: n > 5}]}\n")
+    cfg = tmp_path / "actorbt.yaml"
+    cfg.write_text("subsystems: {}\ntrees: trees\n")
+    return str(cfg)
+
+
+def test_run_prints_progress_and_outputs(config: str, capsys: pytest.CaptureFixture) -> None:
+    assert main(["--config", config, "run", "demo_patrol", "--arg", "rounds=1", "--arg", "pause=0"]) == 0
+    out = capsys.readouterr().out
+    assert "demo_patrol: started (rounds=1, pause=0.0)" in out
+    assert "demo_patrol: active: patrol/rounds/round/drive to kitchen" in out
+    assert "patrol/report/report deadline halted" in out
+    assert out.strip().endswith("{'last': 'bedroom'}")
+
+
+def test_run_quiet_json(config: str, capsys: pytest.CaptureFixture) -> None:
+    assert main(["--config", config, "run", "demo_patrol", "--quiet", "--json"]) == 0
+    assert capsys.readouterr().out.strip() == '{"last": "bedroom"}'
+
+
+def test_run_a_failing_tree_exits_1(config: str, capsys: pytest.CaptureFixture) -> None:
+    assert main(["--config", config, "run", "fails", "--quiet"]) == 1
+    assert "tree fails failed at sequence/too small: n > 5: false" in capsys.readouterr().err
+
+
+def test_run_errors_are_one_line(config: str, capsys: pytest.CaptureFixture) -> None:
+    assert main(["--config", config, "run", "demo_patrl"]) == 2
+    assert "unknown tree 'demo_patrl' (did you mean 'demo_patrol'?)" in capsys.readouterr().err
+    assert main(["--config", config, "run", "demo_patrol", "--arg", "round=2"]) == 2
+    assert "has no input 'round' (did you mean 'rounds'?)" in capsys.readouterr().err
+
+
+def test_run_a_file_record_replay_and_plot(config: str, tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    mission = tmp_path / "extra.yaml"
+    mission.write_text("name: extra\nroot: {sequence: [{wait: 1}, {do: demo_patrol, with: {rounds: 1}}]}\n")
+    trace = tmp_path / "run.jsonl"
+    assert main(["--config", config, "run", str(mission), "--quiet", "--record", str(trace)]) == 0
+    capsys.readouterr()
+    assert main(["--config", config, "replay", str(trace)]) == 0
+    assert "replay of extra: OK" in capsys.readouterr().out
+    mission.write_text(mission.read_text().replace("wait: 1", "wait: 2"))
+    assert main(["--config", config, "replay", str(trace)]) == 1
+    out = capsys.readouterr().out
+    assert "changed since the recording" in out and "DIVERGED, first divergence at event" in out
+    png = tmp_path / "timeline.png"
+    assert main(["--config", config, "plot", str(trace), "--out", str(png)]) == 0
+    assert png.read_bytes()[:4] == b"\x89PNG"
+
+
+def test_check_files_and_folder(config: str, capsys: pytest.CaptureFixture) -> None:
+    assert main(["--config", config, "check"]) == 0
+    assert "2 mission files OK" in capsys.readouterr().out
+    bad = [str(REPO / "tests" / "bad_missions" / n) for n in ("07_unknown_node_type.yaml", "20_self_cycle.yaml")]
+    assert main(["--config", config, "check", *bad]) == 1
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 2
+    assert lines[0].startswith(f"{bad[0]}:4:3: unknown node type 'sequnce'")
+    assert lines[1].startswith(f"{bad[1]}:6:11: subtree cycle self_cycle -> self_cycle")
+
+
+def test_check_reports_a_broken_tree_in_the_folder(config: str, capsys: pytest.CaptureFixture) -> None:
+    folder = Path(config).parent / "trees"
+    (folder / "broken.yaml").write_text("name: broken\nroot: {do: demo_patrol, with: {rounds: many}}\n")
+    assert main(["--config", config, "check"]) == 1
+    err = capsys.readouterr().err
+    assert "broken.yaml:2:40: argument 'rounds' of actor 'demo_patrol' expects an int, got str 'many'" in err
+
+
+def test_show_ascii_and_drawings(config: str, tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    dot = tmp_path / "tree.dot"
+    assert main(["--config", config, "show", "demo_patrol", "--out", str(dot)]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("demo_patrol(rounds: int = 2, pause: float = 0.5) -> {last}")
+    assert "│       ├── drive to kitchen  [do sleep(seconds=1.5)]" in out
+    assert dot.read_text().startswith('digraph "demo_patrol"')
+    if shutil.which("dot"):
+        svg = tmp_path / "tree.svg"
+        assert main(["--config", config, "show", "demo_patrol", "--out", str(svg)]) == 0
+        assert "<svg" in svg.read_text()
+    assert main(["--config", config, "show", "demo_patrol", "--out", str(tmp_path / "x.bmp")]) == 2
+    assert "unknown format 'bmp'" in capsys.readouterr().err
