@@ -32,8 +32,10 @@ def _bottle():
         parts=(("cylinder", body_r, body_h, z0 + body_h / 2),
                ("cylinder", sh_r, sh_h, z0 + body_h + sh_h / 2),
                ("cylinder", neck_r, neck_h, z0 + body_h + sh_h + neck_h / 2)),
-        height=total, radius=body_r, mass=0.20, rgba=(0.05, 0.32, 0.12, 1.0), friction=0.9,
-        description="wine-bottle shape: body 70 mm x 200 mm, shoulder, neck 27 mm; 0.305 m, 200 g (empty/plastic)")
+        # 80 g: an empty PET wine bottle. Much heavier and the extended arm tips the robot
+        # onto its nose (its centre of mass is only ~25 mm behind the wheel axle).
+        height=total, radius=body_r, mass=0.08, rgba=(0.05, 0.32, 0.12, 1.0), friction=0.9,
+        description="wine-bottle shape: body 70 mm x 200 mm, shoulder, neck 27 mm; 0.305 m, 80 g (empty PET)")
 
 
 CATEGORIES: dict[str, Category] = {

@@ -97,10 +97,20 @@ class Robot:
                                     forces=[self.limits[n][2] for n in ARM],
                                     positionGains=[0.3] * 4, velocityGains=[1.0] * 4,
                                     physicsClientId=cid)
+        target = self.gripper_width / 2
         for j in self.grip_idx:
-            p.setJointMotorControl2(b, j, p.POSITION_CONTROL, targetPosition=self.gripper_width / 2,
-                                    force=GRIPPER_FORCE, maxVelocity=GRIPPER_SPEED, positionGain=0.3,
-                                    physicsClientId=cid)
+            if p.getJointState(b, j, physicsClientId=cid)[0] > target + 1e-3:
+                # Closing: like a current-limited servo, drive inwards at full force, so a
+                # finger stalled on an object keeps pressing with GRIPPER_FORCE (position
+                # control stalls well below its force limit).
+                p.setJointMotorControl2(b, j, p.VELOCITY_CONTROL, targetVelocity=0.0, force=0.0,
+                                        physicsClientId=cid)
+                p.setJointMotorControl2(b, j, p.TORQUE_CONTROL, force=-GRIPPER_FORCE,
+                                        physicsClientId=cid)
+            else:
+                p.setJointMotorControl2(b, j, p.POSITION_CONTROL, targetPosition=target,
+                                        force=GRIPPER_FORCE, maxVelocity=GRIPPER_SPEED,
+                                        positionGain=0.3, physicsClientId=cid)
 
     # ---------------- state ----------------
     def joint_states(self):

@@ -372,3 +372,14 @@ def test_behaviour_nodes_use_registered_py_trees_behaviours(rt: Runtime, tmp_pat
     assert rt.call("counting") == {"done": "yes"}
     assert rec.ticks("counting") == 3  # polled every behaviour_period
     assert rt.now() == pytest.approx(0.2)
+
+
+def test_a_tree_may_not_replace_a_root_actor(rt: Runtime, tmp_path: Path) -> None:
+    from bt_engine.trees import DuplicateTreeError
+    write_trees(tmp_path, sleep="""
+        name: sleep
+        root: {wait: 1}
+    """)
+    with pytest.raises(DuplicateTreeError, match="tree name 'sleep' is already the actor sleep"):
+        TreeHost(rt).load_folder(tmp_path)
+    assert not rt.resolve("sleep").is_tree

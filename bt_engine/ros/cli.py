@@ -27,6 +27,10 @@ def register(sub: Any, common: Callable[[argparse.ArgumentParser], None]) -> Non
     common(p)
     p.add_argument("--preempt", action="store_true",
                    help="a goal for a running tree preempts it (default: it is rejected)")
+    p.add_argument("--record-dir", metavar="DIR",
+                   help="where each tree goal's trace is written "
+                        "(default: .actorbt/goals beside actorbt.yaml)")
+    p.add_argument("--no-record", action="store_true", help="do not record goals")
     p.set_defaults(func=cmd_serve)
 
     p = sub.add_parser("goal", help="run a served tree over ROS: TREE --args '{yaml}'")
@@ -62,13 +66,18 @@ def cmd_serve(args: argparse.Namespace, app: Any) -> int:
     try:
         if threading.current_thread() is threading.main_thread():
             signal.signal(signal.SIGTERM, on_term)
-        server = serve(rt, preempt=bool(getattr(args, "preempt", False)))
+        record_dir = None
+        if not getattr(args, "no_record", False):
+            record_dir = getattr(args, "record_dir", None) or str(app.cfg.base / ".actorbt" / "goals")
+        server = serve(rt, preempt=bool(getattr(args, "preempt", False)), record_dir=record_dir)
         transport = "ros" if rt.bus.name == "ros" else "local"
         print(f"actorbt serve: node /actorbt ({transport} bus, "
               f"{'preempting' if server.preempt else 'rejecting'} a second goal per tree)",
               flush=True)
         for action in server.actions:
             print(f"  {action}", flush=True)
+        if record_dir:
+            print(f"actorbt serve: recording tree goals in {record_dir}", flush=True)
         print("actorbt serve: ready (Ctrl-C stops)", flush=True)
         stop = threading.Event()
         while not stop.wait(3600):

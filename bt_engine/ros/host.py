@@ -91,7 +91,7 @@ class RosHost:
 
         def destroy() -> None:
             self.executor.remove_node(node)
-            node.destroy_node()
+            _destroy_node(node)
         if self._stopping:
             destroy()
         else:
@@ -204,7 +204,7 @@ class RosHost:
         for node in nodes:
             try:
                 self.executor.remove_node(node)
-                node.destroy_node()
+                _destroy_node(node)
             except Exception:
                 log.exception("ROS host %s: destroying node failed", self.name)
         try:
@@ -222,3 +222,17 @@ class RosHost:
 
     def __repr__(self) -> str:
         return f"<RosHost {self.name} {'closed' if self._stopping else 'open'}>"
+
+
+def _destroy_node(node: Any) -> None:
+    """Destroy a node and its waitables. ``Node.destroy_node`` leaves action clients and
+    servers alive; their handles keep the node, and so the DDS participant (its
+    threads and shared memory), alive until the process ends."""
+    for waitable in list(node.waitables):
+        destroy = getattr(waitable, "destroy", None)
+        if destroy is not None:
+            try:
+                destroy()
+            except Exception:
+                log.exception("destroying %r failed", waitable)
+    node.destroy_node()

@@ -30,6 +30,11 @@ Goal semantics:
   stopped. ``/actorbt/call`` goals run concurrently.
 - ``close()`` cancels running goals (they end ABORTED, ``server shutting down``) and
   destroys the node.
+- With ``record_dir``, every tree goal is recorded as a JSON Lines trace (the trees
+  layer's TraceRecorder, runtime transactions included) in
+  ``<record_dir>/<time>-<tree>-<goal id>.jsonl``. ``actorbt serve`` records by default.
+  The recorder observes every run of the runtime, so tree goals that overlap in time
+  also see each other's events.
 
 With the ROS transport (``--ros``) the node lives in the transport's context and
 executor thread; otherwise the server makes its own :class:`RosHost`.
@@ -38,6 +43,7 @@ from __future__ import annotations
 
 import functools
 import logging
+import pathlib
 import re
 import time
 from typing import Any
@@ -120,6 +126,8 @@ class _Goal:
         self.last_run: Any = None
         self.final: str | None = None
         self.flush_scheduled = False
+        self.recorder: Any = None
+        self.trace_path: str | None = None
 
     # -- hub -----------------------------------------------------------------------------
     def start_on_hub(self) -> None:
@@ -127,9 +135,12 @@ class _Goal:
         if self.cancel_reason is not None:
             self.resolve(Failure(Cancelled(None, self.cancel_reason)))
             return
+        if self.ep.kind == "tree" and self.server.record_dir is not None:
+            self._open_trace()
         try:
             txn = rt.start(self.path, *self.args, on_done=self.on_done, **self.kwargs)
         except BaseException as e:  # bad arguments found late, runtime closing
+            self._close_trace()
             self.resolve(Failure(e))
             return
         self.txn = txn
@@ -141,7 +152,33 @@ class _Goal:
             self.server._by_txn.pop(self.txn.id, None)
         if self.flush_scheduled:
             self.flush()
+        self._close_trace()
         self.resolve(outcome)
+
+    def _open_trace(self) -> None:
+        try:
+            from ..trees import TraceRecorder, tree_host
+            host = tree_host(self.server.rt)
+            if host is None:
+                return
+            folder = pathlib.Path(self.server.record_dir)
+            folder.mkdir(parents=True, exist_ok=True)
+            stamp = time.strftime("%Y%m%d-%H%M%S")
+            gid = self.key.hex()[:8]
+            path = folder / f"{stamp}-{self.path.replace('.', '_')}-{gid}.jsonl"
+            self.recorder = TraceRecorder(path, host, tree=self.path, inputs=self.kwargs,
+                                          transactions=True)
+            self.trace_path = str(path)
+        except Exception:
+            log.exception("cannot record the goal for %s", self.path)
+
+    def _close_trace(self) -> None:
+        rec, self.recorder = self.recorder, None
+        if rec is not None:
+            try:
+                rec.close()
+            except Exception:
+                log.exception("closing the trace %s failed", self.trace_path)
 
     def cancel_on_hub(self, reason: str) -> None:
         if self.cancel_reason is None:
@@ -214,8 +251,8 @@ class _Goal:
 
 
 def _status_name(status: Any) -> str:
-    name = getattr(status, "name", None) or str(status or "running")
-    return name.lower()
+    name = (getattr(status, "name", None) or str(status or "running")).lower()
+    return "halted" if name == "invalid" else name
 
 
 class Server:
@@ -225,9 +262,11 @@ class Server:
         rt: the runtime whose actors and trees are served.
         preempt: a goal for a running tree preempts it (default: it is rejected).
         node_name: the node's name.
+        record_dir: record each tree goal as a trace in this folder (None: no traces).
     """
 
-    def __init__(self, rt: Any, *, preempt: bool = False, node_name: str = NODE_NAME) -> None:
+    def __init__(self, rt: Any, *, preempt: bool = False, node_name: str = NODE_NAME,
+                 record_dir: "str | pathlib.Path | None" = None) -> None:
         from actorbt_interfaces.action import CallActor, RunTree
         from rclpy.action import ActionServer
         from std_msgs.msg import String
@@ -236,6 +275,7 @@ class Server:
 
         self.rt = rt
         self.preempt = preempt
+        self.record_dir = record_dir
         self._closing = False
         self._closed = False
         self._by_txn: dict[int, _Goal] = {}  # hub only
@@ -516,10 +556,11 @@ class Server:
         self.close()
 
 
-def serve(rt: Any, *, preempt: bool = False, node_name: str = NODE_NAME) -> Server:
+def serve(rt: Any, *, preempt: bool = False, node_name: str = NODE_NAME,
+          record_dir: "str | pathlib.Path | None" = None) -> Server:
     """Expose ``rt``'s actors and trees as ROS 2 actions (see the module docstring).
 
     Returns the :class:`Server`; ``close()`` it before closing the runtime.
     """
-    return Server(rt, preempt=preempt, node_name=node_name)
+    return Server(rt, preempt=preempt, node_name=node_name, record_dir=record_dir)
 

@@ -18,6 +18,7 @@ import py_trees
 import py_trees.behaviours
 
 from ._behaviours import ActorLeaf
+from ._errors import DuplicateTreeError
 from ._library import TreeLibrary
 from ._model import Mission, UseBehaviour, walk
 from ._run import TreeObserver, TreeRun
@@ -100,8 +101,17 @@ class TreeHost:
         return mission
 
     def register(self, mission: Mission) -> None:
-        """Register a (validated) mission as a sync actor of the root, under its name."""
+        """Register a (validated) mission as a sync actor of the root, under its name.
+
+        Raises:
+            DuplicateTreeError: a root actor that is not a tree already has the name.
+        """
         name = mission.name
+        existing = self.rt.run_on_hub(lambda: self.rt.root.actors().get(name))
+        if existing is not None and not existing.is_tree:
+            raise DuplicateTreeError(
+                mission.pos, f"tree name {name!r} is already the actor {existing.path}, expected a name no root actor has"
+            )
 
         def run_tree(*args: Any, **kwargs: Any) -> dict[str, Any]:
             return self.run(name, *args, **kwargs)

@@ -10,7 +10,7 @@ from __future__ import annotations
 import difflib
 import re
 from pathlib import Path
-from typing import Any, Callable, Iterable
+from typing import Any, Iterable
 
 from ._errors import (
     CheckExpressionError,
@@ -102,9 +102,6 @@ class _Parser:
         self.source = source
 
     # ------------------------------------------------------------ helpers
-
-    def fail(self, cls: type[MissionError], where: YNode | Pos, message: str) -> MissionError:
-        return cls(where if isinstance(where, Pos) else where.pos, message)
 
     def check_fields(self, m: YMap, allowed: Iterable[str], what: str) -> None:
         allowed = tuple(allowed)

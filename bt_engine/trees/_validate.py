@@ -40,7 +40,7 @@ from ._model import (
 )
 from ._parse import suggest
 
-__all__ = ["ActorInfo", "Resolver", "annotation_type", "validate_mission"]
+__all__ = ["ActorInfo", "Resolver", "annotation_type", "format_signature", "validate_mission"]
 
 
 class ActorInfo(Protocol):
@@ -73,6 +73,41 @@ def annotation_type(annotation: Any) -> ValueType | None:
     if origin in (list, tuple, dict):
         return _BUILTIN_TYPES[origin]
     return None
+
+
+def _annotation_text(annotation: Any) -> str:
+    if isinstance(annotation, str):
+        return annotation
+    if isinstance(annotation, type):
+        return annotation.__name__
+    return repr(annotation).replace("typing.", "")
+
+
+def format_signature(name: str, sig: inspect.Signature) -> str:
+    """``name(a: int, b: str = 'x', *, c) -> bool``, without the quotes that postponed
+    (string) annotations get from ``str(signature)``."""
+    params = list(sig.parameters.values())
+    last_positional_only = max((i for i, p in enumerate(params) if p.kind is p.POSITIONAL_ONLY), default=-1)
+    parts: list[str] = []
+    star_done = False
+    for i, p in enumerate(params):
+        if p.kind is p.KEYWORD_ONLY and not star_done:
+            parts.append("*")
+        star_done = star_done or p.kind in (p.VAR_POSITIONAL, p.KEYWORD_ONLY)
+        text = {p.VAR_POSITIONAL: "*", p.VAR_KEYWORD: "**"}.get(p.kind, "") + p.name
+        if p.annotation is not p.empty:
+            text += f": {_annotation_text(p.annotation)}"
+            if p.default is not p.empty:
+                text += f" = {p.default!r}"
+        elif p.default is not p.empty:
+            text += f"={p.default!r}"
+        parts.append(text)
+        if i == last_positional_only:
+            parts.append("/")
+    result = f"{name}({', '.join(parts)})"
+    if sig.return_annotation is not sig.empty:
+        result += f" -> {_annotation_text(sig.return_annotation)}"
+    return result
 
 
 def _a(vtype: ValueType) -> str:
@@ -158,7 +193,7 @@ class _Validator:
         if info is None:
             return
         sig = info.signature
-        shown = f"{node.actor}{sig}"
+        shown = format_signature(node.actor, sig)
         params = sig.parameters
         var_kw = any(p.kind is p.VAR_KEYWORD for p in params.values())
         for name in node.kwargs:

@@ -20,7 +20,8 @@ from ._errors import DuplicateKeyError, MissionSyntaxError, Pos
 __all__ = ["YMap", "YNode", "YScalar", "YSeq", "parse_yaml", "plain"]
 
 _MERGE_TAG = "tag:yaml.org,2002:merge"
-_STR_TAG = "tag:yaml.org,2002:str"
+_CORE = "tag:yaml.org,2002:"
+_PLAIN_TAGS = {"str", "int", "float", "bool", "null", "timestamp", "binary"}
 
 
 def _pos(file: str, mark: yaml.Mark) -> Pos:
@@ -125,6 +126,8 @@ class _Walker:
 
     def _walk(self, node: Node, pos: Pos) -> YNode:
         if isinstance(node, ScalarNode):
+            if not (node.tag.startswith(_CORE) and node.tag[len(_CORE):] in _PLAIN_TAGS):
+                raise MissionSyntaxError(pos, f"unsupported YAML tag {node.tag!r}, expected plain YAML values")
             try:
                 value = self.loader.construct_object(node, deep=True)
             except yaml.MarkedYAMLError as exc:

@@ -1,0 +1,276 @@
+"""Perception on rendered RGB-D frames: categories and positions against the simulator's
+ground truth, distractors, pic_find, get_found and the servoing streams.
+
+The robot stands off the origin and turned (so the map-frame transform is exercised), in
+the open_floor world; objects are teleported in front of it.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from sensor_msgs.msg import CameraInfo, Image
+
+from actors.camera import RGBDFrame, image_to_array, stamp_seconds
+from actors.perception import APPEARANCES, Perception, combine_sightings, fit_circle_fixed
+from bt_engine import ActorError, Runtime
+from sim import SimWorld
+from sim.description import load_world
+from sim.objects import CATEGORIES, Category
+
+from tests.conftest import run_in_actor
+
+ROBOT = (0.7, -0.4, 0.6)          # x, y, yaw of the robot in the map frame
+PARK = (2.5, -2.5)                # out of view (behind the robot), for objects not in use
+RED, GREEN = CATEGORIES["can"].rgba, CATEGORIES["bottle"].rgba
+#: distractors that share a target's colour: only the shape tells them apart
+DISTRACTORS = {
+    "red_box": Category("red_box", (("box", (0.066, 0.066, 0.122), 0.0),), 0.122, 0.047, 0.06, RED),
+    "green_can": Category("green_can", (("cylinder", 0.033, 0.122, 0.0),), 0.122, 0.033, 0.04, GREEN),
+    "red_tube": Category("red_tube", (("cylinder", 0.033, 0.25, 0.0),), 0.25, 0.033, 0.06, RED),
+}
+
+
+@pytest.fixture(scope="module")
+def world():
+    added = [k for k in DISTRACTORS if k not in CATEGORIES]
+    CATEGORIES.update({k: DISTRACTORS[k] for k in added})
+    spec = load_world("open_floor", 0)
+    spec.robot_start = ROBOT
+    rt = Runtime(clock="virtual")
+    sim = SimWorld(rt, spec, seed=0).start()
+    try:
+        rt.add_subsystem("perception", Perception)
+        names = {"can": "can_1", "bottle": "bottle_1", "box": "box_1"}
+        for k in DISTRACTORS:
+            names[k] = sim.add_object(k, *PARK)
+        yield rt, sim, names
+    finally:
+        sim.close()
+        rt.close()
+        for k in added:
+            CATEGORIES.pop(k, None)
+
+
+def _in_front(d: float, bearing: float) -> tuple[float, float]:
+    x, y, yaw = ROBOT
+    return x + d * math.cos(yaw + bearing), y + d * math.sin(yaw + bearing)
+
+
+def _place(sim, names, layout):
+    """layout: [(kind, distance, bearing, yaw)]; every other object is parked out of view."""
+    used = {k for k, *_ in layout}
+    for i, (k, n) in enumerate(names.items()):
+        if k not in used:
+            sim.set_object_pose(n, PARK[0] + 0.4 * (i % 3), PARK[1] + 0.4 * (i // 3))
+    for k, d, b, yaw in layout:
+        sim.set_object_pose(names[k], *_in_front(d, b), yaw)
+
+
+def _random_layout(rng, kinds):
+    """Objects 0.4-1.5 m away at bearings within +-26 deg, none hiding another."""
+    while True:
+        out = [(k, rng.uniform(0.4, 1.5), rng.uniform(-0.45, 0.45), rng.uniform(-math.pi, math.pi))
+               for k in kinds]
+        pos = [_in_front(d, b) for _, d, b, _ in out]
+        ok = all(abs(out[i][2] - out[j][2]) > 0.2 and math.dist(pos[i], pos[j]) > 0.25
+                 for i in range(len(out)) for j in range(i + 1, len(out)))
+        if ok:
+            return out
+
+
+def _truth(sim, name):
+    x, y, z = sim.object_pose(name)[:3]
+    return x, y, z - CATEGORIES[sim.object_category(name)].height / 2
+
+
+def _match(dets, truth, gate=0.05):
+    best = min(dets, key=lambda d: math.hypot(d["x"] - truth[0], d["y"] - truth[1]), default=None)
+    if best is None or math.hypot(best["x"] - truth[0], best["y"] - truth[1]) > gate:
+        return None
+    return best
+
+
+# ----------------------------------------------------------------------------- pure parts
+def test_fixed_radius_circle_fit_recovers_the_axis_from_the_front_arc():
+    rng = np.random.default_rng(1)
+    c, r = np.array([1.2, -0.3]), 0.033
+    a = rng.uniform(-1.2, 1.2, 200) + math.pi          # the arc that faces a camera at the origin
+    pts = c + r * np.stack([np.cos(a), np.sin(a)], axis=1) + rng.normal(0, 2e-4, (200, 2))
+    centroid = pts.mean(axis=0)
+    assert np.hypot(*(centroid - c)) > 0.02             # the visible-surface centroid is off
+    est, rms = fit_circle_fixed(pts, r, centroid)
+    assert np.hypot(*(est - c)) < 1e-3 and rms < 5e-4
+
+
+def test_image_conversions():
+    img = Image(height=2, width=3, encoding="rgb8", step=9, data=bytes(range(18)))
+    bgr = image_to_array(img)
+    assert bgr.shape == (2, 3, 3) and bgr.dtype == np.uint8 and list(bgr[0, 0]) == [2, 1, 0]
+    d = np.array([[0.5, np.nan], [1.25, 2.0]], "<f4")
+    img = Image(height=2, width=2, encoding="32FC1", step=8, data=d.tobytes())
+    out = image_to_array(img)
+    assert out.dtype == np.float32 and out[1, 0] == 1.25 and np.isnan(out[0, 1])
+    mm = np.array([[500, 0]], "<u2")
+    out = image_to_array(Image(height=1, width=2, encoding="16UC1", step=4, data=mm.tobytes()))
+    assert out[0, 0] == pytest.approx(0.5) and np.isnan(out[0, 1])
+
+
+def test_combine_sightings_rejects_outliers_and_picks_the_most_seen_object():
+    def det(x, y, cat="can", dist=1.0, t=0.0):
+        return {"category": cat, "x": x, "y": y, "z": 0.0, "height": 0.12, "width": 0.066,
+                "distance": dist, "bearing": 0.0, "confidence": 0.9, "pixel": [0, 0], "stamp": t}
+    s = [det(1.0, 0.0, t=i) for i in range(4)] + [det(1.03, 0.0, t=5)] + [det(2.0, 1.0, dist=0.5)]
+    est = combine_sightings(s, looks=6)
+    assert est["sightings"] == 4 and est["x"] == pytest.approx(1.0) and est["category"] == "can"
+    assert combine_sightings([], 3) is None
+
+
+# ----------------------------------------------------------------------------- camera
+def test_camera_streams_and_the_posed_rgbd_frame(world):
+    rt, sim, names = world
+    _place(sim, names, [("can", 0.8, 0.0, 0.0)])
+    pic = rt.call("pic")
+    depth = rt.call("depth")
+    info = rt.call("camera_info")
+    assert isinstance(info, CameraInfo)
+    assert pic.shape == (info.height, info.width, 3) and pic.dtype == np.uint8
+    assert depth.shape == (info.height, info.width) and depth.dtype == np.float32
+    red = (pic[:, :, 2] > 120) & (pic[:, :, 1] < 60) & (pic[:, :, 0] < 60)   # BGR order
+    assert red.sum() > 100
+    frame = rt.call("rgbd")
+    assert isinstance(frame, RGBDFrame)
+    # the camera pose from /ground_truth/pose x URDF extrinsics is where the sim has the link
+    pos, orn = sim.link_pose("camera_optical_frame")
+    import pybullet as p
+    R = np.array(p.getMatrixFromQuaternion(orn)).reshape(3, 3)
+    assert np.allclose(frame.T_map_cam[:3, 3], pos, atol=1e-3)
+    assert np.allclose(frame.T_map_cam[:3, :3], R, atol=1e-3)
+    assert rt.call("intrinsics")["fx"] == pytest.approx(info.k[0])
+
+
+def test_rgbd_pairs_colour_and_depth_by_stamp(world):
+    rt, sim, names = world
+
+    def body():
+        got = []
+        with rt.root.run_actor_mode("rgbd", "timed_iterator", 1.0) as frames:
+            for f in frames:
+                got.append(f.stamp)
+        with rt.root.run_actor_mode("color_raw", "iterator") as c, rt.root.run_actor_mode("depth_raw", "iterator") as d:
+            pair = stamp_seconds(next(c).header), stamp_seconds(next(d).header)
+        return got, pair
+    stamps, pair = run_in_actor(rt, body)
+    assert len(stamps) >= 4 and stamps == sorted(stamps)
+    assert pair[0] == pair[1]
+
+
+# ----------------------------------------------------------------------------- accuracy
+def test_accuracy_over_20_random_placements(world):
+    rt, sim, names = world
+    rng = np.random.default_rng(2024)
+    errors = []
+    for k in range(20):
+        layout = _random_layout(rng, ["can", "bottle", "box"])
+        _place(sim, names, layout)
+        rt.call("sleep", 0.3)
+        dets = rt.call("object_glance")
+        assert len(dets) == 3, (k, layout, dets)
+        for kind, d, b, _ in layout:
+            truth = _truth(sim, names[kind])
+            det = _match(dets, truth)
+            assert det is not None, (k, kind, d, b, dets)
+            want = kind if kind in APPEARANCES else "unknown"
+            assert det["category"] == want, (k, kind, d, b, det)
+            if want != "unknown":
+                err = math.hypot(det["x"] - truth[0], det["y"] - truth[1])
+                errors.append(err)
+                assert err <= 0.01, (k, kind, d, b, err, det)
+                assert abs(det["z"] - truth[2]) <= 0.01, (k, kind, det["z"], truth)
+                assert det["distance"] == pytest.approx(d, abs=0.01)
+                assert det["bearing"] == pytest.approx(b, abs=0.01)
+    assert len(errors) == 40
+    assert float(np.median(errors)) < 0.005
+
+
+def test_distractors_are_never_cans_or_bottles(world):
+    rt, sim, names = world
+    rng = np.random.default_rng(7)
+    kinds = ["box", "red_box", "green_can", "red_tube"]
+    for k in range(6):
+        layout = _random_layout(rng, list(rng.choice(kinds, 3, replace=False)))
+        _place(sim, names, layout)
+        rt.call("sleep", 0.3)
+        dets = rt.call("object_glance")
+        assert len(dets) == 3, (k, layout, dets)
+        assert all(d["category"] == "unknown" for d in dets), (k, layout, dets)
+        assert rt.call("find_object") is None
+
+
+# ----------------------------------------------------------------------------- actors
+def test_find_object_pic_find_and_timeout(world):
+    rt, sim, names = world
+    _place(sim, names, [("can", 0.9, 0.2, 0.0), ("box", 0.6, -0.2, 0.5)])
+    rt.call("sleep", 0.3)
+    truth = _truth(sim, names["can"])
+    found = rt.call("pic_find", "can", 5.0)
+    assert found["category"] == "can"
+    assert math.hypot(found["x"] - truth[0], found["y"] - truth[1]) <= 0.01
+    assert set(found) >= {"category", "x", "y", "z", "height", "width", "distance", "bearing",
+                          "confidence", "pixel"}
+    assert rt.call("find_object", "bottle") is None
+    assert rt.call("find_object")["category"] == "can"
+    _place(sim, names, [("box", 0.6, -0.2, 0.5)])
+    t0 = rt.now()
+    assert rt.call("pic_find", None, 1.5) is None
+    assert 1.4 <= rt.now() - t0 <= 2.0
+    with pytest.raises(ActorError, match="unknown category"):
+        rt.call("find_object", "teapot")
+
+
+def test_get_found_and_the_servoing_streams(world):
+    rt, sim, names = world
+    _place(sim, names, [("bottle", 1.1, 0.25, 0.0), ("can", 0.7, -0.2, 0.0)])
+    rt.call("sleep", 0.3)
+    truth = _truth(sim, names["bottle"])
+    est = rt.call("get_found", "bottle", 3)
+    assert est["category"] == "bottle" and est["sightings"] == 3 and est["looks"] == 3
+    assert math.hypot(est["x"] - truth[0], est["y"] - truth[1]) <= 0.01
+
+    def body():
+        with rt.root.run_actor_mode("measure_distance", "timed_iterator", 0.7, "bottle") as it:
+            dist = [m for m in it]
+        with rt.root.run_actor_mode("measure_center", "timed_iterator", 0.7, None) as it:
+            centre = [m for m in it]
+        return dist, centre
+    dist, centre = run_in_actor(rt, body)
+    assert len(dist) >= 3 and all(m["distance"] == pytest.approx(1.1, abs=0.01) for m in dist)
+    assert all(m["bearing"] == pytest.approx(0.25, abs=0.01) for m in dist)
+    # the nearest target is the can, to the right of the image centre
+    assert all(m["category"] == "can" and 0 < m["dx"] < 1 for m in centre)
+    _place(sim, names, [])
+    assert rt.call("measure_center") is None
+
+
+def test_positions_stay_right_while_the_robot_turns(world):
+    """Frames are posed by the base pose interpolated to their stamp."""
+    from actors.navigation import Navigation
+    rt, sim, names = world
+    rt.add_subsystem("navigation", Navigation)
+    _place(sim, names, [("can", 1.0, 0.0, 0.0)])
+    rt.call("sleep", 0.3)
+    truth = _truth(sim, names["can"])
+
+    def body():
+        txn = rt.root.run_actor_async("mini_turn", None, 0.6)
+        out = []
+        with rt.root.run_actor_mode("measure_distance", "timed_iterator", 1.2, "can") as it:
+            out = [m for m in it if m]
+        txn.cancel("test over")
+        return out
+    seen = run_in_actor(rt, body)
+    assert len(seen) >= 4
+    bearings = [m["bearing"] for m in seen]
+    assert max(bearings) - min(bearings) > 0.1           # the robot did turn
+    assert all(math.hypot(m["x"] - truth[0], m["y"] - truth[1]) <= 0.01 for m in seen)
