@@ -33,7 +33,7 @@ test: $(STAMP)
 	$(PY) -m pytest -q
 
 demo: $(STAMP)
-	$(VENV)/bin/actorbt run demo_patrol
+	$(VENV)/bin/actorbt demo
 
 bench: $(STAMP)
 	$(PY) bench/run_all.py

@@ -1,4 +1,4 @@
-"""The whole robot: navigation and manipulator under one SubSystem (``robot``)."""
+"""The whole robot: navigation, arm, perception, search and catch under one SubSystem."""
 from __future__ import annotations
 
 from bt_engine import SubSystem
@@ -6,6 +6,8 @@ from bt_engine import SubSystem
 from .catch import Catcher
 from .manipulator import Manipulator
 from .navigation import Navigation
+from .perception import Perception
+from .search import Search
 
 
 class Robot(SubSystem):
@@ -15,4 +17,6 @@ class Robot(SubSystem):
         super().__init__()
         self.add_subsystem("navigation", Navigation)
         self.add_subsystem("arm", Manipulator)
+        self.add_subsystem("perception", Perception)
+        self.add_subsystem("search", Search)
         self.add_subsystem("catch", Catcher)

@@ -27,8 +27,9 @@ def _rot(pts, x, y, yaw):
     return [(x + c * u - s * v, y + s * u + c * v) for u, v in pts]
 
 
-def draw_top_view(sim, out_png, title=None, dpi=110):
-    """Draw a SimWorld's current state from above into ``out_png``."""
+def draw_top_view(sim, out_png, title=None, dpi=110, overlay=None):
+    """Draw a SimWorld's current state from above into ``out_png``; ``overlay(ax)``, when
+    given, draws more on the axes (map frame, metres) before saving."""
     plt, patches = _mpl()
     spec, grid = sim.spec, sim.grid
     x0, y0, x1, y1 = spec.bounds
@@ -85,6 +86,8 @@ def draw_top_view(sim, out_png, title=None, dpi=110):
                 arrowprops=dict(arrowstyle="->", lw=1.5), zorder=8)
     ee = sim.link_pose("end_effector_link")[0]
     ax.plot([ee[0]], [ee[1]], marker="+", color="k", ms=7, zorder=8)
+    if overlay is not None:
+        overlay(ax)
     ax.set_xlim(x0, x1)
     ax.set_ylim(y0, y1)
     ax.set_aspect("equal")

@@ -122,6 +122,7 @@ class Remote:
             self.node = self.host.create_node(node_name or f"actorbt_client_{os.getpid()}_{self.host.id}")
             self._waiter = ServerWait(self.node)
             self._clients: dict[str, Any] = {}
+            self._created: dict[str, float] = {}
             self._rejections: collections.deque = collections.deque(maxlen=200)
             self._rej_cond = threading.Condition()
             from std_msgs.msg import String
@@ -157,11 +158,17 @@ class Remote:
                 self._rej_cond.wait(left)
 
     # -- goals ---------------------------------------------------------------------------
+    #: a new action client's feedback subscription needs a moment to be matched by the
+    #: server's publisher, even once the server is discovered; feedback published
+    #: before that is lost (ROS 2 feedback is volatile), so the first goal waits this [s]
+    SETTLE = 0.25
+
     def _client(self, action_type: type, action: str) -> Any:
         from rclpy.action import ActionClient
         client = self._clients.get(action)
         if client is None:
             client = self._clients[action] = ActionClient(self.node, action_type, action)
+            self._created[action] = time.monotonic()
         return client
 
     def wait_for(self, action_type: type, action: str, timeout: float | None = None) -> bool:
@@ -182,7 +189,8 @@ class Remote:
 
         def start() -> None:
             client = self._client(action_type, action)
-            g.call = GoalCall(client, action, self._waiter, goal,
+            settled = self._created[action] + self.SETTLE
+            g.call = GoalCall(_Settling(client, settled), action, self._waiter, goal,
                               server_timeout=self.wait if wait is None else wait,
                               on_result=g._on_result, on_error=g._on_error,
                               on_accepted=g._on_accepted, on_feedback=on_feedback,
@@ -252,3 +260,17 @@ class Remote:
 
     def __exit__(self, *exc: Any) -> None:
         self.close()
+
+
+class _Settling:
+    """An ActionClient whose server counts as ready only after ``settled`` (monotonic)."""
+
+    def __init__(self, client: Any, settled: float) -> None:
+        self._client = client
+        self._settled = settled
+
+    def server_is_ready(self) -> bool:
+        return self._client.server_is_ready() and time.monotonic() >= self._settled
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._client, name)

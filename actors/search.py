@@ -1,0 +1,56 @@
+"""Searching: drive through search locations looking around, and watch the camera.
+
+The mission runs ``patrol`` and ``watch`` in parallel; the first sighting ends the search
+(the tree halts the patrol, which stops the base).
+"""
+from __future__ import annotations
+
+import math
+
+from bt_engine import ActorbtError, SubSystem, actor
+
+#: a "category" meaning any category the perception knows
+ANY = ("any", "mixed", "", None)
+LOOK_STEP = math.radians(80)   # turn per look, about the camera's field of view [rad]
+LOOK_PAUSE = 0.6               # time to hold still at each look [s]
+
+
+class SearchExhausted(ActorbtError):
+    """Every search location was visited and nothing was seen."""
+
+
+class Search(SubSystem):
+    """Search behaviour built from navigation and perception actors."""
+
+    @actor
+    def watch(self, category: str = "any") -> dict:
+        """Watch the camera until an object of ``category`` ("any": any known category) is
+        seen, and return its detection (map frame). Runs until found or cancelled."""
+        cat = None if category in ANY else category
+        while True:
+            found = self.run_actor("find_object", cat)
+            if found:
+                return found
+
+    @actor
+    def look_around(self, turns: int = 4) -> None:
+        """Turn on the spot in steps, pausing so the camera gets still frames."""
+        for _ in range(max(1, turns)):
+            self.run_actor("sleep", LOOK_PAUSE)
+            self.run_actor("mini_turn", LOOK_STEP)
+
+    @actor
+    def patrol(self, locations: list, turns: int = 4) -> None:
+        """Visit each (x, y) [m] of ``locations`` in turn and look around there. Fails with
+        SearchExhausted after the last one: a patrol that ends has found nothing."""
+        if not locations:
+            raise SearchExhausted("no search locations given")
+        for i, loc in enumerate(locations):
+            try:
+                x, y = float(loc[0]), float(loc[1])
+            except (TypeError, ValueError, IndexError):
+                raise ActorbtError(f"search location {i} must be [x, y], got {loc!r}") from None
+            rx, ry, _ = self.run_actor("get_pose")
+            self.run_actor("goto", x, y, math.atan2(y - ry, x - rx))
+            self.run_actor("look_around", turns)
+        raise SearchExhausted(f"visited {len(locations)} search locations and saw nothing")

@@ -1,0 +1,201 @@
+"""One episode of a mission in a fresh simulated world, with its trace, its outcome
+checked against ground truth, and pictures."""
+from __future__ import annotations
+
+import pathlib
+import sys
+import time
+from dataclasses import dataclass, field
+from typing import Any, TextIO
+
+from geometry_msgs.msg import PoseStamped
+
+from actors.robot import Robot
+from bt_engine import ActorError, Runtime
+from bt_engine.trees import register_tree_folder
+from bt_engine.trees._run import TreeObserver
+from bt_engine.trees._trace import TraceRecorder
+from sim import SimWorld
+
+TREES = pathlib.Path(__file__).resolve().parents[1] / "trees"
+
+
+@dataclass
+class Episode:
+    """What one run of a mission did. Times in seconds."""
+
+    tree: str
+    world: str
+    seed: int
+    category: str
+    success: bool = False
+    tree_status: str = ""
+    failed_node: str = ""
+    reason: str = ""
+    found: dict | None = None
+    placed_object: str = ""
+    sim_time: float = 0.0
+    wall_time: float = 0.0
+    trace: str = ""
+    path: list = field(default_factory=list, repr=False)
+    detections: list = field(default_factory=list, repr=False)
+
+    @property
+    def realtime_factor(self) -> float:
+        return self.sim_time / self.wall_time if self.wall_time else float("nan")
+
+
+class DemoProgress(TreeObserver):
+    """Compact live progress: the active node of the top mission, and what was found where."""
+
+    def __init__(self, out: TextIO, rt: Runtime) -> None:
+        self.out = out
+        self.rt = rt
+        self._last = ""
+
+    def _say(self, text: str) -> None:
+        self.out.write(f"[{self.rt.now():7.1f}s] {text}\n")
+        self.out.flush()
+
+    def status_changed(self, run, path, old, new) -> None:
+        if run.depth > 1 or new.name != "RUNNING":
+            return
+        label = f"{run.mission.name}: {path}"
+        if path.count("/") <= 2 and label != self._last:
+            self._last = label
+            self._say(label)
+
+    def actor_finished(self, run, leaf, txn) -> None:
+        actor = leaf.node.actor
+        if txn.state.value != "done":
+            if txn.state.value == "failed":
+                self._say(f"  {actor} failed: {txn.error}")
+            return
+        r = txn.result
+        if actor == "watch" and isinstance(r, dict):
+            self._say(f"  found a {r['category']} at ({r['x']:.2f}, {r['y']:.2f}), "
+                      f"{r['distance']:.1f} m away")
+        elif actor == "approach_object" and isinstance(r, dict):
+            self._say(f"  close look: {r['category']} at ({r['x']:.3f}, {r['y']:.3f})")
+        elif actor == "pick" and isinstance(r, dict):
+            self._say(f"  holding the {r['category']} (fingers at {r['width'] * 1000:.0f} mm)")
+        elif actor == "place_on" and isinstance(r, dict):
+            self._say(f"  put it down at ({r['x']:.2f}, {r['y']:.2f})")
+
+
+def _on_surface(pose, place) -> bool:
+    x, y, z = pose[:3]
+    return (abs(x - place.x) <= place.sx / 2 and abs(y - place.y) <= place.sy / 2
+            and z > place.sz)
+
+
+def run_episode(tree: str = "bt_pick_place", world: str = "house", seed: int = 0,
+                category: str = "any", out_dir: str | pathlib.Path | None = None,
+                progress: TextIO | None = None, world_setup: Any = None) -> Episode:
+    """Run ``tree`` once in a fresh ``world`` built from ``seed``.
+
+    Success means the tree succeeded and, for a pick-and-place, an object of the category
+    stands on the place location. ``world_setup(world)`` may change the world first (the
+    fault tests use it). With ``out_dir``, the trace is written there.
+    """
+    ep = Episode(tree=tree, world=world, seed=seed, category=category)
+    out = pathlib.Path(out_dir) if out_dir else None
+    wall0 = time.perf_counter()
+    with Runtime(watchdog=None) as rt:
+        sim = SimWorld(rt, world=world, seed=seed)
+        sim.start()
+        try:
+            if world_setup is not None:
+                world_setup(sim)
+            rt.add_subsystem("robot", Robot)
+            host = register_tree_folder(rt, TREES)
+            if progress is not None:
+                host.observers.append(DemoProgress(progress, rt))
+            sub = rt.bus.subscribe("/ground_truth/pose", PoseStamped, lambda m: ep.path.append(
+                (m.pose.position.x, m.pose.position.y)))
+            recorder = None
+            if out is not None:
+                out.mkdir(parents=True, exist_ok=True)
+                ep.trace = str(out / "trace.jsonl")
+                recorder = TraceRecorder(ep.trace, host, tree=tree, inputs={"category": category},
+                                         seed=seed)
+            before = {n: sim.object_pose(n) for n in sim.object_names()}
+            sim0 = rt.now()
+            try:
+                result = rt.call(tree, category=category) if _takes_category(rt, tree) else rt.call(tree)
+                ep.tree_status = "SUCCESS"
+                ep.found = (result or {}).get("found") if isinstance(result, dict) else None
+            except ActorError as exc:
+                cause = exc.__cause__
+                ep.tree_status = "FAILURE"
+                ep.reason = str(cause if cause is not None else exc)
+                ep.failed_node = getattr(cause, "path", "") or _failed_node(str(ep.reason))
+            finally:
+                ep.sim_time = rt.now() - sim0
+                sub.close()
+                if recorder is not None:
+                    recorder.close()
+            ep.success = ep.tree_status == "SUCCESS"
+            if ep.success and sim.place_location is not None and tree in ("bt_pick_place", "bt_carry"):
+                placed = [n for n in sim.object_names()
+                          if _on_surface(sim.object_pose(n), sim.place_location)
+                          and not _on_surface(before[n], sim.place_location)]
+                wanted = [n for n in placed if category in ("any", "mixed")
+                          or sim.object_category(n) == category]
+                ep.placed_object = wanted[0] if wanted else ""
+                if not wanted:
+                    ep.success = False
+                    ep.failed_node = "ground truth"
+                    ep.reason = "the tree succeeded but no object of the category is on the place location"
+            if ep.found:
+                ep.detections.append(ep.found)
+            if out is not None:
+                _draw(sim, ep, out / "top_view.png")
+        finally:
+            rt.run_on_hub(sim.close)
+    ep.wall_time = time.perf_counter() - wall0
+    return ep
+
+
+def _takes_category(rt: Runtime, tree: str) -> bool:
+    return "category" in rt.resolve(tree).signature.parameters
+
+
+def _failed_node(reason: str) -> str:
+    # TreeFailure messages start with "tree NAME failed at PATH: ..." in the trees layer
+    marker = " at "
+    if marker in reason:
+        return reason.split(marker, 1)[1].split(":", 1)[0].strip()
+    return ""
+
+
+def _draw(sim: SimWorld, ep: Episode, png: pathlib.Path) -> None:
+    from sim.topview import draw_top_view
+
+    def overlay(ax) -> None:
+        if ep.path:
+            xs, ys = zip(*ep.path)
+            ax.plot(xs, ys, "-", color=(0.1, 0.35, 0.8), lw=1.2, alpha=0.8, zorder=5, label="robot path")
+            ax.plot(xs[0], ys[0], "o", color=(0.1, 0.35, 0.8), ms=6, zorder=6)
+        for d in ep.detections:
+            ax.plot(d["x"], d["y"], "x", color="magenta", ms=10, mew=2, zorder=9,
+                    label=f"detected {d['category']}")
+        if ep.placed_object:
+            x, y = sim.object_pose(ep.placed_object)[:2]
+            ax.plot(x, y, "*", color="gold", mec="k", ms=16, zorder=9, label=f"placed {ep.placed_object}")
+        ax.legend(loc="upper left", fontsize=8, framealpha=0.9)
+
+    verdict = "success" if ep.success else f"FAILED at {ep.failed_node or '?'}"
+    draw_top_view(sim, png, title=f"{ep.tree} in {ep.world} (seed {ep.seed}): {verdict}, "
+                  f"{ep.sim_time:.0f} s sim", overlay=overlay)
+
+
+def print_outcome(ep: Episode, out: TextIO = sys.stdout) -> None:
+    if ep.success:
+        where = f"; {ep.placed_object} is on the place location" if ep.placed_object else ""
+        out.write(f"SUCCESS{where}\n")
+    else:
+        out.write(f"FAILURE at {ep.failed_node or '?'}: {ep.reason}\n")
+    out.write(f"sim time {ep.sim_time:.1f} s, wall time {ep.wall_time:.1f} s "
+              f"({ep.realtime_factor:.1f}x real time)\n")
+

@@ -1,0 +1,105 @@
+"""`actorbt eval`: a mission over many seeds, each in a fresh world, with a table and CSV."""
+from __future__ import annotations
+
+import collections
+import csv
+import multiprocessing
+import pathlib
+import statistics
+import sys
+import time
+from dataclasses import asdict
+from typing import TextIO
+
+from .episode import Episode, run_episode
+
+CSV_FIELDS = ["tree", "world", "seed", "category", "success", "tree_status", "failed_node",
+              "reason", "placed_object", "sim_time", "wall_time", "trace"]
+
+
+def _one(job: tuple) -> Episode:
+    tree, world, seed, category, out = job
+    return run_episode(tree, world, seed, category, out_dir=out)
+
+
+def _jobs(tree: str, world: str, seeds: int, first_seed: int, category: str,
+          out: pathlib.Path) -> list[tuple]:
+    cats = ["can", "bottle"] if category == "mixed" else [category]
+    jobs = []
+    for i in range(seeds):
+        seed = first_seed + i
+        # mixed: both categories are in every world; alternate which one is asked for,
+        # so the table shows both strategies
+        cat = cats[i % len(cats)]
+        jobs.append((tree, world, seed, cat, out / f"{cat}_seed{seed}"))
+    return jobs
+
+
+def evaluate(tree: str, seeds: int, world: str = "house", category: str = "mixed",
+             jobs: int = 1, out_dir: str | pathlib.Path = "out/eval", first_seed: int = 0,
+             progress: TextIO | None = sys.stdout) -> list[Episode]:
+    """Run ``tree`` for ``seeds`` seeds; returns the episodes in seed order."""
+    out = pathlib.Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    work = _jobs(tree, world, seeds, first_seed, category, out)
+    episodes: list[Episode] = []
+    t0 = time.perf_counter()
+
+    def tick() -> None:
+        if progress is None:
+            return
+        n, ok = len(episodes), sum(e.success for e in episodes)
+        bar = "#" * int(30 * n / len(work))
+        progress.write(f"\r[{bar:<30}] {n}/{len(work)} episodes, {ok} succeeded, "
+                       f"{time.perf_counter() - t0:.0f} s")
+        progress.flush()
+    tick()
+    if jobs > 1:
+        ctx = multiprocessing.get_context("spawn")  # each worker its own runtime and sim
+        with ctx.Pool(jobs) as pool:
+            for ep in pool.imap_unordered(_one, work):
+                episodes.append(ep)
+                tick()
+    else:
+        for job in work:
+            episodes.append(_one(job))
+            tick()
+    if progress is not None:
+        progress.write("\n")
+    episodes.sort(key=lambda e: (e.seed, e.category))
+    write_csv(episodes, out / "episodes.csv")
+    return episodes
+
+
+def write_csv(episodes: list[Episode], path: pathlib.Path) -> None:
+    with open(path, "w", newline="") as f:
+        w = csv.DictWriter(f, CSV_FIELDS)
+        w.writeheader()
+        for e in episodes:
+            row = {k: v for k, v in asdict(e).items() if k in CSV_FIELDS}
+            row["sim_time"] = f"{e.sim_time:.2f}"
+            row["wall_time"] = f"{e.wall_time:.2f}"
+            w.writerow(row)
+
+
+def print_table(episodes: list[Episode], out: TextIO = sys.stdout) -> None:
+    by_cat: dict[str, list[Episode]] = collections.defaultdict(list)
+    for e in episodes:
+        by_cat[e.category].append(e)
+    out.write(f"\n{'category':10s} {'episodes':>8s} {'success':>8s} {'rate':>7s} "
+              f"{'sim s (median)':>15s} {'wall s (median)':>16s} {'x real time':>12s}\n")
+    for cat, eps in sorted(by_cat.items()) + [("all", episodes)]:
+        ok = sum(e.success for e in eps)
+        out.write(f"{cat:10s} {len(eps):8d} {ok:8d} {100 * ok / len(eps):6.1f}% "
+                  f"{statistics.median(e.sim_time for e in eps):15.1f} "
+                  f"{statistics.median(e.wall_time for e in eps):16.1f} "
+                  f"{statistics.median(e.realtime_factor for e in eps):12.1f}\n")
+    failures = collections.Counter(e.failed_node or "?" for e in episodes if not e.success)
+    if failures:
+        out.write("\nfailures by node:\n")
+        for node, n in failures.most_common():
+            out.write(f"  {n:3d}  {node}\n")
+        out.write("\nfailed episodes:\n")
+        for e in episodes:
+            if not e.success:
+                out.write(f"  seed {e.seed:3d} {e.category:7s} {e.failed_node}: {e.reason[:150]}\n")
