@@ -67,8 +67,10 @@ def assert_clean(rt: Runtime, host: TreeHost) -> None:
     assert not [c for c in py_trees.blackboard.Blackboard.clients.values() if c.startswith("actorbt:")]
 
 
-def test_demo_patrol_runs_on_virtual_time(rt: Runtime) -> None:
-    host = register_tree_folder(rt, REPO_TREES)
+def test_demo_patrol_runs_on_virtual_time(rt: Runtime, tmp_path: Path) -> None:
+    # the repo's trees folder also holds the robot missions, which need the robot's actors
+    (tmp_path / "demo_patrol.yaml").write_text((REPO_TREES / "demo_patrol.yaml").read_text())
+    host = register_tree_folder(rt, tmp_path)
     assert tree_host(rt) is host
     assert rt.resolve("demo_patrol").is_tree
     started = time.perf_counter()
