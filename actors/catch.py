@@ -110,8 +110,9 @@ class Catcher(SubSystem):
         strategy = self._strategy(target, category)
         g, a = strategy.grasp, strategy.approach
         xy = _target_xy(target)
+        height = float(target.get("z", 0.0)) + g.height  # the object may stand on something
         self.run_actor("open", g.open_width)
-        self.run_actor("move_to_pose", a.reach, 0.0, g.height, g.pitch)
+        self.run_actor("move_to_pose", a.reach, 0.0, height, g.pitch)
         distance = self._face(xy, strategy)
         driven = self.run_actor("mini_walk", distance - a.reach)
         width = self.run_actor("close")
@@ -120,7 +121,7 @@ class Catcher(SubSystem):
             raise GraspError(f"{strategy.category} grasp missed: fingers closed to "
                              f"{width * 1000:.0f} mm, expected {g.closed_min * 1000:.0f}.."
                              f"{g.closed_max * 1000:.0f} mm")
-        self.run_actor("move_to_pose", a.reach - 0.02, 0.0, g.height + g.lift, g.pitch)
+        self.run_actor("move_to_pose", a.reach - 0.02, 0.0, height + g.lift, g.pitch)
         width = self.run_actor("gripper_width")
         if not strategy.holding(width):
             self._back_off(driven, g.open_width)

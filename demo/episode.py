@@ -91,12 +91,14 @@ def _on_surface(pose, place) -> bool:
 
 def run_episode(tree: str = "bt_pick_place", world: str = "house", seed: int = 0,
                 category: str = "any", out_dir: str | pathlib.Path | None = None,
-                progress: TextIO | None = None, world_setup: Any = None) -> Episode:
+                progress: TextIO | None = None, world_setup: Any = None,
+                inputs: dict | None = None, observers: list | None = None) -> Episode:
     """Run ``tree`` once in a fresh ``world`` built from ``seed``.
 
     Success means the tree succeeded and, for a pick-and-place, an object of the category
-    stands on the place location. ``world_setup(world)`` may change the world first (the
-    fault tests use it). With ``out_dir``, the trace is written there.
+    stands on the place location. ``world_setup(world)`` may change the world first and
+    ``observers`` watch the tree runs (the fault tests use both); ``inputs`` are more tree
+    inputs. With ``out_dir``, the trace and the top view are written there.
     """
     ep = Episode(tree=tree, world=world, seed=seed, category=category)
     out = pathlib.Path(out_dir) if out_dir else None
@@ -111,18 +113,29 @@ def run_episode(tree: str = "bt_pick_place", world: str = "house", seed: int = 0
             host = register_tree_folder(rt, TREES)
             if progress is not None:
                 host.observers.append(DemoProgress(progress, rt))
+            host.observers.extend(observers or ())
+            args = dict(inputs or {})
+            params = rt.resolve(tree).signature.parameters
+            if "category" in params:
+                args.setdefault("category", category)
+            pl = sim.place_location
+            if "place" in params and pl is not None:  # this world's place location
+                args.setdefault("place", {"x": pl.x, "y": pl.y, "size_x": pl.sx,
+                                          "size_y": pl.sy, "height": pl.sz})
+            if "home" in params:
+                hx, hy, hyaw = sim.robot_pose()
+                args.setdefault("home", {"x": hx, "y": hy, "yaw": hyaw})
             sub = rt.bus.subscribe("/ground_truth/pose", PoseStamped, lambda m: ep.path.append(
                 (m.pose.position.x, m.pose.position.y)))
             recorder = None
             if out is not None:
                 out.mkdir(parents=True, exist_ok=True)
                 ep.trace = str(out / "trace.jsonl")
-                recorder = TraceRecorder(ep.trace, host, tree=tree, inputs={"category": category},
-                                         seed=seed)
+                recorder = TraceRecorder(ep.trace, host, tree=tree, inputs=args, seed=seed)
             before = {n: sim.object_pose(n) for n in sim.object_names()}
             sim0 = rt.now()
             try:
-                result = rt.call(tree, category=category) if _takes_category(rt, tree) else rt.call(tree)
+                result = rt.call(tree, **args)
                 ep.tree_status = "SUCCESS"
                 ep.found = (result or {}).get("found") if isinstance(result, dict) else None
             except ActorError as exc:
@@ -155,10 +168,6 @@ def run_episode(tree: str = "bt_pick_place", world: str = "house", seed: int = 0
             rt.run_on_hub(sim.close)
     ep.wall_time = time.perf_counter() - wall0
     return ep
-
-
-def _takes_category(rt: Runtime, tree: str) -> bool:
-    return "category" in rt.resolve(tree).signature.parameters
 
 
 def _failed_node(reason: str) -> str:

@@ -4,6 +4,10 @@
 
 Each ``.jsonl`` here is replayed by ``tests/test_trees_trace.py`` with no actors
 loaded; the tree files are found at the paths the traces recorded.
+
+``bt_pick_place_house_seed0.jsonl`` is a whole simulated episode; re-record it with
+``.venv/bin/actorbt demo --seed 0 --out /tmp/demo`` and copy ``/tmp/demo/trace.jsonl`` here
+after changing a mission tree.
 """
 
 from __future__ import annotations
