@@ -11,8 +11,10 @@ Pipeline (one frame, :func:`detect`; ``docs/perception.md`` explains each step):
    from it. The object's metric width profile is measured in height bands, across the
    viewing direction.
 4. **Category**: an :class:`Appearance` (colour + profile of radius against height) whose
-   colour matches is checked against the measured height, width profile and the fit of a
-   cylinder of its body radius to the body's surface points. The best match above
+   colour matches is checked against the measured width profile, the height the model
+   would show in this image (projected from the fitted axis: the image border may hide a
+   bottle's neck), and the fit of a cylinder of its body radius to the body's surface
+   points (a flat face or a poor fit rejects it). The best match above
    ``min_confidence`` names the segment; otherwise it is ``unknown`` (a distractor).
 5. **Position**: the object's vertical axis is the centre of the circle of the known body
    radius fitted (least squares, robust) to the visible surface points of the body: the
@@ -54,7 +56,10 @@ MIN_PIXELS = 40         # smaller segments are ignored
 MAX_RANGE = 4.0         # [m] farther segments are ignored
 MAX_UNKNOWN_SIZE = (0.35, 0.60)   # [m] width, height: larger coloured things are structure
 OCCLUSION_JUMP = 0.03   # [m] (and 4 % of the range) depth step that separates two objects
-DEPTH_NOISE = 0.0015    # [m] RMS a true cylinder's surface may deviate from the fitted one;
+FIT_POINTS = 400        # surface points used to fit an axis (an even subsample)
+MIN_VISIBLE_WIDTH = 0.5 # fraction of its body an object cut by the image border or an
+                        # occluder must show to be classified (a sliver fits any cylinder)
+DEPTH_NOISE = 0.001     # [m] RMS a true cylinder's surface may deviate from the fitted one;
                         # the simulator's depth is exact (~0.3 mm); raise it for a real sensor
 
 
@@ -160,6 +165,8 @@ def backproject(frame: RGBDFrame) -> np.ndarray:
 def fit_circle_fixed(xy: np.ndarray, r: float, c0: np.ndarray, iters: int = 12) -> tuple[np.ndarray, float]:
     """Centre of the circle of radius ``r`` through 2-D points ``xy`` (Gauss-Newton from
     ``c0``, Huber-weighted); returns (centre, RMS residual [m])."""
+    if len(xy) > FIT_POINTS:                 # an even subsample (points come row by row)
+        xy = xy[np.linspace(0, len(xy) - 1, FIT_POINTS).astype(int)]
     c = np.asarray(c0, float).copy()
     for _ in range(iters):
         d = xy - c
@@ -190,7 +197,8 @@ class _Segment:
     u: float                  # centroid [px]
     v: float
     bbox: tuple[int, int, int, int]
-    truncated: dict           # sides of the image the segment touches
+    truncated: dict           # sides cut by the image border
+    occluded: dict            # sides hidden by something nearer
     pts: np.ndarray           # (N, 3) map-frame surface points
     hts: np.ndarray           # (N,) height above the base [m]
     base: float               # support height [m]
@@ -200,6 +208,11 @@ class _Segment:
     lateral: np.ndarray       # (N,) coordinate across the viewing direction [m]
     m_per_px: float           # metres per pixel at the segment
     range: float              # median horizontal distance camera -> surface [m]
+    frame: RGBDFrame | None = None
+
+    def cut(self, side: str) -> bool:
+        """Part of the object is out of view on ``side`` (image border or occluder)."""
+        return self.truncated.get(side, False) or self.occluded.get(side, False)
 
     @property
     def height(self) -> float:
@@ -263,10 +276,47 @@ def _measure(colour: str, comp: np.ndarray, x0: int, y0: int, P: np.ndarray, dep
     x1, y1 = int(xs.max()) + 1, int(ys.max()) + 1
     bx0, by0 = int(xs.min()), int(ys.min())
     trunc = {"left": bx0 <= 0, "right": x1 >= w, "top": by0 <= 0, "bottom": y1 >= h}
+    occluded = _occluded_sides(xs, ys, depth, P, base)
     return _Segment(colour=colour, pixels=int(len(xs)), u=float(xs.mean()), v=float(ys.mean()),
-                    bbox=(bx0, by0, x1, y1), truncated=trunc, pts=pts, hts=pts[:, 2] - base,
-                    base=base, top=float(pts[:, 2].max()), cam_xy=cam_xy, ray=ray, lateral=lateral,
-                    m_per_px=m_per_px, range=rng)
+                    bbox=(bx0, by0, x1, y1), truncated=trunc, occluded=occluded, pts=pts,
+                    hts=pts[:, 2] - base, base=base, top=float(pts[:, 2].max()), cam_xy=cam_xy,
+                    ray=ray, lateral=lateral,
+                    m_per_px=m_per_px, range=rng, frame=frame)
+
+
+def _occluded_sides(xs: np.ndarray, ys: np.ndarray, depth: np.ndarray, P: np.ndarray,
+                    base: float) -> dict[str, bool]:
+    """Sides (left, right, top) along which something nearer hides part of the segment:
+    on at least a quarter of the rows (columns), the pixel next to the outermost one is
+    nearer by more than OCCLUSION_JUMP. Rows within 2 cm of the base are skipped (the
+    floor in front of the base is nearer there)."""
+    h, w = depth.shape
+    out = {}
+    for side in ("left", "right", "top"):
+        if side == "top":
+            key, other, step, lim = xs, ys, -1, 0
+        else:
+            key, other = ys, xs
+            step, lim = (-1, 0) if side == "left" else (1, w - 1)
+        k0 = int(key.min())
+        edge = np.full(int(key.max()) - k0 + 1, -1 if step > 0 else 1 << 30, np.int64)
+        (np.maximum if step > 0 else np.minimum).at(edge, key - k0, other)
+        ks = np.arange(len(edge)) + k0
+        inside = (edge >= 0) & (edge < (1 << 30)) & (edge != lim)
+        ks, edge = ks[inside], edge[inside]
+        if side == "top":
+            ex, ey, nx, ny = ks, edge, ks, np.maximum(edge - 1, 0)
+        else:
+            ex, ey, nx, ny = edge, ks, np.clip(edge + step, 0, w - 1), ks
+        keep = P[ey, ex, 2] - base > 0.02
+        if keep.sum() < 3:
+            out[side] = False
+            continue
+        d_edge, d_next = depth[ey, ex][keep], depth[ny, nx][keep]
+        with np.errstate(invalid="ignore"):
+            nearer = np.isfinite(d_next) & (d_next < d_edge - OCCLUSION_JUMP)
+        out[side] = bool(nearer.mean() >= 0.25)
+    return out
 
 
 def _segments(frame: RGBDFrame, P: np.ndarray) -> list[_Segment]:
@@ -308,9 +358,9 @@ def _score(seg: _Segment, app: Appearance) -> tuple[float, dict]:
     rho = seg.range + app.body_radius
     tangent = math.sqrt(max(0.0, 1.0 - (app.body_radius / max(rho, 1e-3)) ** 2))
     tol_w = max(0.008, 1.6 * px)
-    tol_h = max(0.012, 2.0 * px)
+    tol_h = max(0.006, 1.5 * px)
     widths = seg.band_widths(band)
-    side_cut = seg.truncated["left"] or seg.truncated["right"]
+    side_cut = seg.cut("left") or seg.cut("right")
     # width profile: measured band widths against the appearance's diameter at that height
     errs = []
     for hmid, wm in widths:
@@ -323,46 +373,70 @@ def _score(seg: _Segment, app: Appearance) -> tuple[float, dict]:
             errs.append(wm - we)
     if len(errs) < 2:
         return 0.0, {"reason": "too few height bands"}
+    if side_cut:
+        body_w = [wm for hmid, wm in widths if band <= hmid <= min(app.body_top, seg.height - band)]
+        if not body_w or float(np.median(body_w)) < MIN_VISIBLE_WIDTH * 2 * app.body_radius * tangent:
+            return 0.0, {"reason": "too little of it in view"}
     e_prof = float(np.sqrt(np.mean(np.square(errs))))
-    # height: exact when the top is in the image, an upper bound otherwise
-    if seg.truncated["top"]:
-        e_h = max(0.0, seg.height - app.height)
-    else:
-        e_h = seg.height - app.height
-    # body: a cylinder of the body radius must fit the body's surface
-    body = seg.pts[(seg.hts > 0.15 * app.body_top) & (seg.hts < 0.9 * app.body_top)]
+    # body: a cylinder of the body radius must fit the body's surface, and a plane must not
+    body = seg.pts[(seg.hts > 0.1 * app.body_top) & (seg.hts < 0.9 * app.body_top), :2]
     if len(body) < 10:
         return 0.0, {"reason": "body not visible"}
-    c0 = body[:, :2].mean(axis=0) + app.body_radius * seg.ray
-    _, rms = fit_circle_fixed(body[:, :2], app.body_radius, c0)
+    c0 = body.mean(axis=0) + app.body_radius * seg.ray
+    axis, rms = fit_circle_fixed(body, app.body_radius, c0)
+    flat = math.sqrt(max(0.0, float(np.linalg.eigvalsh(np.cov(body.T))[0])))
+    if flat < 2 * DEPTH_NOISE:
+        return 0.0, {"reason": "flat", "line_rms": flat}
+    # height: the model, standing on the axis, is projected into the image: its highest
+    # point inside the image is the height that must be seen (a bottle at the left border
+    # may show its body but not its neck). Behind an occluder the seen height is only a
+    # lower bound.
+    top = _visible_top(seg, app, axis)
+    if seg.occluded["top"] or seg.occluded["left"] or seg.occluded["right"]:
+        e_h = max(0.0, seg.height - top)
+    else:
+        e_h = seg.height - top
     tol_r = DEPTH_NOISE
     z = np.array([e_prof / tol_w, e_h / tol_h, rms / tol_r])
     conf = float(math.exp(-0.5 * float(np.mean(z * z))))
     if np.any(np.abs(z) > 2.5):
         conf = min(conf, 0.1)
-    if seg.truncated["top"] or side_cut:
+    if seg.cut("top") or side_cut:
         conf *= 0.85                                 # part of the evidence is out of view
-    return conf, {"profile_err": e_prof, "height_err": e_h, "cylinder_rms": rms}
+    return conf, {"profile_err": e_prof, "height_err": e_h, "cylinder_rms": rms, "line_rms": flat,
+                  "axis": axis}
 
 
-def _axis(seg: _Segment, app: Appearance | None) -> tuple[np.ndarray, float]:
-    """(x, y) of the vertical axis, and the radius used."""
-    if app is not None:
-        body = seg.pts[(seg.hts > 0.08 * app.body_top) & (seg.hts < 0.92 * app.body_top)]
-        if len(body) < 10:
-            body = seg.pts
-        r = app.body_radius
-    else:
-        body = seg.pts
-        widths = [wd for _, wd in seg.band_widths(max(0.01, 1.6 * seg.m_per_px))]
-        r = 0.5 * float(np.median(widths)) if widths else 0.03
-    c0 = body[:, :2].mean(axis=0) + r * seg.ray
-    c, rms = fit_circle_fixed(body[:, :2], r, c0)
-    if app is None and rms > 2 * DEPTH_NOISE:
-        c = _box_centre(body[:, :2], seg.ray)
-    # a fit that wandered off (too few or degenerate points): visible centroid + r along the ray
-    if not np.all(np.isfinite(c)) or np.hypot(*(c - c0)) > 2 * r:
-        c = c0
+def _visible_top(seg: _Segment, app: Appearance, axis: np.ndarray) -> float:
+    """Highest point of ``app`` standing at ``axis`` that projects into the image [m]."""
+    frame = seg.frame
+    k = frame.intrinsics
+    T = np.linalg.inv(frame.T_map_cam)
+    hs = np.concatenate([np.arange(0.0, top, 0.002).tolist() + [top - 1e-4] for top, _ in app.sections])
+    rs = np.array([app.radius_at(h) for h in hs])
+    ang = np.linspace(0, 2 * math.pi, 16, endpoint=False)
+    X = axis[0] + rs[:, None] * np.cos(ang)[None, :]
+    Y = axis[1] + rs[:, None] * np.sin(ang)[None, :]
+    Z = np.broadcast_to((seg.base + hs)[:, None], X.shape)
+    pc = np.einsum("ij,...j->...i", T[:3, :3], np.stack([X, Y, Z], axis=-1)) + T[:3, 3]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        u = k.fx * pc[..., 0] / pc[..., 2] + k.cx
+        v = k.fy * pc[..., 1] / pc[..., 2] + k.cy
+    inside = (pc[..., 2] > 0) & (u >= 0) & (u <= k.width - 1) & (v >= 0) & (v <= k.height - 1)
+    seen = inside.any(axis=1)
+    return float(hs[seen].max()) if seen.any() else 0.0
+
+
+def _axis(seg: _Segment) -> tuple[np.ndarray, float]:
+    """(x, y) of the vertical axis of an object of no known category, and its radius: a
+    cylinder of the measured width when one fits, else a box (see ``_box_centre``)."""
+    widths = [wd for _, wd in seg.band_widths(max(0.01, 1.6 * seg.m_per_px))]
+    r = 0.5 * float(np.median(widths)) if widths else 0.03
+    xy = seg.pts[:, :2]
+    c0 = xy.mean(axis=0) + r * seg.ray
+    c, rms = fit_circle_fixed(xy, r, c0)
+    if rms > 2 * DEPTH_NOISE or not np.all(np.isfinite(c)) or np.hypot(*(c - c0)) > 2 * r:
+        c = _box_centre(xy, seg.ray)
     return c, r
 
 
@@ -374,6 +448,8 @@ def _box_centre(xy: np.ndarray, ray: np.ndarray) -> np.ndarray:
     one face shows (a thin rectangle) it is pushed back by half its width along the
     viewing direction: a square footprint is assumed.
     """
+    if len(xy) > FIT_POINTS:
+        xy = xy[np.linspace(0, len(xy) - 1, FIT_POINTS).astype(int)]
     o = xy.mean(axis=0)
     q = xy - o
     th = np.radians(np.arange(0.0, 90.0, 1.0))
@@ -409,7 +485,8 @@ def detect(frame: RGBDFrame, appearances: dict[str, Appearance] | None = None) -
       bearing     direction of the axis in the robot's frame [rad], positive left
       confidence  in [0, 1]
       pixel       [u, v] centroid of the object's pixels
-      colour, truncated (sides of the image it touches), stamp [s], frame ("map")
+      colour, truncated (sides cut by the image border or hidden behind something
+      nearer), stamp [s], frame ("map")
     """
     apps = APPEARANCES if appearances is None else appearances
     P = backproject(frame)
@@ -426,11 +503,14 @@ def detect(frame: RGBDFrame, appearances: dict[str, Appearance] | None = None) -
         else:
             category, app = UNKNOWN, None
             conf = 1.0 - best_conf
-        c, r = _axis(seg, app)
+        if app is not None:
+            c, r = evidence["axis"], app.body_radius
+        else:
+            c, r = _axis(seg)
         widths = [wd for hm, wd in seg.band_widths(max(0.01, 1.6 * seg.m_per_px))
                   if app is None or hm < app.body_top]
         width = float(np.median(widths)) if widths else 2 * r
-        if app is not None and (seg.truncated["left"] or seg.truncated["right"]):
+        if app is not None and (seg.cut("left") or seg.cut("right")):
             width = 2 * r                              # partly out of view: the model's width
         if app is None and (width > MAX_UNKNOWN_SIZE[0] or seg.height > MAX_UNKNOWN_SIZE[1]):
             continue                                   # a wall, furniture: not an object
@@ -443,7 +523,7 @@ def detect(frame: RGBDFrame, appearances: dict[str, Appearance] | None = None) -
             "confidence": round(float(conf), 3),
             "pixel": [round(seg.u, 1), round(seg.v, 1)],
             "colour": seg.colour,
-            "truncated": [k for k, v in seg.truncated.items() if v],
+            "truncated": [k for k in ("left", "right", "top", "bottom") if seg.cut(k)],
             "stamp": frame.stamp, "frame": "map",
         })
     out.sort(key=lambda d: d["distance"])

@@ -18,6 +18,7 @@ from .actor import ActorRef, ActorSpec
 from .api import CallApi
 from .errors import ActorbtError, AmbiguousActorError, UnknownActorError
 from .modes import Kind
+from .ros.qos import qos_depth  # pure Python: sizes stream buffers for any transport
 
 if TYPE_CHECKING:
     from .runtime import Runtime
@@ -218,8 +219,9 @@ class SubSystem(CallApi):
         raise KeyError(f"no value {key!r} in {self!r} or its parents")
 
     # -- edges to the outside world (bus) --------------------------------------------
-    def register_publisher(self, name: str, msg_type: type, topic: str, qos: int = 10) -> ActorRef:
-        """Make actor ``name(msg)`` that publishes ``msg`` on ``topic``."""
+    def register_publisher(self, name: str, msg_type: type, topic: str, qos: Any = 10) -> ActorRef:
+        """Make actor ``name(msg)`` that publishes ``msg`` on ``topic``. ``qos``: a depth,
+        a name ("sensor", "latched", "reliable") or an rclpy QoSProfile."""
         pub = self._rt.bus.publisher(_topic(topic), msg_type, qos)
         self._edges.append(pub)
 
@@ -231,16 +233,16 @@ class SubSystem(CallApi):
         return self.add_actor(name, publish, Kind.SYNC, signature=inspect.Signature(
             [inspect.Parameter("msg", inspect.Parameter.POSITIONAL_OR_KEYWORD, annotation=msg_type)]))
 
-    def register_subscriber(self, name: str, msg_type: type, topic: str, qos: int = 10) -> ActorRef:
+    def register_subscriber(self, name: str, msg_type: type, topic: str, qos: Any = 10) -> ActorRef:
         """Make stream actor ``name`` that emits each message arriving on ``topic``;
-        its buffer keeps the latest ``qos`` messages."""
+        its buffer keeps as many of the latest messages as the ``qos`` depth."""
         bus = self._rt.bus
         t = _topic(topic)
 
         def subscribe(emit: Callable[[Any], None]) -> Callable[[], None]:
             return bus.subscribe(t, msg_type, emit, qos).close
         subscribe.__doc__ = f"Messages ({msg_type.__module__}.{msg_type.__name__}) arriving on {t}."
-        return self.add_actor(name, subscribe, Kind.STREAM, buffer=max(1, qos),
+        return self.add_actor(name, subscribe, Kind.STREAM, buffer=qos_depth(qos),
                               signature=inspect.Signature([]))
 
     def register_action(self, name: str, action_type: type, server: str) -> ActorRef:

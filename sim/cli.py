@@ -8,6 +8,7 @@
 from __future__ import annotations
 
 import argparse
+import signal
 import time
 
 
@@ -68,6 +69,7 @@ def cmd_run(args, app) -> int:
     if not app.world_spec():
         args.world = "house"
     rt = app.runtime(clock="wall")
+    signal.signal(signal.SIGTERM, _interrupt)  # stop as cleanly on SIGTERM as on Ctrl-C
     try:
         print(f"world {app.world_spec()['name']} running on the {rt.bus.name} bus; Ctrl-C stops it",
               flush=True)
@@ -79,3 +81,7 @@ def cmd_run(args, app) -> int:
     finally:
         app.close(rt)
     return 0
+
+
+def _interrupt(signum, frame) -> None:
+    raise KeyboardInterrupt

@@ -15,6 +15,9 @@ import time
 from bt_engine import Cancelled, SubSystem, actor
 
 os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+# Test runs on one machine must not see each other's servers (two servers for one
+# action name both execute a goal): each pytest process takes its own ROS domain.
+os.environ.setdefault("ROS_DOMAIN_ID", str(1 + os.getpid() % 100))
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 

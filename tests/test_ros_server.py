@@ -75,7 +75,7 @@ def test_tree_actor_goal_completes_with_feedback_and_result(served):
     assert g.result.success and g.result.status == "succeeded"
     assert yaml.safe_load(g.result.outputs_yaml) == {"double": 42, "label": "z"}
     # Not a trees-layer mission: feedback at the start and at the end only.
-    assert wait_until(lambda: len(log) >= 2, 2.0)
+    assert wait_until(lambda: len(log) >= 2, 2.0), log
     assert log[0][0] == "running" and log[-1][0] == "success"
 
 

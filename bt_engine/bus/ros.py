@@ -144,6 +144,8 @@ class RosTransport(Transport):
         GoalRejectedError. Cancelling the transaction cancels the goal.
         """
         from rclpy.action import ActionClient
+        # Created here, not through host.call: the hub never waits for the executor
+        # thread (which may be waiting for the hub), see RosHost.
         client = ActionClient(self.node, action_type, server)
         rt, host, waiter = self._rt, self.host, self._waiter
         goal_type = action_type.Goal

@@ -58,6 +58,8 @@ class App:
     def world_spec(self) -> dict[str, Any] | None:
         w = dict(self.cfg.world or {})
         name = getattr(self.args, "world", None)
+        if name == "none":  # the robot is whatever answers on the topics
+            return None
         if name:
             w["name"] = name
         seed = getattr(self.args, "seed", None)

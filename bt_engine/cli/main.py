@@ -23,7 +23,7 @@ BUILTIN_EXTENSIONS = ["bt_engine.trees.cli", "bt_engine.ros.cli"]
 
 
 def _common(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--world", help="world to simulate (overrides actorbt.yaml)")
+    p.add_argument("--world", help="world to simulate (overrides actorbt.yaml; 'none': no sim)")
     p.add_argument("--seed", type=int, help="world seed")
     p.add_argument("--gui", action="store_true", help="open pybullet's window (wall clock)")
     p.add_argument("--clock", choices=["virtual", "wall"], help="runtime clock")
@@ -59,6 +59,9 @@ def cmd_catalog(args: argparse.Namespace, app: App) -> int:
 
 
 def cmd_call(args: argparse.Namespace, app: App) -> int:
+    if getattr(args, "ros", False):  # a client of a running `actorbt serve`
+        from ..ros.cli import cmd_rcall
+        return cmd_rcall(args, app)
     pos, kw = parse_args(args.args)
     rt = app.runtime()
     try:

@@ -18,6 +18,7 @@ import pprint
 import signal
 import sys
 import threading
+import time
 from typing import Any, Callable
 
 
@@ -131,6 +132,8 @@ def cmd_goal(args: argparse.Namespace, app: Any) -> int:
         rc = _follow(goal, args.timeout)
         if rc is not None:
             return rc
+        if not args.quiet:
+            time.sleep(0.05)  # the last feedback may arrive just after the result
         err = goal.error
         if isinstance(err, GoalRejectedError):
             print(f"actorbt: {tree_action_name(args.tree)} rejected the goal"

@@ -38,6 +38,14 @@ class GoalRejectedError(ActorbtError):
         super().__init__(f"{server} rejected the goal" + (f": {reason}" if reason else ""))
 
 
+class GoalNotSentError(ActorbtError):
+    """The goal was cancelled while it waited for the server, so it was never sent."""
+
+    def __init__(self, server: str) -> None:
+        self.server = server
+        super().__init__(f"goal for {server} cancelled before it was sent")
+
+
 class ActionGoalError(ActorbtError):
     """The goal ended without succeeding (aborted or canceled by the server)."""
 
@@ -124,12 +132,15 @@ class GoalCall:
                  on_error: Callable[[BaseException], None],
                  on_accepted: Callable[[Any], None] | None = None,
                  on_feedback: Callable[[Any], None] | None = None,
-                 on_status: Callable[[int, Any], None] | None = None) -> None:
+                 on_status: Callable[[int, Any], None] | None = None,
+                 goal_uuid: Any = None) -> None:
         self.client = client
+        self.goal_uuid = goal_uuid
         self.server = server
         self.goal = goal
         self.handle: Any = None
         self.cancelled = False
+        self.sent = False
         self.finished = False
         self._waiter = waiter
         self._wait_entry: list | None = None
@@ -150,8 +161,9 @@ class GoalCall:
     def _send(self) -> None:
         if self.cancelled:
             return
+        self.sent = True
         fb = (lambda m: self._on_feedback(m.feedback)) if self._on_feedback else None
-        fut = self.client.send_goal_async(self.goal, feedback_callback=fb)
+        fut = self.client.send_goal_async(self.goal, feedback_callback=fb, goal_uuid=self.goal_uuid)
         fut.add_done_callback(self._on_response)
 
     def _on_response(self, fut: Any) -> None:
@@ -191,13 +203,17 @@ class GoalCall:
             self._on_error(exc)
 
     def cancel(self) -> Any:
-        """Ask the server to cancel the goal (now, or as soon as it is accepted).
-        Returns the cancel-response future when a request was sent."""
+        """Ask the server to cancel the goal (now, or as soon as it is accepted); a goal
+        not sent yet is not sent and ends with GoalNotSentError. Returns the
+        cancel-response future when a request was sent."""
         if self.cancelled or self.finished:
             return None
         self.cancelled = True
         if self._wait_entry:
             self._waiter.forget(self._wait_entry)
+        if not self.sent:
+            self._finish_error(GoalNotSentError(self.server))
+            return None
         if self.handle is not None:
             return self.handle.cancel_goal_async()
         return None

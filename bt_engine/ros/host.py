@@ -11,6 +11,8 @@ Threads:
   :meth:`RosHost.post`, in FIFO order, or :meth:`RosHost.call` to wait for a result.
   rclpy's action client keeps no lock around its request tables, so goals, cancels and
   result requests are always sent from the executor thread.
+- The executor thread may wait for the hub (``rt.run_on_hub``), so the hub never waits
+  for the executor thread: from the hub, only ``post``, never ``call``.
 
 Discovery: ``ROS_AUTOMATIC_DISCOVERY_RANGE`` defaults to ``LOCALHOST`` (set before the
 context is created, unless the environment already says otherwise), so no discovery

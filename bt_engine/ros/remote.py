@@ -15,12 +15,14 @@ import collections
 import os
 import threading
 import time
+import uuid
 from typing import Any, Callable
 
 import yaml
 
 from ..errors import ActorbtError, ActorTimeout
-from .client import (STATUS_NAMES, ActionGoalError, GoalCall, GoalRejectedError, ServerWait)
+from .client import (STATUS_NAMES, ActionGoalError, GoalCall, GoalNotSentError,
+                     GoalRejectedError, ServerWait)
 from .host import RosClosedError, RosHost
 from .server import CALL_ACTION, REJECTIONS_TOPIC, goal_text, rejections_qos, tree_action_name
 from .yamlio import dump
@@ -52,6 +54,7 @@ class RemoteGoal:
         self.result: Any = None
         self.error: BaseException | None = None
         self.sent_at = 0.0
+        self.ended_at: float | None = None
         self.call: GoalCall | None = None
 
     def _on_accepted(self, handle: Any) -> None:
@@ -65,15 +68,19 @@ class RemoteGoal:
     def _on_result(self, result: Any) -> None:
         self.status = "succeeded"
         self.result = result
+        self.ended_at = time.monotonic()
         self.accepted.set()
         self.done.set()
 
     def _on_error(self, exc: BaseException) -> None:
         if isinstance(exc, GoalRejectedError):
             self.status = "rejected"  # wait() adds the reason, off the executor thread
+        elif isinstance(exc, GoalNotSentError):
+            self.status = "canceled"
         elif not isinstance(exc, ActionGoalError):
             self.status = "failed"
         self.error = exc
+        self.ended_at = time.monotonic()
         self.accepted.set()
         self.done.set()
 
@@ -94,17 +101,21 @@ class RemoteGoal:
 
     def cancel(self) -> None:
         """Ask the server to cancel the goal (as soon as it is accepted)."""
-        call = self.call
-        if call is not None and not self.done.is_set():
-            self.remote.host.post(self._cancel, call)
+        if not self.done.is_set():
+            try:
+                self.remote.host.post(self._cancel)
+            except RosClosedError:
+                pass
 
-    @staticmethod
-    def _cancel(call: GoalCall) -> None:
+    def _cancel(self) -> None:
         # Unlike GoalCall.cancel, keep following the goal: the result reports CANCELED.
+        call = self.call
+        if call is None or call.finished:
+            return
         if call.handle is not None:
             call.handle.cancel_goal_async()
         else:
-            call.cancelled = True
+            call.cancel()  # not accepted yet: cancelled on acceptance, or never sent
 
 
 class Remote:
@@ -123,6 +134,7 @@ class Remote:
             self._waiter = ServerWait(self.node)
             self._clients: dict[str, Any] = {}
             self._created: dict[str, float] = {}
+            self._feedback: dict[bytes, tuple[RemoteGoal, Callable[[Any], None]]] = {}
             self._rejections: collections.deque = collections.deque(maxlen=200)
             self._rej_cond = threading.Condition()
             from std_msgs.msg import String
@@ -165,11 +177,32 @@ class Remote:
 
     def _client(self, action_type: type, action: str) -> Any:
         from rclpy.action import ActionClient
+        from rclpy.qos import QoSProfile
         client = self._clients.get(action)
         if client is None:
             client = self._clients[action] = ActionClient(self.node, action_type, action)
             self._created[action] = time.monotonic()
+            # Feedback through our own subscription: rclpy drops a goal's feedback
+            # callback when its result arrives, and the result (a service reply) often
+            # overtakes the last feedback message (a topic).
+            self.node.create_subscription(action_type.Impl.FeedbackMessage,
+                                          f"{action}/_action/feedback", self._on_feedback,
+                                          QoSProfile(depth=100))
         return client
+
+    #: how long a finished goal still receives feedback that arrives late [s]
+    FEEDBACK_GRACE = 2.0
+
+    def _on_feedback(self, msg: Any) -> None:
+        entry = self._feedback.get(bytes(msg.goal_id.uuid))
+        if entry is not None:
+            entry[1](msg.feedback)
+
+    def _prune_feedback(self) -> None:
+        now = time.monotonic()
+        for key, (g, _) in list(self._feedback.items()):
+            if g.ended_at is not None and now - g.ended_at > self.FEEDBACK_GRACE:
+                del self._feedback[key]
 
     def wait_for(self, action_type: type, action: str, timeout: float | None = None) -> bool:
         """Wait until ``action`` is discovered; False after ``timeout`` [s]."""
@@ -188,16 +221,27 @@ class Remote:
         g = RemoteGoal(self, action, goal)
 
         def start() -> None:
+            try:
+                begin()
+            except Exception as e:
+                g._on_error(e)
+
+        def begin() -> None:
+            from unique_identifier_msgs.msg import UUID
             client = self._client(action_type, action)
             settled = self._created[action] + self.SETTLE
+            goal_id = uuid.uuid4().bytes
+            self._prune_feedback()
+            if on_feedback is not None:
+                self._feedback[goal_id] = (g, on_feedback)
             g.call = GoalCall(_Settling(client, settled), action, self._waiter, goal,
                               server_timeout=self.wait if wait is None else wait,
                               on_result=g._on_result, on_error=g._on_error,
-                              on_accepted=g._on_accepted, on_feedback=on_feedback,
-                              on_status=g._on_status)
+                              on_accepted=g._on_accepted, on_status=g._on_status,
+                              goal_uuid=UUID(uuid=list(goal_id)))
             g.sent_at = time.monotonic()
             g.call.start()
-        self.host.call(start)
+        self.host.post(start)  # cancel() is posted after it, so it finds g.call
         return g
 
     def tree_goal(self, tree: str, inputs: "dict | str | None" = None, *,

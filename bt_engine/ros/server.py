@@ -60,6 +60,8 @@ NODE_NAME = "actorbt"
 CALL_ACTION = "/actorbt/call"
 TREE_PREFIX = "/actorbt/tree/"
 REJECTIONS_TOPIC = "/actorbt/rejections"
+#: seconds a finished goal's result is kept (see Server)
+RESULT_TIMEOUT = 2
 
 __all__ = ["CALL_ACTION", "REJECTIONS_TOPIC", "TREE_PREFIX", "Server", "goal_text",
            "rejections_qos", "serve", "tree_action_name"]
@@ -239,8 +241,12 @@ class _Goal:
             fb = fb_type(status=status, active_node=active, tick_count=max(0, ticks))
         else:
             fb = fb_type(status=status)
+        host = self.server.host
+        if host.in_executor_thread():
+            self.handle.publish_feedback(fb)
+            return
         try:
-            self.server.host.post(self.handle.publish_feedback, fb)
+            host.post(self.handle.publish_feedback, fb)
         except RosClosedError:
             pass
 
@@ -263,10 +269,16 @@ class Server:
         preempt: a goal for a running tree preempts it (default: it is rejected).
         node_name: the node's name.
         record_dir: record each tree goal as a trace in this folder (None: no traces).
+        result_timeout: how long a finished goal's result stays available [s]. Every
+            goal the server keeps is in every status message its clients decode, so a
+            long timeout makes each goal slower (rclpy's default, 900 s, added about
+            16 us per kept goal to every round trip here). rclpy clients ask for the
+            result as soon as the goal is accepted, so a few seconds is plenty.
     """
 
     def __init__(self, rt: Any, *, preempt: bool = False, node_name: str = NODE_NAME,
-                 record_dir: "str | pathlib.Path | None" = None) -> None:
+                 record_dir: "str | pathlib.Path | None" = None,
+                 result_timeout: int = RESULT_TIMEOUT) -> None:
         from actorbt_interfaces.action import CallActor, RunTree
         from rclpy.action import ActionServer
         from std_msgs.msg import String
@@ -279,6 +291,7 @@ class Server:
         self._closing = False
         self._closed = False
         self._by_txn: dict[int, _Goal] = {}  # hub only
+        self._parsed: dict[int, tuple[Any, tuple]] = {}  # executor thread only
         self._String = String
         bus = rt.bus
         self._own_host = not isinstance(bus, RosTransport)
@@ -302,7 +315,7 @@ class Server:
                                                               rejections_qos())
                 for ep in self.endpoints:
                     ep.server = ActionServer(
-                        self.node, ep.action_type, ep.action,
+                        self.node, ep.action_type, ep.action, result_timeout=result_timeout,
                         execute_callback=functools.partial(self._execute, ep),
                         goal_callback=lambda goal, ep=ep: self._on_goal(ep, goal),
                         cancel_callback=lambda gh, ep=ep: self._on_cancel(ep, gh))
@@ -406,7 +419,7 @@ class Server:
         try:
             if self._closing:
                 raise GoalError("the server is shutting down")
-            self._parse(ep, goal)
+            parsed = self._parse(ep, goal)
             if ep.kind == "tree" and not self.preempt and (ep.active is not None or ep.reserved):
                 raise GoalError(f"tree {ep.ref.path} is already running a goal; cancel it "
                                 "first (this server rejects a second goal: it was started "
@@ -415,6 +428,10 @@ class Server:
             self._reject(ep, goal, str(e))
             return GoalResponse.REJECT
         ep.reserved += 1
+        # rclpy hands the same goal message to the execute callback: keep the parse.
+        if len(self._parsed) > 1000:  # goals accepted but never executed (cannot happen)
+            self._parsed.clear()
+        self._parsed[id(goal)] = (goal, parsed)
         return GoalResponse.ACCEPT
 
     def _reject(self, ep: _Endpoint, goal: Any, reason: str) -> None:
@@ -445,7 +462,11 @@ class Server:
         ep.goals[g.key] = g
         try:
             try:
-                g.path, g.args, g.kwargs = self._parse(ep, handle.request)
+                kept = self._parsed.pop(id(handle.request), None)
+                if kept is not None and kept[0] is handle.request:
+                    g.path, g.args, g.kwargs = kept[1]
+                else:
+                    g.path, g.args, g.kwargs = self._parse(ep, handle.request)
             except GoalError as e:  # the world changed since the goal was accepted
                 handle.abort()
                 return self._result(ep, False, f"failed: {e}", None, str(e))

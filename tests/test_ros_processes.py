@@ -1,0 +1,167 @@
+"""Two processes over real DDS (loopback): ``actorbt serve --ros`` in a subprocess, and
+clients here (action-client actors, the Remote client) and in further subprocesses
+(``actorbt goal``, ``actorbt rcall``). Discovery between processes takes seconds, so
+the server is started once for the module."""
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import threading
+import time
+
+import pytest
+import yaml
+
+pytest.importorskip("rclpy")
+from actorbt_interfaces.action import CallActor, RunTree  # noqa: E402
+
+from bt_engine import ActorError, Runtime  # noqa: E402
+from bt_engine.bus.ros import RosTransport  # noqa: E402
+from bt_engine.ros.remote import Remote  # noqa: E402
+from tests.test_ros_common import ROOT, shm_leaks, shm_mapped, wait_until, write_config  # noqa: E402
+
+ENV = dict(os.environ, ROS_AUTOMATIC_DISCOVERY_RANGE=os.environ.get(
+    "ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST"), PYTHONUNBUFFERED="1")
+
+
+def actorbt(*args: str, **kw) -> subprocess.Popen:
+    return subprocess.Popen([sys.executable, "-m", "bt_engine.cli.main", *args], cwd=ROOT,
+                            env=ENV, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                            text=True, **kw)
+
+
+class Server:
+    def __init__(self, tmp):
+        self.tmp = tmp
+        self.cfg = write_config(tmp)
+        self.lines: list[str] = []
+        self.proc = actorbt("--config", str(self.cfg), "serve", "--ros",
+                            "--record-dir", str(tmp / "goals"))
+        self.ready = threading.Event()
+        self._reader = threading.Thread(target=self._read, daemon=True)
+        self._reader.start()
+        self.segments: set[str] = set()
+
+    def _read(self):
+        for line in self.proc.stdout:
+            self.lines.append(line.rstrip())
+            if "ready" in line:
+                self.ready.set()
+
+    def output(self) -> str:
+        return "\n".join(self.lines)
+
+    def stop(self) -> int:
+        if self.proc.poll() is None:
+            self.proc.send_signal(signal.SIGINT)
+            try:
+                self.proc.wait(15)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.proc.wait()
+        self._reader.join(5)
+        return self.proc.returncode
+
+
+@pytest.fixture(scope="module")
+def server(tmp_path_factory):
+    s = Server(tmp_path_factory.mktemp("serve"))
+    try:
+        assert s.ready.wait(30), s.output()
+        yield s
+    finally:
+        s.stop()
+
+
+@pytest.fixture(scope="module")
+def client(server):
+    rt = Runtime(clock="wall", bus=RosTransport)
+    remote = None
+    try:
+        rt.run_on_hub(rt.bus.register_action, rt.root, "remote_call", CallActor, "/actorbt/call")
+        rt.run_on_hub(rt.bus.register_action, rt.root, "steps", RunTree, "/actorbt/tree/steps_tree")
+        remote = Remote()
+        yield rt, remote
+    finally:
+        if remote is not None:
+            remote.close()
+        rt.close()
+
+
+def test_action_client_actors_reach_a_server_in_another_process(server, client):
+    rt, remote = client
+    # the first goal waits for discovery (about 2 s between processes)
+    res = rt.call("remote_call", actor="work.echo", args_yaml="[1, two]")
+    assert res.success and yaml.safe_load(res.result_yaml) == {"args": [1, "two"], "kwargs": {}}
+    res = rt.call("steps", inputs_yaml="{steps: 2, period: 0.01}")
+    assert res.success and res.status == "succeeded"
+    assert yaml.safe_load(res.outputs_yaml) == {"count": 2}
+    with pytest.raises(ActorError) as e:
+        rt.call("steps", inputs_yaml="{steps: lots}")
+    assert "rejected" in str(e.value)
+
+
+def test_goal_with_feedback_and_cancel_mid_run(server, client):
+    rt, remote = client
+    before = remote.call("work.stats")
+    feedback: list = []
+    g = remote.tree_goal("steps_tree", {"steps": 1000, "period": 0.01},
+                         on_feedback=lambda fb: feedback.append((fb.status, fb.active_node, fb.tick_count)))
+    assert wait_until(lambda: any("counting" in a for _, a, _ in feedback), 10.0), feedback
+    assert feedback[0][0] == "running"
+    t0 = time.monotonic()
+    g.cancel()
+    assert g.wait(5.0)
+    cancel_latency = time.monotonic() - t0
+    assert g.status == "canceled" and g.result.status == "canceled" and not g.result.success
+    assert cancel_latency < 1.0
+    stats = remote.call("work.stats")
+    assert stats["cancelled"] == before["cancelled"] + 1 and stats["live"] == []
+    # the server's trace of the goal: the leaf's actor call and its transaction cancelled
+    def trace_events():
+        files = sorted((server.tmp / "goals").glob("*steps_tree*.jsonl"), key=os.path.getmtime)
+        return [json.loads(line) for line in files[-1].read_text().splitlines()] if files else []
+    assert wait_until(lambda: any(e["type"] == "end" for e in trace_events()), 5.0)
+    events = trace_events()
+    assert events[0]["type"] == "header" and events[0]["tree"] == "steps_tree"
+    assert any(e["type"] == "return" and e["actor"] == "work.slow" and e["state"] == "cancelled"
+               for e in events)
+    assert any(e["type"] == "txn" and e["phase"] == "end" and e["actor"] == "work.slow"
+               and e["state"] == "cancelled" for e in events)
+    assert [e["status"] for e in events if e["type"] == "end"] == ["INVALID"]
+
+
+def test_malformed_goal_is_rejected_and_the_server_keeps_serving(server, client):
+    rt, remote = client
+    g = remote.tree_goal("steps_tree", "{steps: [")
+    assert g.wait(5.0) and g.status == "rejected"
+    assert "not valid YAML" in g.error.reason
+    g = remote.send(CallActor, "/actorbt/call", CallActor.Goal(actor="work.nothing"))
+    assert g.wait(5.0) and g.status == "rejected" and "unknown actor" in g.error.reason
+    assert remote.run_tree("steps_tree", {"steps": 1, "period": 0.0}) == {"count": 1}
+
+
+def test_goal_and_rcall_commands(server):
+    cfg = str(server.cfg)
+    goal = actorbt("--config", cfg, "goal", "steps_tree", "--args", "{steps: 3, period: 0.01}")
+    rcall = actorbt("--config", cfg, "rcall", "work.echo", "1", "k='v'")
+    bad = actorbt("--config", cfg, "goal", "steps_tree", "--args", "{steps: x}")
+    out, _ = goal.communicate(timeout=30)
+    assert goal.returncode == 0, out
+    assert "status: succeeded" in out and "[tick" in out and "count: 3" in out
+    out, _ = rcall.communicate(timeout=30)
+    assert rcall.returncode == 0, out
+    assert "{'args': [1], 'kwargs': {'k': 'v'}}" in out
+    out, _ = bad.communicate(timeout=30)
+    assert bad.returncode == 2 and "rejected the goal" in out and "expected int" in out
+
+
+def test_server_shuts_down_cleanly(server):
+    segments = shm_mapped(server.proc.pid)
+    assert segments, "the server maps Fast DDS shared memory while it runs"
+    assert server.stop() == 0, server.output()
+    assert "actorbt serve: stopped" in server.output()
+    assert shm_leaks(segments) == set()
