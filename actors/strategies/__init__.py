@@ -16,7 +16,7 @@ from .can import CAN
 _REGISTRY: dict[str, Strategy] = {}
 
 
-class UnknownCategoryError(ActorbtError, KeyError):
+class UnknownCategoryError(ActorbtError, LookupError):
     """No strategy is registered for a category."""
 
 
