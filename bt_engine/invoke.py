@@ -19,6 +19,9 @@ if TYPE_CHECKING:
     from .actor import ActorRef
     from .runtime import Runtime
 
+#: what a sync call raises for its caller when the callee failed, timed out or was cancelled
+_CALL_ERRORS = (ActorError, ActorTimeout, ActorCancelled, BadArgumentsError)
+
 
 def dispatch(rt: "Runtime", ref: "ActorRef", mode: Mode, args: tuple, kwargs: dict,
              cb: Callable | None = None, seconds: float | None = None) -> Any:
@@ -170,17 +173,7 @@ class _GenFirst:
 def _start_callback_impl(ref: "ActorRef", txn: Transaction, args: tuple, kwargs: dict,
                          on_result: Callable[[Any], None] | None = None) -> None:
     """Start an async-kind implementation; ``done(result)`` finishes ``txn``."""
-    done = Done(txn, on_result)
-    try:
-        closer = ref.fn(done, *args, **kwargs)
-    except Exception as e:
-        txn.finish(TxnState.FAILED, error=_bad_args(ref, args, kwargs) or e)
-        return
-    if callable(closer):
-        if txn.done:
-            _call_quietly(closer)
-        else:
-            txn.closer = closer
+    _call_impl(ref, txn, Done(txn, on_result), args, kwargs)
 
 
 def _start_emit_impl(ref: "ActorRef", txn: Transaction, args: tuple, kwargs: dict,
@@ -208,9 +201,14 @@ def _start_emit_impl(ref: "ActorRef", txn: Transaction, args: tuple, kwargs: dic
         else:
             txn.finish(TxnState.DONE, None)
 
-    emitter = Emitter(txn.rt, push, end)
+    _call_impl(ref, txn, Emitter(txn.rt, push, end), args, kwargs)
+
+
+def _call_impl(ref: "ActorRef", txn: Transaction, handle: Any, args: tuple, kwargs: dict) -> None:
+    """Call an async or stream implementation with its ``done``/``emit`` handle and keep
+    the closer it returns (or call it at once if the work already finished)."""
     try:
-        closer = ref.fn(emitter, *args, **kwargs)
+        closer = ref.fn(handle, *args, **kwargs)
     except Exception as e:
         txn.finish(TxnState.FAILED, error=_bad_args(ref, args, kwargs) or e)
         return
@@ -272,15 +270,10 @@ def spawn(rt: "Runtime", ref: "ActorRef", mode: Mode, args: tuple, kwargs: dict,
 
 def start_async(rt: "Runtime", ref: "ActorRef", args: tuple, kwargs: dict,
                 cb: Callable | None) -> Transaction:
-    if ref.kind is Kind.SYNC:
+    if ref.kind is Kind.SYNC or ref.is_generator:
+        body_ref = _GenFirst(ref) if ref.is_generator else ref
         txn = spawn(rt, ref, Mode.ASYNC, args, kwargs,
-                    lambda task, txn: _root_body(ref, txn, task, args, kwargs))
-        _notify(cb, txn)
-        return txn
-    if ref.is_generator:
-        gen_ref = _GenFirst(ref)
-        txn = spawn(rt, ref, Mode.ASYNC, args, kwargs,
-                    lambda task, txn: _root_body(gen_ref, txn, task, args, kwargs))
+                    lambda task, txn: run_body(body_ref, txn, task, args, kwargs))
         _notify(cb, txn)
         return txn
     ref.check_args(args, kwargs)
@@ -291,12 +284,6 @@ def start_async(rt: "Runtime", ref: "ActorRef", args: tuple, kwargs: dict,
     else:
         _start_emit_impl(ref, txn, args, kwargs, first_only=True, on_value=None)
     return txn
-
-
-def _root_body(ref: Any, txn: Transaction, task: Task, args: tuple, kwargs: dict) -> None:
-    """Body of a task whose root transaction is ``txn``: the txn is popped by run_body."""
-    # run_body appends txn itself; it was created with task=task already.
-    run_body(ref, txn, task, args, kwargs)
 
 
 # -- multi -------------------------------------------------------------------------------
@@ -311,7 +298,7 @@ def start_multi(rt: "Runtime", ref: "ActorRef", args: tuple, kwargs: dict,
                 child = Transaction(rt, ref.path, txn, Mode.SYNC, ref.owner, task, args)
                 try:
                     value = run_body(ref, child, task, args, kwargs)
-                except ActorbtErrorTypes as e:
+                except _CALL_ERRORS as e:
                     txn.finish(TxnState.FAILED, error=e)
                     emit(Failure(e, txn))
                     return
@@ -368,5 +355,3 @@ def _spawn_root(rt: "Runtime", ref: "ActorRef", mode: Mode, args: tuple, kwargs:
             task.txns.pop()
     return spawn(rt, ref, mode, args, kwargs, wrapped)
 
-
-ActorbtErrorTypes = (ActorError, ActorTimeout, ActorCancelled, BadArgumentsError)

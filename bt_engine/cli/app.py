@@ -22,7 +22,9 @@ class App:
     def runtime(self, clock: str | None = None, with_world: bool = True) -> Runtime:
         """A runtime with everything actorbt.yaml names, and the world started."""
         args = self.args
-        clock = clock or getattr(args, "clock", None) or self.cfg.clock
+        # a window is watched by a person: --gui runs in real time unless told otherwise
+        gui_clock = "wall" if getattr(args, "gui", False) else None
+        clock = clock or getattr(args, "clock", None) or gui_clock or self.cfg.clock
         rt = Runtime(clock=clock, bus=self._transport())
         try:
             for name, spec in self.cfg.subsystems.items():
