@@ -18,6 +18,12 @@ from .strategies import Strategy, strategy_for
 #: place surface height and the part of the object held decide the release height
 RELEASE_CLEARANCE = 0.008   # [m] above the surface when the fingers open
 STANDOFF_CLEARANCE = 0.26   # room the base needs around a standoff pose [m]
+BASE_CLEARANCE = 0.22       # room along the straight drive in (the base's half diagonal) [m]
+HAND_HALF_WIDTH = 0.07      # half the open hand's width, with margin [m]
+SAME_OBJECT = 0.12          # detections closer than this to the target are the target [m]
+TEST_LIFT = 0.02            # first, short lift that checks the grip [m]
+DRIVE_IN_TOLERANCE = 0.015  # how close the drive around an object must end [m]: the
+#                             fingers are 70 mm long
 PLACE_INSET = 0.12          # how far inside a surface's edge the object is put down [m]
 
 
@@ -27,6 +33,14 @@ class GraspError(ActorbtError):
 
 class ApproachError(ActorbtError):
     """The robot could not line up with the object."""
+
+
+def _segment_distance(p: tuple[float, float], a: tuple[float, float], b: tuple[float, float]) -> float:
+    """Distance from point ``p`` to the segment ``a``-``b`` [m]."""
+    (px, py), (ax, ay), (bx, by) = p, a, b
+    dx, dy = bx - ax, by - ay
+    t = max(0.0, min(1.0, ((px - ax) * dx + (py - ay) * dy) / ((dx * dx + dy * dy) or 1e-12)))
+    return math.hypot(ax + t * dx - px, ay + t * dy - py)
 
 
 def _target_xy(target: Any) -> tuple[float, float]:
@@ -60,13 +74,46 @@ class Catcher(SubSystem):
         raise ApproachError(f"could not face the object: {math.degrees(bearing):.1f} deg off")
 
     def _free_standoff(self, robot_xy: tuple[float, float], xy: tuple[float, float],
-                       strategy: Strategy, extra: float = 0.0) -> tuple[float, float, float]:
-        """The first standoff pose with room for the base around it."""
+                       strategy: Strategy, extra: float = 0.0, others: list[dict] = (),
+                       corridor: bool = True) -> list[tuple[float, float, float]]:
+        """Standoff poses with room for the base around them and (with ``corridor``) a
+        clear straight approach to the object, best first (``others``: perceived objects
+        to keep clear of)."""
+        free = []
         for pose in strategy.standoff_poses(robot_xy, xy, extra):
-            if self.run_actor("clearance", pose[0], pose[1]) >= STANDOFF_CLEARANCE:
-                return pose
-        raise ApproachError(f"no free standoff around ({xy[0]:.2f}, {xy[1]:.2f}): the object "
-                            "is too close to walls or furniture on every side")
+            if (self.run_actor("clearance", pose[0], pose[1]) >= STANDOFF_CLEARANCE
+                    and (not corridor or self._corridor_clear(pose, xy, strategy, others))):
+                free.append(pose)
+        if not free:
+            raise ApproachError(f"no free standoff around ({xy[0]:.2f}, {xy[1]:.2f}): walls, "
+                                "furniture or other objects are in the way on every side")
+        return free
+
+    def _corridor_clear(self, pose: tuple[float, float, float], xy: tuple[float, float],
+                        strategy: Strategy, others: list[dict]) -> bool:
+        """Can the base drive straight in from ``pose`` until the hand is at the object?"""
+        reach = strategy.approach.reach
+        sx, sy, yaw = pose
+        c, s = math.cos(yaw), math.sin(yaw)
+        gx, gy = xy[0] - reach * c, xy[1] - reach * s  # base position when grasping
+        for k in range(1, 5):  # the base's path: the map (obstacles marked) has room
+            f = k / 4
+            if self.run_actor("clearance", sx + f * (gx - sx), sy + f * (gy - sy)) < BASE_CLEARANCE:
+                return False
+        for o in others:  # the open hand's path, from the base's front to the object
+            r = float(o.get("radius", 0.05))
+            if _segment_distance((o["x"], o["y"]), (gx + 0.1 * c, gy + 0.1 * s), xy) < HAND_HALF_WIDTH + r:
+                return False
+        return True
+
+    def _others(self, target: dict) -> list[dict]:
+        """Perceived objects other than the target in view now, as obstacles (x, y, radius)."""
+        if not self.check_actor("object_glance"):
+            return []
+        xy = _target_xy(target)
+        return [{"x": d["x"], "y": d["y"], "radius": max(0.04, float(d.get("width", 0.08)) / 2) + 0.02}
+                for d in self.run_actor("object_glance")
+                if math.dist((d["x"], d["y"]), xy) > SAME_OBJECT]
 
     def _refine(self, target: dict, category: str) -> dict:
         """Look again from close by, when a perception actor is available."""
@@ -81,24 +128,47 @@ class Catcher(SubSystem):
 
     @actor
     def approach_object(self, target: dict, category: str | None = None) -> dict:
-        """Drive to the category's standoff in front of ``target`` and face it; returns the
-        target, re-measured from close by when perception is available."""
+        """Drive to the category's standoff in front of ``target`` and face it.
+
+        From a look distance the robot first faces the object and looks again (when
+        perception is available): the target is re-measured, and other objects near it are
+        marked on the planner's map and kept out of the approach. Returns the target.
+        """
         strategy = self._strategy(target, category)
         cat = strategy.category
         xy = _target_xy(target)
-        rx, ry, _ = self.run_actor("get_pose")
-        if strategy.approach.look_distance and math.dist((rx, ry), xy) > strategy.approach.look_distance + 0.3:
-            lx, ly, lyaw = self._free_standoff((rx, ry), xy, strategy, strategy.approach.look_distance
-                                               - strategy.approach.reach - strategy.approach.standoff)
-            self.run_actor("goto", lx, ly, lyaw)
+        look = strategy.approach.look_distance
+        for step in ("look", "standoff"):
+            # face it, look (again), and keep what else is around it out of the way
             self._face(xy, strategy)
-            target = self._refine(target, cat)
-            xy = _target_xy(target)
+            if step == "standoff":
+                target = self._refine(target, cat)
+                xy = _target_xy(target)
+            others = self._others(target)
+            self.run_actor("mark_obstacles", others)
             rx, ry, _ = self.run_actor("get_pose")
-        sx, sy, syaw = self._free_standoff((rx, ry), xy, strategy)
-        self.run_actor("goto", sx, sy, syaw)
+            if step == "look":
+                if not look or math.dist((rx, ry), xy) <= look + 0.3:
+                    continue  # close enough already
+                extra = look - strategy.approach.reach - strategy.approach.standoff
+                poses = self._free_standoff((rx, ry), xy, strategy, extra, others)
+            else:
+                poses = self._free_standoff((rx, ry), xy, strategy, others=others)
+            self._goto_first(poses, xy)
         self._face(xy, strategy)
         return {**target, "category": cat}
+
+    def _goto_first(self, poses: list[tuple[float, float, float]], xy: tuple[float, float]) -> None:
+        """Go to the first of ``poses`` that the base can reach (up to three tries)."""
+        errors = []
+        for pose in poses[:3]:
+            try:
+                self.run_actor("goto", *pose)
+                return
+            except ActorbtError as e:
+                errors.append(str(e))
+        raise ApproachError(f"could not reach a standoff near ({xy[0]:.2f}, {xy[1]:.2f}): "
+                            + "; ".join(errors))
 
     @actor
     def pick(self, target: dict, category: str | None = None) -> dict:
@@ -114,19 +184,22 @@ class Catcher(SubSystem):
         self.run_actor("open", g.open_width)
         self.run_actor("move_to_pose", a.reach, 0.0, height, g.pitch)
         distance = self._face(xy, strategy)
-        driven = self.run_actor("mini_walk", distance - a.reach)
+        driven = self.run_actor("mini_walk", distance - a.reach, tolerance=DRIVE_IN_TOLERANCE)
         width = self.run_actor("close")
         if not strategy.holding(width):
             self._back_off(driven, g.open_width)
             raise GraspError(f"{strategy.category} grasp missed: fingers closed to "
                              f"{width * 1000:.0f} mm, expected {g.closed_min * 1000:.0f}.."
                              f"{g.closed_max * 1000:.0f} mm")
-        self.run_actor("move_to_pose", a.reach - 0.02, 0.0, height + g.lift, g.pitch)
-        width = self.run_actor("gripper_width")
-        if not strategy.holding(width):
-            self._back_off(driven, g.open_width)
-            raise GraspError(f"{strategy.category} slipped out while lifting "
-                             f"(fingers at {width * 1000:.0f} mm)")
+        # Test lift: a slip shows in the finger opening, and the object drops only a little
+        # (a can dropped from the full lift height may fall over).
+        for x, z in ((a.reach, height + TEST_LIFT), (a.reach - 0.02, height + g.lift)):
+            self.run_actor("move_to_pose", x, 0.0, z, g.pitch)
+            width = self.run_actor("gripper_width")
+            if not strategy.holding(width):
+                self._back_off(driven, g.open_width)
+                raise GraspError(f"{strategy.category} slipped out while lifting "
+                                 f"(fingers at {width * 1000:.0f} mm)")
         held = {"category": strategy.category, "width": width}
         self.set_value("holding", held)
         return held
@@ -166,7 +239,8 @@ class Catcher(SubSystem):
         g, a = strategy.grasp, strategy.approach
         if heading is None:
             rx, ry, _ = self.run_actor("get_pose")
-            sx, sy, syaw = self._free_standoff((rx, ry), (x, y), strategy)
+            # the surface under the release point is on the map: no corridor check
+            sx, sy, syaw = self._free_standoff((rx, ry), (x, y), strategy, corridor=False)[0]
         else:
             d = a.reach + a.standoff
             sx, sy, syaw = x - d * math.cos(heading), y - d * math.sin(heading), heading
@@ -174,7 +248,7 @@ class Catcher(SubSystem):
         release_z = surface + g.height + RELEASE_CLEARANCE
         self.run_actor("move_to_pose", a.reach, 0.0, release_z + 0.03, g.pitch)
         distance = self._face((x, y), strategy)
-        driven = self.run_actor("mini_walk", distance - a.reach)
+        driven = self.run_actor("mini_walk", distance - a.reach, tolerance=DRIVE_IN_TOLERANCE)
         self.run_actor("move_to_pose", a.reach, 0.0, release_z, g.pitch)
         self.run_actor("open", g.open_width)
         self.set_value("holding", None)

@@ -12,7 +12,7 @@ from nav_msgs.msg import OccupancyGrid as OccupancyGridMsg
 from nav_msgs.msg import Odometry
 
 from bt_engine import ActorbtError, Cancelled, SubSystem, actor
-from planning import GridPlanner, OccupancyGrid, inflate
+from planning import BasePath, FailureReason, GridPlanner, OccupancyGrid, inflate, with_obstacles
 
 from .ros_conv import pose2d, wrap
 
@@ -23,6 +23,7 @@ ROBOT_RADIUS = 0.20     # footprint radius used to inflate the map [m]
 INFLATION = 0.45        # distance over which the map cost decays [m]
 XY_TOLERANCE = 0.04     # goal position tolerance [m]
 YAW_TOLERANCE = math.radians(0.5)
+RECOVERY_BACKUP = 0.15  # how far to back away when the start is too close to something [m]
 
 
 class NavigationError(ActorbtError):
@@ -45,7 +46,9 @@ class Navigation(SubSystem):
         self.register_subscriber("pose", PoseStamped, "/ground_truth/pose", 1)
         self.register_subscriber("odom", Odometry, "/odom", 1)
         self.register_subscriber("map", OccupancyGridMsg, "/map", 1)
-        self.set_value("planner", None)
+        self.set_value("grid", None)        # the static map, once received
+        self.set_value("obstacles", {})     # perceived objects marked on it
+        self.set_value("planner", None)     # built from both
         self.set_value("last_path", None)
 
     # -- queries -----------------------------------------------------------------------
@@ -57,10 +60,29 @@ class Navigation(SubSystem):
     def _planner(self) -> GridPlanner:
         planner = self.get_value("planner")
         if planner is None:
-            grid = OccupancyGrid.from_msg(self.run_actor_mode("map", "timed", 5.0))
-            planner = GridPlanner(inflate(grid, ROBOT_RADIUS, inflation_radius=INFLATION))
+            grid = self.get_value("grid")
+            if grid is None:
+                grid = OccupancyGrid.from_msg(self.run_actor_mode("map", "timed", 5.0))
+                self.set_value("grid", grid)
+            marked = with_obstacles(grid, list(self.get_value("obstacles").values()))
+            planner = GridPlanner(inflate(marked, ROBOT_RADIUS, inflation_radius=INFLATION))
             self.set_value("planner", planner)
         return planner
+
+    @actor
+    def mark_obstacles(self, obstacles: list) -> int:
+        """Put perceived objects on the planner's map, replacing those marked before: each
+        a dict with x, y [m] (map frame) and radius [m]. Returns how many are marked."""
+        marked = {}
+        for i, o in enumerate(obstacles):
+            try:
+                marked[i] = (float(o["x"]), float(o["y"]), float(o["radius"]))
+            except (TypeError, KeyError, ValueError):
+                raise NavigationError(f"obstacle {i} needs numeric x, y and radius, got {o!r}") from None
+        if marked != self.get_value("obstacles"):
+            self.set_value("obstacles", marked)
+            self.set_value("planner", None)  # rebuilt with them on the next query
+        return len(marked)
 
     @actor
     def clearance(self, x: float, y: float) -> float:
@@ -71,12 +93,16 @@ class Navigation(SubSystem):
             return 0.0
         return float(costmap.clearance[row, col])
 
-    @actor
-    def plan_path(self, x: float, y: float) -> list[tuple[float, float]]:
-        """A collision-free path from the robot to (x, y) [m] on the inflated map."""
+    def _plan_from_here(self, x: float, y: float) -> BasePath:
         sx, sy, _ = self.get_pose()
         path = self._planner().plan((sx, sy), (x, y))
         self.set_value("last_path", path)
+        return path
+
+    @actor
+    def plan_path(self, x: float, y: float) -> list[tuple[float, float]]:
+        """A collision-free path from the robot to (x, y) [m] on the inflated map."""
+        path = self._plan_from_here(x, y)
         if not path.ok:
             raise NavigationError(f"no path to ({x:.2f}, {y:.2f}): {path.message}")
         return [tuple(p) for p in path.waypoints]
@@ -89,7 +115,15 @@ class Navigation(SubSystem):
         Fails with NavigationError when no path exists or the goal is not reached within
         ``timeout`` [s] (default: from the path length). Returns the pose reached.
         """
-        path = self.run_actor("plan_path", x, y)
+        plan = self._plan_from_here(x, y)
+        if plan.failure is FailureReason.START_INVALID:
+            # Recovery: the robot stands too close to something (a newly marked object, a
+            # wall after a pick); back away and plan again.
+            self.run_actor("mini_walk", -RECOVERY_BACKUP)
+            plan = self._plan_from_here(x, y)
+        if not plan.ok:
+            raise NavigationError(f"no path to ({x:.2f}, {y:.2f}): {plan.message}")
+        path = [tuple(p) for p in plan.waypoints]
         length = sum(math.dist(a, b) for a, b in zip(path, path[1:]))
         budget = timeout if timeout is not None else 20.0 + 3.0 * length / MAX_SPEED
         deadline = self.runtime.now() + budget
@@ -107,9 +141,9 @@ class Navigation(SubSystem):
         return self.run_actor("goto", gx, gy, wrap(yaw + dtheta))
 
     @actor
-    def mini_walk(self, distance: float, speed: float = 0.1) -> float:
-        """Drive straight by ``distance`` [m] (negative: backwards) without planning; returns
-        the distance driven."""
+    def mini_walk(self, distance: float, speed: float = 0.1, tolerance: float = 0.005) -> float:
+        """Drive straight by ``distance`` [m] (negative: backwards) without planning, to
+        within ``tolerance`` [m]; returns the distance driven."""
         x0, y0, yaw0 = self.get_pose()
         sign = 1.0 if distance >= 0 else -1.0
         deadline = self.runtime.now() + 5.0 + abs(distance) / max(speed, 1e-3) * 2
@@ -119,7 +153,7 @@ class Navigation(SubSystem):
                     x, y, yaw = pose2d(msg)
                     along = (x - x0) * math.cos(yaw0) + (y - y0) * math.sin(yaw0)
                     remaining = distance - along
-                    if abs(remaining) < 0.005:
+                    if abs(remaining) < tolerance:
                         break
                     if self.runtime.now() > deadline:
                         raise NavigationError(f"mini_walk timed out {remaining:+.3f} m short")

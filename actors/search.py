@@ -13,6 +13,12 @@ from bt_engine import ActorbtError, SubSystem, actor
 ANY = ("any", "mixed", "", None)
 LOOK_STEP = math.radians(80)   # turn per look, about the camera's field of view [rad]
 LOOK_PAUSE = 0.6               # time to hold still at each look [s]
+HAND_RANGE = 0.45              # detections closer than this may be in the gripper [m]
+
+
+def _in_own_hand(detection: dict) -> bool:
+    """An object right in front of the camera and off the floor is the one being held."""
+    return detection.get("distance", 1.0) < HAND_RANGE and detection.get("z", 0.0) > 0.03
 
 
 class SearchExhausted(ActorbtError):
@@ -29,7 +35,7 @@ class Search(SubSystem):
         cat = None if category in ANY else category
         while True:
             found = self.run_actor("find_object", cat)
-            if found:
+            if found and not _in_own_hand(found):
                 return found
 
     @actor

@@ -32,7 +32,7 @@ from .errors import (
     UnreachableError,
 )
 from .failure import FailureReason
-from .grid import Costmap, OccupancyGrid, inflate
+from .grid import Costmap, OccupancyGrid, inflate, with_obstacles
 from .kinematics import ArmKinematics, ArmPose, IKResult, IKSolution
 from .motion import PLANNERS, MotionPlan, path_length, plan_joint_motion, plan_pose_motion, seed_planners
 from .scene import CollisionReport, Contact, Obstacle, PlanningScene
@@ -81,6 +81,7 @@ __all__ = [
     "OccupancyGrid",
     "Costmap",
     "inflate",
+    "with_obstacles",
     "GridPlanner",
     "BasePath",
     "plan_base_path",

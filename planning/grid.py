@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Sequence
 
 import numpy as np
 from scipy import ndimage
@@ -115,6 +115,20 @@ class Costmap:
     unknown: np.ndarray = field(repr=False)
     lethal: np.ndarray = field(repr=False)
     cost: np.ndarray = field(repr=False)
+
+
+def with_obstacles(grid: OccupancyGrid, circles: Sequence[tuple[float, float, float]]) -> OccupancyGrid:
+    """A copy of ``grid`` with each circle (x, y, radius) [m] marked occupied: perceived
+    objects that the static map does not know about (nav2's obstacle layer)."""
+    if not circles:
+        return grid
+    data = grid.data.copy()
+    rows, cols = np.indices(data.shape)
+    cx = grid.origin[0] + (cols + 0.5) * grid.resolution
+    cy = grid.origin[1] + (rows + 0.5) * grid.resolution
+    for x, y, r in circles:
+        data[(cx - x) ** 2 + (cy - y) ** 2 <= r * r] = 100
+    return OccupancyGrid(data, grid.resolution, grid.origin)
 
 
 def inflate(
