@@ -22,6 +22,7 @@ BASE_CLEARANCE = 0.22       # room along the straight drive in (the base's half 
 HAND_HALF_WIDTH = 0.07      # half the open hand's width, with margin [m]
 SAME_OBJECT = 0.12          # detections closer than this to the target are the target [m]
 TEST_LIFT = 0.02            # first, short lift that checks the grip [m]
+GENTLE_RELEASE = 0.006      # first opening step past the held width when letting go [m]
 DRIVE_IN_TOLERANCE = 0.015  # how close the drive around an object must end [m]: the
 #                             fingers are 70 mm long
 PLACE_INSET = 0.12          # how far inside a surface's edge the object is put down [m]
@@ -250,6 +251,9 @@ class Catcher(SubSystem):
         distance = self._face((x, y), strategy)
         driven = self.run_actor("mini_walk", distance - a.reach, tolerance=DRIVE_IN_TOLERANCE)
         self.run_actor("move_to_pose", a.reach, 0.0, release_z, g.pitch)
+        # Let go gently: just past the object first, so the fingers' squeeze is released
+        # without kicking it over, then wide enough to back out.
+        self.run_actor("open", min(g.open_width, held["width"] + GENTLE_RELEASE))
         self.run_actor("open", g.open_width)
         self.set_value("holding", None)
         # Back the open hand out the way it came in: lifting or folding first could catch

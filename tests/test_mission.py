@@ -37,7 +37,7 @@ class DryAfterSlip(TreeObserver):
         self.world = world
         self.cans = [n for n in world.object_names() if world.object_category(n) == "can"]
         for name in self.cans:
-            _set_friction(world, name, 0.02)
+            _set_friction(world, name, 0.0)
 
     def actor_finished(self, run, leaf, txn) -> None:
         failed = txn.state.value == "failed"
@@ -56,8 +56,9 @@ def test_a_slipping_grasp_is_detected_and_retried():
                      world_setup=dry.grease, observers=[dry])
     # a greased can squeezes out of the closing fingers ("missed"), slides out while
     # lifting ("slipped out") or on the way ("lost while carrying"): either way the
-    # finger opening gives it away
-    assert len(dry.failures) == 1, dry.failures
+    # finger opening gives it away. Where it lands, the next attempts (catch's retries,
+    # then a new search) find it.
+    assert dry.failures, "the slip was not noticed"
     assert any(w in dry.failures[0] for w in ("missed", "slipped out", "lost while carrying"))
     assert ep.success, f"{ep.failed_node}: {ep.reason}"
 
