@@ -267,14 +267,16 @@ class Catcher(SubSystem):
         """Place the held object on a box-shaped surface (a pallet) centred at (x, y) [m],
         ``size_x`` by ``size_y`` [m], ``height`` [m] high: near the edge the robot can reach
         best, since the base cannot drive over the surface."""
+        held = self.get_value("holding")
+        if not held:
+            raise GraspError("place_on: nothing is held")
+        approach = strategy_for(held["category"]).approach
+        standoff = approach.reach + approach.standoff
         rx, ry, _ = self.run_actor("get_pose")
         sides = []
         for nx, ny, half in ((1, 0, size_x / 2), (-1, 0, size_x / 2), (0, 1, size_y / 2), (0, -1, size_y / 2)):
             px, py = x + nx * (half - PLACE_INSET), y + ny * (half - PLACE_INSET)
             heading = math.atan2(-ny, -nx)  # facing the surface across this edge
-            held = self.get_value("holding")
-            reach = strategy_for(held["category"]).approach.reach if held else 0.27
-            standoff = reach + strategy_for(held["category"]).approach.standoff if held else 0.4
             sx, sy = px - standoff * math.cos(heading), py - standoff * math.sin(heading)
             sides.append((math.hypot(sx - rx, sy - ry), px, py, heading, sx, sy))
         for _, px, py, heading, sx, sy in sorted(sides):

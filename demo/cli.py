@@ -26,7 +26,7 @@ def register(sub, common) -> None:
 
 
 def cmd_demo(args, app) -> int:
-    from bt_engine.trees._plot import plot_trace
+    from bt_engine.trees import plot_trace
 
     from .episode import print_outcome, run_episode
     out = pathlib.Path(args.out)

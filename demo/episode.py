@@ -12,9 +12,7 @@ from geometry_msgs.msg import PoseStamped
 
 from actors.robot import Robot
 from bt_engine import ActorError, Runtime
-from bt_engine.trees import register_tree_folder
-from bt_engine.trees._run import TreeObserver
-from bt_engine.trees._trace import TraceRecorder
+from bt_engine.trees import TraceRecorder, TreeObserver, register_tree_folder
 from sim import SimWorld
 
 TREES = pathlib.Path(__file__).resolve().parents[1] / "trees"

@@ -4,7 +4,7 @@ from __future__ import annotations
 import pybullet as p
 import pytest
 
-from bt_engine.trees._run import TreeObserver
+from bt_engine.trees import TreeObserver
 from demo.episode import run_episode
 from sim import SimWorld
 

@@ -410,6 +410,26 @@ def field_of(value: Any, field: str) -> Any:
     return result
 
 
+def read_path(lookup: Callable[[str], Any], key: str, fields: tuple[str, ...]) -> Any:
+    """The value at ``key.field.field`` on the blackboard; ``lookup`` raises KeyError for
+    unset keys.
+
+    Raises:
+        KeyError: the key is unset or a field is missing; its message names which.
+    """
+    try:
+        value = lookup(key)
+    except KeyError:
+        raise KeyError(f"blackboard key {key!r} is not set") from None
+    for i, field in enumerate(fields):
+        try:
+            value = field_of(value, field)
+        except KeyError:
+            where = ".".join((key, *fields[:i]))
+            raise KeyError(f"{where} has no field {field!r} (it is {type(value).__name__})") from None
+    return value
+
+
 def evaluate(expr: Expr, lookup: Callable[[str], Any]) -> Any:
     """Evaluate ``expr``; ``lookup(key)`` reads the blackboard and raises KeyError if unset.
 
@@ -420,16 +440,9 @@ def evaluate(expr: Expr, lookup: Callable[[str], Any]) -> Any:
         return expr.value
     if isinstance(expr, Key):
         try:
-            value = lookup(expr.name)
-        except KeyError:
-            raise CheckEvaluationError(f"blackboard key {expr.name!r} is not set") from None
-        for i, field in enumerate(expr.fields):
-            try:
-                value = field_of(value, field)
-            except KeyError:
-                where = ".".join((expr.name, *expr.fields[:i]))
-                raise CheckEvaluationError(f"{where} has no field {field!r} (it is {type(value).__name__})") from None
-        return value
+            return read_path(lookup, expr.name, expr.fields)
+        except KeyError as e:
+            raise CheckEvaluationError(e.args[0]) from None
     if isinstance(expr, ListExpr):
         return [evaluate(item, lookup) for item in expr.items]
     if isinstance(expr, Neg):

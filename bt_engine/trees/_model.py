@@ -16,7 +16,7 @@ from typing import Any, Callable, ClassVar, Iterator, Mapping, Union
 import yaml
 
 from ._errors import InputError, Pos
-from ._expr import Expr, field_of
+from ._expr import Expr, read_path
 
 __all__ = [
     "REQUIRED",
@@ -171,17 +171,7 @@ class Ref:
         Raises:
             KeyError: the key is unset or a field is missing; the message names which.
         """
-        try:
-            value = lookup(self.key)
-        except KeyError:
-            raise KeyError(f"blackboard key {self.key!r} is not set") from None
-        for i, name in enumerate(self.fields):
-            try:
-                value = field_of(value, name)
-            except KeyError:
-                where = ".".join((self.key, *self.fields[:i]))
-                raise KeyError(f"{where} has no field {name!r}") from None
-        return value
+        return read_path(lookup, self.key, self.fields)
 
 
 def refs_in(value: Any) -> Iterator[Ref]:
