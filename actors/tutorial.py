@@ -24,9 +24,12 @@ class Tutorial(SubSystem):
         """Return a greeting, using the subsystem's persistent ``greeting`` value."""
         return f"{self.get_value('greeting')}, {name}"
 
-    @actor("countdown", "multi")
+    @actor("countdown", "multi", hub_only=True)
     def countdown(self, emit, start: int = 3, period: float = 1.0):
-        """Emit start, start-1, ..., 1 every ``period`` [s], then end (an emit-style stream)."""
+        """Emit start, start-1, ..., 1 every ``period`` [s], then end (an emit-style stream).
+
+        ``hub_only``: it emits from a runtime timer, never from another thread, so the
+        virtual clock may jump while it runs."""
         state = {"n": start}
 
         def tick() -> None:

@@ -26,7 +26,7 @@ class Bench(SubSystem):
             yield i
             i += 1
 
-    @actor("burst", "multi")
+    @actor("burst", "multi", hub_only=True)
     def burst(self, emit):
         """Emits 64 values per hub turn while open (a fast sensor)."""
         state = {"open": True}

@@ -32,11 +32,12 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from bt_engine import Kind, Runtime  # noqa: E402
-from bt_engine.bus.ros import RosTransport  # noqa: E402
+from bt_engine.bus.qos import qos_depth  # noqa: E402
 from bt_engine.ros.host import RosHost  # noqa: E402
-from bt_engine.ros.qos import qos_depth, qos_profile  # noqa: E402
+from bt_engine.ros.qos import qos_profile  # noqa: E402
 from bt_engine.ros.remote import Remote  # noqa: E402
 from bt_engine.ros.server import serve  # noqa: E402
+from bt_engine.ros.transport import RosTransport  # noqa: E402
 
 GOALS = 200
 CANCELS = 20

@@ -65,12 +65,12 @@ IDLE_SECONDS = 60.0
 
 
 class BenchActors(SubSystem):
-    @actor("instant", "async")
+    @actor("instant", "async", hub_only=True)
     def instant(self, done):
         """Finishes at once, inside the call that starts it."""
         done(None)
 
-    @actor("pending", "async")
+    @actor("pending", "async", hub_only=True)
     def pending(self, done):
         """Never finishes by itself; cancelling it just drops it."""
         return lambda: None

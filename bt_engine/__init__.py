@@ -1,10 +1,20 @@
 """actorbt engine. Knows nothing of robots.
 
-Layering (DESIGN.md): ``bt_engine`` imports none of ``actors``, ``planning`` or ``sim``;
-a test reads the imports to keep it so. The public surface is re-exported here.
+Layering (DESIGN.md): ``bt_engine`` imports none of ``actors``, ``planning`` or ``sim``,
+and inside it imports only go downwards, with no cycles; ``tests/test_layering.py``
+reads every import (relative, in functions, under TYPE_CHECKING) to keep it so.
+The core, bottom to top::
+
+    errors, clock, modes -> actor, hub -> transaction -> outcome, handles -> execution
+    -> iterator -> invoke -> external -> api -> subsystem -> runtime -> default
+
+The public surface is re-exported here; everything else is internal.
 """
 from .actor import ActorRef, actor
 from .clock import Clock, VirtualClock, WallClock
+from .default import (check_actor, close_default_runtime, default_runtime, get_value,
+                      register_subsystem, run_actor, run_actor_async, run_actor_mode,
+                      set_default_runtime, set_value)
 from .errors import (ActorbtError, ActorCancelled, ActorError, ActorTimeout,
                      AmbiguousActorError, BadArgumentsError, BadModeError, Cancelled, Failure,
                      HubBlockingError, RuntimeClosedError, UnknownActorError)
@@ -19,5 +29,7 @@ __all__ = [
     "AmbiguousActorError", "BadArgumentsError", "BadModeError", "Cancelled", "Clock",
     "Failure", "HubBlockingError", "Kind", "Mode", "Runtime", "RuntimeClosedError", "Signal",
     "SubNet", "SubSystem", "Transaction", "TxnState", "UnknownActorError", "VirtualClock",
-    "WallClock", "actor", "current_runtime",
+    "WallClock", "actor", "check_actor", "close_default_runtime", "current_runtime",
+    "default_runtime", "get_value", "register_subsystem", "run_actor", "run_actor_async",
+    "run_actor_mode", "set_default_runtime", "set_value",
 ]

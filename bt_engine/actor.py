@@ -2,9 +2,10 @@
 from __future__ import annotations
 
 import inspect
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any, Callable
 
+from .errors import BadArgumentsError
 from .modes import Kind
 
 #: Default depth of a stream's buffer; the oldest value is dropped when it is full.
@@ -13,15 +14,18 @@ DEFAULT_STREAM_BUFFER = 16
 
 @dataclass(frozen=True)
 class ActorSpec:
-    """What ``@actor`` records on a function: name, kind and stream buffer depth."""
+    """What ``@actor`` records on a function: name, kind, stream buffer depth, and
+    whether its ``done``/``emit`` are only ever called by hub code (see ``hub_only``)."""
 
     name: str | None
     kind: Kind
     fn: Callable
     buffer: int = DEFAULT_STREAM_BUFFER
+    hub_only: bool = False
 
 
-def actor(*args: Any, kind: "str | Kind | None" = None, buffer: int = DEFAULT_STREAM_BUFFER):
+def actor(*args: Any, kind: "str | Kind | None" = None, buffer: int = DEFAULT_STREAM_BUFFER,
+          hub_only: bool = False):
     """Declare a method of a SubSystem or SubNet as an actor.
 
     Forms, as in the proposal::
@@ -33,9 +37,14 @@ def actor(*args: Any, kind: "str | Kind | None" = None, buffer: int = DEFAULT_ST
         @actor(kind='multi', buffer=1)
 
     A generator function is a stream actor whatever kind is given.
+
+    ``hub_only=True`` promises that an async or stream implementation calls ``done`` /
+    ``emit`` only from hub code (runtime timers, local-bus callbacks), never from
+    another thread. The virtual clock may then jump while it runs; otherwise it paces
+    itself to wall time until the work completes (see :class:`~bt_engine.VirtualClock`).
     """
     if len(args) == 1 and callable(args[0]) and kind is None:
-        return _mark(args[0], None, None, buffer)
+        return _mark(args[0], None, None, buffer, hub_only)
     if len(args) > 2:
         raise TypeError("@actor takes at most a name and a kind")
     name = args[0] if args else None
@@ -44,16 +53,17 @@ def actor(*args: Any, kind: "str | Kind | None" = None, buffer: int = DEFAULT_ST
         raise TypeError(f"@actor name must be a string, not {type(name).__name__}")
 
     def deco(fn: Callable) -> Callable:
-        return _mark(fn, name, k, buffer)
+        return _mark(fn, name, k, buffer, hub_only)
     return deco
 
 
-def _mark(fn: Callable, name: str | None, kind: "str | Kind | None", buffer: int) -> Callable:
+def _mark(fn: Callable, name: str | None, kind: "str | Kind | None", buffer: int,
+          hub_only: bool) -> Callable:
     if inspect.isgeneratorfunction(fn):
         k = Kind.STREAM
     else:
         k = Kind.parse(kind) if kind is not None else Kind.SYNC
-    fn._actor_spec = ActorSpec(name or fn.__name__, k, fn, buffer)  # type: ignore[attr-defined]
+    fn._actor_spec = ActorSpec(name or fn.__name__, k, fn, buffer, hub_only)  # type: ignore[attr-defined]
     return fn
 
 
@@ -62,7 +72,7 @@ class ActorRef:
     """A bound, callable actor as the runtime sees it.
 
     ``signature`` describes what a caller passes (no ``self``, and no ``done``/``emit``
-    for async and stream implementations).
+    for async and stream implementations). ``hub_only``: see :func:`actor`.
     """
 
     path: str
@@ -75,22 +85,23 @@ class ActorRef:
     is_tree: bool = False
     is_generator: bool = False
     buffer: int = DEFAULT_STREAM_BUFFER
-    meta: dict = field(default_factory=dict)
+    hub_only: bool = False
 
     @classmethod
     def build(cls, path: str, name: str, fn: Callable, kind: Kind, owner: Any = None,
               doc: str | None = None, signature: inspect.Signature | None = None,
-              is_tree: bool = False, buffer: int = DEFAULT_STREAM_BUFFER) -> "ActorRef":
+              is_tree: bool = False, buffer: int = DEFAULT_STREAM_BUFFER,
+              hub_only: bool = False) -> "ActorRef":
         is_gen = inspect.isgeneratorfunction(fn)
         if signature is None:
             signature = _caller_signature(fn, kind, is_gen)
         return cls(path=path, name=name, fn=fn, kind=kind, signature=signature,
                    doc=inspect.cleandoc(doc if doc is not None else (fn.__doc__ or "")),
-                   owner=owner, is_tree=is_tree, is_generator=is_gen, buffer=buffer)
+                   owner=owner, is_tree=is_tree, is_generator=is_gen, buffer=buffer,
+                   hub_only=hub_only)
 
     def check_args(self, args: tuple, kwargs: dict) -> None:
         """Raise BadArgumentsError when the arguments do not fit the signature."""
-        from .errors import BadArgumentsError
         try:
             self.signature.bind(*args, **kwargs)
         except TypeError as e:

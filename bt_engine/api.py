@@ -4,32 +4,32 @@
 from __future__ import annotations
 
 import contextlib
-from typing import TYPE_CHECKING, Any, Callable, Iterator
+from threading import get_ident
+from typing import Any, Callable, Iterator
 
-from .errors import BadModeError
+from .errors import ActorbtError, BadModeError
+from .external import call_from_thread
+from .invoke import dispatch
 from .modes import Mode
-
-if TYPE_CHECKING:
-    from .runtime import Runtime
-    from .subsystem import SubSystem
-    from .transaction import Transaction
+from .transaction import Transaction, TransactionTable
 
 
 class CallApi:
-    """Mixin: call actors by name, resolved from ``self._call_scope()``."""
+    """Mixin: call actors by name, resolved from ``self._call_scope()`` (an object with
+    ``resolve(name)``), on the runtime's transaction table ``self._txns()``."""
 
-    _rt: "Runtime"
+    def _call_scope(self) -> Any:  # pragma: no cover - overridden
+        raise NotImplementedError
 
-    def _call_scope(self) -> "SubSystem":  # pragma: no cover - overridden
+    def _txns(self) -> TransactionTable:  # pragma: no cover - overridden
         raise NotImplementedError
 
     def _dispatch(self, name: str, mode: Mode, args: tuple, kwargs: dict,
                   cb: Callable | None = None, seconds: float | None = None) -> Any:
-        rt = self._rt
-        if rt.hub.thread_id == _get_ident():
-            from .invoke import dispatch
-            return dispatch(rt, self._call_scope().resolve(name), mode, args, kwargs, cb, seconds)
-        return rt._external(self._call_scope(), name, mode, args, kwargs, cb, seconds)
+        table = self._txns()
+        if table.hub.thread_id == get_ident():
+            return dispatch(table, self._call_scope().resolve(name), mode, args, kwargs, cb, seconds)
+        return call_from_thread(table, self._call_scope(), name, mode, args, kwargs, cb, seconds)
 
     # -- the proposal's API ----------------------------------------------------------
     def run_actor(self, name: str, /, *args: Any, **kwargs: Any) -> Any:
@@ -56,22 +56,21 @@ class CallApi:
         return self._dispatch(name, m, args, kwargs, cb, seconds)
 
     def run_actor_async(self, name: str, callback: Callable[[Any], Any] | None, /, *args: Any,
-                        **kwargs: Any) -> "Transaction":
+                        **kwargs: Any) -> Transaction:
         """Start actor ``name``; ``callback(result)`` (or a Failure) when it finishes."""
         return self._dispatch(name, Mode.ASYNC, args, kwargs, callback)
 
     def check_actor(self, name: str) -> bool:
         """True when ``name`` resolves to exactly one actor from this scope."""
-        from .errors import ActorbtError
         try:
             self._call_scope().resolve(name)
         except ActorbtError:
             return False
         return True
 
-    def transactions(self) -> list["Transaction"]:
+    def transactions(self) -> list[Transaction]:
         """The live transactions, oldest first."""
-        return self._rt.transactions()
+        return list(self._txns().live.values())
 
     # -- keyword-only API --------------------------------------------------------------
     def call(self, name: str, /, *args: Any, timeout: float | None = None, **kwargs: Any) -> Any:
@@ -80,7 +79,7 @@ class CallApi:
         return self._dispatch(name, mode, args, kwargs, None, timeout)
 
     def start(self, name: str, /, *args: Any, on_done: Callable[[Any], Any] | None = None,
-              **kwargs: Any) -> "Transaction":
+              **kwargs: Any) -> Transaction:
         """Start ``name`` and return its Transaction; ``on_done(result | Failure)``."""
         return self._dispatch(name, Mode.ASYNC, args, kwargs, on_done)
 
@@ -95,5 +94,3 @@ class CallApi:
         finally:
             it.close()
 
-
-from threading import get_ident as _get_ident  # noqa: E402  (hot path: a local name)

@@ -3,6 +3,8 @@ from __future__ import annotations
 
 import time
 
+from .errors import BadModeError
+
 
 class Clock:
     """Seconds since the runtime started, on either real or virtual time."""
@@ -29,8 +31,21 @@ class WallClock(Clock):
 class VirtualClock(Clock):
     """Simulated time: the hub advances it to the next timer when every task waits.
 
-    A three-minute mission thus runs as fast as the CPU allows, and a run is
-    deterministic because nothing depends on real time.
+    A three-minute mission thus runs as fast as the CPU allows, and a run of work that
+    lives on the hub is deterministic because nothing depends on real time.
+
+    **The rule** (the one place it is stated; the hub implements it):
+
+    1. Time moves only while some transaction is live, nothing is ready to run and
+       nothing posted from another thread is waiting: then it jumps to the next timer.
+    2. While work started by an actor may still complete from another thread (an
+       async or stream implementation not declared ``hub_only``, such as a driver
+       thread, a ROS callback or a ``threading.Timer`` calling ``done``), time
+       advances no faster than wall time, measured from when the latest such work
+       started. So a deadline of D seconds never passes before that work has had D
+       seconds of real time to complete.
+    3. While an offload runs, or an outside thread consumes an iterator item, time
+       stands still.
     """
 
     virtual = True
@@ -55,5 +70,4 @@ def make_clock(spec: "str | Clock | None") -> Clock:
         return VirtualClock()
     if spec == "wall":
         return WallClock()
-    from .errors import BadModeError
     raise BadModeError(f"unknown clock {spec!r}; expected 'virtual' or 'wall'")

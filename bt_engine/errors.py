@@ -48,13 +48,46 @@ class BadModeError(ActorbtError, ValueError):
     """A call-mode or actor-kind string that does not exist."""
 
 
+#: the longest message text an error repeats from its cause [characters]
+MESSAGE_LIMIT = 300
+
+
+def shorten(text: str, limit: int = MESSAGE_LIMIT) -> str:
+    """``text`` cut to ``limit`` characters by eliding its middle."""
+    if len(text) <= limit:
+        return text
+    keep = (limit - 5) // 2
+    return f"{text[:keep]} ... {text[-keep:]}"
+
+
+def _path_chain(paths: list[str], limit: int = 6) -> str:
+    if len(paths) > limit:
+        hidden = len(paths) - limit + 2
+        paths = paths[:limit // 2] + [f"... {hidden} more ..."] + paths[-(limit // 2 - 1):]
+    return " -> ".join(paths)
+
+
 class ActorError(ActorbtError):
-    """An exception escaped an actor. ``__cause__`` holds the original exception."""
+    """An exception escaped an actor. ``__cause__`` holds the original exception.
+
+    Attributes: ``path`` (the actor that failed), ``cause`` (what escaped it: the
+    exception, or the ActorError of an actor it called), ``root_cause`` (the innermost
+    exception of a chain of failed calls) and ``call_chain`` (the actor paths from this
+    one down to where the failure started).
+
+    The message stays short however deep the chain: the call chain (elided in the
+    middle) and the innermost cause.
+    """
 
     def __init__(self, path: str, cause: BaseException) -> None:
         self.path = path
         self.cause = cause
-        super().__init__(f"actor {path} failed: {type(cause).__name__}: {cause}")
+        inner = cause if isinstance(cause, ActorError) else None
+        self.call_chain: list[str] = [path] + (inner.call_chain if inner else [])
+        self.root_cause: BaseException = inner.root_cause if inner else cause
+        root = self.root_cause
+        super().__init__(f"actor {_path_chain(self.call_chain)} failed: "
+                         f"{type(root).__name__}: {shorten(str(root))}")
 
 
 class ActorTimeout(ActorbtError, TimeoutError):

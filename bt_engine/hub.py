@@ -4,6 +4,9 @@ Every actor runs on the hub thread. A blocking primitive (a sync call, the next 
 an iterator, ``sleep``, waiting for a message) parks the calling task on a
 :class:`Waiter` and switches to the hub greenlet, which runs whatever is ready next.
 Other threads never touch hub state; they post work with ``call_soon_threadsafe``.
+
+Under the virtual clock the hub decides when time jumps; the rule it follows is stated
+once, in :class:`bt_engine.clock.VirtualClock`, and implemented in :meth:`Hub._idle`.
 """
 from __future__ import annotations
 
@@ -153,10 +156,16 @@ class Hub:
         self._wake = threading.Lock()
         self._wake.acquire()
         self._stopping = False
-        self.spin = 100
         self._is_idle_world = is_idle_world
-        #: outside work the hub must wait for before jumping virtual time (offloads).
+        #: outside work virtual time stands still for (offloads, an outside consumer
+        #: working on an item).
         self.outside_pending = 0
+        #: started work that may complete from another thread (async and stream
+        #: implementations not declared hub_only); virtual time is paced to wall time.
+        self.foreign_pending = 0
+        #: (wall, virtual) time when pacing last started: virtual time may not get
+        #: further ahead of that point than wall time has.
+        self._pace_from: tuple[float, float] | None = None
         self.glet: greenlet.greenlet | None = None
         self.thread_id: int | None = None
         #: what the hub is running now, for the watchdog: (monotonic start, label source)
@@ -235,7 +244,27 @@ class Hub:
         self.ready.append((w.wake, ()))
         w.wait()
 
+    def foreign_work_started(self) -> None:
+        """Work that may complete from another thread began. Hub thread only.
+
+        Every start re-anchors the pacing, so each such job gets at least as much
+        wall time as virtual time passes while it runs.
+        """
+        self.foreign_pending += 1
+        self._pace_from = (time.monotonic(), self.clock.now())
+
+    def foreign_work_ended(self) -> None:
+        """That work completed or was cancelled. Hub thread only."""
+        self.foreign_pending -= 1
+        if self.foreign_pending == 0:
+            self._pace_from = None
+
     # -- loop -----------------------------------------------------------------------
+    @property
+    def stopped(self) -> bool:
+        """True once ``stop()`` was called: the hub takes no more work."""
+        return self._stopping
+
     def stop(self) -> None:
         self._stopping = True
         self.call_soon_threadsafe(lambda: None)
@@ -279,11 +308,22 @@ class Hub:
     def _idle(self, now: float) -> None:
         timers, clock = self._timers, self.clock
         if clock.virtual:
-            # Jump time only while work is live, nothing waits on another thread and
-            # nothing is posted: then the next timer is the next thing that can happen.
+            # Jump only while work is live, nothing is posted and no outside work holds
+            # time still; while foreign work may still complete, no faster than wall time.
             if (timers and not self._inbox and self.outside_pending == 0
                     and not self._is_idle_world()):
-                clock.advance_to(timers[0][0])
+                due = timers[0][0]
+                if self._pace_from is not None:
+                    wall0, virtual0 = self._pace_from
+                    allowed = virtual0 + (time.monotonic() - wall0)
+                    if due > allowed:
+                        # Keep pace: move to where wall time allows, wait for the timer
+                        # or for something posted, then catch up with the wall time spent.
+                        clock.advance_to(allowed)
+                        self._wake.acquire(timeout=due - allowed)
+                        clock.advance_to(min(due, virtual0 + (time.monotonic() - wall0)))
+                        return
+                clock.advance_to(due)
                 return
             self._wake.acquire()
             return

@@ -4,6 +4,7 @@ Strings from the proposal's API are parsed once into these enums.
 """
 from __future__ import annotations
 
+import difflib
 import enum
 
 from .errors import BadModeError
@@ -56,7 +57,6 @@ class Mode(enum.Enum):
         try:
             return _MODE_NAMES[value]
         except (KeyError, TypeError):
-            import difflib
             close = difflib.get_close_matches(str(value), list(_MODE_NAMES), n=3)
             hint = f" (did you mean {', '.join(close)}?)" if close else ""
             raise BadModeError(
@@ -64,4 +64,6 @@ class Mode(enum.Enum):
             ) from None
 
 
-_MODE_NAMES = {m.value: m for m in Mode}
+#: the enum values, plus the word orders ros_actor programs use ('timed' + a base mode)
+_MODE_NAMES = {m.value: m for m in Mode} | {
+    "timed_sync": Mode.TIMED, "sync_timed": Mode.TIMED, "iterator_timed": Mode.TIMED_ITERATOR}

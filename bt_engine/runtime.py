@@ -9,10 +9,9 @@ from __future__ import annotations
 
 import concurrent.futures
 import logging
-import queue
 import threading
 import time
-from typing import Any, Callable, Iterator
+from typing import Any, Callable
 
 import greenlet
 
@@ -21,11 +20,12 @@ from .api import CallApi
 from .bus.local import LocalBus
 from .bus.transport import Transport
 from .clock import Clock, make_clock
-from .errors import Cancelled, RuntimeClosedError
-from .hub import Hub, Task, TimerHandle, Waiter
-from .modes import Mode
+from .errors import ActorbtError
+from .external import run_on_hub
+from .hub import Hub, TimerHandle, Waiter
 from .subsystem import SubSystem
-from .transaction import Transaction
+from .transaction import Transaction, TransactionTable
+from .watchdog import Watchdog
 
 log = logging.getLogger("actorbt")
 
@@ -53,20 +53,19 @@ class Runtime(CallApi):
                  bus: "str | Transport | Callable[[Runtime], Transport] | None" = None,
                  watchdog: float | None = 0.5) -> None:
         self.clock = make_clock(clock)
-        self._live: dict[int, Transaction] = {}
         self._topology_version = 0
-        self._closed = False
         self._executor: concurrent.futures.ThreadPoolExecutor | None = None
-        #: trace recorder service, or None (see bt_engine.trace)
-        self.recorder: Any = None
-        self.hub = Hub(self.clock, is_idle_world=lambda: not self._live)
+        self._extensions: dict[str, Any] = {}
+        self.hub = Hub(self.clock, is_idle_world=self._nothing_live)
         self.hub.rt = self
+        #: the live transactions (and the trace recorder hook)
+        self.txns = TransactionTable(self.hub, self.clock)
         started = threading.Event()
 
-        def hub_main() -> None:
-            self.hub.thread_id = threading.get_ident()
+        def hub_main(hub: Hub = self.hub) -> None:
+            hub.thread_id = threading.get_ident()
             started.set()
-            self.hub.run()
+            hub.run()
         self._thread = threading.Thread(target=hub_main, name="actorbt-hub", daemon=True)
         self._thread.start()
         started.wait()
@@ -77,11 +76,13 @@ class Runtime(CallApi):
         else:
             self.bus = bus(self)  # type: ignore[operator]
         self.root: SubSystem = self.run_on_hub(RootSystem._create, self, "", None)
-        self._watchdog = None
+        self._watchdog: Watchdog | None = None
         if watchdog:
-            from .watchdog import Watchdog
             self._watchdog = Watchdog(self.hub, watchdog)
             self._watchdog.start()
+
+    def _nothing_live(self) -> bool:
+        return not self.txns.live
 
     # -- scope -----------------------------------------------------------------------
     @property
@@ -91,8 +92,31 @@ class Runtime(CallApi):
     def _call_scope(self) -> SubSystem:
         return self.root
 
+    def _txns(self) -> TransactionTable:
+        return self.txns
+
     def _topology_changed(self) -> None:
         self._topology_version += 1
+
+    @property
+    def recorder(self) -> Any:
+        """The trace recorder hook (``call_started``/``call_finished``), or None."""
+        return self.txns.recorder
+
+    @recorder.setter
+    def recorder(self, value: Any) -> None:
+        self.txns.recorder = value
+
+    def extension(self, key: str, factory: Callable[[], Any] | None = None) -> Any:
+        """A service a layer above the engine keeps per runtime (the trees of this
+        runtime, for one), made by ``factory()`` on first use; None without a factory.
+
+        Registries belong to their runtime, not to modules: they go when it goes.
+        """
+        value = self._extensions.get(key)
+        if value is None and factory is not None:
+            value = self._extensions[key] = factory()
+        return value
 
     def add_subsystem(self, name: str, cls: type[SubSystem], *args: Any, **kwargs: Any) -> SubSystem:
         """Create subsystem ``name`` of class ``cls`` under the root."""
@@ -106,11 +130,11 @@ class Runtime(CallApi):
 
     def transactions(self) -> list[Transaction]:
         """Live transactions, oldest first."""
-        return list(self._live.values())
+        return list(self.txns.live.values())
 
     def stats(self) -> dict[str, int]:
         """Counts for leak checks: live transactions and tasks (greenlets)."""
-        return {"transactions": len(self._live), "tasks": self.hub.tasks_alive}
+        return {"transactions": len(self.txns.live), "tasks": self.hub.tasks_alive}
 
     # -- time --------------------------------------------------------------------------
     def now(self) -> float:
@@ -136,17 +160,14 @@ class Runtime(CallApi):
     # -- threads -----------------------------------------------------------------------
     def run_on_hub(self, fn: Callable, *args: Any, **kwargs: Any) -> Any:
         """Run a non-blocking ``fn`` on the hub thread and return its result."""
-        if self.hub.in_hub_thread():
-            return fn(*args, **kwargs)
-        self._check_open()
-        c = _Completion()
-        self.hub.call_soon_threadsafe(c.run, fn, args, kwargs)
-        return c.wait(self)
+        if kwargs:
+            return run_on_hub(self.hub, lambda: fn(*args, **kwargs))
+        return run_on_hub(self.hub, fn, *args)
 
     def offload(self, fn: Callable, *args: Any) -> Any:
         """Run blocking library code in a worker thread; the calling actor waits.
 
-        Under the virtual clock, time does not jump while offloaded work runs.
+        Under the virtual clock, time stands still while offloaded work runs.
         """
         hub = self.hub
         task = hub.require_task("offload")
@@ -163,50 +184,24 @@ class Runtime(CallApi):
         fut.add_done_callback(lambda f: hub.call_soon_threadsafe(settle, f))
         return w.wait().result()
 
-    def _check_open(self) -> None:
-        if self._closed:
-            raise RuntimeClosedError("the runtime is closed")
-
-    def _external(self, scope: SubSystem, name: str, mode: Mode, args: tuple, kwargs: dict,
-                  cb: Callable | None, seconds: float | None) -> Any:
-        """A call from a thread other than the hub: hand it over and wait."""
-        from .invoke import dispatch
-        self._check_open()
-        if mode in (Mode.ITERATOR, Mode.TIMED_ITERATOR):
-            return ExternalIterator(self, scope, name, mode, args, kwargs, seconds)
-        c = _Completion()
-        hub = self.hub
-        if mode in (Mode.SYNC, Mode.TIMED):
-            def body() -> None:
-                try:
-                    c.set(dispatch(self, scope.resolve(name), mode, args, kwargs, cb, seconds))
-                except BaseException as e:  # delivered to the calling thread
-                    c.set_error(e)
-
-            def begin() -> None:
-                c.task = Task(hub, body)
-                hub.switch_to(c.task)
-            hub.call_soon_threadsafe(begin)
-        else:
-            hub.call_soon_threadsafe(c.run, lambda: dispatch(
-                self, scope.resolve(name), mode, args, kwargs, cb, seconds), (), {})
-        return c.wait(self)
-
     # -- lifecycle ---------------------------------------------------------------------
+    @property
+    def closed(self) -> bool:
+        return self.hub.stopped
+
     def close(self, grace: float = 5.0) -> None:
         """Cancel all live work, then stop the hub and every thread the runtime made."""
-        if self._closed:
+        if self.hub.stopped:
             return
         try:
             self.run_on_hub(self._cancel_all, "runtime closing")
             t0 = time.monotonic()
-            while self.run_on_hub(lambda: bool(self._live or self.hub.tasks_alive)):
+            while self.run_on_hub(lambda: bool(self.txns.live or self.hub.tasks_alive)):
                 if time.monotonic() - t0 > grace:
-                    log.warning("runtime closing with %d live transactions", len(self._live))
+                    log.warning("runtime closing with %d live transactions", len(self.txns.live))
                     break
                 time.sleep(0.001)
         finally:
-            self._closed = True
             self.bus.close()
             self.hub.stop()
             self._thread.join(timeout=grace)
@@ -217,154 +212,13 @@ class Runtime(CallApi):
                 self._executor.shutdown(wait=False, cancel_futures=True)
                 for worker in list(getattr(self._executor, "_threads", ())):
                     worker.join(timeout=grace)
+            self._extensions.clear()
 
     def _cancel_all(self, reason: str) -> None:
-        for txn in list(self._live.values()):
-            if txn.parent is None:
-                txn.cancel(reason)
+        for txn in self.txns.roots():
+            txn.cancel(reason)
 
     def __enter__(self) -> "Runtime":
-        return self
-
-    def __exit__(self, *exc: Any) -> None:
-        self.close()
-
-
-class _Completion:
-    """A one-shot result handed from the hub to a waiting outside thread."""
-
-    __slots__ = ("_lock", "value", "error", "task")
-
-    def __init__(self) -> None:
-        self._lock = threading.Lock()
-        self._lock.acquire()
-        self.value: Any = None
-        self.error: BaseException | None = None
-        self.task: Task | None = None
-
-    def set(self, value: Any) -> None:
-        self.value = value
-        self._lock.release()
-
-    def set_error(self, error: BaseException) -> None:
-        self.error = error
-        self._lock.release()
-
-    def run(self, fn: Callable, args: tuple, kwargs: dict) -> None:
-        try:
-            value = fn(*args, **kwargs)
-        except BaseException as e:
-            self.set_error(e)
-        else:
-            self.set(value)
-
-    def wait(self, rt: Runtime) -> Any:
-        try:
-            self._lock.acquire()
-        except KeyboardInterrupt:
-            # Ctrl-C in the caller cancels the work it was waiting for, then re-raises.
-            task = self.task
-            if task is not None:
-                rt.hub.call_soon_threadsafe(_interrupt, task)
-                self._lock.acquire(timeout=5.0)
-            raise
-        if self.error is not None:
-            raise self.error
-        return self.value
-
-
-def _interrupt(task: Task) -> None:
-    if task.txns:
-        task.txns[0].cancel("interrupted")
-    else:
-        task.deliver_cancel(Cancelled(None, "interrupted"))
-
-
-class ExternalIterator:
-    """Iterate an actor from a thread other than the hub.
-
-    A pump task on the hub pulls one item per request, so the source is never read
-    ahead of the consumer.
-    """
-
-    _END = object()
-
-    def __init__(self, rt: Runtime, scope: SubSystem, name: str, mode: Mode, args: tuple,
-                 kwargs: dict, seconds: float | None) -> None:
-        self._rt = rt
-        self._q: queue.SimpleQueue = queue.SimpleQueue()
-        self._requests = 0
-        self._waiter: Waiter | None = None
-        self._it: Any = None
-        self._closed = False
-        self._task: Task | None = None
-
-        def pump() -> None:
-            from .invoke import dispatch
-            try:
-                self._it = it = dispatch(rt, scope.resolve(name), mode, args, kwargs, None, seconds)
-                while True:
-                    # While the consumer thread works on an item, virtual time stands
-                    # still: the consumer counts as outside work the hub waits for.
-                    if self._requests == 0:
-                        rt.hub.outside_pending += 1
-                        try:
-                            while self._requests == 0:
-                                self._waiter = Waiter(self._task)  # type: ignore[arg-type]
-                                self._waiter.wait()
-                        finally:
-                            rt.hub.outside_pending -= 1
-                    self._requests -= 1
-                    try:
-                        self._q.put(("v", next(it)))
-                    except StopIteration:
-                        self._q.put(("end", None))
-                        return
-            except BaseException as e:
-                self._q.put(("err", e))
-            finally:
-                if self._it is not None:
-                    self._it.close()
-
-        def begin() -> None:
-            self._task = Task(rt.hub, pump)
-            rt.hub.switch_to(self._task)
-        rt.run_on_hub(begin)
-
-    def _request(self) -> None:
-        self._requests += 1
-        if self._waiter is not None:
-            self._waiter.wake()
-
-    def __iter__(self) -> "ExternalIterator":
-        return self
-
-    def __next__(self) -> Any:
-        if self._closed:
-            raise StopIteration
-        self._rt.hub.call_soon_threadsafe(self._request)
-        kind, value = self._q.get()
-        if kind == "v":
-            return value
-        self._closed = True
-        if kind == "err":
-            if isinstance(value, Cancelled):
-                raise StopIteration
-            raise value
-        raise StopIteration
-
-    def close(self) -> None:
-        if self._closed:
-            return
-        self._closed = True
-
-        def stop() -> None:
-            task = self._task
-            if task is not None and not task.dead:
-                task.deliver_cancel(Cancelled(None, "iterator closed"))
-        self._rt.run_on_hub(stop)
-
-    def __enter__(self) -> "ExternalIterator":
         return self
 
     def __exit__(self, *exc: Any) -> None:
@@ -377,5 +231,4 @@ def current_runtime() -> Runtime:
     hub = getattr(g, "hub", None)
     if hub is not None:
         return hub.rt
-    from .errors import ActorbtError
     raise ActorbtError("current_runtime() is only known inside an actor; pass the Runtime explicitly")

@@ -1,12 +1,9 @@
 """A level-triggered flag that actors can wait on (used by the tree tick loop)."""
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import Any
 
 from .hub import Waiter
-
-if TYPE_CHECKING:
-    from .runtime import Runtime
 
 
 class Signal:
@@ -18,7 +15,8 @@ class Signal:
 
     __slots__ = ("_rt", "_set", "_waiters")
 
-    def __init__(self, rt: "Runtime") -> None:
+    def __init__(self, rt: Any) -> None:
+        """``rt``: the Runtime (its hub and clock)."""
         self._rt = rt
         self._set = False
         self._waiters: list[Waiter] = []

@@ -12,16 +12,14 @@ subsystems below the scope where it is looked up is ambiguous. A dotted name
 from __future__ import annotations
 
 import inspect
-from typing import TYPE_CHECKING, Any, Callable
+from typing import Any, Callable
 
 from .actor import ActorRef, ActorSpec
 from .api import CallApi
+from .bus.qos import qos_depth
 from .errors import ActorbtError, AmbiguousActorError, UnknownActorError
 from .modes import Kind
-from .ros.qos import qos_depth  # pure Python: sizes stream buffers for any transport
-
-if TYPE_CHECKING:
-    from .runtime import Runtime
+from .transaction import TransactionTable
 
 _MISSING = object()
 
@@ -31,24 +29,32 @@ class SubSystem(CallApi):
 
     Subclass it, declare values and edges in ``__init__`` (after ``super().__init__()``),
     and write actors as ``@actor`` methods. The runtime creates instances; do not call
-    the class yourself.
+    the class yourself. A ros_actor-style constructor ``__init__(self, name, parent)``
+    also works: it receives the subsystem's name and parent.
     """
 
-    def __init__(self) -> None:
+    def __init__(self, name: str | None = None, parent: "SubSystem | None" = None) -> None:
         # The runtime binds _rt/_name/_parent before __init__ runs (see _create), so a
-        # subclass constructor can already call set_value and register_*.
+        # subclass constructor can already call set_value and register_*; the
+        # arguments exist only for ros_actor-style subclasses that pass them on.
         pass
 
+    #: the Runtime that owns this subsystem (typed loosely: the runtime module builds on
+    #: this one, not the other way round)
+    _rt: Any
+
     @classmethod
-    def _create(cls, rt: "Runtime", name: str, parent: "SubSystem | None",
+    def _create(cls, rt: Any, name: str, parent: "SubSystem | None",
                 *args: Any, **kwargs: Any) -> "SubSystem":
         obj = cls.__new__(cls)
         obj._bind(rt, name, parent)
+        if not args and not kwargs and _wants_args(cls.__init__, 2):
+            args = (name, parent)  # ros_actor's SubSystem(name, parent)
         obj.__init__(*args, **kwargs)
         obj._collect_actors(obj)
         return obj
 
-    def _bind(self, rt: "Runtime", name: str, parent: "SubSystem | None") -> None:
+    def _bind(self, rt: Any, name: str, parent: "SubSystem | None") -> None:
         self._rt = rt
         self._name = name
         self._parent = parent
@@ -61,8 +67,12 @@ class SubSystem(CallApi):
 
     # -- identity ----------------------------------------------------------------------
     @property
-    def runtime(self) -> "Runtime":
+    def runtime(self) -> Any:
+        """The Runtime this subsystem belongs to."""
         return self._rt
+
+    def _txns(self) -> TransactionTable:
+        return self._rt.txns
 
     @property
     def path(self) -> str:
@@ -104,13 +114,14 @@ class SubSystem(CallApi):
             raise ActorbtError(f"add_network needs a SubNet class, got {net_cls!r}")
         net = net_cls.__new__(net_cls)
         net._subsystem = self
-        net.__init__()
+        net.__init__(*((self,) if _wants_args(net_cls.__init__, 1) else ()))  # ros_actor: SubNet(subsystem)
         self._collect_actors(net)
         return net
 
     def add_actor(self, name: str, fn: Callable, kind: "str | Kind" = Kind.SYNC, *,
                   doc: str | None = None, signature: inspect.Signature | None = None,
-                  is_tree: bool = False, buffer: int | None = None, replace: bool = False) -> ActorRef:
+                  is_tree: bool = False, buffer: int | None = None, replace: bool = False,
+                  hub_only: bool = False) -> ActorRef:
         """Register a plain callable as an actor of this subsystem (trees, bus edges)."""
         k = Kind.parse(kind)
         if inspect.isgeneratorfunction(fn):
@@ -118,7 +129,7 @@ class SubSystem(CallApi):
         if name in self._actors and not replace:
             raise ActorbtError(f"{self._actor_path(name)} is already defined")
         ref = ActorRef.build(self._actor_path(name), name, fn, k, owner=self, doc=doc,
-                             signature=signature, is_tree=is_tree,
+                             signature=signature, is_tree=is_tree, hub_only=hub_only,
                              **({"buffer": buffer} if buffer else {}))
         self._actors[name] = ref
         self._rt._topology_changed()
@@ -133,7 +144,8 @@ class SubSystem(CallApi):
                     continue
                 seen.add(attr)
                 bound = getattr(holder, attr)
-                self.add_actor(spec.name or attr, bound, spec.kind, buffer=spec.buffer)
+                self.add_actor(spec.name or attr, bound, spec.kind, buffer=spec.buffer,
+                               hub_only=spec.hub_only)
 
     @property
     def children(self) -> dict[str, "SubSystem"]:
@@ -235,7 +247,8 @@ class SubSystem(CallApi):
 
     def register_subscriber(self, name: str, msg_type: type, topic: str, qos: Any = 10) -> ActorRef:
         """Make stream actor ``name`` that emits each message arriving on ``topic``;
-        its buffer keeps as many of the latest messages as the ``qos`` depth."""
+        its buffer keeps as many of the latest messages as the ``qos`` depth. On a
+        transport that delivers on the hub (the local bus) it is ``hub_only``."""
         bus = self._rt.bus
         t = _topic(topic)
 
@@ -243,7 +256,8 @@ class SubSystem(CallApi):
             return bus.subscribe(t, msg_type, emit, qos).close
         subscribe.__doc__ = f"Messages ({msg_type.__module__}.{msg_type.__name__}) arriving on {t}."
         return self.add_actor(name, subscribe, Kind.STREAM, buffer=qos_depth(qos),
-                              signature=inspect.Signature([]))
+                              signature=inspect.Signature([]),
+                              hub_only=bus.delivers_on_hub)
 
     def register_action(self, name: str, action_type: type, server: str) -> ActorRef:
         """Make async actor ``name(goal)`` that sends a goal to action ``server``."""
@@ -252,6 +266,17 @@ class SubSystem(CallApi):
     def register_service(self, name: str, srv_type: type, server: str) -> ActorRef:
         """Make async actor ``name(request)`` that calls service ``server``."""
         return self._rt.bus.register_service(self, name, srv_type, server)
+
+
+def _wants_args(init: Callable, n: int) -> bool:
+    """True when constructor ``init`` requires exactly ``n`` positional arguments."""
+    try:
+        params = list(inspect.signature(init).parameters.values())[1:]  # skip self
+    except (TypeError, ValueError):
+        return False
+    required = [p for p in params if p.default is p.empty
+                and p.kind in (p.POSITIONAL_ONLY, p.POSITIONAL_OR_KEYWORD)]
+    return len(required) == n
 
 
 def _topic(topic: str) -> str:
@@ -266,12 +291,16 @@ class SubNet(CallApi):
 
     _subsystem: SubSystem
 
-    def __init__(self) -> None:
+    def __init__(self, subsystem: "SubSystem | None" = None) -> None:
+        # ``subsystem`` exists only for ros_actor-style SubNets that pass it on.
         pass
 
     @property
-    def _rt(self) -> "Runtime":  # type: ignore[override]
+    def _rt(self) -> Any:
         return self._subsystem._rt
+
+    def _txns(self) -> TransactionTable:
+        return self._subsystem._rt.txns
 
     def _call_scope(self) -> SubSystem:
         return self._subsystem

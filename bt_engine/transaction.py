@@ -12,14 +12,13 @@ import itertools
 import logging
 from typing import TYPE_CHECKING, Any, Callable
 
+from .clock import Clock
 from .errors import Cancelled, Failure
 
 if TYPE_CHECKING:
-    from .hub import Task
-    from .runtime import Runtime
+    from .hub import Hub, Task
 
 log = logging.getLogger("actorbt")
-_ids = itertools.count(1)
 
 
 class TxnState(enum.Enum):
@@ -35,6 +34,29 @@ class TxnState(enum.Enum):
     """Cancelled (by a caller, a parent, or a deadline)."""
 
 
+class TransactionTable:
+    """The live transactions of one runtime, and what every transaction needs from it:
+    the hub, the clock and the trace recorder.
+
+    ``recorder`` is None or an object with ``call_started(txn)`` and
+    ``call_finished(txn)`` (the trace layer installs one).
+    """
+
+    def __init__(self, hub: "Hub", clock: Clock) -> None:
+        self.hub = hub
+        self.clock = clock
+        self.live: dict[int, Transaction] = {}
+        self.recorder: Any = None
+        self._ids = itertools.count(1)
+
+    def next_id(self) -> int:
+        return next(self._ids)
+
+    def roots(self) -> list["Transaction"]:
+        """Live transactions without a parent, oldest first."""
+        return [t for t in self.live.values() if t.parent is None]
+
+
 class Transaction:
     """One call of one actor.
 
@@ -44,20 +66,21 @@ class Transaction:
     """
 
     __slots__ = ("id", "path", "parent", "mode", "started", "deadline", "state", "children",
-                 "task", "closer", "reason", "result", "error", "timed_out", "rt",
+                 "task", "closer", "reason", "result", "error", "timed_out", "table",
                  "_listeners", "_deadline_timer", "scope", "args", "__weakref__")
 
-    def __init__(self, rt: "Runtime", path: str, parent: "Transaction | None", mode: Any,
-                 scope: Any = None, task: "Task | None" = None, args: tuple = ()) -> None:
-        self.id = next(_ids)
-        self.rt = rt
+    def __init__(self, table: TransactionTable, path: str, parent: "Transaction | None",
+                 mode: Any, scope: Any = None, task: "Task | None" = None,
+                 args: tuple = ()) -> None:
+        self.id = table.next_id()
+        self.table = table
         self.path = path
         self.parent = parent
         self.mode = mode
         self.scope = scope
         self.task = task
         self.args = args
-        self.started = rt.clock.now()
+        self.started = table.clock.now()
         self.deadline: float | None = None
         self.state = TxnState.RUNNING
         self.children: dict[int, Transaction] = {}
@@ -68,11 +91,11 @@ class Transaction:
         self.timed_out = False
         self._listeners: list | None = None
         self._deadline_timer = None
-        rt._live[self.id] = self
+        table.live[self.id] = self
         if parent is not None:
             parent.children[self.id] = self
-        if rt.recorder is not None:
-            rt.recorder.call_started(self)
+        if table.recorder is not None:
+            table.recorder.call_started(self)
 
     # -- queries ----------------------------------------------------------------------
     @property
@@ -96,8 +119,8 @@ class Transaction:
     # -- control ----------------------------------------------------------------------
     def set_deadline(self, seconds: float) -> None:
         """Cancel this transaction (as timed out) after ``seconds`` on the runtime clock."""
-        self.deadline = self.rt.clock.now() + seconds
-        self._deadline_timer = self.rt.hub.call_at(self.deadline, self._expire)
+        self.deadline = self.table.clock.now() + seconds
+        self._deadline_timer = self.table.hub.call_at(self.deadline, self._expire)
 
     def _expire(self) -> None:
         if self.state is TxnState.RUNNING:
@@ -106,9 +129,9 @@ class Transaction:
 
     def cancel(self, reason: str = "cancelled by caller") -> None:
         """Cancel this transaction and, first, all of its children. Thread-safe."""
-        rt = self.rt
-        if not rt.hub.in_hub_thread():
-            rt.hub.call_soon_threadsafe(self.cancel, reason)
+        hub = self.table.hub
+        if not hub.in_hub_thread():
+            hub.call_soon_threadsafe(self.cancel, reason)
             return
         if self.state is not TxnState.RUNNING or self.reason is not None:
             return
@@ -144,15 +167,15 @@ class Transaction:
         self.error = error
         if self._deadline_timer is not None:
             self._deadline_timer.cancel()
-        rt = self.rt
-        rt._live.pop(self.id, None)
+        table = self.table
+        table.live.pop(self.id, None)
         if self.parent is not None:
             self.parent.children.pop(self.id, None)
         if self.children:
             for child in list(self.children.values()):
                 child.cancel(f"parent {self.path} finished")
-        if rt.recorder is not None:
-            rt.recorder.call_finished(self)
+        if table.recorder is not None:
+            table.recorder.call_finished(self)
         listeners, self._listeners = self._listeners, None
         if listeners:
             for fn in listeners:

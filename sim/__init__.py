@@ -6,15 +6,42 @@
     sim.close()
 
 Helpers for the CLI: write_map(world, seed, out_pgm), snapshot(world, seed, out_png, camera).
+
+The names below are imported on first use (PEP 562), so ``import sim.cli`` (what
+``actorbt --help`` does to list the ``sim`` commands) loads neither pybullet nor numpy.
 """
-from .description import WorldError, WorldSpec, list_worlds, load_world
-from .simworld import SimWorld
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from .description import WorldError, WorldSpec, list_worlds, load_world
+    from .simworld import SimWorld
 
 __all__ = ["SimWorld", "start_world", "WorldError", "WorldSpec", "list_worlds", "load_world", "write_map", "snapshot"]
+
+#: name -> the submodule that defines it
+_LAZY = {"SimWorld": "simworld", "WorldError": "description", "WorldSpec": "description",
+         "list_worlds": "description", "load_world": "description"}
+
+
+def __getattr__(name: str) -> Any:
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f".{module}", __name__), name)
+    globals()[name] = value  # later lookups skip __getattr__
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))
 
 
 def write_map(world="house", seed=0, out_pgm="map.pgm", resolution=0.05):
     """Write map_server's PGM + YAML pair for a world; returns (pgm_path, yaml_path)."""
+    from .description import load_world
     from .gridmap import build_grid, write_pgm_yaml
 
     return write_pgm_yaml(build_grid(load_world(world, seed), resolution), out_pgm)
@@ -31,4 +58,6 @@ def snapshot(world="house", seed=0, out_png="world.png", camera=False, camera_si
 def start_world(runtime, world="house", seed=0, gui=False):
     """Build ``world`` with ``seed`` and put it on ``runtime`` (what actorbt.yaml's
     ``simulator: sim:start_world`` names). Returns the started SimWorld."""
+    from .simworld import SimWorld
+
     return SimWorld(runtime, world=world, seed=seed, gui=gui).start()

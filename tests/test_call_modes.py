@@ -28,12 +28,12 @@ class Kinds(SubSystem):
         self.run_actor("sleep", STEP)
         return (x, self._next())
 
-    @actor("async_kind", "async")
+    @actor("async_kind", "async", hub_only=True)  # completes on a runtime timer
     def async_kind(self, done, x: int):
         timer = self.runtime.call_later(STEP, lambda: done((x, self._next())))
         return timer.cancel
 
-    @actor("emit_kind", "multi")
+    @actor("emit_kind", "multi", hub_only=True)
     def emit_kind(self, emit, x: int):
         timer = self.runtime.call_every(STEP, lambda: emit((x, self._next())))
 

@@ -39,7 +39,7 @@ class Blockers(SubSystem):
             self._seen("child_call")
             raise
 
-    @actor("slow_async", "async")
+    @actor("slow_async", "async", hub_only=True)  # completes on a runtime timer
     def slow_async(self, done):
         timer = self.runtime.call_later(100, done, "late")
 
@@ -56,7 +56,7 @@ class Blockers(SubSystem):
             self._seen("async_wait")
             raise
 
-    @actor("quiet_stream", "multi")
+    @actor("quiet_stream", "multi", hub_only=True)
     def quiet_stream(self, emit):
         return lambda: self.get_value("closed").append("quiet_stream")
 

@@ -10,7 +10,7 @@ import pytest
 from bt_engine import Runtime
 from bt_engine.cli.main import main
 from bt_engine.cli.shell import ActorShell
-from bt_engine.cli.values import parse_args
+from bt_engine.literals import parse_args
 
 REPO = pathlib.Path(__file__).resolve().parents[1]
 

@@ -20,7 +20,7 @@ class Faulty(SubSystem):
     def calls_divide(self) -> float:
         return self.run_actor("divide", 1, 0)
 
-    @actor("fails_later", "async")
+    @actor("fails_later", "async", hub_only=True)
     def fails_later(self, done):
         self.runtime.call_later(0.1, done.fail, RuntimeError("sensor lost"))
 

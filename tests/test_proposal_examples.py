@@ -25,7 +25,10 @@ class SampleSystem(SubSystem):
     def sample_actor(self, mes):
         print(mes)
 
-    @actor('pic_receiver', 'async')
+    # hub_only: the local bus calls back on the hub, so the virtual clock need not pace
+    # itself to wall time while a picture is awaited (tests/test_foreign_completion.py
+    # runs the same pattern fed by a thread).
+    @actor('pic_receiver', 'async', hub_only=True)
     def pic_receiver(self, callback):
         """Start receiving one picture; call back with it as an array."""
         def on_frame(msg):

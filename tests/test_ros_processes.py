@@ -19,8 +19,8 @@ pytest.importorskip("rclpy")
 from actorbt_interfaces.action import CallActor, RunTree  # noqa: E402
 
 from bt_engine import ActorError, Runtime  # noqa: E402
-from bt_engine.bus.ros import RosTransport  # noqa: E402
 from bt_engine.ros.remote import Remote  # noqa: E402
+from bt_engine.ros.transport import RosTransport  # noqa: E402
 from tests.test_ros_common import ROOT, shm_leaks, shm_mapped, wait_until, write_config  # noqa: E402
 
 ENV = dict(os.environ, ROS_AUTOMATIC_DISCOVERY_RANGE=os.environ.get(

@@ -14,11 +14,13 @@ pytest.importorskip("rclpy")
 from actorbt_interfaces.action import CallActor, RunTree  # noqa: E402
 
 from bt_engine import Runtime  # noqa: E402
-from bt_engine.bus.ros import RosTransport  # noqa: E402
 from bt_engine.ros.client import GoalRejectedError  # noqa: E402
+from bt_engine.ros.goals import GoalError, parse_call_args, parse_inputs  # noqa: E402
+from bt_engine.ros.names import tree_action_name  # noqa: E402
 from bt_engine.ros.remote import Remote, RemoteCallError  # noqa: E402
-from bt_engine.ros.server import serve, tree_action_name  # noqa: E402
-from bt_engine.ros.yamlio import GoalError, dump, parse_call_args, parse_inputs  # noqa: E402
+from bt_engine.ros.server import serve  # noqa: E402
+from bt_engine.ros.transport import RosTransport  # noqa: E402
+from bt_engine.ros.yamlio import dump  # noqa: E402
 from tests.test_ros_common import Work, wait_until, write_trees  # noqa: E402
 
 

@@ -15,10 +15,11 @@ from std_msgs.msg import String  # noqa: E402
 from std_srvs.srv import SetBool  # noqa: E402
 
 from bt_engine import ActorError, Kind, Runtime, SubSystem  # noqa: E402
-from bt_engine.bus.ros import RosTransport  # noqa: E402
+from bt_engine.bus.qos import QosError, qos_depth  # noqa: E402
 from bt_engine.ros.host import RosHost  # noqa: E402
-from bt_engine.ros.qos import QosError, qos_depth, qos_profile  # noqa: E402
+from bt_engine.ros.qos import qos_profile  # noqa: E402
 from bt_engine.ros.server import serve  # noqa: E402
+from bt_engine.ros.transport import RosTransport  # noqa: E402
 from tests.test_ros_common import (Work, os_threads, python_threads, shm_leaks,  # noqa: E402
                                    shm_mapped, wait_until)
 

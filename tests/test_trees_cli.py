@@ -91,10 +91,37 @@ def test_show_ascii_and_drawings(config: str, tmp_path: Path, capsys: pytest.Cap
     out = capsys.readouterr().out
     assert out.startswith("demo_patrol(rounds: int = 2, pause: float = 0.5) -> {last}")
     assert "│       ├── drive to kitchen  [do sleep(seconds=1.5)]" in out
-    assert dot.read_text().startswith('digraph "demo_patrol"')
+    source = dot.read_text()
+    assert source.startswith("digraph demo_patrol {")
+    assert 'label="drive to kitchen\\ndo sleep(seconds=1.5)"' in source
     if shutil.which("dot"):
         svg = tmp_path / "tree.svg"
         assert main(["--config", config, "show", "demo_patrol", "--out", str(svg)]) == 0
         assert "<svg" in svg.read_text()
     assert main(["--config", config, "show", "demo_patrol", "--out", str(tmp_path / "x.bmp")]) == 2
     assert "unknown format 'bmp'" in capsys.readouterr().err
+
+
+def test_show_draws_any_text_literally(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    mission = tmp_path / "odd.yaml"
+    mission.write_text(
+        "name: odd\n"
+        "root: {sequence: [{name: 'say \"hi\" \\l <b>', set: {a: '<i>'}}], name: '<seq>'}\n"
+    )
+    dot = tmp_path / "odd.dot"
+    assert main(["show", str(mission), "--out", str(dot)]) == 0
+    source = dot.read_text()
+    assert 'label="say \\"hi\\" \\\\l <b>\\nset a=<i>"' in source  # quotes and \\ escaped
+    assert 'label="→ <seq>\\nsequence"' in source  # <...> is text, not an HTML label
+    if shutil.which("dot"):
+        svg = tmp_path / "odd.svg"
+        assert main(["show", str(mission), "--out", str(svg)]) == 0
+        assert "say &quot;hi&quot; \\l &lt;b&gt;" in svg.read_text()
+    capsys.readouterr()
+
+
+def test_show_without_graphviz_says_what_to_do(config: str, tmp_path: Path, capsys: pytest.CaptureFixture,
+                                                monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("PATH", str(tmp_path))  # no dot here
+    assert main(["--config", config, "show", "demo_patrol", "--out", str(tmp_path / "t.png")]) == 2
+    assert "Graphviz 'dot' is not installed, so t.png cannot be drawn" in capsys.readouterr().err

@@ -1,4 +1,14 @@
-"""Message transports: the in-process ``local`` bus, and ROS 2 (rclpy)."""
+"""Message transports, the abstraction only: what SubSystem edges need, and the
+in-process bus.
+
+    transport   Transport: the interface the runtime uses (topics, actions, services)
+    local       LocalBus: in-process topics delivered on the hub (the embedded default)
+    qos         QoS settings by name and the stream depth each one keeps (pure Python)
+
+Layering: ``bus`` imports only ``bt_engine.errors`` and knows nothing of ROS. The
+rclpy transport, :class:`bt_engine.ros.transport.RosTransport`, lives in the ``ros``
+package, which sits above this one.
+"""
 from .local import LocalBus
 from .transport import Transport
 

@@ -42,10 +42,6 @@ class LocalPublisher:
                                  f"not {type(msg).__name__}")
         self._bus._deliver(self._t, msg)
 
-    @property
-    def subscription_count(self) -> int:
-        return len(self._t.subs)
-
 
 class LocalSubscription:
     __slots__ = ("topic", "callback", "_t", "closed")
@@ -73,6 +69,9 @@ class LocalBus(Transport):
     """Topics in one process, delivered on the hub."""
 
     name = "local"
+    #: Publishing from another thread is possible but the virtual clock does not wait
+    #: for it (such a driver belongs in an async or stream actor, or on the wall clock).
+    delivers_on_hub = True
 
     def __init__(self, hub: "Hub") -> None:
         self._hub = hub
@@ -87,11 +86,11 @@ class LocalBus(Transport):
                                  f"{t.msg_type.__name__}; cannot use it for {msg_type.__name__}")
         return t
 
-    def publisher(self, topic: str, msg_type: type, qos: int = 10) -> LocalPublisher:
+    def publisher(self, topic: str, msg_type: type, qos: Any = 10) -> LocalPublisher:
         return LocalPublisher(self, self._topic(topic, msg_type))
 
     def subscribe(self, topic: str, msg_type: type, callback: Callable[[Any], None],
-                  qos: int = 10) -> LocalSubscription:
+                  qos: Any = 10) -> LocalSubscription:
         t = self._topic(topic, msg_type)
         sub = LocalSubscription(t, callback)
         t.subs.append(sub)
@@ -100,9 +99,6 @@ class LocalBus(Transport):
     def subscription_count(self, topic: str) -> int:
         t = self._topics.get(topic)
         return len(t.subs) if t is not None else 0
-
-    def topics(self) -> dict[str, type]:
-        return {n: t.msg_type for n, t in self._topics.items()}
 
     def _deliver(self, t: _Topic, msg: Any) -> None:
         if not t.subs:

@@ -7,7 +7,10 @@
     simulator: sim:start_world      # how a world is started (python path)
     transport: local       # or ros
     clock: virtual         # default clock for run/call/shell/eval (serve uses wall)
-    plugins: [sim.cli]     # modules adding `actorbt` sub-commands (register(subparsers))
+    plugins: [sim.cli]     # modules adding `actorbt` sub-commands (register(subparsers, common))
+
+Every command imports the plugins (``--help`` lists their commands), so a plugin keeps
+only argparse wiring at module level and imports its implementation when it runs.
 """
 from __future__ import annotations
 
@@ -63,6 +66,8 @@ def load_config(path: "str | pathlib.Path | None" = None) -> Config:
         return Config()
     try:
         data = yaml.safe_load(p.read_text()) or {}
+    except OSError as e:
+        raise ConfigError(f"cannot read {p}: {e.strerror or e}") from None
     except yaml.YAMLError as e:
         mark = getattr(e, "problem_mark", None)
         where = f"{p}:{mark.line + 1}:{mark.column + 1}" if mark else str(p)

@@ -1,7 +1,11 @@
 """The ``actorbt`` command.
 
-Core commands live here; the tree layer and plugins named in actorbt.yaml add their own
-(each module has ``register(subparsers)`` and sets ``func(args, app) -> exit code``).
+Core commands and the tree commands are declared here; ``bt_engine.ros.cli`` and the
+plugins named in actorbt.yaml add their own (each module has ``register(subparsers,
+common)`` and sets ``func(args, app) -> exit code``). Declaring a command imports nothing
+heavy: a command's implementation is imported when it runs, so ``actorbt --help`` and
+``actorbt check`` load neither the simulator, ROS nor OpenCV (tests/test_cli_startup.py;
+bench/bench_cli_startup.py measures it).
 """
 from __future__ import annotations
 
@@ -11,15 +15,16 @@ import json
 import logging
 import pprint
 import sys
-from typing import Any
+from typing import Callable
 
 from ..errors import ActorbtError
 from .app import App
-from .config import load_config
-from .values import parse_args
+from .config import Config, load_config
 
 #: command modules inside the engine that add sub-commands when importable
-BUILTIN_EXTENSIONS = ["bt_engine.trees.cli", "bt_engine.ros.cli"]
+BUILTIN_EXTENSIONS = ["bt_engine.ros.cli"]
+
+Command = Callable[[argparse.Namespace, App], int]
 
 
 def _common(p: argparse.ArgumentParser) -> None:
@@ -30,31 +35,31 @@ def _common(p: argparse.ArgumentParser) -> None:
     p.add_argument("--ros", action="store_true", help="use the ROS 2 transport")
 
 
+def _lazy(module: str, name: str) -> Command:
+    """The command ``module.name``, imported when it runs (not when the parser is built)."""
+    def command(args: argparse.Namespace, app: App) -> int:
+        return getattr(importlib.import_module(module), name)(args, app)
+    command.__qualname__ = f"{module}.{name}"
+    return command
+
+
 def cmd_list(args: argparse.Namespace, app: App) -> int:
-    rt = app.runtime(with_world=False)
-    try:
-        for r in sorted(rt.root.all_actors(), key=lambda r: r.path):
-            first = r.doc.splitlines()[0] if r.doc else ""
-            tag = "tree" if r.is_tree else r.kind.value
-            print(f"{r.path}{r.signature}  [{tag}]  {first}")
-    finally:
-        app.close(rt)
+    # from the actor index: the robot's code is neither imported nor constructed
+    for e in app.actors_with_trees():
+        first = e.doc.splitlines()[0] if e.doc else ""
+        print(f"{e.path}{e.shown}  [{'tree' if e.is_tree else e.kind}]  {first}")
     return 0
 
 
 def cmd_catalog(args: argparse.Namespace, app: App) -> int:
-    from ..catalog import catalog, tool_schemas
-    rt = app.runtime(with_world=False)
-    try:
-        if args.json:
-            print(json.dumps(tool_schemas(rt.root), indent=2, default=str))
-        else:
-            for d in catalog(rt.root):
-                print(f"{d['signature']}  [{'tree' if d['is_tree'] else d['kind']}]")
-                for line in (d["doc"] or "(no docstring)").splitlines():
-                    print(f"    {line}")
-    finally:
-        app.close(rt)
+    entries = app.actors_with_trees()
+    if args.json:
+        print(json.dumps([e.tool for e in entries], indent=2, default=str))
+        return 0
+    for e in entries:
+        print(f"{e.path}{e.shown}  [{'tree' if e.is_tree else e.kind}]")
+        for line in (e.doc or "(no docstring)").splitlines():
+            print(f"    {line}")
     return 0
 
 
@@ -62,6 +67,7 @@ def cmd_call(args: argparse.Namespace, app: App) -> int:
     if getattr(args, "ros", False):  # a client of a running `actorbt serve`
         from ..ros.cli import cmd_rcall
         return cmd_rcall(args, app)
+    from ..literals import parse_args
     pos, kw = parse_args(args.args)
     rt = app.runtime()
     try:
@@ -109,6 +115,7 @@ def build_parser(plugins: list[str]) -> argparse.ArgumentParser:
     _common(p)
     p.set_defaults(func=cmd_shell)
 
+    _tree_commands(sub)
     for mod_name in BUILTIN_EXTENSIONS + plugins:
         try:
             mod = importlib.import_module(mod_name)
@@ -120,26 +127,67 @@ def build_parser(plugins: list[str]) -> argparse.ArgumentParser:
     return parser
 
 
-def _plugins_from_config(argv: list[str]) -> list[str]:
-    cfg_path = None
-    if "--config" in argv:
-        i = argv.index("--config")
-        cfg_path = argv[i + 1] if i + 1 < len(argv) else None
+def _tree_commands(sub: argparse._SubParsersAction) -> None:
+    """run, check, show, replay, plot: implemented in bt_engine.trees.cli, which imports
+    the whole tree layer (py_trees...), so it is imported only when one of them runs."""
+    def tree_command(name: str) -> Command:
+        return _lazy("bt_engine.trees.cli", f"cmd_{name}")
+
+    p = sub.add_parser("run", help="run a tree with live progress: TREE [--arg k=v ...]")
+    p.add_argument("tree", help="tree name, or a mission file")
+    p.add_argument("--arg", action="append", default=[], metavar="NAME=VALUE",
+                   help="an input, parsed by its declared type (repeatable)")
+    p.add_argument("--record", metavar="FILE.jsonl", help="record a trace for replay and plot")
+    p.add_argument("--max-period", type=float, metavar="S", help="tick at least every S seconds")
+    p.add_argument("--quiet", action="store_true", help="no progress, only the result")
+    p.add_argument("--ticks", action="store_true", help="also print every tick")
+    p.add_argument("--json", action="store_true", help="print the outputs as JSON")
+    _common(p)
+    p.set_defaults(func=tree_command("run"))
+
+    p = sub.add_parser("check", help="validate mission files without running them (default: the trees folder)")
+    p.add_argument("files", nargs="*", help="mission YAML files")
+    p.set_defaults(func=tree_command("check"))
+
+    p = sub.add_parser("show", help="draw a tree: ASCII here, --out x.png|svg|pdf|dot for a picture")
+    p.add_argument("tree", help="tree name, or a mission file")
+    p.add_argument("--out", metavar="FILE", help="write a drawing (format from the suffix)")
+    p.set_defaults(func=tree_command("show"))
+
+    p = sub.add_parser("replay", help="re-run a recorded tree against its recording; exit 1 on a divergence")
+    p.add_argument("trace", help="a .jsonl trace from run --record")
+    p.add_argument("--trees", metavar="DIR", help="find the tree files here (default: the recorded paths)")
+    p.set_defaults(func=tree_command("replay"))
+
+    p = sub.add_parser("plot", help="draw the timeline of a recorded run")
+    p.add_argument("trace", help="a .jsonl trace from run --record")
+    p.add_argument("--out", required=True, metavar="FILE.png", help="the picture (png, svg or pdf)")
+    p.set_defaults(func=tree_command("plot"))
+
+
+def _config(argv: list[str]) -> Config | None:
+    """actorbt.yaml as ``--config`` names it (the nearest one without), read before the
+    full parser exists: the plugins it names add commands. ``None`` if it is broken:
+    :class:`App` reports that once the command line is parsed."""
+    pre = argparse.ArgumentParser(add_help=False, exit_on_error=False)
+    pre.add_argument("--config")
     try:
-        return load_config(cfg_path).plugins
-    except ActorbtError:
-        return []
+        known, _ = pre.parse_known_args(argv)
+        return load_config(known.config)
+    except (argparse.ArgumentError, ActorbtError):
+        return None
 
 
 def main(argv: list[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
     try:
-        parser = build_parser(_plugins_from_config(argv))
+        cfg = _config(argv)
+        parser = build_parser(cfg.plugins if cfg is not None else [])
         args = parser.parse_args(argv)
         if args.verbose:
             logging.getLogger().setLevel(logging.DEBUG)
-        return int(args.func(args, App(args)) or 0)
+        return int(args.func(args, App(args, cfg)) or 0)
     except ActorbtError as e:
         print(f"actorbt: error: {e}", file=sys.stderr)
         return 2

@@ -13,7 +13,7 @@ from typing import Any
 
 from ..errors import ActorbtError
 from ..runtime import Runtime
-from .values import parse_args, split_line
+from ..literals import parse_args, split_line
 
 HISTORY = pathlib.Path(os.environ.get("ACTORBT_HISTORY", pathlib.Path.home() / ".actorbt_history"))
 

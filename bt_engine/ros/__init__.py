@@ -1,12 +1,22 @@
-"""ROS 2 (rclpy) side of the engine.
+"""ROS 2 (rclpy) side of the engine, one concept per module. Imports go down this list:
 
-    host     RosHost: one rclpy Context, its nodes and one executor thread
-    qos      QoS settings by name ("sensor", "latched", a depth)
-    client   goals and service calls sent from the executor thread
-    server   ``serve(rt)``: /actorbt/call and one action server per tree
-    cli      ``actorbt serve``, ``actorbt goal``, ``actorbt rcall``
+    names        node, action and topic names of ``actorbt serve``, shared with clients
+    yamlio       values as YAML text (results, and the arguments a client sends)
+    goals        a goal's YAML text -> a validated call (the one place goals are decoded)
+    host         RosHost: one rclpy Context, its nodes and one executor thread
+    qos          rclpy QoS profiles for the named settings of ``bt_engine.bus.qos``
+    client       goals and service calls sent from the executor thread
+    transport    RosTransport: the bus interface (``bt_engine.bus``) over rclpy
+    goal_server  one action server and the goals it runs: accept, cancel, result
+    call_server  ``/actorbt/call`` (CallActor)
+    tree_server  ``/actorbt/tree/<name>`` (RunTree): one goal at a time, progress, traces
+    server       ``serve(rt)``: the node, its action servers and rejections, shutdown
+    remote       Remote: a client of a running ``actorbt serve``
+    cli          ``actorbt serve``, ``actorbt goal``, ``actorbt rcall``
 
-The ROS transport of the bus is :class:`bt_engine.bus.ros.RosTransport`.
+Layering: ``ros`` sits above ``bus`` (it implements the bus interface) and the trees
+layer (it serves trees); nothing below imports ``ros``, and only ``bt_engine.cli``,
+the top layer, imports ``ros.cli``.
 
 Nothing here imports rclpy until it is used, so ``actorbt`` starts quickly and
 builds without ROS still run the local bus. Discovery stays on this machine unless
@@ -16,14 +26,15 @@ from __future__ import annotations
 
 from typing import Any
 
-__all__ = ["RosHost", "Server", "serve"]
+__all__ = ["Remote", "RosHost", "RosTransport", "Server", "serve"]
+
+_HOMES = {"Remote": "remote", "RosHost": "host", "RosTransport": "transport",
+          "Server": "server", "serve": "server"}
 
 
 def __getattr__(name: str) -> Any:
-    if name == "RosHost":
-        from .host import RosHost
-        return RosHost
-    if name in ("Server", "serve"):
-        from . import server
-        return getattr(server, name)
-    raise AttributeError(name)
+    home = _HOMES.get(name)
+    if home is None:
+        raise AttributeError(name)
+    import importlib
+    return getattr(importlib.import_module(f"{__name__}.{home}"), name)

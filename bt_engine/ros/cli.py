@@ -124,8 +124,8 @@ def _follow(goal: Any, timeout: float | None) -> int | None:
 
 def cmd_goal(args: argparse.Namespace, app: Any) -> int:
     from .client import ActionGoalError, GoalRejectedError
+    from .names import tree_action_name
     from .remote import Remote
-    from .server import tree_action_name
     with Remote(wait=args.wait) as remote:
         goal = remote.tree_goal(args.tree, args.inputs or "",
                                 on_feedback=None if args.quiet else _print_feedback)
@@ -155,8 +155,9 @@ def cmd_rcall(args: argparse.Namespace, app: Any) -> int:
     """Also usable as ``actorbt call --ros`` (reads actor, args, timeout, json, wait)."""
     import yaml
 
-    from ..cli.values import parse_args
+    from ..literals import parse_args
     from .client import ActionGoalError, GoalRejectedError
+    from .names import CALL_ACTION
     from .remote import Remote
     pos, kw = parse_args(list(args.args))
     with Remote(wait=getattr(args, "wait", None) or 10.0) as remote:
@@ -166,7 +167,7 @@ def cmd_rcall(args: argparse.Namespace, app: Any) -> int:
             return rc
         err = goal.error
         if isinstance(err, GoalRejectedError):
-            print(f"actorbt: /actorbt/call rejected the call"
+            print(f"actorbt: {CALL_ACTION} rejected the call"
                   + (f": {err.reason}" if err.reason else ""), file=sys.stderr)
             return 2
         if err is not None and not isinstance(err, ActionGoalError):

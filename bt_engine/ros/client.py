@@ -15,7 +15,7 @@ from ..errors import ActorbtError
 #: GoalStatus codes by name
 STATUS_NAMES = {0: "unknown", 1: "accepted", 2: "executing", 3: "canceling", 4: "succeeded",
                 5: "canceled", 6: "aborted"}
-STATUS_SUCCEEDED, STATUS_CANCELED, STATUS_ABORTED = 4, 5, 6
+STATUS_SUCCEEDED = 4
 
 
 class ServerUnavailableError(ActorbtError, TimeoutError):
@@ -120,7 +120,7 @@ class ServerWait:
 
 
 class GoalCall:
-    """One goal: wait for the server, send, follow feedback, get the result, cancel.
+    """One goal: wait for the server, send, get the result, cancel.
 
     All methods run on the executor thread. Exactly one of ``on_result(result_msg)``
     (succeeded) or ``on_error(exc)`` is called, unless the call was cancelled before the
@@ -131,7 +131,6 @@ class GoalCall:
                  server_timeout: float, on_result: Callable[[Any], None],
                  on_error: Callable[[BaseException], None],
                  on_accepted: Callable[[Any], None] | None = None,
-                 on_feedback: Callable[[Any], None] | None = None,
                  on_status: Callable[[int, Any], None] | None = None,
                  goal_uuid: Any = None) -> None:
         self.client = client
@@ -148,7 +147,6 @@ class GoalCall:
         self._on_result = on_result
         self._on_error = on_error
         self._on_accepted = on_accepted
-        self._on_feedback = on_feedback
         self._on_status = on_status
 
     def start(self) -> None:
@@ -162,8 +160,7 @@ class GoalCall:
         if self.cancelled:
             return
         self.sent = True
-        fb = (lambda m: self._on_feedback(m.feedback)) if self._on_feedback else None
-        fut = self.client.send_goal_async(self.goal, feedback_callback=fb, goal_uuid=self.goal_uuid)
+        fut = self.client.send_goal_async(self.goal, goal_uuid=self.goal_uuid)
         fut.add_done_callback(self._on_response)
 
     def _on_response(self, fut: Any) -> None:

@@ -21,17 +21,16 @@ traffic leaves the machine.
 from __future__ import annotations
 
 import collections
-import itertools
+import concurrent.futures
 import logging
 import os
 import threading
+import uuid
 from typing import Any, Callable
 
 from ..errors import ActorbtError
 
 log = logging.getLogger("actorbt.ros")
-
-_host_ids = itertools.count(1)
 
 
 class RosClosedError(ActorbtError, RuntimeError):
@@ -57,7 +56,8 @@ class RosHost:
         from rclpy.executors import SingleThreadedExecutor
 
         self.name = name
-        self.id = next(_host_ids)
+        #: distinguishes this host's thread and default node names from other hosts'
+        self.id = uuid.uuid4().hex[:8]
         self.context = Context()
         # Context.init (not rclpy.init): no signal handlers, no ROS args from sys.argv.
         self.context.init(args=[], domain_id=domain_id)
@@ -100,10 +100,6 @@ class RosHost:
             self.call(destroy)
 
     # -- hand-over to the executor thread ------------------------------------------
-    @property
-    def thread(self) -> threading.Thread:
-        return self._thread
-
     def in_executor_thread(self) -> bool:
         return threading.current_thread() is self._thread
 
@@ -126,22 +122,18 @@ class RosHost:
         """Run ``fn(*args)`` on the executor thread and return its result."""
         if self.in_executor_thread():
             return fn(*args)
-        done = threading.Event()
-        box: list = [None, None]
+        fut: concurrent.futures.Future = concurrent.futures.Future()
 
         def run() -> None:
             try:
-                box[0] = fn(*args)
+                fut.set_result(fn(*args))
             except BaseException as e:  # handed to the caller
-                box[1] = e
-            finally:
-                done.set()
+                fut.set_exception(e)
         self.post(run)
-        if not done.wait(timeout):
+        done, _ = concurrent.futures.wait([fut], timeout)
+        if not done:
             raise RosClosedError(f"ROS host {self.name}: executor did not answer in {timeout:g} s")
-        if box[1] is not None:
-            raise box[1]
-        return box[0]
+        return fut.result()
 
     def flush(self, timeout: float = 1.0) -> bool:
         """Wait until everything posted so far has run. False on timeout or when closed."""

@@ -24,7 +24,7 @@ from ..errors import ActorbtError, ActorTimeout
 from .client import (STATUS_NAMES, ActionGoalError, GoalCall, GoalNotSentError,
                      GoalRejectedError, ServerWait)
 from .host import RosClosedError, RosHost
-from .server import CALL_ACTION, REJECTIONS_TOPIC, goal_text, rejections_qos, tree_action_name
+from .names import CALL_ACTION, REJECTIONS_TOPIC, goal_text, rejections_qos, tree_action_name
 from .yamlio import dump
 
 __all__ = ["Remote", "RemoteCallError", "RemoteGoal"]
@@ -53,7 +53,6 @@ class RemoteGoal:
         self.status = "pending"
         self.result: Any = None
         self.error: BaseException | None = None
-        self.sent_at = 0.0
         self.ended_at: float | None = None
         self.call: GoalCall | None = None
 
@@ -122,7 +121,7 @@ class Remote:
     """A ROS 2 client of ``actorbt serve`` (see the module docstring).
 
     Args:
-        node_name: this client's node name (default ``actorbt_client_<pid>_<n>``).
+        node_name: this client's node name (default ``actorbt_client_<pid>_<host id>``).
         wait: how long to wait for a server to be discovered [s].
     """
 
@@ -239,7 +238,6 @@ class Remote:
                               on_result=g._on_result, on_error=g._on_error,
                               on_accepted=g._on_accepted, on_status=g._on_status,
                               goal_uuid=UUID(uuid=list(goal_id)))
-            g.sent_at = time.monotonic()
             g.call.start()
         self.host.post(start)  # cancel() is posted after it, so it finds g.call
         return g

@@ -1,20 +1,20 @@
 """One run's blackboard: a py_trees client confined to a namespace of its own.
 
 py_trees keeps one class-global blackboard. Every run of a tree gets a fresh namespace
-(``/actorbt/<tree>/<run id>``), seeded from its inputs, and removes it when it ends, so
-two runs of the same tree (recursion, parallel calls) never see each other's keys.
+(``/actorbt/<tree>/<random id>``: random because the storage is shared by every runtime
+of the process), seeded from its inputs, and removes it when it ends, so two runs of the
+same tree (recursion, parallel calls, two runtimes) never see each other's keys.
 """
 
 from __future__ import annotations
 
-import itertools
+import uuid
 from typing import Any, Callable, Iterable
 
 import py_trees
 
 __all__ = ["RunBlackboard"]
 
-_run_ids = itertools.count(1)
 _Access = py_trees.common.Access
 
 
@@ -29,7 +29,7 @@ class RunBlackboard:
 
     def __init__(self, tree: str, keys: Iterable[str] = (),
                  on_write: Callable[[str, Any], None] | None = None) -> None:
-        self.namespace = f"/actorbt/{tree}/r{next(_run_ids)}"
+        self.namespace = f"/actorbt/{tree}/r{uuid.uuid4().hex[:16]}"
         self._client = py_trees.blackboard.Client(name=f"actorbt:{tree}", namespace=self.namespace)
         self._keys: set[str] = set()
         self._storage = py_trees.blackboard.Blackboard.storage

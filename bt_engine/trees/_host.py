@@ -10,7 +10,7 @@ greenlet until it finishes. So trees call trees with ``do:``, actors call trees 
 
 from __future__ import annotations
 
-import weakref
+import itertools
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Callable, Mapping
 
@@ -32,7 +32,8 @@ __all__ = ["STANDARD_BEHAVIOURS", "BehaviourFactory", "TreeHost", "register_tree
 #: plus ``name=`` and ``blackboard_namespace=`` when it accepts them.
 BehaviourFactory = Callable[..., py_trees.behaviour.Behaviour]
 
-_hosts: "weakref.WeakKeyDictionary[Any, TreeHost]" = weakref.WeakKeyDictionary()
+#: the key of a runtime's TreeHost among its extensions (``rt.extension``)
+EXTENSION_KEY = "trees"
 
 #: py_trees' own behaviours, available to ``behaviour:`` in every host.
 STANDARD_BEHAVIOURS: dict[str, BehaviourFactory] = {
@@ -69,6 +70,7 @@ class TreeHost:
         self.behaviour_period = behaviour_period
         self.library = TreeLibrary(resolver=self._resolve, behaviours=self.behaviours)
         self.observers: list[TreeObserver] = []
+        self._run_ids = itertools.count(1)
         self._runs_by_txn: dict[int, TreeRun] = {}
         self._live: dict[int, TreeRun] = {}
 
@@ -126,6 +128,10 @@ class TreeHost:
 
     # ------------------------------------------------------------ running
 
+    def next_run_id(self) -> int:
+        """A fresh run id (unique among this host's runs)."""
+        return next(self._run_ids)
+
     def period_for(self, mission: Mission) -> float | None:
         """The max tick period of a run of ``mission``."""
         if any(isinstance(node, UseBehaviour) for node in walk(mission.root)):
@@ -168,7 +174,8 @@ class TreeHost:
             run.txn_id = txn.id
         return run
 
-    def _run_closed(self, run: TreeRun) -> None:
+    def run_closed(self, run: TreeRun) -> None:
+        """Forget a run that has ended (TreeRun calls this from ``close``)."""
         self._live.pop(run.id, None)
         if run.txn_id is not None:
             self._runs_by_txn.pop(run.txn_id, None)
@@ -193,11 +200,11 @@ class TreeHost:
 
 
 def tree_host(rt: Runtime, create: bool = False) -> TreeHost | None:
-    """The TreeHost of a runtime (made now with ``create``), or None."""
-    host = _hosts.get(rt)
-    if host is None and create:
-        host = _hosts[rt] = TreeHost(rt)
-    return host
+    """The TreeHost of a runtime (made now with ``create``), or None.
+
+    The host is kept by the runtime itself, so it goes when the runtime goes.
+    """
+    return rt.extension(EXTENSION_KEY, (lambda: TreeHost(rt)) if create else None)
 
 
 def register_tree_folder(rt: Runtime, folder: str | Path, **options: Any) -> TreeHost:
@@ -208,8 +215,6 @@ def register_tree_folder(rt: Runtime, folder: str | Path, **options: Any) -> Tre
     Raises:
         MissionError: the first problem found, ``file:line:column: message``.
     """
-    host = _hosts.get(rt)
-    if host is None:
-        host = _hosts[rt] = TreeHost(rt, **options)
+    host = rt.extension(EXTENSION_KEY, lambda: TreeHost(rt, **options))
     host.load_folder(folder)
     return host

@@ -10,8 +10,7 @@ All tree code runs on the hub thread.
 from __future__ import annotations
 
 import inspect
-import itertools
-from typing import TYPE_CHECKING, Any, Callable, Iterator, Mapping
+from typing import Any, Callable, Iterator, Mapping, Protocol
 
 import py_trees
 from py_trees.common import Status
@@ -45,12 +44,7 @@ from ._model import (
     walk,
 )
 
-if TYPE_CHECKING:
-    from ._host import TreeHost
-
-__all__ = ["TreeObserver", "TreeRun", "written_keys"]
-
-_run_ids = itertools.count(1)
+__all__ = ["RunHost", "TreeObserver", "TreeRun", "written_keys"]
 
 
 def _preorder(b: py_trees.behaviour.Behaviour) -> Iterator[py_trees.behaviour.Behaviour]:
@@ -91,6 +85,26 @@ class TreeObserver:
         INVALID with the exception that halted it (cancellation)."""
 
 
+class RunHost(Protocol):
+    """What a run needs from the host that made it (:class:`~bt_engine.trees.TreeHost`,
+    or the replay host)."""
+
+    rt: Any
+    observers: list[TreeObserver]
+    behaviours: Mapping[str, Callable[..., py_trees.behaviour.Behaviour]]
+
+    def next_run_id(self) -> int: ...
+
+    def period_for(self, mission: Mission) -> float | None: ...
+
+    def actor_target(self, name: str) -> tuple[str, str]: ...
+
+    def start_actor(self, run: "TreeRun", leaf: ActorLeaf, args: tuple, kwargs: dict,
+                    on_done: Callable[[Any], None]) -> Any: ...
+
+    def run_closed(self, run: "TreeRun") -> None: ...
+
+
 def written_keys(mission: Mission) -> set[str]:
     """Every blackboard key a mission may hold: inputs and everything it writes."""
     keys = {spec.name for spec in mission.inputs}
@@ -112,7 +126,7 @@ class TreeRun:
     the hub (tests).
 
     Attributes:
-        id: unique per process.
+        id: unique among the runs of its host.
         mission: what runs.
         parent: the run whose ``do:`` called this one, if any; ``depth`` counts them.
         ticks: ticks so far.
@@ -121,14 +135,14 @@ class TreeRun:
         paths: node path of every behaviour (``sequence/retry x3/pick``).
     """
 
-    def __init__(self, host: TreeHost, mission: Mission, inputs: Mapping[str, Any],
+    def __init__(self, host: RunHost, mission: Mission, inputs: Mapping[str, Any],
                  parent: TreeRun | None = None) -> None:
         self.host = host
         self.rt = host.rt
         self.mission = mission
         self.parent = parent
         self.depth = 0 if parent is None else parent.depth + 1
-        self.id = next(_run_ids)
+        self.id = host.next_run_id()
         self.txn_id: int | None = None  # the transaction running it, when run as an actor
         self.ticks = 0
         self.status = Status.INVALID
@@ -364,4 +378,4 @@ class TreeRun:
         if self.root.status is Status.RUNNING:
             self.halt()
         self.bb.close()
-        self.host._run_closed(self)
+        self.host.run_closed(self)

@@ -3,14 +3,16 @@
 ``actorbt show TREE`` prints :func:`ascii_tree`; ``--out x.dot`` writes :func:`dot_tree`,
 and ``--out x.png`` / ``x.svg`` renders it with Graphviz' ``dot`` (installed by
 ``make deps``; without it, write ``.dot`` and run ``dot -Tpng x.dot -o x.png``).
+
+The DOT source is built with the ``graphviz`` package (quoting, escaping, running
+``dot``), imported only when a drawing is made.
 """
 
 from __future__ import annotations
 
 import json
-import shutil
-import subprocess
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from ..errors import ActorbtError
 from ._model import (
@@ -30,7 +32,10 @@ from ._model import (
     children_of,
 )
 
-__all__ = ["RenderError", "ascii_tree", "describe", "dot_tree", "render"]
+if TYPE_CHECKING:
+    import graphviz
+
+__all__ = ["RenderError", "ascii_tree", "describe", "dot_graph", "dot_tree", "render"]
 
 
 class RenderError(ActorbtError):
@@ -85,44 +90,51 @@ def ascii_tree(mission: Mission) -> str:
     return "\n".join(lines)
 
 
-_SHAPES = [
-    (ReactiveSequence, 'shape=box, style="rounded,filled", fillcolor="#fde9c8", label="⟳→ {}"'),
-    (Sequence, 'shape=box, style=filled, fillcolor="#fde9c8", label="→ {}"'),
-    (ReactiveSelector, 'shape=octagon, style=filled, fillcolor="#d4e8fc", label="⟳? {}"'),
-    (Selector, 'shape=octagon, style=filled, fillcolor="#d4e8fc", label="? {}"'),
-    (Parallel, 'shape=parallelogram, style=filled, fillcolor="#e3d7f5", label="⇉ {}"'),
-    (Decorator, 'shape=ellipse, style=filled, fillcolor="#eeeeee", label="{}"'),
-    (Do, 'shape=box, style="rounded,filled", fillcolor="#d8f3d8", label="{}"'),
-    (Check, 'shape=ellipse, style=filled, fillcolor="#fff7b3", label="{}"'),
+#: node attributes by node class, first match wins; ``label`` is a format for the text
+_STYLES: list[tuple[type, dict[str, str]]] = [
+    (ReactiveSequence, {"shape": "box", "style": "rounded,filled", "fillcolor": "#fde9c8", "label": "⟳→ {}"}),
+    (Sequence, {"shape": "box", "style": "filled", "fillcolor": "#fde9c8", "label": "→ {}"}),
+    (ReactiveSelector, {"shape": "octagon", "style": "filled", "fillcolor": "#d4e8fc", "label": "⟳? {}"}),
+    (Selector, {"shape": "octagon", "style": "filled", "fillcolor": "#d4e8fc", "label": "? {}"}),
+    (Parallel, {"shape": "parallelogram", "style": "filled", "fillcolor": "#e3d7f5", "label": "⇉ {}"}),
+    (Decorator, {"shape": "ellipse", "style": "filled", "fillcolor": "#eeeeee", "label": "{}"}),
+    (Do, {"shape": "box", "style": "rounded,filled", "fillcolor": "#d8f3d8", "label": "{}"}),
+    (Check, {"shape": "ellipse", "style": "filled", "fillcolor": "#fff7b3", "label": "{}"}),
 ]
 
 
-def _dot_label(text: str) -> str:
-    return text.replace("\\", "\\\\").replace('"', '\\"')
+def dot_graph(mission: Mission) -> "graphviz.Digraph":
+    """The mission as a ``graphviz.Digraph`` (top-down): name and kind on each node."""
+    import graphviz
 
-
-def dot_tree(mission: Mission) -> str:
-    """The mission as a Graphviz digraph (top-down)."""
-    out = [
-        f'digraph "{_dot_label(mission.name)}" {{',
-        "  graph [rankdir=TB, fontname=Helvetica];",
-        '  node [fontname=Helvetica, fontsize=11, shape=box, style="rounded,filled", fillcolor=white];',
-    ]
-    ids: dict[int, str] = {}
+    graph = graphviz.Digraph(
+        mission.name,
+        graph_attr={"rankdir": "TB", "fontname": "Helvetica"},
+        node_attr={"fontname": "Helvetica", "fontsize": "11", "shape": "box", "style": "rounded,filled",
+                   "fillcolor": "white"},
+    )
+    count = 0
 
     def visit(node: Node) -> str:
-        nid = ids.setdefault(id(node), f"n{len(ids)}")
-        desc = _dot_label(describe(node))
-        label = desc if node.name is None else f"{_dot_label(node.name)}\\n{desc}"
-        style = next((fmt for cls, fmt in _SHAPES if isinstance(node, cls)), 'label="{}"')
-        out.append(f"  {nid} [{style.format(label)}];")
+        nonlocal count
+        nid, count = f"n{count}", count + 1
+        text = graphviz.escape(describe(node))  # mission text is literal: no \l, no <html>
+        if node.name is not None:
+            text = graphviz.escape(node.name) + "\\n" + text
+        attrs = dict(next((style for cls, style in _STYLES if isinstance(node, cls)), {"label": "{}"}))
+        attrs["label"] = graphviz.nohtml(attrs["label"].format(text))
+        graph.node(nid, **attrs)
         for child in children_of(node):
-            out.append(f"  {nid} -> {visit(child)};")
+            graph.edge(nid, visit(child))
         return nid
 
     visit(mission.root)
-    out.append("}")
-    return "\n".join(out) + "\n"
+    return graph
+
+
+def dot_tree(mission: Mission) -> str:
+    """The mission as Graphviz DOT source (see :func:`dot_graph`)."""
+    return dot_graph(mission).source
 
 
 def render(mission: Mission, path: str | Path) -> Path:
@@ -132,21 +144,23 @@ def render(mission: Mission, path: str | Path) -> Path:
         RenderError: unknown suffix, or Graphviz is missing or fails.
     """
     path = Path(path)
-    dot = dot_tree(mission)
     fmt = path.suffix.lstrip(".").lower()
     if fmt in ("dot", "gv"):
-        path.write_text(dot, encoding="utf-8")
+        path.write_text(dot_tree(mission), encoding="utf-8")
         return path
     if fmt not in ("png", "svg", "pdf"):
         raise RenderError(f"cannot draw {path.name}: unknown format {fmt!r}, expected .dot, .png, .svg or .pdf")
-    exe = shutil.which("dot")
-    if exe is None:
+    import graphviz
+
+    try:
+        data = dot_graph(mission).pipe(format=fmt, quiet=True)
+    except graphviz.ExecutableNotFound:
         raise RenderError(
             f"Graphviz 'dot' is not installed, so {path.name} cannot be drawn; "
             f"install graphviz (make deps) or write {path.with_suffix('.dot').name} and render it yourself"
-        )
-    proc = subprocess.run([exe, f"-T{fmt}", "-o", str(path)], input=dot.encode("utf-8"),
-                          capture_output=True, timeout=60)
-    if proc.returncode != 0:
-        raise RenderError(f"dot failed on {path.name}: {proc.stderr.decode(errors='replace').strip()}")
+        ) from None
+    except graphviz.CalledProcessError as exc:
+        stderr = (exc.stderr or b"").decode(errors="replace").strip()
+        raise RenderError(f"dot failed on {path.name}: {stderr or exc}") from None
+    path.write_bytes(data)
     return path

@@ -1,8 +1,8 @@
 """The tree layer's ``actorbt`` commands: run, check, show, replay, plot.
 
-``bt_engine.cli.main`` imports this module and calls :func:`register`; each command is
-``func(args, app) -> exit status``. Errors derive from ActorbtError, which the main
-program prints on one line (exit status 2).
+``bt_engine.cli.main`` declares their arguments and imports this module when one of
+them runs; each command is ``func(args, app) -> exit status``. Errors derive from
+ActorbtError, which the main program prints on one line (exit status 2).
 """
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ import json
 import pprint
 import sys
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any
 
 from ..errors import ActorbtError, ActorError
 from ._errors import MissionError, TreeFailure
@@ -22,7 +22,7 @@ from ._model import Mission
 from ._parse import suggest
 from ._progress import ProgressPrinter, parse_inputs
 
-__all__ = ["register"]
+__all__ = ["cmd_check", "cmd_plot", "cmd_replay", "cmd_run", "cmd_show"]
 
 
 def _is_file(spec: str) -> bool:
@@ -75,25 +75,22 @@ def cmd_run(args: argparse.Namespace, app: Any) -> int:
 
 
 def cmd_check(args: argparse.Namespace, app: Any) -> int:
+    # Against the actor index, not a runtime: no robot code is imported or started
+    # (the index is rebuilt, once, when that code changed).
     folder = app.cfg.trees_dir()
-    app.cfg.trees = None  # validate the folder here, with the files, instead of failing on load
-    rt = app.runtime(with_world=False)
-    try:
-        files = [Path(f) for f in args.files]
-        folder_files = sorted(folder.glob("*.y*ml")) if folder is not None and folder.is_dir() else []
-        if not files:
-            files = folder_files
-        library = TreeLibrary(rt.root.resolve, STANDARD_BEHAVIOURS)
-        given = {f.resolve() for f in files}
-        for path in folder_files:  # trees the checked files may call
-            if path.resolve() not in given:
-                try:
-                    library.load_file(path)
-                except MissionError:
-                    pass  # reported when that file is checked itself
-        errors = check_files(files, library=library)
-    finally:
-        app.close(rt)
+    files = [Path(f) for f in args.files]
+    folder_files = sorted(folder.glob("*.y*ml")) if folder is not None and folder.is_dir() else []
+    if not files:
+        files = folder_files
+    library = TreeLibrary(app.actor_index().resolve, STANDARD_BEHAVIOURS)
+    given = {f.resolve() for f in files}
+    for path in folder_files:  # trees the checked files may call
+        if path.resolve() not in given:
+            try:
+                library.load_file(path)
+            except MissionError:
+                pass  # reported when that file is checked itself
+    errors = check_files(files, library=library)
     for error in errors:
         print(error, file=sys.stderr)
     if errors:
@@ -134,37 +131,3 @@ def cmd_plot(args: argparse.Namespace, app: Any) -> int:
     from ._plot import plot_trace
     print(f"wrote {plot_trace(args.trace, args.out)}")
     return 0
-
-
-def register(sub: argparse._SubParsersAction, common: Callable[[argparse.ArgumentParser], None]) -> None:
-    """Add the tree commands to the ``actorbt`` parser."""
-    p = sub.add_parser("run", help="run a tree with live progress: TREE [--arg k=v ...]")
-    p.add_argument("tree", help="tree name, or a mission file")
-    p.add_argument("--arg", action="append", default=[], metavar="NAME=VALUE",
-                   help="an input, parsed by its declared type (repeatable)")
-    p.add_argument("--record", metavar="FILE.jsonl", help="record a trace for replay and plot")
-    p.add_argument("--max-period", type=float, metavar="S", help="tick at least every S seconds")
-    p.add_argument("--quiet", action="store_true", help="no progress, only the result")
-    p.add_argument("--ticks", action="store_true", help="also print every tick")
-    p.add_argument("--json", action="store_true", help="print the outputs as JSON")
-    common(p)
-    p.set_defaults(func=cmd_run)
-
-    p = sub.add_parser("check", help="validate mission files without running them (default: the trees folder)")
-    p.add_argument("files", nargs="*", help="mission YAML files")
-    p.set_defaults(func=cmd_check)
-
-    p = sub.add_parser("show", help="draw a tree: ASCII here, --out x.png|svg|pdf|dot for a picture")
-    p.add_argument("tree", help="tree name, or a mission file")
-    p.add_argument("--out", metavar="FILE", help="write a drawing (format from the suffix)")
-    p.set_defaults(func=cmd_show)
-
-    p = sub.add_parser("replay", help="re-run a recorded tree against its recording; exit 1 on a divergence")
-    p.add_argument("trace", help="a .jsonl trace from run --record")
-    p.add_argument("--trees", metavar="DIR", help="find the tree files here (default: the recorded paths)")
-    p.set_defaults(func=cmd_replay)
-
-    p = sub.add_parser("plot", help="draw the timeline of a recorded run")
-    p.add_argument("trace", help="a .jsonl trace from run --record")
-    p.add_argument("--out", required=True, metavar="FILE.png", help="the picture (png, svg or pdf)")
-    p.set_defaults(func=cmd_plot)

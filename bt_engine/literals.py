@@ -5,7 +5,7 @@ import ast
 import shlex
 from typing import Any
 
-from ..errors import ActorbtError
+from .errors import ActorbtError
 
 
 class ArgumentSyntaxError(ActorbtError, ValueError):

@@ -1,4 +1,5 @@
-"""The ROS 2 transport: the bus over rclpy and Fast DDS.
+"""The ROS 2 transport: the bus interface (:class:`bt_engine.bus.Transport`) over rclpy
+and Fast DDS.
 
 ``Runtime(bus=RosTransport)`` (``transport: ros`` in actorbt.yaml, or ``--ros``) keeps
 the actor-facing API of the local bus: ``register_publisher`` / ``register_subscriber``
@@ -19,20 +20,18 @@ import logging
 import os
 from typing import TYPE_CHECKING, Any, Callable
 
+from ..bus.transport import Transport
 from ..modes import Kind
-from ..ros.client import (ActionGoalError, GoalCall, GoalRejectedError, ServerUnavailableError,
-                          ServerWait, ServiceCall, build_message)
-from ..ros.host import RosClosedError, RosHost
-from ..ros.qos import qos_profile
-from .transport import Transport
+from .client import GoalCall, ServerWait, ServiceCall, build_message
+from .host import RosClosedError, RosHost
+from .qos import qos_profile
 
 if TYPE_CHECKING:
     from ..runtime import Runtime
 
 log = logging.getLogger("actorbt.ros")
 
-__all__ = ["ActionGoalError", "GoalRejectedError", "RosClosedError", "RosPublisher",
-           "RosSubscription", "RosTransport", "ServerUnavailableError"]
+__all__ = ["RosPublisher", "RosSubscription", "RosTransport"]
 
 
 class RosPublisher:
@@ -49,11 +48,6 @@ class RosPublisher:
         if self._host.closed:
             raise RosClosedError(f"cannot publish on {self.topic}: the ROS transport is closed")
         self._pub.publish(msg)
-
-    @property
-    def subscription_count(self) -> int:
-        """Subscriptions matched to this publisher, in any process."""
-        return 0 if self._host.closed else self._pub.get_subscription_count()
 
 
 class RosSubscription:
@@ -94,7 +88,7 @@ class RosTransport(Transport):
 
     Args:
         rt: the runtime whose hub receives callbacks.
-        node_name: the node's name (default ``actorbt_<pid>_<n>``).
+        node_name: the node's name (default ``actorbt_<pid>_<host id>``).
         server_timeout: how long an action or service actor waits for its server to be
             discovered [s, wall] before failing with ServerUnavailableError.
     """
@@ -147,7 +141,7 @@ class RosTransport(Transport):
         # Created here, not through host.call: the hub never waits for the executor
         # thread (which may be waiting for the hub), see RosHost.
         client = ActionClient(self.node, action_type, server)
-        rt, host, waiter = self._rt, self.host, self._waiter
+        host, waiter = self.host, self._waiter
         goal_type = action_type.Goal
 
         def send_goal(done: Any, goal: Any = None, **fields: Any) -> Callable[[], None]:

@@ -1,0 +1,261 @@
+"""One action server of ``actorbt serve`` and the goals it runs.
+
+A goal's way through (thread in brackets):
+
+1. ``goal_callback`` [executor]: :meth:`GoalServer.admit` decodes and validates the goal
+   once (:mod:`bt_engine.ros.goals`); a :class:`~bt_engine.ros.goals.GoalError` rejects
+   it, with the reason published by the owner.
+2. ``handle_accepted_callback`` [executor]: rclpy calls it right after (same thread, same
+   request message), so the decoded call is handed over there and becomes a
+   :class:`ServedGoal`, known by its goal id from then on (cancel requests find it).
+3. ``execute_callback`` [executor, a coroutine]: the work is started on the hub with
+   ``rt.start``; its outcome comes back to the coroutine through an rclpy Future, and
+   becomes the result: succeeded, canceled (the client asked) or aborted.
+
+Subclasses say what a goal means (:meth:`GoalServer.admit`), how feedback and results
+look, and may wait their turn before the work starts (a tree runs one goal at a time).
+"""
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any, Protocol
+
+from ..errors import Cancelled, Failure
+from .goals import GoalError, Invocation
+from .host import RosClosedError, RosHost
+
+if TYPE_CHECKING:
+    import pathlib
+
+__all__ = ["GoalServer", "Owner", "ServedGoal"]
+
+
+class Owner(Protocol):
+    """What a GoalServer needs from the server that owns it (see ``server.Server``)."""
+
+    rt: Any
+    host: RosHost
+    #: no new goals: the server is shutting down
+    closing: bool
+    #: a goal for a running tree preempts it (otherwise it is rejected)
+    preempt: bool
+    #: where tree goals are recorded (None: not recorded)
+    record_dir: "str | pathlib.Path | None"
+
+    def reject(self, action: str, goal: Any, reason: str) -> None: ...
+
+
+class ServedGoal:
+    """One accepted goal. Each method says the thread it runs on."""
+
+    def __init__(self, server: "GoalServer", handle: Any, call: Invocation) -> None:
+        from rclpy.task import Future
+        self.server = server
+        self.rt = server.owner.rt
+        self.handle = handle
+        self.key = bytes(handle.goal_id.uuid)
+        self.call = call
+        self.txn: Any = None
+        self.cancel_reason: str | None = None
+        self.resolved = False
+        self.outcome = Future()   # the work's result or Failure; set on the executor thread
+        self.finished = Future()  # set when the execute coroutine has ended
+
+    # -- any thread ------------------------------------------------------------------------
+    def start(self) -> None:
+        """Start the work on the hub."""
+        self._to_hub(self._start_on_hub)
+
+    def cancel(self, reason: str) -> None:
+        """Cancel the work (before or after it started) with ``reason``."""
+        self._to_hub(self._cancel_on_hub, reason)
+
+    def resolve(self, outcome: Any) -> None:
+        """Hand the outcome to the execute coroutine; the first outcome wins."""
+        if self.resolved:
+            return
+        self.resolved = True
+        try:
+            self.server.owner.host.post(self._set_outcome, outcome)
+        except RosClosedError:
+            pass
+
+    def send_feedback(self, fb: Any) -> None:
+        """Publish feedback message ``fb`` (it is sent from the executor thread)."""
+        host = self.server.owner.host
+        if host.in_executor_thread():
+            self.handle.publish_feedback(fb)
+            return
+        try:
+            host.post(self.handle.publish_feedback, fb)
+        except RosClosedError:
+            pass
+
+    def _to_hub(self, fn: Any, *args: Any) -> None:
+        try:
+            self.rt.call_soon_threadsafe(fn, *args)
+        except Exception:  # the runtime is gone: the work cannot run any more
+            self.resolve(Failure(Cancelled(None, "the runtime is closed")))
+
+    # -- hub -------------------------------------------------------------------------------
+    def _start_on_hub(self) -> None:
+        if self.cancel_reason is not None:
+            self.resolve(Failure(Cancelled(None, self.cancel_reason)))
+            return
+        self.starting()
+        call = self.call
+        try:
+            txn = self.rt.start(call.path, *call.args, on_done=self._on_done, **call.kwargs)
+        except BaseException as e:  # the runtime is closing, or a late surprise
+            self.ended()
+            self.resolve(Failure(e))
+            return
+        self.txn = txn
+        if not self.resolved:
+            self.started(txn)
+
+    def _on_done(self, outcome: Any) -> None:
+        self.ended()
+        self.resolve(outcome)
+
+    def _cancel_on_hub(self, reason: str) -> None:
+        if self.cancel_reason is None:
+            self.cancel_reason = reason
+        if self.txn is not None and not self.txn.done:
+            self.txn.cancel(reason)
+
+    # Hooks for subclasses (hub): before the transaction starts, once it runs, once it ended.
+    def starting(self) -> None:
+        pass
+
+    def started(self, txn: Any) -> None:
+        pass
+
+    def ended(self) -> None:
+        pass
+
+    # -- executor thread -----------------------------------------------------------------
+    def _set_outcome(self, outcome: Any) -> None:
+        if not self.outcome.done():
+            self.outcome.set_result(outcome)
+
+
+class GoalServer:
+    """One rclpy ActionServer whose goals run actors of the owner's runtime.
+
+    Args:
+        owner: the server this action belongs to (runtime, host, rejections, closing).
+        action: the action name.
+        action_type: the action type (RunTree, CallActor).
+    """
+
+    def __init__(self, owner: Owner, action: str, action_type: type) -> None:
+        self.owner = owner
+        self.action = action
+        self.action_type = action_type
+        self.goals: dict[bytes, ServedGoal] = {}  # accepted, not ended; executor thread
+        self._admitted: tuple[Any, Invocation] | None = None  # goal callback -> accepted callback
+        self._server: Any = None
+
+    # -- what a goal means (subclasses) ----------------------------------------------------
+    def admit(self, goal: Any) -> Invocation:
+        """The call ``goal`` asks for, or GoalError with the reason to reject it."""
+        raise NotImplementedError
+
+    def new_goal(self, handle: Any, call: Invocation) -> ServedGoal:
+        return ServedGoal(self, handle, call)
+
+    def feedback(self, status: str) -> Any:
+        return self.action_type.Feedback(status=status)
+
+    def result(self, success: bool, status: str, value: Any, error: str) -> Any:
+        """The Result message: ``status`` as in ``succeeded``, ``canceled``, ``failed: …``;
+        ``value`` what the work returned (success only); ``error`` the reason otherwise."""
+        raise NotImplementedError
+
+    async def take_turn(self, g: ServedGoal) -> None:
+        """Wait until ``g`` may start (executor thread)."""
+
+    def leave(self, g: ServedGoal) -> None:
+        """``g`` has ended (executor thread)."""
+
+    def concluding(self, g: ServedGoal, outcome: Any) -> None:
+        """The work of ``g`` ended with ``outcome``; the result goes out next."""
+
+    # -- rclpy (executor thread) -----------------------------------------------------------
+    def create(self, node: Any, result_timeout: int) -> None:
+        from rclpy.action import ActionServer
+        self._server = ActionServer(
+            node, self.action_type, self.action, self._execute, result_timeout=result_timeout,
+            goal_callback=self._on_goal, handle_accepted_callback=self._on_accepted,
+            cancel_callback=self._on_cancel)
+
+    def destroy(self) -> None:
+        if self._server is not None:
+            self._server.destroy()
+            self._server = None
+
+    def _on_goal(self, goal: Any) -> Any:
+        from rclpy.action import GoalResponse
+        try:
+            if self.owner.closing:
+                raise GoalError("the server is shutting down")
+            call = self.admit(goal)
+        except GoalError as e:
+            self.owner.reject(self.action, goal, str(e))
+            return GoalResponse.REJECT
+        self._admitted = (goal, call)
+        return GoalResponse.ACCEPT
+
+    def _on_accepted(self, handle: Any) -> None:
+        admitted, self._admitted = self._admitted, None
+        # rclpy calls this right after the goal callback accepted this very request, on
+        # the same thread (ActionServer._execute_goal_request).
+        if admitted is None or admitted[0] is not handle.request:
+            raise RuntimeError(f"{self.action}: accepted a goal that was not admitted")
+        g = self.new_goal(handle, admitted[1])
+        self.goals[g.key] = g
+        handle.execute()
+
+    def _on_cancel(self, handle: Any) -> Any:
+        from rclpy.action import CancelResponse
+        g = self.goals.get(bytes(handle.goal_id.uuid))
+        if g is not None:
+            g.cancel("goal canceled")
+        return CancelResponse.ACCEPT
+
+    async def _execute(self, handle: Any) -> Any:
+        g = self.goals[bytes(handle.goal_id.uuid)]
+        try:
+            await self.take_turn(g)
+            if handle.is_cancel_requested:
+                handle.canceled()
+                return self.result(False, "canceled", None, "goal canceled")
+            if self.owner.closing:
+                handle.abort()
+                return self.result(False, "aborted: the server is shutting down", None,
+                                   "the server is shutting down")
+            g.send_feedback(self.feedback("running"))
+            g.start()
+            outcome = await g.outcome
+            return self._conclude(g, outcome)
+        finally:
+            self.leave(g)
+            self.goals.pop(g.key, None)
+            g.finished.set_result(True)
+
+    def _conclude(self, g: ServedGoal, outcome: Any) -> Any:
+        handle = g.handle
+        self.concluding(g, outcome)
+        if not isinstance(outcome, Failure):
+            handle.succeed()
+            return self.result(True, "succeeded", outcome, "")
+        exc = outcome.exception
+        if outcome.cancelled or isinstance(exc, Cancelled):
+            reason = getattr(exc, "reason", "") or str(exc)
+            if handle.is_cancel_requested:
+                handle.canceled()
+                return self.result(False, "canceled", None, reason)
+            handle.abort()
+            return self.result(False, f"aborted: {reason}", None, reason)
+        handle.abort()
+        return self.result(False, f"failed: {exc}", None, f"{type(exc).__name__}: {exc}")
