@@ -30,24 +30,30 @@ _default: Runtime | None = None
 _exit_hook_installed = False
 
 
+def _close_at_exit() -> None:
+    global _exit_hook_installed
+    if not _exit_hook_installed:
+        atexit.register(close_default_runtime)
+        _exit_hook_installed = True
+
+
 def default_runtime() -> Runtime:
     """The default runtime, made now if there is none (or the last one was closed)."""
-    global _default, _exit_hook_installed
+    global _default
     with _lock:
         if _default is None or _default.closed:
             _default = Runtime()
-            if not _exit_hook_installed:
-                atexit.register(close_default_runtime)
-                _exit_hook_installed = True
+            _close_at_exit()
         return _default
 
 
 def set_default_runtime(rt: Runtime | None) -> None:
-    """Use ``rt`` as the default runtime (None: make a fresh one on next use). The
-    caller keeps ownership of ``rt``; a replaced default made here is closed."""
+    """Use ``rt`` as the default runtime (None: make a fresh one on next use); it is
+    closed at exit like one made here. The runtime it replaces is closed now."""
     global _default
     with _lock:
         old, _default = _default, rt
+        _close_at_exit()
     if old is not None and old is not rt and not old.closed:
         old.close()
 

@@ -55,7 +55,7 @@ def run_body(ref: "ActorRef | GenFirst", txn: Transaction, task: Task, args: tup
             raise
         err: BaseException = e
         if isinstance(e, TypeError):
-            err = bad_arguments(ref, args, kwargs) or e
+            err = bad_arguments(ref, args, kwargs, txn) or e
         txn.finish(TxnState.FAILED, error=err)
         raise caller_error(txn) from (None if err is not e else e)
     else:
@@ -79,12 +79,14 @@ def drop_pending(task: Task, txn: Transaction) -> None:
         t = t.parent
 
 
-def bad_arguments(ref: "ActorRef | GenFirst", args: tuple, kwargs: dict) -> BadArgumentsError | None:
-    """The BadArgumentsError for arguments that do not fit, or None when they fit (a
-    TypeError raised inside the actor is then the actor's own failure)."""
+def bad_arguments(ref: "ActorRef | GenFirst", args: tuple, kwargs: dict,
+                  txn: Transaction) -> BadArgumentsError | None:
+    """The BadArgumentsError of call ``txn`` when its arguments do not fit, or None when
+    they fit (a TypeError raised inside the actor is then the actor's own failure)."""
     try:
         ref.check_args(args, kwargs)
     except BadArgumentsError as e:
+        e.transaction_id = txn.id  # type: ignore[attr-defined]  # it is this call's own error
         return e
     return None
 
@@ -189,7 +191,7 @@ def _call_impl(ref: ActorRef, txn: Transaction, handle: Any, args: tuple, kwargs
         if not is_failure(e):
             txn.finish(TxnState.FAILED, error=e)
             raise
-        err = bad_arguments(ref, args, kwargs) if isinstance(e, TypeError) else None
+        err = bad_arguments(ref, args, kwargs, txn) if isinstance(e, TypeError) else None
         txn.finish(TxnState.FAILED, error=err or e)
         return
     closer = _closer_of(closer, txn)

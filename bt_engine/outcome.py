@@ -3,8 +3,8 @@ says why not. Every call mode translates outcomes here, so they all agree.
 
 - timed out: :class:`ActorTimeout`
 - cancelled by someone else: :class:`ActorCancelled`
-- failed: :class:`BadArgumentsError`, or :class:`ActorError` naming the actor and
-  chaining the original exception
+- failed: :class:`BadArgumentsError` (the call did not fit the signature), or
+  :class:`ActorError` naming the actor and chaining the original exception
 """
 from __future__ import annotations
 
@@ -12,8 +12,7 @@ from typing import Any
 
 import greenlet
 
-from .errors import (ActorbtError, ActorCancelled, ActorError, ActorTimeout,
-                     BadArgumentsError, Cancelled, Failure)
+from .errors import ActorbtError, ActorCancelled, ActorError, ActorTimeout, Cancelled, Failure
 from .transaction import Transaction, TxnState
 
 #: exceptions that end the process or a greenlet; an actor never turns them into failures
@@ -27,17 +26,26 @@ def is_failure(exc: BaseException) -> bool:
 
 
 def caller_error(txn: Transaction) -> ActorbtError:
-    """The exception a caller sees for a transaction that finished without a result."""
+    """The exception a caller sees for a transaction that finished without a result.
+
+    It is tagged with the transaction's id (``transaction_id``): an error that already
+    describes this transaction passes through, while one from a call it made (even to
+    the same actor, recursively) is wrapped, so the call chain stays visible.
+    """
+    err: ActorbtError
     if txn.state is TxnState.CANCELLED:
         if txn.timed_out:
-            return ActorTimeout(txn.path, (txn.deadline or txn.started) - txn.started)
-        return ActorCancelled(txn.path, txn.reason or "cancelled")
-    err = txn.error
-    if isinstance(err, (ActorError, BadArgumentsError)) and getattr(err, "path", None) == txn.path:
-        return err
-    wrapped = ActorError(txn.path, err if err is not None else RuntimeError("no result"))
-    wrapped.__cause__ = err
-    return wrapped
+            err = ActorTimeout(txn.path, (txn.deadline or txn.started) - txn.started)
+        else:
+            err = ActorCancelled(txn.path, txn.reason or "cancelled")
+    else:
+        cause = txn.error
+        if isinstance(cause, ActorbtError) and getattr(cause, "transaction_id", None) == txn.id:
+            return cause
+        err = ActorError(txn.path, cause if cause is not None else RuntimeError("no result"))
+        err.__cause__ = cause
+    err.transaction_id = txn.id  # type: ignore[attr-defined]
+    return err
 
 
 def result_or_raise(txn: Transaction) -> Any:

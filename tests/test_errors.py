@@ -123,3 +123,83 @@ def test_blocking_from_a_hub_callback_is_a_clear_error(rt, faulty):
             errors.append(e)
     rt.run_on_hub(in_callback)
     assert "must not block" in str(errors[0])
+
+
+class Oddity(BaseException):
+    """A custom BaseException subclass, as some libraries raise."""
+
+
+class Unusual(SubSystem):
+    @actor
+    def raises_base(self) -> None:
+        raise Oddity("the driver gave up")
+
+    @actor("async_base", "async")
+    def async_base(self, done):
+        raise Oddity("at start")
+
+    @actor
+    def gen_base(self):
+        yield 1
+        raise Oddity("mid-stream")
+
+    @actor
+    def recurse(self, n: int) -> int:
+        if n == 0:
+            raise ValueError("x" * 5000)
+        return self.run_actor("recurse", n - 1)
+
+
+@pytest.fixture
+def unusual(rt):
+    return rt.add_subsystem("u", Unusual)
+
+
+@pytest.mark.parametrize("name", ["raises_base", "async_base"])
+def test_a_custom_base_exception_fails_the_actor_like_any_other(rt, unusual, name):
+    with pytest.raises(ActorError) as e:
+        rt.call(name)
+    assert e.value.path == f"u.{name}"
+    assert isinstance(e.value.__cause__, Oddity) or isinstance(e.value.root_cause, Oddity)
+    assert "Oddity" in str(e.value)
+    got = []
+    run_in_actor(rt, lambda: (unusual.run_actor_mode(name, "async", got.append), rt.sleep(0.1)))
+    assert isinstance(got[0], Failure) and isinstance(got[0].exception, ActorError)
+
+
+def test_a_custom_base_exception_in_a_stream_ends_it_with_an_actor_error(rt, unusual):
+    def body():
+        with unusual.run_actor_mode("gen_base", "iterator") as it:
+            assert next(it) == 1
+            next(it)
+    with pytest.raises(ActorError) as e:
+        run_in_actor(rt, body)
+    assert "Oddity: mid-stream" in str(e.value)
+
+
+def test_keyboard_interrupt_and_system_exit_are_not_failures(rt):
+    class Quits(SubSystem):
+        @actor
+        def quits(self) -> None:
+            raise SystemExit(3)
+    rt.add_subsystem("q", Quits)
+    with pytest.raises(SystemExit):
+        rt.call("quits")
+
+
+def test_a_chain_of_failures_gives_one_short_message(rt, unusual):
+    with pytest.raises(ActorError) as e:
+        rt.call("recurse", 60)
+    message = str(e.value)
+    assert len(message) < 700, message
+    assert message.startswith("actor u.recurse -> u.recurse")
+    assert "... 57 more ..." in message and "ValueError: xxx" in message
+    assert isinstance(e.value.root_cause, ValueError)
+    assert len(e.value.call_chain) == 61
+
+
+def test_a_long_cause_is_elided_in_the_middle():
+    from bt_engine.errors import shorten
+    text = "head " + "m" * 1000 + " tail"
+    short = shorten(text, 100)
+    assert len(short) <= 100 and short.startswith("head ") and short.endswith(" tail") and " ... " in short

@@ -1,4 +1,8 @@
-"""The layering of DESIGN.md, read from the imports of every module."""
+"""The layering of DESIGN.md, read from the imports of every module.
+
+Every import counts: absolute and relative, at module level, inside functions and under
+``if TYPE_CHECKING:``.
+"""
 from __future__ import annotations
 
 import ast
@@ -7,6 +11,7 @@ import pathlib
 import pytest
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
+ENGINE = ROOT / "bt_engine"
 FORBIDDEN = {
     "bt_engine": {"actors", "planning", "sim"},
     "planning": {"bt_engine", "sim", "actors"},
@@ -53,3 +58,104 @@ def test_public_names_exist():
     import bt_engine
     for name in bt_engine.__all__:
         assert hasattr(bt_engine, name), name
+
+
+# -- inside bt_engine ---------------------------------------------------------------------
+def module_name(path: pathlib.Path) -> str:
+    parts = list(path.relative_to(ROOT).with_suffix("").parts)
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def engine_imports(path: pathlib.Path, modules: set[str]) -> set[str]:
+    """The bt_engine modules ``path`` imports (``from a import b`` names module ``a.b``
+    when it is one, else ``a``)."""
+    parts = list(path.relative_to(ROOT).with_suffix("").parts)
+    package = parts[:-1]  # a package's __init__ and its modules resolve alike
+    found = set()
+    for node in ast.walk(ast.parse(path.read_text(), str(path))):
+        if isinstance(node, ast.Import):
+            names = [a.name for a in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            base = package[:len(package) - node.level + 1] if node.level else []
+            mod = ".".join(base + ([node.module] if node.module else []))
+            names = [f"{mod}.{a.name}" if f"{mod}.{a.name}" in modules else mod for a in node.names]
+        else:
+            continue
+        found |= {n for n in names if n.startswith("bt_engine")}
+    return found
+
+
+def engine_graph() -> dict[str, set[str]]:
+    files = {module_name(f): f for f in ENGINE.rglob("*.py")}
+    modules = set(files)
+    return {m: {n for n in engine_imports(f, modules) if n != m and n in modules}
+            for m, f in files.items()}
+
+
+def cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """Strongly connected components with more than one module (Tarjan)."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    found: list[list[str]] = []
+
+    def visit(v: str) -> None:
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        for w in sorted(graph[v]):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            component = []
+            while True:
+                w = stack.pop()
+                component.append(w)
+                if w == v:
+                    break
+            if len(component) > 1:
+                found.append(sorted(component))
+    for v in sorted(graph):
+        if v not in index:
+            visit(v)
+    return found
+
+
+def test_no_import_cycle_inside_the_engine():
+    assert cycles(engine_graph()) == []
+
+
+def test_the_cycle_finder_finds_a_cycle():
+    assert cycles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]
+
+
+#: which parts of the engine a part may not import (the core is the top-level modules)
+ENGINE_FORBIDDEN = {
+    "bt_engine.bus": ("bt_engine.ros", "bt_engine.trees", "bt_engine.cli", "bt_engine.runtime",
+                      "bt_engine.subsystem", "bt_engine.default"),
+    "core": ("bt_engine.ros", "bt_engine.trees", "bt_engine.cli"),
+    "bt_engine.trees": ("bt_engine.ros", "bt_engine.cli", "bt_engine.default"),
+    "bt_engine.ros": ("bt_engine.cli", "bt_engine.default"),
+}
+
+
+def part_of(module: str) -> str:
+    parts = module.split(".")
+    if len(parts) > 2 or (module + ".__init__").replace(".", "/") + ".py" in _package_inits():
+        return ".".join(parts[:2])
+    return "core" if module != "bt_engine" else "bt_engine"
+
+
+def _package_inits() -> set[str]:
+    return {str(f.relative_to(ROOT)) for f in ENGINE.rglob("__init__.py")}
+
+
+def test_engine_parts_import_only_downwards():
+    bad = []
+    for module, deps in engine_graph().items():
+        forbidden = ENGINE_FORBIDDEN.get(part_of(module), ())
+        bad += [f"{module} imports {d}" for d in sorted(deps)
+                if any(d == f or d.startswith(f + ".") for f in forbidden)]
+    assert not bad, "layering broken:\n" + "\n".join(bad)

@@ -234,7 +234,8 @@ class TimeoutNode(_ParamDecorator):
     def __init__(self, name: str, ctx: RunContext, child: py_trees.behaviour.Behaviour, seconds: Any) -> None:
         super().__init__(name=name, child=child)
         self.ctx = ctx
-        self.seconds = seconds
+        self.seconds = seconds  # a number or a blackboard reference
+        self.resolved = 0.0     # the number it had when the child started [s]
         self.deadline = 0.0
         self.timer: Any = None
         self.error: str | None = None
@@ -242,12 +243,13 @@ class TimeoutNode(_ParamDecorator):
     def initialise(self) -> None:
         seconds, self.error = _number(self.seconds, self.ctx, "timeout seconds", integer=False)
         if self.error is None:
+            self.resolved = seconds
             self.deadline = self.ctx.rt.now() + seconds
             self.timer = self.ctx.rt.call_later(seconds, self.ctx.wake)
 
     def tick(self) -> Iterator[py_trees.behaviour.Behaviour]:
         if self.status is Status.RUNNING and self.ctx.rt.now() >= self.deadline:
-            self.feedback_message = f"timed out after {self.seconds} s"
+            self.feedback_message = f"timed out after {self.resolved:g} s"
             self.stop(Status.FAILURE)  # halts the running child
             yield self
             return
