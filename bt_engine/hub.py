@@ -101,17 +101,16 @@ def _is_ancestor(a: Any, b: Any) -> bool:
 class Waiter:
     """A one-shot wake-up for the task that created it.
 
-    The first ``wake``/``throw`` wins; later ones are ignored, so a timer and a result
-    can race safely.
+    The first ``wake`` wins; later ones are ignored, so a timer and a result can race
+    safely.
     """
 
-    __slots__ = ("task", "fired", "value", "exc")
+    __slots__ = ("task", "fired", "value")
 
     def __init__(self, task: Task) -> None:
         self.task = task
         self.fired = False
         self.value: Any = None
-        self.exc: BaseException | None = None
 
     def wake(self, value: Any = None) -> None:
         if self.fired:
@@ -121,12 +120,6 @@ class Waiter:
         task = self.task
         if task.waiter is self:
             task.hub.ready.append((task._resume, ()))
-
-    def throw(self, exc: BaseException) -> None:
-        if self.fired:
-            return
-        self.exc = exc
-        self.wake()
 
     def wait(self) -> Any:
         """Park the task until woken; raises a pending cancellation first."""
@@ -139,8 +132,6 @@ class Waiter:
             finally:
                 task.waiter = None
             task.raise_pending()
-        if self.exc is not None:
-            raise self.exc
         return self.value
 
 

@@ -17,7 +17,8 @@ from typing import Iterator
 import pytest
 
 from bt_engine import Runtime
-from bt_engine.cli.app import ActorIndex, App
+from bt_engine.cli.actor_index import ActorIndex
+from bt_engine.cli.app import App
 from bt_engine.cli.config import load_config
 from bt_engine.errors import AmbiguousActorError, UnknownActorError
 from bt_engine.trees import TreeLibrary, check_files

@@ -28,7 +28,6 @@ from __future__ import annotations
 
 import dataclasses
 import datetime
-import hashlib
 import json
 import logging
 import math
@@ -289,8 +288,3 @@ class TraceRecorder:
 
     def __exit__(self, *exc: Any) -> None:
         self.close()
-
-
-def file_sha256(path: str | Path) -> str:
-    """sha256 of a file's text, as in the header (the mission's ``source_hash``)."""
-    return hashlib.sha256(Path(path).read_text(encoding="utf-8").encode("utf-8")).hexdigest()
