@@ -21,6 +21,7 @@ __all__ = [
     "DuplicateTreeError",
     "InputError",
     "InvalidValueError",
+    "LimitError",
     "MissionError",
     "MissionSyntaxError",
     "Pos",
@@ -31,7 +32,24 @@ __all__ = [
     "UnknownFieldError",
     "UnknownNodeError",
     "UnresolvedActorError",
+    "shorten",
 ]
+
+#: Longest message a MissionError prints; longer ones lose their middle. Values quoted
+#: in messages are shortened where they are quoted (:func:`shorten`); this is the net.
+MAX_MESSAGE_LENGTH = 1000
+
+
+def shorten(value: object, limit: int = 60) -> str:
+    """``repr(value)``, cut to about ``limit`` characters with ``...`` for error messages
+    that quote what the user wrote (a value may be thousands of characters long)."""
+    text = repr(value)
+    return text if len(text) <= limit else text[: limit - 4] + "..." + text[-1]
+
+
+def _printable(text: str) -> str:
+    # A file name with a newline (or an undecodable byte) must not break the one line.
+    return text if text.isprintable() else "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
 
 
 @dataclass(frozen=True, order=True)
@@ -43,7 +61,7 @@ class Pos:
     column: int
 
     def __str__(self) -> str:
-        return f"{self.file}:{self.line}:{self.column}"
+        return f"{_printable(self.file)}:{self.line}:{self.column}"
 
     def shifted(self, columns: int) -> Pos:
         """The position ``columns`` characters further along the same line."""
@@ -61,12 +79,22 @@ class MissionError(ActorbtError):
     def __init__(self, pos: Pos, message: str) -> None:
         # One line, always: tools grep for ``file:line:col:`` and editors jump to it.
         self.pos = pos
-        self.message = " ".join(message.split())
+        message = " ".join(message.split())
+        if len(message) > MAX_MESSAGE_LENGTH:
+            keep = MAX_MESSAGE_LENGTH // 2
+            message = f"{message[:keep]} ... {message[-keep:]}"  # keep what is wrong and what was expected
+        self.message = message
         super().__init__(f"{pos}: {self.message}")
 
 
 class MissionSyntaxError(MissionError):
     """The file is not valid YAML, or uses YAML features missions do not allow."""
+
+
+class LimitError(MissionSyntaxError):
+    """The file goes past a loader limit: its size, its nesting depth, the length of a
+    value or number. The message names the limit; each is a module constant
+    (``_yaml.MAX_YAML_DEPTH``, ``_parse.MAX_MISSION_SIZE``...)."""
 
 
 class DuplicateKeyError(MissionError):
@@ -121,12 +149,6 @@ class CheckEvaluationError(ActorbtError):
 class InputError(ActorbtError, TypeError):
     """Values given for a tree's inputs do not fit its declared inputs (unknown name,
     missing required input, wrong type). Raised where the tree is called."""
-
-
-class InputError(ActorbtError, TypeError):
-    """Values given for a tree's inputs do not fit its declared inputs (unknown name,
-    missing required input, wrong type). Raised where the tree is called."""
-
 
 
 class TreeFailure(ActorbtError):

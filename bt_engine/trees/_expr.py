@@ -14,17 +14,25 @@ Grammar (lowest precedence first)::
 Comparisons do not chain (``a < b < c`` is an error: write ``a < b and b < c``).
 ``and``/``or`` short-circuit and give booleans. The expression is parsed once, at load
 time, into a small AST; evaluation walks that AST. Nothing is ever handed to ``eval``.
+
+The parser, :func:`keys_of` and :func:`evaluate` recurse over the expression, so its
+depth is limited: each ``(``, ``[``, ``not``, unary ``-`` and each ``and``/``or`` of a
+chain is one level, at most :data:`MAX_EXPR_DEPTH`. Numbers have at most
+:data:`MAX_NUMBER_DIGITS` digits.
 """
 
 from __future__ import annotations
 
 import operator
+import re
 from dataclasses import dataclass
 from typing import Any, Callable, Iterator, Union
 
-from ._errors import CheckEvaluationError
+from ._errors import CheckEvaluationError, shorten
 
 __all__ = [
+    "MAX_EXPR_DEPTH",
+    "MAX_NUMBER_DIGITS",
     "And",
     "Compare",
     "Expr",
@@ -52,7 +60,19 @@ class ExprSyntaxError(ValueError):
         self.offset = offset
 
 
+#: Deepest nesting of a check expression (see the module docstring for what counts).
+#: The parser recurses about five frames per level; 64 keeps it and the evaluator far
+#: below Python's recursion limit, and no sensible check comes near it.
+MAX_EXPR_DEPTH = 64
+
+#: Most digits in a number literal (Python refuses int <-> str past 4,300 digits).
+MAX_NUMBER_DIGITS = 100
+
 # ---------------------------------------------------------------- tokens
+
+# ASCII digits with single '_' between them, as in Python; a fraction; an exponent.
+_NUMBER = re.compile(r"[0-9](?:_?[0-9])*(?:\.[0-9](?:_?[0-9])*)?(?:[eE][+-]?[0-9](?:_?[0-9])*)?"
+                     r"|\.[0-9](?:_?[0-9])*(?:[eE][+-]?[0-9](?:_?[0-9])*)?")
 
 _KEYWORDS = {"and", "or", "not", "in", "true", "false", "null"}
 _OPERATORS = ("==", "!=", "<=", ">=", "<", ">", "(", ")", "[", "]", ",", ".", "-")
@@ -74,30 +94,10 @@ def _tokenize(source: str) -> list[_Token]:
         if c in " \t\r\n":
             i += 1
             continue
-        if c.isdigit() or (c == "." and i + 1 < n and source[i + 1].isdigit()):
-            j = i
-            while j < n and (source[j].isdigit() or source[j] == "_"):
-                j += 1
-            is_float = False
-            if j < n and source[j] == "." and j + 1 < n and source[j + 1].isdigit():
-                is_float = True
-                j += 1
-                while j < n and source[j].isdigit():
-                    j += 1
-            if j < n and source[j] in "eE":
-                k = j + 1
-                if k < n and source[k] in "+-":
-                    k += 1
-                if k < n and source[k].isdigit():
-                    is_float = True
-                    j = k
-                    while j < n and source[j].isdigit():
-                        j += 1
-            if j < n and (source[j].isalpha() or source[j] == "_"):
-                raise ExprSyntaxError(f"malformed number {source[i:j + 1]!r}", i)
-            text = source[i:j]
-            tokens.append(_Token("num", text, float(text) if is_float else int(text), i))
-            i = j
+        number = _NUMBER.match(source, i)
+        if number is not None:
+            tokens.append(_number_token(source, number))
+            i = number.end()
             continue
         if c.isalpha() or c == "_":
             j = i
@@ -126,6 +126,16 @@ def _tokenize(source: str) -> list[_Token]:
             raise ExprSyntaxError(f"unexpected character {c!r}", i)
     tokens.append(_Token("end", "", None, n))
     return tokens
+
+
+def _number_token(source: str, number: re.Match[str]) -> _Token:
+    i, j, text = number.start(), number.end(), number.group()
+    if j < len(source) and (source[j].isalnum() or source[j] == "_"):
+        raise ExprSyntaxError(f"malformed number {shorten(source[i:j + 1])}", i)
+    if sum(c.isdigit() for c in text) > MAX_NUMBER_DIGITS:
+        raise ExprSyntaxError(f"number longer than {MAX_NUMBER_DIGITS} digits, expected a shorter number", i)
+    is_float = any(c in ".eE" for c in text)
+    return _Token("num", text, float(text) if is_float else int(text), i)
 
 
 _ESCAPES = {"n": "\n", "t": "\t", "r": "\r", "\\": "\\", "'": "'", '"': '"', "0": "\0"}
@@ -239,6 +249,17 @@ class _Parser:
         self.source = source
         self.tokens = _tokenize(source)
         self.i = 0
+        self.depth = 0  # levels open on the way to the current token
+
+    def deeper(self, tok: _Token) -> None:
+        """Open one more level at ``tok``; the caller closes it by restoring ``depth``."""
+        self.depth += 1
+        if self.depth > MAX_EXPR_DEPTH:
+            raise ExprSyntaxError(
+                f"expression nested deeper than {MAX_EXPR_DEPTH} levels, expected a flatter expression "
+                "(split it into several check: nodes)",
+                tok.offset,
+            )
 
     @property
     def tok(self) -> _Token:
@@ -254,7 +275,7 @@ class _Parser:
         return tok.kind == kind and (text is None or tok.text == text)
 
     def describe(self, tok: _Token) -> str:
-        return "end of expression" if tok.kind == "end" else repr(tok.text)
+        return "end of expression" if tok.kind == "end" else shorten(tok.text)
 
     def expect(self, kind: str, text: str, what: str) -> _Token:
         if not self.at(kind, text):
@@ -273,23 +294,32 @@ class _Parser:
         return expr
 
     def or_expr(self) -> Expr:
+        depth = self.depth
         left = self.and_expr()
         while self.at("kw", "or"):
             tok = self.advance()
+            self.deeper(tok)  # a chain nests to the left: Or(Or(a, b), c)
             left = Or(left, self.and_expr(), tok.offset)
+        self.depth = depth
         return left
 
     def and_expr(self) -> Expr:
+        depth = self.depth
         left = self.not_expr()
         while self.at("kw", "and"):
             tok = self.advance()
+            self.deeper(tok)
             left = And(left, self.not_expr(), tok.offset)
+        self.depth = depth
         return left
 
     def not_expr(self) -> Expr:
         if self.at("kw", "not"):
             tok = self.advance()
-            return Not(self.not_expr(), tok.offset)
+            self.deeper(tok)
+            operand = self.not_expr()
+            self.depth -= 1
+            return Not(operand, tok.offset)
         return self.comparison()
 
     def comparison(self) -> Expr:
@@ -309,30 +339,18 @@ class _Parser:
 
     def operand(self) -> Expr:
         tok = self.tok
-        if tok.kind == "op" and tok.text == "-":
+        if tok.kind == "op" and tok.text in ("-", "(", "["):
             self.advance()
-            return Neg(self.operand(), tok.offset)
+            self.deeper(tok)
+            inner = self.nested(tok)
+            self.depth -= 1
+            return inner
         if tok.kind in ("num", "str"):
             self.advance()
             return Literal(tok.value, tok.offset)
         if tok.kind == "kw" and tok.text in ("true", "false", "null"):
             self.advance()
             return Literal({"true": True, "false": False, "null": None}[tok.text], tok.offset)
-        if tok.kind == "op" and tok.text == "(":
-            self.advance()
-            inner = self.or_expr()
-            self.expect("op", ")", "')' to close the '('")
-            return inner
-        if tok.kind == "op" and tok.text == "[":
-            self.advance()
-            items: list[Expr] = []
-            while not self.at("op", "]"):
-                items.append(self.or_expr())
-                if not self.at("op", ","):
-                    break
-                self.advance()
-            self.expect("op", "]", "',' or ']' to close the list")
-            return ListExpr(tuple(items), tok.offset)
         if tok.kind == "name":
             self.advance()
             fields: list[str] = []
@@ -342,15 +360,32 @@ class _Parser:
                 if field.kind not in ("name", "kw"):
                     raise ExprSyntaxError(f"unexpected {self.describe(field)}, expected a field name after '.'", field.offset)
                 if field.text.startswith("_"):
-                    raise ExprSyntaxError(f"private field {field.text!r}, expected a public field name", field.offset)
+                    raise ExprSyntaxError(f"private field {shorten(field.text)}, expected a public field name", field.offset)
                 self.advance()
                 fields.append(field.text)
             if tok.text.startswith("__"):
-                raise ExprSyntaxError(f"invalid key {tok.text!r}, expected a blackboard key", tok.offset)
+                raise ExprSyntaxError(f"invalid key {shorten(tok.text)}, expected a blackboard key", tok.offset)
             return Key(tok.text, tuple(fields), tok.offset)
         if tok.kind == "kw":
             raise ExprSyntaxError(f"unexpected keyword {tok.text!r}, expected a value", tok.offset)
         raise ExprSyntaxError(f"unexpected {self.describe(tok)}, expected a value (number, string, key, list)", tok.offset)
+
+    def nested(self, tok: _Token) -> Expr:
+        """What follows an opening ``-``, ``(`` or ``[`` (already consumed)."""
+        if tok.text == "-":
+            return Neg(self.operand(), tok.offset)
+        if tok.text == "(":
+            inner = self.or_expr()
+            self.expect("op", ")", "')' to close the '('")
+            return inner
+        items: list[Expr] = []
+        while not self.at("op", "]"):
+            items.append(self.or_expr())
+            if not self.at("op", ","):
+                break
+            self.advance()
+        self.expect("op", "]", "',' or ']' to close the list")
+        return ListExpr(tuple(items), tok.offset)
 
 
 def parse_expression(source: str) -> Expr:

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ..errors import ActorbtError, UnknownActorError
-from ._errors import DuplicateTreeError, MissionError
+from ._errors import DuplicateTreeError, MissionError, Pos
 from ._model import Mission
 from ._parse import read_mission
 from ._validate import ActorInfo, Resolver, validate_mission
@@ -99,9 +99,12 @@ class TreeLibrary:
         """Parse every ``*.yaml`` / ``*.yml`` file of a folder (not recursive), in name order.
 
         Raises:
-            MissionError: the first file that does not parse.
+            MissionError: the folder cannot be listed, or the first file that does not parse.
         """
-        paths = sorted(p for p in Path(folder).iterdir() if p.suffix in (".yaml", ".yml") and p.is_file())
+        try:
+            paths = sorted(p for p in Path(folder).iterdir() if p.suffix in (".yaml", ".yml") and p.is_file())
+        except OSError as exc:  # missing, not a folder, no permission (also from is_file)
+            raise MissionError(Pos(str(folder), 1, 1), f"cannot read trees folder: {exc.strerror or exc}") from None
         return [self.load_file(p) for p in paths]
 
     # ------------------------------------------------------------ lookup

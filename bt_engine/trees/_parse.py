@@ -7,7 +7,9 @@ trees (names, signatures, blackboard data flow, cycles) is in ``_validate``.
 
 from __future__ import annotations
 
+import codecs
 import difflib
+import keyword
 import re
 from pathlib import Path
 from typing import Any, Iterable
@@ -15,11 +17,13 @@ from typing import Any, Iterable
 from ._errors import (
     CheckExpressionError,
     InvalidValueError,
+    LimitError,
     MissionError,
     MissionSyntaxError,
     Pos,
     UnknownFieldError,
     UnknownNodeError,
+    shorten,
 )
 from ._expr import ExprSyntaxError, keys_of, parse_expression
 from ._model import (
@@ -51,9 +55,14 @@ from ._model import (
 )
 from ._yaml import YMap, YNode, YScalar, YSeq, parse_yaml, plain
 
-__all__ = ["MISSION_FIELDS", "NODE_TYPES", "parse_mission", "read_mission", "suggest"]
+__all__ = ["MAX_MISSION_SIZE", "MISSION_FIELDS", "NODE_TYPES", "parse_mission", "read_mission", "suggest"]
 
 MISSION_FIELDS = ("name", "doc", "inputs", "outputs", "root")
+
+#: Largest mission, in bytes read from a file or characters given as text. Real
+#: missions are a few kilobytes; this bounds the time one file can take (pure-Python
+#: YAML reads a dense mission at roughly 100 kB/s: a few seconds at most).
+MAX_MISSION_SIZE = 250_000
 
 _COMPOSITES: dict[str, type[Composite]] = {
     "sequence": Sequence,
@@ -80,10 +89,18 @@ _REF = re.compile(r"\{([A-Za-z_][A-Za-z0-9_]*)((?:\.[A-Za-z][A-Za-z0-9_]*)*)\}\Z
 _INNER_REF = re.compile(r"(?<!\{)\{[A-Za-z_][A-Za-z0-9_.]*\}(?!\})")
 
 
+#: Most choices :func:`suggest` compares a word with (difflib takes ~10 us a choice).
+MAX_SUGGESTION_CHOICES = 500
+
+
 def suggest(word: str, choices: Iterable[str]) -> str:
-    """``" (did you mean 'x'?)"`` for the closest choice, or ``""``."""
-    close = difflib.get_close_matches(word, list(choices), n=1, cutoff=0.6)
-    return f" (did you mean {close[0]!r}?)" if close else ""
+    """``" (did you mean 'x'?)"`` for the closest choice, or ``""`` (also when there are
+    more than MAX_SUGGESTION_CHOICES to compare with)."""
+    choices = list(choices)
+    if len(choices) > MAX_SUGGESTION_CHOICES:
+        return ""
+    close = difflib.get_close_matches(word, choices, n=1, cutoff=0.6)
+    return f" (did you mean {shorten(close[0])}?)" if close else ""
 
 
 def _kind(node: YNode) -> str:
@@ -93,7 +110,7 @@ def _kind(node: YNode) -> str:
         return "a list"
     if node.value is None:
         return "nothing"
-    return f"{type(node.value).__name__} {node.raw!r}"
+    return f"{type(node.value).__name__} {shorten(node.raw)}"
 
 
 class _Parser:
@@ -109,7 +126,7 @@ class _Parser:
             if key.raw not in allowed:
                 raise UnknownFieldError(
                     key.pos,
-                    f"unknown field {key.raw!r} in {what}{suggest(key.raw, allowed)}, "
+                    f"unknown field {shorten(key.raw)} in {what}{suggest(key.raw, allowed)}, "
                     f"expected one of: {', '.join(allowed)}",
                 )
 
@@ -122,7 +139,7 @@ class _Parser:
         text = self.string(node, what)
         if not _IDENT.match(text):
             raise InvalidValueError(
-                node.pos, f"{what} {text!r} is not a valid name, expected letters, digits and '_' (e.g. target_pose)"
+                node.pos, f"{what} {shorten(text)} is not a valid name, expected letters, digits and '_' (e.g. target_pose)"
             )
         return text
 
@@ -171,7 +188,7 @@ class _Parser:
             if inner is not None:
                 raise InvalidValueError(
                     node.pos_at(inner.start()),
-                    f"{inner.group(0)} inside the string {node.value!r}: a blackboard reference must be the whole "
+                    f"{inner.group(0)} inside the string {shorten(node.value)}: a blackboard reference must be the whole "
                     f"string, expected \"{inner.group(0)}\" alone (write {{{{ }}}} for literal braces)",
                 )
             return node.value.replace("{{", "{").replace("}}", "}")
@@ -216,7 +233,7 @@ class _Parser:
         except ValueError:
             names = [t.value for t in ValueType]
             raise InvalidValueError(
-                node.pos, f"unknown type {text!r}{suggest(text, names)}, expected one of: {', '.join(names)}"
+                node.pos, f"unknown type {shorten(text)}{suggest(text, names)}, expected one of: {', '.join(names)}"
             ) from None
 
     def inputs(self, node: YNode | None) -> tuple[InputSpec, ...]:
@@ -226,6 +243,10 @@ class _Parser:
         specs = []
         for key, spec in m.items:
             name = self.ident(key, "input name")
+            if keyword.iskeyword(name):  # inputs are the parameters of the tree as an actor
+                raise InvalidValueError(
+                    key.pos, f"input name {name!r} is a Python keyword, expected a name a parameter can have"
+                )
             if isinstance(spec, YScalar) and isinstance(spec.value, str):
                 specs.append(InputSpec(name, self.type_name(spec), REQUIRED, None, key.pos))
                 continue
@@ -305,13 +326,13 @@ class _Parser:
                 key = others[0]
                 raise UnknownNodeError(
                     key.pos,
-                    f"unknown node type {key.raw!r}{suggest(key.raw, NODE_TYPES)}, expected one of: {', '.join(NODE_TYPES)}",
+                    f"unknown node type {shorten(key.raw)}{suggest(key.raw, NODE_TYPES)}, expected one of: {', '.join(NODE_TYPES)}",
                 )
             raise UnknownNodeError(y.pos, f"node has no type, expected one of: {', '.join(NODE_TYPES)}")
         if len(types) > 1:
             raise UnknownNodeError(
                 types[1].pos,
-                f"node has two types {types[0].raw!r} and {types[1].raw!r}, expected exactly one per node "
+                f"node has two types {shorten(types[0].raw)} and {shorten(types[1].raw)}, expected exactly one per node "
                 "(put several nodes in a sequence)",
             )
         kind = types[0].raw
@@ -324,7 +345,7 @@ class _Parser:
         if name_node is not None:
             name = self.string(name_node, "name")
             if not name.strip() or "/" in name:
-                raise InvalidValueError(name_node.pos, f"name {name!r} is not a valid node name, expected non-empty text without '/'")
+                raise InvalidValueError(name_node.pos, f"name {shorten(name)} is not a valid node name, expected non-empty text without '/'")
             common["name"] = name
         value = y.get(kind)
         if kind in _COMPOSITES:
@@ -376,7 +397,7 @@ class _Parser:
             except ValueError:
                 names = [p.value for p in ParallelPolicy]
                 raise InvalidValueError(
-                    policy_node.pos, f"unknown policy {text!r}{suggest(text, names)}, expected one of: {', '.join(names)}"
+                    policy_node.pos, f"unknown policy {shorten(text)}{suggest(text, names)}, expected one of: {', '.join(names)}"
                 ) from None
         selected: list[str] = []
         selected_node = m.get("selected")
@@ -393,7 +414,7 @@ class _Parser:
                 if text not in names:
                     raise InvalidValueError(
                         item.pos,
-                        f"no child named {text!r} in this parallel{suggest(text, names)}, "
+                        f"no child named {shorten(text)} in this parallel{suggest(text, names)}, "
                         f"expected one of the children's names: {', '.join(names) or '(give children a name:)'}",
                     )
                 if text in selected:
@@ -435,7 +456,7 @@ class _Parser:
     def leaf_do(self, y: YMap, value: YNode, common: dict[str, Any]) -> Node:
         actor = self.string(value, "do")
         if not _ACTOR_NAME.match(actor):
-            raise InvalidValueError(value.pos, f"do {actor!r} is not an actor name, expected e.g. navigate or robot.navigation.goto")
+            raise InvalidValueError(value.pos, f"do {shorten(actor)} is not an actor name, expected e.g. navigate or robot.navigation.goto")
         args: tuple[Any, ...] = ()
         kwargs: dict[str, Any] = {}
         arg_pos: dict[str, Pos] = {}
@@ -487,7 +508,7 @@ class _Parser:
     def leaf_behaviour(self, y: YMap, value: YNode, common: dict[str, Any]) -> Node:
         name = self.string(value, "behaviour")
         if not _ACTOR_NAME.match(name):
-            raise InvalidValueError(value.pos, f"behaviour {name!r} is not a registered name, expected e.g. CheckBattery")
+            raise InvalidValueError(value.pos, f"behaviour {shorten(name)} is not a registered name, expected e.g. CheckBattery")
         kwargs: dict[str, Any] = {}
         arg_pos: dict[str, Pos] = {}
         with_node = y.get("with")
@@ -510,8 +531,38 @@ def parse_mission(source: str, file: str = "<mission>") -> Mission:
 
     Raises:
         MissionError: the first problem found, as ``file:line:column: message``.
+        LimitError: the text is longer than MAX_MISSION_SIZE, or goes past a limit of
+            the YAML reader or the check: language.
     """
+    if len(source) > MAX_MISSION_SIZE:
+        raise LimitError(Pos(file, 1, 1), f"mission longer than {MAX_MISSION_SIZE} characters, expected a smaller file")
     return _Parser(file, source).mission()
+
+
+def _read_bytes(path: str | Path, file: str) -> bytes:
+    # Read at most one byte past the limit: the file may be /dev/zero or still growing.
+    try:
+        with open(path, "rb") as stream:
+            data = stream.read(MAX_MISSION_SIZE + 1)
+    except (OSError, ValueError) as exc:  # ValueError: a NUL in the path
+        raise MissionError(Pos(file, 1, 1), f"cannot read mission file: {getattr(exc, 'strerror', None) or exc}") from None
+    if len(data) > MAX_MISSION_SIZE:
+        raise LimitError(Pos(file, 1, 1), f"file larger than {MAX_MISSION_SIZE} bytes, expected a mission file")
+    return data
+
+
+def _decode(data: bytes, file: str) -> str:
+    if data.startswith((codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE)):
+        raise MissionSyntaxError(Pos(file, 1, 1), "file is UTF-16 text, expected UTF-8")
+    try:
+        return data.decode("utf-8-sig")  # a UTF-8 BOM is dropped, so columns on line 1 stay right
+    except UnicodeDecodeError as exc:
+        line_start = data.rfind(b"\n", 0, exc.start) + 1
+        line = data.count(b"\n", 0, exc.start) + 1
+        column = len(data[line_start:exc.start].decode("utf-8-sig" if line_start == 0 else "utf-8", "replace")) + 1
+        raise MissionSyntaxError(
+            Pos(file, line, column), f"file is not UTF-8 text (byte 0x{data[exc.start]:02X}), expected a YAML mission"
+        ) from None
 
 
 def read_mission(path: str | Path) -> Mission:
@@ -519,15 +570,7 @@ def read_mission(path: str | Path) -> Mission:
 
     Raises:
         MissionError: unreadable file, or a problem in it.
+        LimitError: a file larger than MAX_MISSION_SIZE bytes.
     """
     file = str(path)
-    try:
-        data = Path(path).read_bytes()
-    except OSError as exc:
-        raise MissionError(Pos(file, 1, 1), f"cannot read mission file: {exc.strerror or exc}") from None
-    try:
-        source = data.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        line = data[: exc.start].count(b"\n") + 1
-        raise MissionSyntaxError(Pos(file, line, 1), "file is not UTF-8 text, expected a YAML mission") from None
-    return parse_mission(source, file)
+    return parse_mission(_decode(_read_bytes(path, file), file), file)

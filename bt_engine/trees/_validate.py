@@ -16,12 +16,14 @@ from ._errors import (
     ActorbtError,
     ArgumentMismatchError,
     InvalidValueError,
+    LimitError,
     MissionError,
     Pos,
     SubtreeCycleError,
     UnknownBehaviourError,
     UnknownBlackboardKeyError,
     UnresolvedActorError,
+    shorten,
 )
 from ._model import (
     Check,
@@ -40,7 +42,7 @@ from ._model import (
 )
 from ._parse import suggest
 
-__all__ = ["ActorInfo", "Resolver", "annotation_type", "format_signature", "validate_mission"]
+__all__ = ["MAX_ERRORS", "ActorInfo", "Resolver", "annotation_type", "format_signature", "validate_mission"]
 
 
 class ActorInfo(Protocol):
@@ -53,6 +55,10 @@ class ActorInfo(Protocol):
 
 #: ``name -> ActorInfo``; raises an error with ``.suggestions`` for unknown names.
 Resolver = Callable[[str], ActorInfo]
+
+#: Validation of one mission stops after this many problems: nobody reads more, and
+#: each may search for close matches (a megabyte of bad keys would take hours).
+MAX_ERRORS = 100
 
 _BUILTIN_TYPES = {str: ValueType.STR, int: ValueType.INT, float: ValueType.FLOAT, bool: ValueType.BOOL,
                   list: ValueType.LIST, tuple: ValueType.LIST, dict: ValueType.DICT}
@@ -137,10 +143,16 @@ class _Validator:
         self.resolved: dict[int, ActorInfo] = {}
         self.key_types: dict[str, ValueType] = {}  # every key written, with its static type
 
+    @property
+    def full(self) -> bool:
+        return len(self.errors) >= MAX_ERRORS
+
     def run(self) -> list[MissionError]:
         self.resolve_actors()
         self.collect_writers()
         for node in walk(self.mission.root):
+            if self.full:
+                break
             if isinstance(node, Do):
                 self.check_do(node)
             elif isinstance(node, SetValues):
@@ -158,14 +170,19 @@ class _Validator:
             elif isinstance(node, UseBehaviour):
                 self.check_behaviour(node)
         for spec in self.mission.outputs:
-            if spec.name not in self.key_types:
+            if spec.name not in self.key_types and not self.full:
                 self.errors.append(UnknownBlackboardKeyError(
                     spec.pos,
                     f"output {spec.name!r} is never written, expected a key set by out:, set: or writes: in the tree"
                     f"{suggest(spec.name, self.key_types)}",
                 ))
         self.check_cycles()
-        return sorted(self.errors, key=lambda e: (e.pos.line, e.pos.column))
+        errors = sorted(self.errors, key=lambda e: (e.pos.line, e.pos.column))
+        if not self.full:
+            return errors
+        errors = errors[:MAX_ERRORS]
+        return [*errors, LimitError(errors[-1].pos, f"more than {MAX_ERRORS} problems in this mission, "
+                                                    "stopped checking (fix these first)")]
 
     # ------------------------------------------------------------ actors
 
@@ -173,6 +190,8 @@ class _Validator:
         if self.resolver is None:
             return
         for node in walk(self.mission.root):
+            if self.full:
+                break
             if not isinstance(node, Do):
                 continue
             try:
@@ -181,9 +200,9 @@ class _Validator:
                 suggestions = getattr(exc, "suggestions", None)
                 if suggestions is not None:
                     hint = f" (did you mean {' or '.join(repr(s) for s in suggestions)}?)" if suggestions else ""
-                    message = f"unknown actor {node.actor!r}{hint}, expected a registered actor or tree name"
+                    message = f"unknown actor {shorten(node.actor)}{hint}, expected a registered actor or tree name"
                 else:
-                    message = f"cannot resolve actor {node.actor!r}: {exc}"
+                    message = f"cannot resolve actor {shorten(node.actor)}: {exc}"
                 self.errors.append(UnresolvedActorError(node.at("do"), message))
 
     def check_do(self, node: Do) -> None:
@@ -235,7 +254,7 @@ class _Validator:
                 ))
         elif not any(refs_in(value)) and not expected.accepts(value):
             self.errors.append(ArgumentMismatchError(
-                pos, f"{what} expects {_a(expected)}, got {type(value).__name__} {value!r}"
+                pos, f"{what} expects {_a(expected)}, got {type(value).__name__} {shorten(value)}"
             ))
 
     # ------------------------------------------------------------ blackboard
@@ -319,25 +338,39 @@ class _Validator:
             if isinstance(node, Do) and node.actor in self.trees:
                 yield node.actor, node
 
+    def path_back(self, callee: str) -> list[str] | None:
+        """Trees ``callee -> ... -> this mission`` through ``do:`` calls, if there is a path.
+
+        Depth first with an explicit stack: a folder may chain more trees than Python
+        may recurse.
+        """
+        assert self.trees is not None
+        start = self.mission.name
+        came_from: dict[str, str | None] = {callee: None}
+        stack = [callee]
+        while stack:
+            name = stack.pop()
+            if name == start:
+                path = [name]
+                while (previous := came_from[path[-1]]) is not None:
+                    path.append(previous)
+                return path[::-1]
+            if name not in self.trees:
+                continue
+            calls = [c for c, _ in self.tree_calls(self.trees[name]) if c not in came_from]
+            for next_name in reversed(calls):  # reversed: the first call is explored first
+                came_from[next_name] = name
+                stack.append(next_name)
+        return None
+
     def check_cycles(self) -> None:
         if self.trees is None:
             return
         start = self.mission.name
-
-        def path_back(name: str, seen: set[str]) -> list[str] | None:
-            if name == start:
-                return [name]
-            if name in seen or name not in self.trees:
-                return None
-            seen.add(name)
-            for callee, _ in self.tree_calls(self.trees[name]):
-                rest = path_back(callee, seen)
-                if rest is not None:
-                    return [name, *rest]
-            return None
-
         for callee, node in self.tree_calls(self.mission):
-            cycle = path_back(callee, set())
+            if self.full:
+                break
+            cycle = self.path_back(callee)
             if cycle is not None:
                 self.errors.append(SubtreeCycleError(
                     node.at("do"),
