@@ -7,7 +7,7 @@ import contextlib
 from threading import get_ident
 from typing import Any, Callable, Iterator
 
-from .errors import ActorbtError, BadModeError
+from .errors import ActorbtError
 from .external import call_from_thread
 from .invoke import dispatch
 from .modes import Mode
@@ -43,16 +43,7 @@ class CallApi:
         ``'timed_iterator'`` take the seconds first; the actor's arguments follow.
         """
         m = Mode.parse(mode)
-        cb = seconds = None
-        if m in (Mode.ASYNC, Mode.MULTI):
-            if not args or not (args[0] is None or callable(args[0])):
-                raise BadModeError(f"mode {m.value!r} needs a callback (or None) before the "
-                                   "actor's arguments")
-            cb, args = args[0], args[1:]
-        elif m in (Mode.TIMED, Mode.TIMED_ITERATOR):
-            if not args or not isinstance(args[0], (int, float)) or isinstance(args[0], bool):
-                raise BadModeError(f"mode {m.value!r} needs the seconds before the actor's arguments")
-            seconds, args = float(args[0]), args[1:]
+        cb, seconds, args = m.split_args(args)
         return self._dispatch(name, m, args, kwargs, cb, seconds)
 
     def run_actor_async(self, name: str, callback: Callable[[Any], Any] | None, /, *args: Any,

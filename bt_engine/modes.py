@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import difflib
 import enum
+from typing import Any, Callable
 
 from .errors import BadModeError
 
@@ -62,6 +63,24 @@ class Mode(enum.Enum):
             raise BadModeError(
                 f"unknown call mode {value!r}{hint}; expected one of: {', '.join(_MODE_NAMES)}"
             ) from None
+
+    def split_args(self, args: tuple) -> "tuple[Callable | None, float | None, tuple]":
+        """The proposal's positional form: ``(callback, seconds, actor arguments)``.
+
+        ``async`` and ``multi`` take the callback first; ``timed`` and ``timed_iterator``
+        take the seconds first.
+        """
+        if self in (Mode.ASYNC, Mode.MULTI):
+            if not args or not (args[0] is None or callable(args[0])):
+                raise BadModeError(f"mode {self.value!r} needs a callback (or None) before the "
+                                   "actor's arguments")
+            return args[0], None, args[1:]
+        if self in (Mode.TIMED, Mode.TIMED_ITERATOR):
+            first: Any = args[0] if args else None
+            if not isinstance(first, (int, float)) or isinstance(first, bool):
+                raise BadModeError(f"mode {self.value!r} needs the seconds before the actor's arguments")
+            return None, float(first), args[1:]
+        return None, None, args
 
 
 #: the enum values, plus the word orders ros_actor programs use ('timed' + a base mode)

@@ -10,8 +10,9 @@ Threads: one private rclpy Context per transport, one node, one executor thread
 (:class:`bt_engine.ros.host.RosHost`). Message callbacks hand over to the hub with
 ``call_soon_threadsafe``; goals are sent from the executor thread.
 
-Under the virtual clock, a goal or service request in flight counts as outside work
-(like ``offload``): virtual time does not jump past it. Waiting on a topic does not.
+Everything here completes from the executor thread, so under the virtual clock a goal,
+a request or a subscriber waiting for a message keeps virtual time at wall pace (the
+rule of :class:`bt_engine.clock.VirtualClock`): a deadline never overtakes a reply.
 """
 from __future__ import annotations
 
@@ -148,7 +149,6 @@ class RosTransport(Transport):
             msg = build_message(goal_type, goal, fields)
             call = GoalCall(client, server, waiter, msg, server_timeout=self.server_timeout,
                             on_result=done, on_error=done.fail)
-            self._count_outside(done)
             host.post(call.start)
             return lambda: self._post_quietly(call.cancel)
 
@@ -168,7 +168,6 @@ class RosTransport(Transport):
             msg = build_message(req_type, request, fields)
             call = ServiceCall(client, server, waiter, msg, server_timeout=self.server_timeout,
                                on_result=done, on_error=done.fail)
-            self._count_outside(done)
             host.post(call.start)
             return lambda: self._post_quietly(call.cancel)
 
@@ -176,18 +175,6 @@ class RosTransport(Transport):
                "return the response.")
         return scope.add_actor(name, call_service, Kind.ASYNC, doc=doc,
                                signature=_message_signature("request", req_type))
-
-    def _count_outside(self, done: Any) -> None:
-        """Under the virtual clock, hold time still while the request is in flight."""
-        rt = self._rt
-        if not rt.clock.virtual:
-            return
-        hub = rt.hub
-        hub.outside_pending += 1
-
-        def release(_txn: Any) -> None:
-            hub.outside_pending -= 1
-        done.txn.add_done_callback(release)
 
     def _post_quietly(self, fn: Callable[[], Any]) -> None:
         try:
