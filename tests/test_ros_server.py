@@ -100,6 +100,28 @@ def test_mission_goal_reports_ticks_and_is_recorded(served):
     assert any(e["type"] == "end" and e["status"] == "SUCCESS" for e in events)
 
 
+def test_a_goal_trace_replays(served, capsys):
+    """`actorbt replay` of the trace serve wrote for a goal (wall clock, the recorder opened
+    before the run starts), while another caller runs the same tree in the same runtime."""
+    from bt_engine.cli.main import main
+    rt, server, remote, tmp = served
+    before = set((tmp / "goals").glob("*steps_tree*.jsonl"))
+    other = threading.Event()
+    rt.run_on_hub(lambda: rt.start("steps_tree", steps=4, period=0.015, on_done=lambda _: other.set()))
+    g = remote.tree_goal("steps_tree", "{steps: 3, period: 0.02}")
+    assert g.wait(10.0) and g.status == "succeeded", g.error
+    assert other.wait(10.0)
+    new = set((tmp / "goals").glob("*steps_tree*.jsonl")) - before
+    assert len(new) == 1, new
+    trace = new.pop()
+    assert wait_until(lambda: '"phase":"end","txn"' in trace.read_text().splitlines()[-1], 2.0)
+    header = json.loads(trace.read_text().splitlines()[0])
+    assert header["clock"] == "wall" and header["inputs"] == {"steps": 3, "period": 0.02}
+    assert main(["replay", str(trace)]) == 0
+    out = capsys.readouterr().out
+    assert "replay of steps_tree: OK" in out, out
+
+
 def test_call_actor_results_and_failures(served):
     rt, server, remote, tmp = served
     assert remote.call("work.echo", 1, "two", k=[3]) == {"args": [1, "two"], "kwargs": {"k": [3]}}

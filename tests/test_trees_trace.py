@@ -6,6 +6,7 @@ import dataclasses
 import json
 import logging
 import shutil
+import threading
 import textwrap
 from pathlib import Path
 
@@ -241,3 +242,144 @@ def test_plot_draws_a_timeline(folder: Path, tmp_path: Path) -> None:
     record(folder, trace)
     out = plot_trace(trace, tmp_path / "timeline.png")
     assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+# -- every way in replays (issue cli-dx 6): run --record, a call nested in another actor,
+# TraceRecorder around rt.call; on the virtual and the wall clock. `serve` goals are in
+# tests/test_ros_server.py.
+
+NAP = """\
+name: nap
+inputs: {tag: {type: str, default: a}}
+outputs: [said]
+root:
+  sequence:
+    - {name: first, do: sleep, with: {seconds: 0.05}}
+    - {name: say, do: echo, with: {value: "{tag}"}, out: said}
+    - {name: pause, wait: 0.03}
+    - {name: last, do: sleep, with: {seconds: 0.02}}
+"""
+
+
+class Caller(SubSystem):
+    @actor
+    def outer(self, tag: str = "a") -> object:
+        """Calls the tree from inside another actor's transaction."""
+        self.run_actor("sleep", 0.01)
+        return self.run_actor("nap", tag=tag)
+
+
+@pytest.fixture
+def nap_folder(tmp_path: Path) -> Path:
+    trees = tmp_path / "trees"
+    trees.mkdir()
+    (trees / "nap.yaml").write_text(NAP)
+    return trees
+
+
+@pytest.mark.parametrize("clock", ["virtual", "wall"])
+def test_actorbt_run_record_replays(nap_folder: Path, tmp_path: Path, clock: str,
+                                    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture) -> None:
+    from bt_engine.cli.main import main
+    config = tmp_path / "actorbt.yaml"
+    config.write_text("subsystems: {script: bt_engine.trees.testing:ScriptedActors}\n"
+                      "trees: trees\nworld: null\n")
+    monkeypatch.chdir(tmp_path)
+    trace = tmp_path / "run.jsonl"
+    assert main(["--config", str(config), "run", "nap", "--arg", "tag=b", "--quiet", "--json",
+                 "--record", str(trace), "--clock", clock]) == 0
+    assert json.loads(capsys.readouterr().out) == {"said": "b"}
+    assert read_trace(trace)[0]["clock"] == clock
+    assert main(["replay", str(trace)]) == 0
+    out = capsys.readouterr().out
+    assert "replay of nap: OK" in out, out
+
+
+@pytest.mark.parametrize("clock", ["virtual", "wall"])
+@pytest.mark.parametrize("way", ["python", "nested"])
+def test_a_recorder_around_rt_call_replays(nap_folder: Path, tmp_path: Path, clock: str, way: str) -> None:
+    """Python: TraceRecorder around rt.call(tree), opened well before the tree starts;
+    nested: the tree called by another actor (as `actorbt call outer` would)."""
+    trace = tmp_path / "run.jsonl"
+    with Runtime(clock=clock) as rt:
+        rt.add_subsystem("script", ScriptedActors)
+        rt.add_subsystem("caller", Caller)
+        host = TreeHost(rt)
+        host.load_folder(nap_folder)
+        with TraceRecorder(trace, host, tree="nap", inputs={"tag": "b"}):
+            rt.call("sleep", 0.1)  # the run starts 0.1 s after the recording
+            if way == "python":
+                assert rt.call("nap", tag="b") == {"said": "b"}
+            else:
+                assert rt.call("caller.outer", tag="b") == {"said": "b"}
+    header, events = read_trace(trace)
+    assert header["clock"] == clock
+    assert events[0]["t"] >= 0.1
+    report = replay(trace, trees=nap_folder)
+    assert report.ok, str(report)
+    assert report.compared > 10
+
+
+def test_replay_times_are_relative_to_the_run_start(nap_folder: Path, tmp_path: Path) -> None:
+    """A virtual-clock recording is compared exactly, from the run's start: a changed
+    wait shows, and the report prints times from the run's start."""
+    trace = tmp_path / "run.jsonl"
+    with Runtime() as rt:
+        rt.add_subsystem("script", ScriptedActors)
+        host = TreeHost(rt)
+        host.load_folder(nap_folder)
+        with TraceRecorder(trace, host, tree="nap"):
+            rt.call("sleep", 5.0)
+            rt.call("nap")
+    path = nap_folder / "nap.yaml"
+    path.write_text(NAP.replace("pause, wait: 0.03", "pause, wait: 0.04"))
+    report = replay(trace, trees=nap_folder)
+    assert not report.ok
+    assert "[t=0.080s run 1]" in str(report.divergence), str(report)
+    assert "t=5." not in str(report.divergence)
+
+
+def test_wall_clock_recordings_allow_jitter_but_not_a_changed_wait(nap_folder: Path, tmp_path: Path) -> None:
+    trace = tmp_path / "run.jsonl"
+    with Runtime(clock="wall") as rt:
+        rt.add_subsystem("script", ScriptedActors)
+        host = TreeHost(rt)
+        host.load_folder(nap_folder)
+        with TraceRecorder(trace, host, tree="nap"):
+            rt.call("nap")
+    # jitter: every recorded time moved by up to 50 ms (more than the wall tolerance allows
+    # in total, less than it allows between two events)
+    lines = trace.read_text().splitlines()
+    shifted = [lines[0]]
+    for i, line in enumerate(lines[1:]):
+        e = json.loads(line)
+        e["t"] += 0.05 * (i % 2)
+        shifted.append(json.dumps(e))
+    jittery = tmp_path / "jittery.jsonl"
+    jittery.write_text("\n".join(shifted) + "\n")
+    assert replay(jittery, trees=nap_folder).ok
+    (nap_folder / "nap.yaml").write_text(NAP.replace("pause, wait: 0.03", "pause, wait: 0.5"))
+    report = replay(trace, trees=nap_folder)
+    assert not report.ok, str(report)
+    assert "tick 4, got [t=0.55" in str(report.divergence), str(report)  # the tick after the pause
+
+
+def test_a_recorder_that_follows_a_transaction_skips_other_runs(nap_folder: Path, tmp_path: Path) -> None:
+    trace = tmp_path / "run.jsonl"
+    with Runtime() as rt:
+        rt.add_subsystem("script", ScriptedActors)
+        host = TreeHost(rt)
+        host.load_folder(nap_folder)
+        with TraceRecorder(trace, host, tree="nap", inputs={"tag": "b"}, transactions=True) as rec:
+            done = [threading.Event(), threading.Event()]
+
+            def start() -> None:
+                mine = rt.start("nap", tag="b", on_done=lambda _: done[0].set())
+                rec.follow(mine)
+                rt.start("nap", tag="other", on_done=lambda _: done[1].set())
+            rt.run_on_hub(start)
+            assert done[0].wait(10) and done[1].wait(10)
+    _, events = read_trace(trace)
+    assert {e["run"] for e in events if "run" in e} == {1}
+    assert not any(e.get("value") == "other" for e in events)
+    assert replay(trace, trees=nap_folder).ok

@@ -10,7 +10,11 @@ feedback from the trees layer's progress, and a trace of every goal.
   ticks) and a last one when the run finishes. Other tree actors get a last
   ``success`` or ``failure``.
 - With the owner's ``record_dir``, each goal is recorded as a JSON Lines trace,
-  ``<record_dir>/<time>-<tree>-<goal id>.jsonl``.
+  ``<record_dir>/<time>-<tree>-<goal id>.jsonl``, that ``actorbt replay`` replays.
+  The recorder follows the goal's transaction, so the trace holds only the goal's runs
+  (not those of other goals that overlap it), and it records the wall clock
+  (``clock: wall`` in the header): the replay compares times relative to the run's
+  start, with a tolerance (see :mod:`bt_engine.trees._replay`).
 """
 from __future__ import annotations
 
@@ -109,6 +113,8 @@ class TreeGoal(ServedGoal):
 
     def started(self, txn: Any) -> None:
         self.server.progress.goals[txn.id] = self
+        if self.recorder is not None:
+            self.recorder.follow(txn)  # only this goal's runs and transactions
 
     def ended(self) -> None:
         if self.txn is not None:

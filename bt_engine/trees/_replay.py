@@ -5,7 +5,28 @@ out as recorded; the first event that differs is reported.
 Calls to other *trees* are not answered from the recording: those trees run again too,
 so an edited subtree is caught as well. Each answered call finishes after the recorded
 duration on the virtual clock, with the recorded value or failure; a call that was
-cancelled in the recording waits until the replayed tree halts it.
+cancelled in the recording waits until the replayed tree halts it. The replay ticks with
+the recorded host's ``max_period`` and ``behaviour_period`` (header keys; older traces
+have none: the defaults).
+
+What is compared (the rule, whichever way the recording was made: ``actorbt run
+--record``, a ``serve`` goal, ``TraceRecorder`` around ``rt.call``):
+
+- The events of types :data:`COMPARED`, in order, each on its type and the keys in
+  ``_KEYS`` (``log``, ``txn`` and other events are informative only).
+- Times are compared **relative to the recorded run's start**: the first compared event
+  of the recording is its time zero, and the first event of the replay is the replay's.
+  When the recorder was opened (the header's ``start``) does not matter, so a recording
+  that began before the tree was started (``serve`` opens it when a goal is accepted,
+  and the goal waits for its turn) replays all the same. Reports print these times.
+- A recording on the **virtual clock** (header ``clock: virtual``) is deterministic:
+  every time must match within :data:`TIME_TOLERANCE` (1 us).
+- A recording on the **wall clock** (``clock: wall``: ``serve``, robots) has jitter
+  (scheduling, timer latency) that the replay, on the virtual clock, does not: there the
+  time *between consecutive compared events* must match within
+  ``WALL_TOLERANCE[0] + WALL_TOLERANCE[1] * recorded gap`` (0.2 s + 10 %). Gaps, not
+  absolute times, so that latencies do not add up over a long run; a changed ``wait`` or
+  ``timeout`` of more than that still shows as a divergence.
 """
 
 from __future__ import annotations
@@ -41,7 +62,11 @@ _KEYS = {
     "write": ("run", "key", "value"),
     "end": ("run", "status", "outputs"),
 }
-_TIME_TOLERANCE = 1e-6
+#: Times of a virtual-clock recording must match within this [s].
+TIME_TOLERANCE = 1e-6
+#: A wall-clock recording: the gap between two compared events may differ by
+#: ``absolute + relative * recorded gap`` [s] (see the module docstring).
+WALL_TOLERANCE = (0.2, 0.1)
 
 
 class ReplayError(ActorbtError):
@@ -117,11 +142,22 @@ def describe_event(event: dict[str, Any] | None) -> str:
     return f"[{where}] {what}"
 
 
-def _same(expected: dict[str, Any], got: dict[str, Any]) -> bool:
+def _same(expected: dict[str, Any], got: dict[str, Any], previous: tuple[dict, dict] | None = None,
+          wall: bool = False) -> bool:
+    """Whether ``got`` matches ``expected`` (times relative to the run's start); on the wall
+    clock, the gaps since the ``previous`` (expected, got) pair are compared instead."""
     kind = expected.get("type")
     if kind != got.get("type"):
         return False
-    if abs(float(expected.get("t", 0.0)) - float(got.get("t", 0.0))) > _TIME_TOLERANCE:
+    t_want, t_got = float(expected.get("t", 0.0)), float(got.get("t", 0.0))
+    if wall:
+        if previous is not None:
+            t_want -= float(previous[0].get("t", 0.0))
+            t_got -= float(previous[1].get("t", 0.0))
+        absolute, relative = WALL_TOLERANCE
+        if abs(t_want - t_got) > absolute + relative * abs(t_want):
+            return False
+    elif abs(t_want - t_got) > TIME_TOLERANCE:
         return False
     return all(expected.get(k) == got.get(k) for k in _KEYS.get(kind, ()))
 
@@ -250,19 +286,28 @@ class ReplayHost(TreeHost):
 
 
 class _Comparer:
-    def __init__(self, expected: list[dict[str, Any]]) -> None:
+    """Compares the replay's events with ``expected`` (times relative to the recorded
+    run's start) as they come; the replay's times are made relative to its first event."""
+
+    def __init__(self, expected: list[dict[str, Any]], wall: bool = False) -> None:
         self.expected = expected
+        self.wall = wall
         self.got: list[dict[str, Any]] = []
         self.divergence: Divergence | None = None
         self.on_divergence: Callable[[], None] = lambda: None
+        self._t0: float | None = None
 
     def check(self, event: dict[str, Any]) -> None:
+        if self._t0 is None:
+            self._t0 = float(event.get("t", 0.0))
+        event = {**event, "t": float(event.get("t", 0.0)) - self._t0}
         self.got.append(event)
         if self.divergence is not None:
             return
         i = len(self.got) - 1
         want = self.expected[i] if i < len(self.expected) else None
-        if want is None or not _same(want, event):
+        previous = (self.expected[i - 1], self.got[i - 1]) if i > 0 else None
+        if want is None or not _same(want, event, previous, self.wall):
             self.divergence = Divergence(i + 1, want, event)
             self.on_divergence()
 
@@ -314,6 +359,10 @@ def replay(trace: str | Path, *, trees: str | Path | None = None, wall_timeout: 
     trace = Path(trace)
     header, events = read_trace(trace)
     expected = [e for e in events if e.get("type") in COMPARED]
+    if expected:  # times relative to the recorded run's start (the module docstring)
+        t0 = float(expected[0].get("t", 0.0))
+        expected = [{**e, "t": float(e.get("t", t0)) - t0} for e in expected]
+    wall = header.get("clock") == "wall"
     tree = header["tree"]
     files, notes = _locate(header, trace, trees)
     calls: dict[int, tuple[dict, dict | None]] = {}
@@ -321,9 +370,13 @@ def replay(trace: str | Path, *, trees: str | Path | None = None, wall_timeout: 
     for e in expected:
         if e["type"] == "call":
             calls[e["call"]] = (e, returns.get(e["call"]))
-    comparer = _Comparer(expected)
+    comparer = _Comparer(expected, wall=wall)
     with Runtime(clock="virtual") as rt:
         host = ReplayHost(rt, calls)
+        if header.get("max_period") is not None:
+            host.max_period = float(header["max_period"])
+        if header.get("behaviour_period") is not None:
+            host.behaviour_period = float(header["behaviour_period"])
         for path in files.values():
             host.library.load_file(path)
         host.library.check()
@@ -331,7 +384,8 @@ def replay(trace: str | Path, *, trees: str | Path | None = None, wall_timeout: 
             host.register(mission)
         host.observers.append(EventBuilder(comparer.check))
         finished = threading.Event()
-        limit = (expected[-1]["t"] if expected else 0.0) + 1.0
+        end = expected[-1]["t"] if expected else 0.0
+        limit = end + 1.0 + (WALL_TOLERANCE[0] * len(expected) + WALL_TOLERANCE[1] * end if wall else 0.0)
         inputs = _from_json(header.get("inputs") or {})
 
         def start() -> Any:

@@ -1,8 +1,10 @@
 """Recording tree runs as JSON Lines traces.
 
 A trace starts with a header (tree, inputs, seed, versions, the runtime-clock time the
-recording started, and the file and sha256 of every tree the run may use), followed by
-one event per line, each stamped with the runtime clock (``t``, seconds):
+recording started (``start``) and which clock it is (``clock``: ``virtual`` or
+``wall``), the host's tick periods (``max_period``, ``behaviour_period``), and the file
+and sha256 of every tree the run may use), followed by one event per line, each stamped
+with the runtime clock (``t``, seconds):
 
 =========  ===============================================================
 ``run``     a tree run started: ``run`` (ordinal), ``tree``, ``parent``
@@ -18,6 +20,10 @@ one event per line, each stamped with the runtime clock (``t``, seconds):
 ``txn``     with ``transactions=True``: every runtime transaction's start
             and end (``phase``), from the runtime's recorder hooks
 =========  ===============================================================
+
+A recorder records every run of its host unless told to :meth:`TraceRecorder.follow`
+one transaction (``serve`` does, for each goal): then only the runs under it, and with
+``transactions=True`` only the transactions under it.
 
 Values are stored as JSON: dataclasses, ROS messages and other objects become mappings
 with a ``__type__`` key, anything else its ``repr``. Replay (``_replay``) answers actor
@@ -120,8 +126,10 @@ class EventBuilder(TreeObserver):
     executions of the same tree give the same events whatever the transaction ids.
     """
 
-    def __init__(self, sink: Callable[[dict[str, Any]], None]) -> None:
+    def __init__(self, sink: Callable[[dict[str, Any]], None],
+                 accept: Callable[[TreeRun], bool] | None = None) -> None:
         self.sink = sink
+        self.accept = accept  # which runs to report (None: all)
         self._runs: dict[int, int] = {}
         self._calls: dict[int, int] = {}  # id(txn) -> call number, while the call runs
         self._call_count = 0
@@ -132,20 +140,33 @@ class EventBuilder(TreeObserver):
     def _emit(self, run: TreeRun, event: dict[str, Any]) -> None:
         self.sink({"t": run.rt.now(), **event})
 
+    def _skip(self, run: TreeRun) -> bool:
+        return self.accept is not None and run.id not in self._runs and not self.accept(run)
+
     def run_started(self, run: TreeRun) -> None:
+        if self._skip(run):
+            return
         parent = self._runs.get(run.parent.id) if run.parent is not None else None
         self._emit(run, {"type": "run", "run": self._run(run), "tree": run.mission.name, "parent": parent})
 
     def tick(self, run: TreeRun) -> None:
+        if self._skip(run):
+            return
         self._emit(run, {"type": "tick", "run": self._run(run), "n": run.ticks})
 
     def status_changed(self, run: TreeRun, path: str, old: Status, new: Status) -> None:
+        if self._skip(run):
+            return
         self._emit(run, {"type": "status", "run": self._run(run), "path": path, "old": old.name, "new": new.name})
 
     def blackboard_write(self, run: TreeRun, key: str, value: Any) -> None:
+        if self._skip(run):
+            return
         self._emit(run, {"type": "write", "run": self._run(run), "key": key, "value": to_json(value)})
 
     def actor_started(self, run: TreeRun, leaf: ActorLeaf, args: tuple, kwargs: dict, txn: Any) -> None:
+        if self._skip(run):
+            return
         self._call_count += 1
         number = self._calls[id(txn)] = self._call_count
         self._emit(run, {
@@ -155,6 +176,8 @@ class EventBuilder(TreeObserver):
         })
 
     def actor_finished(self, run: TreeRun, leaf: ActorLeaf, txn: Any) -> None:
+        if self._skip(run):
+            return
         event: dict[str, Any] = {"type": "return", "run": self._run(run), "path": leaf.path,
                                  "call": self._calls.pop(id(txn), 0), "actor": leaf.node.actor}
         if txn.state is TxnState.DONE:
@@ -166,6 +189,8 @@ class EventBuilder(TreeObserver):
         self._emit(run, event)
 
     def run_finished(self, run: TreeRun, status: Status, outcome: Any) -> None:
+        if self._skip(run):
+            return
         event: dict[str, Any] = {"type": "end", "run": self._run(run), "status": status.name}
         if status is Status.SUCCESS:
             event["outputs"] = to_json(outcome)
@@ -194,13 +219,13 @@ class _RuntimeHooks:
         self.recorder = recorder
 
     def call_started(self, txn: Any) -> None:
-        if self.recorder.transactions:
+        if self.recorder.transactions and self.recorder.followed(txn):
             parent = txn.parent.id if txn.parent is not None else None
             self.recorder.emit({"type": "txn", "phase": "start", "txn": txn.id, "parent": parent,
                                 "actor": txn.path, "mode": txn.mode.value})
 
     def call_finished(self, txn: Any) -> None:
-        if self.recorder.transactions:
+        if self.recorder.transactions and self.recorder.followed(txn):
             self.recorder.emit({"type": "txn", "phase": "end", "txn": txn.id, "actor": txn.path,
                                 "state": txn.state.value})
 
@@ -237,7 +262,8 @@ class TraceRecorder:
         self.transactions = transactions
         self._own = isinstance(sink, (str, Path))
         self._out: IO[str] = open(sink, "w", encoding="utf-8") if self._own else sink  # type: ignore[arg-type]
-        self.builder = EventBuilder(self.emit)
+        self._follow: int | None = None
+        self.builder = EventBuilder(self.emit, self._accept)
         self._hooks = _RuntimeHooks(self)
         self._log = _LogHandler(self)
         self._closed = False
@@ -247,6 +273,7 @@ class TraceRecorder:
             "inputs": to_json(dict(inputs or {})), "seed": seed, "start": self.rt.now(),
             "clock": "virtual" if getattr(self.rt.clock, "virtual", False) else "wall",
             "recorded": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+            "max_period": host.max_period, "behaviour_period": host.behaviour_period,
             "versions": _versions(), "trees": tree_files(host, tree),
         }
         self._write(header)
@@ -254,6 +281,33 @@ class TraceRecorder:
         self._previous_recorder = self.rt.recorder
         self.rt.recorder = self._hooks
         logging.getLogger().addHandler(self._log)
+
+    def follow(self, txn: Any) -> None:
+        """Record only what runs under transaction ``txn`` (or its id) from now on: its
+        tree runs and the runs they lead to, not those of other callers of the host."""
+        self._follow = txn if isinstance(txn, int) else txn.id
+
+    def followed(self, txn: Any) -> bool:
+        """Whether transaction ``txn`` is recorded (under the followed one, if any)."""
+        if self._follow is None:
+            return True
+        while txn is not None:
+            if txn.id == self._follow:
+                return True
+            txn = txn.parent
+        return False
+
+    def _accept(self, run: TreeRun) -> bool:
+        if self._follow is None:
+            return True
+        while run.parent is not None:
+            run = run.parent
+        if run.txn_id is None:  # being built (its inputs are written): the caller's
+            task = self.rt.hub.current_task()
+            return self.followed(task.txns[-1]) if task is not None and task.txns else False
+        if run.txn_id == self._follow:
+            return True
+        return self.followed(self.rt.txns.live.get(run.txn_id))
 
     def _write(self, event: dict[str, Any]) -> None:
         line = json.dumps(event, default=repr, separators=(",", ":")) + "\n"
