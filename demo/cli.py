@@ -32,7 +32,9 @@ def cmd_demo(args, app) -> int:
     out = pathlib.Path(args.out)
     print(f"actorbt demo: {args.tree} in {args.world} (seed {args.seed}), category {args.category}",
           flush=True)
-    ep = run_episode(args.tree, args.world, args.seed, args.category, out_dir=out, progress=sys.stdout)
+    # the runtime is built from actorbt.yaml, as for every command (subsystems, trees, simulator)
+    ep = run_episode(args.tree, args.world, args.seed, args.category, out_dir=out, progress=sys.stdout,
+                     app=app)
     print_outcome(ep)
     timeline = plot_trace(ep.trace, out / "timeline.png", title=f"{args.tree} (seed {args.seed})")
     print(f"trace:     {ep.trace}\ntop view:  {out / 'top_view.png'}\ntimeline:  {timeline}")
@@ -42,7 +44,7 @@ def cmd_demo(args, app) -> int:
 def cmd_eval(args, app) -> int:
     from .evaluate import evaluate, print_table
     episodes = evaluate(args.tree, args.seeds, args.world, args.category, args.jobs, args.out,
-                        first_seed=args.first_seed)
+                        first_seed=args.first_seed, config=app.cfg)
     print_table(episodes)
     print(f"\nCSV: {pathlib.Path(args.out) / 'episodes.csv'}")
     return 0 if all(e.success for e in episodes) else 1

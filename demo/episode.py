@@ -2,6 +2,7 @@
 checked against ground truth, and pictures."""
 from __future__ import annotations
 
+import argparse
 import pathlib
 import sys
 import time
@@ -10,12 +11,26 @@ from typing import Any, TextIO
 
 from geometry_msgs.msg import PoseStamped
 
-from actors.robot import Robot
 from bt_engine import ActorError, Runtime
-from bt_engine.trees import TraceRecorder, TreeObserver, register_tree_folder
+from bt_engine.cli.app import App
+from bt_engine.cli.config import Config, ConfigError, find_config, load_config
+from bt_engine.trees import TraceRecorder, TreeObserver, tree_host
 from sim import SimWorld
 
-TREES = pathlib.Path(__file__).resolve().parents[1] / "trees"
+#: the reference application's own actorbt.yaml, used when none is found from here
+REPO_CONFIG = pathlib.Path(__file__).resolve().parents[1] / "actorbt.yaml"
+
+
+def episode_app(world: str, seed: int, app: App | None = None, config: Config | None = None) -> App:
+    """The App an episode builds its runtime with: ``app``'s configuration (else
+    ``config``, else the nearest actorbt.yaml, else the repository's), for ``world``
+    and ``seed``. So the subsystems, the trees folder and the simulator are the ones
+    actorbt.yaml names, as for every other command."""
+    if app is not None:
+        return app.for_world(world, seed)
+    if config is None:
+        config = load_config(find_config() or REPO_CONFIG)
+    return App(argparse.Namespace(world=world, seed=seed), config)
 
 
 @dataclass
@@ -90,80 +105,92 @@ def _on_surface(pose, place) -> bool:
 def run_episode(tree: str = "bt_pick_place", world: str = "house", seed: int = 0,
                 category: str = "any", out_dir: str | pathlib.Path | None = None,
                 progress: TextIO | None = None, world_setup: Any = None,
-                inputs: dict | None = None, observers: list | None = None) -> Episode:
+                inputs: dict | None = None, observers: list | None = None,
+                app: App | None = None, config: Config | None = None) -> Episode:
     """Run ``tree`` once in a fresh ``world`` built from ``seed``.
+
+    The runtime is built as every ``actorbt`` command builds it (see :func:`episode_app`):
+    the subsystems, trees folder and simulator of actorbt.yaml; trees that do not load
+    are skipped with a warning unless ``tree`` needs them.
 
     Success means the tree succeeded and, for a pick-and-place, an object of the category
     stands on the place location. ``world_setup(world)`` may change the world first and
     ``observers`` watch the tree runs (the fault tests use both); ``inputs`` are more tree
     inputs. With ``out_dir``, the trace and the top view are written there.
+
+    Raises:
+        ConfigError: actorbt.yaml names no world to run in (or ``world`` is ``none``).
+        SkippedTreeError: ``tree`` (or a tree it calls) did not load; the reason.
+        UnknownActorError: no tree or actor ``tree``.
     """
     ep = Episode(tree=tree, world=world, seed=seed, category=category)
     out = pathlib.Path(out_dir) if out_dir else None
     wall0 = time.perf_counter()
-    with Runtime(watchdog=None) as rt:
-        sim = SimWorld(rt, world=world, seed=seed)
-        sim.start()
+    app = episode_app(world, seed, app, config)
+    if app.world_spec() is None:
+        raise ConfigError(f"an episode needs a simulated world, got --world {world}")
+    rt = app.runtime(watchdog=None, world_first=True, world_setup=world_setup)
+    sim: SimWorld = app.world
+    try:
+        host = tree_host(rt, create=True)
+        assert host is not None
+        if tree in host.library:
+            host.library[tree]  # a skipped tree raises why, before anything runs
+        if progress is not None:
+            host.observers.append(DemoProgress(progress, rt))
+        host.observers.extend(observers or ())
+        args = dict(inputs or {})
+        params = rt.resolve(tree).signature.parameters
+        if "category" in params:
+            args.setdefault("category", category)
+        pl = sim.place_location
+        if "place" in params and pl is not None:  # this world's place location
+            args.setdefault("place", {"x": pl.x, "y": pl.y, "size_x": pl.sx,
+                                      "size_y": pl.sy, "height": pl.sz})
+        if "home" in params:
+            hx, hy, hyaw = sim.robot_pose()
+            args.setdefault("home", {"x": hx, "y": hy, "yaw": hyaw})
+        sub = rt.bus.subscribe("/ground_truth/pose", PoseStamped, lambda m: ep.path.append(
+            (m.pose.position.x, m.pose.position.y)))
+        recorder = None
+        if out is not None:
+            out.mkdir(parents=True, exist_ok=True)
+            ep.trace = str(out / "trace.jsonl")
+            recorder = TraceRecorder(ep.trace, host, tree=tree, inputs=args, seed=seed)
+        before = {n: sim.object_pose(n) for n in sim.object_names()}
+        sim0 = rt.now()
         try:
-            if world_setup is not None:
-                world_setup(sim)
-            rt.add_subsystem("robot", Robot)
-            host = register_tree_folder(rt, TREES)
-            if progress is not None:
-                host.observers.append(DemoProgress(progress, rt))
-            host.observers.extend(observers or ())
-            args = dict(inputs or {})
-            params = rt.resolve(tree).signature.parameters
-            if "category" in params:
-                args.setdefault("category", category)
-            pl = sim.place_location
-            if "place" in params and pl is not None:  # this world's place location
-                args.setdefault("place", {"x": pl.x, "y": pl.y, "size_x": pl.sx,
-                                          "size_y": pl.sy, "height": pl.sz})
-            if "home" in params:
-                hx, hy, hyaw = sim.robot_pose()
-                args.setdefault("home", {"x": hx, "y": hy, "yaw": hyaw})
-            sub = rt.bus.subscribe("/ground_truth/pose", PoseStamped, lambda m: ep.path.append(
-                (m.pose.position.x, m.pose.position.y)))
-            recorder = None
-            if out is not None:
-                out.mkdir(parents=True, exist_ok=True)
-                ep.trace = str(out / "trace.jsonl")
-                recorder = TraceRecorder(ep.trace, host, tree=tree, inputs=args, seed=seed)
-            before = {n: sim.object_pose(n) for n in sim.object_names()}
-            sim0 = rt.now()
-            try:
-                result = rt.call(tree, **args)
-                ep.tree_status = "SUCCESS"
-                ep.found = (result or {}).get("found") if isinstance(result, dict) else None
-            except ActorError as exc:
-                cause = exc.__cause__
-                ep.tree_status = "FAILURE"
-                ep.reason = str(cause if cause is not None else exc)
-                ep.failed_node = getattr(cause, "path", "") or _failed_node(str(ep.reason))
-            finally:
-                ep.sim_time = rt.now() - sim0
-                sub.close()
-                if recorder is not None:
-                    recorder.close()
-            ep.success = ep.tree_status == "SUCCESS"
-            if ep.success and sim.place_location is not None and tree in ("bt_pick_place", "bt_carry"):
-                placed = [n for n in sim.object_names()
-                          if _on_surface(sim.object_pose(n), sim.place_location)
-                          and not _on_surface(before[n], sim.place_location)]
-                wanted = [n for n in placed if category in ("any", "mixed")
-                          or sim.object_category(n) == category]
-                ep.placed_object = wanted[0] if wanted else ""
-                if not wanted:
-                    ep.success = False
-                    ep.failed_node = "ground truth"
-                    ep.reason = "the tree succeeded but no object of the category is on the place location"
-            if ep.found:
-                ep.detections.append(ep.found)
-            if out is not None:
-                _draw(sim, ep, out / "top_view.png")
+            result = rt.call(tree, **args)
+            ep.tree_status = "SUCCESS"
+            ep.found = (result or {}).get("found") if isinstance(result, dict) else None
+        except ActorError as exc:
+            cause = exc.__cause__
+            ep.tree_status = "FAILURE"
+            ep.reason = str(cause if cause is not None else exc)
+            ep.failed_node = getattr(cause, "path", "") or _failed_node(str(ep.reason))
         finally:
-            rt.run_on_hub(sim.close)
+            ep.sim_time = rt.now() - sim0
+            sub.close()
+            if recorder is not None:
+                recorder.close()
+        ep.success = ep.tree_status == "SUCCESS"
+        if ep.success and sim.place_location is not None and tree in ("bt_pick_place", "bt_carry"):
+            placed = [n for n in sim.object_names()
+                      if _on_surface(sim.object_pose(n), sim.place_location)
+                      and not _on_surface(before[n], sim.place_location)]
+            wanted = [n for n in placed if category in ("any", "mixed")
+                      or sim.object_category(n) == category]
+            ep.placed_object = wanted[0] if wanted else ""
+            if not wanted:
+                ep.success = False
+                ep.failed_node = "ground truth"
+                ep.reason = "the tree succeeded but no object of the category is on the place location"
+        if ep.found:
+            ep.detections.append(ep.found)
+        if out is not None:
+            _draw(sim, ep, out / "top_view.png")
+    finally:
+        app.close(rt)
     ep.wall_time = time.perf_counter() - wall0
     return ep
 

@@ -11,19 +11,28 @@ import time
 from dataclasses import asdict
 from typing import TextIO
 
-from .episode import Episode, run_episode
+from bt_engine.cli.app import App
+from bt_engine.cli.config import Config
+
+from .episode import Episode, episode_app, run_episode
 
 CSV_FIELDS = ["tree", "world", "seed", "category", "success", "tree_status", "failed_node",
               "reason", "placed_object", "sim_time", "wall_time", "trace"]
 
+#: this process's App (one per worker, so each skipped tree is reported once per process)
+_app: App | None = None
+
 
 def _one(job: tuple) -> Episode:
-    tree, world, seed, category, out = job
-    return run_episode(tree, world, seed, category, out_dir=out)
+    global _app
+    tree, world, seed, category, out, config = job
+    if _app is None or _app.cfg != config:
+        _app = episode_app(world, seed, config=config)
+    return run_episode(tree, world, seed, category, out_dir=out, app=_app)
 
 
 def _jobs(tree: str, world: str, seeds: int, first_seed: int, category: str,
-          out: pathlib.Path) -> list[tuple]:
+          out: pathlib.Path, config: Config | None = None) -> list[tuple]:
     cats = ["can", "bottle"] if category == "mixed" else [category]
     jobs = []
     for i in range(seeds):
@@ -31,17 +40,23 @@ def _jobs(tree: str, world: str, seeds: int, first_seed: int, category: str,
         # mixed: both categories are in every world; alternate which one is asked for,
         # so the table shows both strategies
         cat = cats[i % len(cats)]
-        jobs.append((tree, world, seed, cat, out / f"{cat}_seed{seed}"))
+        jobs.append((tree, world, seed, cat, out / f"{cat}_seed{seed}", config))
     return jobs
 
 
 def evaluate(tree: str, seeds: int, world: str = "house", category: str = "mixed",
              jobs: int = 1, out_dir: str | pathlib.Path = "out/eval", first_seed: int = 0,
-             progress: TextIO | None = sys.stdout) -> list[Episode]:
-    """Run ``tree`` for ``seeds`` seeds; returns the episodes in seed order."""
+             progress: TextIO | None = sys.stdout, config: Config | None = None) -> list[Episode]:
+    """Run ``tree`` for ``seeds`` seeds; returns the episodes in seed order.
+
+    Each episode's runtime is built from ``config`` (actorbt.yaml; by default the
+    nearest one), as ``actorbt`` builds every runtime: see :func:`run_episode`.
+    """
     out = pathlib.Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    work = _jobs(tree, world, seeds, first_seed, category, out)
+    if config is None:
+        config = episode_app(world, first_seed).cfg
+    work = _jobs(tree, world, seeds, first_seed, category, out, config)
     episodes: list[Episode] = []
     t0 = time.perf_counter()
 

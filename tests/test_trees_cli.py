@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import logging
+import re
 import shutil
 from pathlib import Path
 
@@ -29,7 +31,10 @@ def test_run_prints_progress_and_outputs(config: str, capsys: pytest.CaptureFixt
     assert "demo_patrol: started (rounds=1, pause=0.0)" in out
     assert "demo_patrol: active: patrol/rounds/round/drive to kitchen" in out
     assert "patrol/report/report deadline halted" in out
-    assert out.strip().endswith("{'last': 'bedroom'}")
+    lines = out.strip().splitlines()
+    assert lines[-2] == "SUCCESS {'last': 'bedroom'}"  # the outputs, once
+    assert out.count("bedroom'}") == 1
+    assert re.fullmatch(r"sim time 6\.5 s, wall time \d+\.\d s \(\d+\.\dx real time\)", lines[-1])
 
 
 def test_run_quiet_json(config: str, capsys: pytest.CaptureFixture) -> None:
@@ -125,3 +130,59 @@ def test_show_without_graphviz_says_what_to_do(config: str, tmp_path: Path, caps
     monkeypatch.setenv("PATH", str(tmp_path))  # no dot here
     assert main(["--config", config, "show", "demo_patrol", "--out", str(tmp_path / "t.png")]) == 2
     assert "Graphviz 'dot' is not installed, so t.png cannot be drawn" in capsys.readouterr().err
+
+
+def test_run_ending_like_demo(config: str, tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    trace = tmp_path / "run.jsonl"
+    assert main(["--config", config, "run", "demo_patrol", "--arg", "rounds=1", "--json",
+                 "--record", str(trace)]) == 0
+    lines = capsys.readouterr().out.strip().splitlines()
+    assert lines[-3] == 'SUCCESS {"last": "bedroom"}'
+    assert lines[-2].startswith("sim time 7.5 s, wall time ")
+    assert lines[-1] == f"trace:     {trace}"
+    assert trace.is_file()
+
+
+def test_run_failure_ending(config: str, capsys: pytest.CaptureFixture) -> None:
+    assert main(["--config", config, "run", "fails"]) == 1
+    lines = capsys.readouterr().out.strip().splitlines()
+    assert lines[-2] == "FAILURE at sequence/too small: n > 5: false"
+    assert lines[-1].startswith("sim time 0.0 s, wall time ")
+    assert not any(line.endswith("fails: FAILURE: tree fails failed at sequence/too small: n > 5: false")
+                   for line in lines)  # said once, on the outcome line
+
+
+def test_nested_runs_still_show_their_outcome(config: str, tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    mission = tmp_path / "outer.yaml"
+    mission.write_text("name: outer\nroot: {do: demo_patrol, with: {rounds: 1, pause: 0}}\n")
+    assert main(["--config", config, "run", str(mission)]) == 0
+    out = capsys.readouterr().out
+    assert "  demo_patrol: SUCCESS {'last': 'bedroom'}" in out  # the nested run, indented
+    assert out.strip().splitlines()[-2] == "SUCCESS {}"  # outer has no outputs
+
+
+def _world_config(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> str:
+    """A config with a fake simulator, so that starting a world logs its INFO line."""
+    (tmp_path / "fake_sim_for_cli.py").write_text("def start(rt, name, seed=0, gui=False):\n    return None\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    cfg = tmp_path / "actorbt.yaml"
+    cfg.write_text("subsystems: {}\ntrees: null\nworld: {name: flat, seed: 4}\n"
+                   "simulator: fake_sim_for_cli:start\n")
+    return str(cfg)
+
+
+def test_quiet_by_default_info_with_v(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+                                      capsys: pytest.CaptureFixture, caplog: pytest.LogCaptureFixture) -> None:
+    cfg = _world_config(tmp_path, monkeypatch)
+    caplog.set_level(logging.NOTSET)  # the handler takes all; the root level decides
+    assert main(["--config", cfg, "call", "sleep", "0.1"]) == 0
+    assert logging.getLogger().level == logging.WARNING
+    assert "world flat (seed 4) started" not in caplog.text
+    out, err = capsys.readouterr()
+    assert "INFO" not in out + err
+    assert main(["--config", cfg, "-v", "call", "sleep", "0.1"]) == 0
+    assert logging.getLogger().level == logging.INFO
+    assert "world flat (seed 4) started" in caplog.text
+    assert main(["--config", cfg, "-vv", "list"]) == 0
+    assert logging.getLogger().level == logging.DEBUG
+    logging.getLogger().setLevel(logging.WARNING)

@@ -11,7 +11,7 @@ import logging
 import os
 import sys
 from pathlib import Path
-from typing import Any, Iterator
+from typing import Any, Callable, Iterator
 
 from ..runtime import Runtime
 from .actor_index import ActorEntry, ActorIndex, loaded_sources
@@ -27,21 +27,44 @@ class App:
         self.args = args
         self.cfg: Config = cfg if cfg is not None else load_config(getattr(args, "config", None))
         self.world: Any = None
+        self._warned: set[str] = set()
 
-    def runtime(self, clock: str | None = None, with_world: bool = True) -> Runtime:
-        """A runtime with everything actorbt.yaml names, and the world started."""
+    def for_world(self, world: str | None, seed: int | None = None) -> App:
+        """An App with this configuration (and its warnings already given) for another
+        world and seed: what ``demo`` and ``eval`` build each episode's runtime with."""
+        args = argparse.Namespace(**{**vars(self.args), "world": world, "seed": seed})
+        other = App(args, self.cfg)
+        other._warned = self._warned
+        return other
+
+    def runtime(self, clock: str | None = None, with_world: bool = True, *,
+                watchdog: float | None = 0.5, world_first: bool = False,
+                world_setup: Callable[[Any], None] | None = None) -> Runtime:
+        """A runtime with everything actorbt.yaml names, and the world started.
+
+        Args:
+            clock: overrides ``--clock`` and actorbt.yaml.
+            with_world: start the world actorbt.yaml (or ``--world``) names.
+            watchdog: the runtime's hub watchdog [s]; ``None`` for none.
+            world_first: start the world before the subsystems are added (the robot
+                boots in a running world), not after the trees are loaded.
+            world_setup: called with the started world (``self.world``) before the
+                subsystems see it when ``world_first``, else once it runs.
+        """
         args = self.args
         # a window is watched by a person: --gui runs in real time unless told otherwise
         gui_clock = "wall" if getattr(args, "gui", False) else None
         clock = clock or getattr(args, "clock", None) or gui_clock or self.cfg.clock
-        rt = Runtime(clock=clock, bus=self._transport())
+        rt = Runtime(clock=clock, bus=self._transport(), watchdog=watchdog)
         try:
+            if with_world and world_first:
+                self._start_world(rt, world_setup)
             self._add_subsystems(rt)
             self._load_trees(rt)
-            if with_world:
-                self._start_world(rt)
+            if with_world and not world_first:
+                self._start_world(rt, world_setup)
         except BaseException:
-            rt.close()
+            self.close(rt)
             raise
         return rt
 
@@ -93,19 +116,22 @@ class App:
             entries += self._tree_entries(folder, index)
         return sorted(entries, key=lambda e: e.path)
 
-    @staticmethod
-    def _tree_entries(folder: Path, index: ActorIndex) -> list[ActorEntry]:
+    def _tree_entries(self, folder: Path, index: ActorIndex) -> list[ActorEntry]:
         from ..trees import TreeHost
         rt = Runtime(clock="virtual")
         try:
             host = TreeHost(rt)
             host.library.resolver = index.resolve  # the subsystems are in the index, not in rt
-            host.load_folder(folder)
+            host.load_folder(folder, strict=False)
+            self.warn_skipped(host.library, folder)
             return [ActorEntry.of(ref) for ref in rt.root.all_actors() if ref.is_tree]
         finally:
             rt.close()
 
     def _load_trees(self, rt: Runtime) -> None:
+        """Register the trees folder's trees. A tree that does not load (or calls one
+        that does not) is skipped with a warning; calling it by name gives the reason
+        (``actorbt check`` is the strict one)."""
         folder = self.cfg.trees_dir()
         if folder is None or not folder.is_dir():
             return
@@ -113,7 +139,16 @@ class App:
             from ..trees import register_tree_folder
         except ImportError:  # trees layer not installed in this build
             return
-        register_tree_folder(rt, folder)
+        host = register_tree_folder(rt, folder, strict=False)
+        self.warn_skipped(host.library, folder)
+
+    def warn_skipped(self, library: Any, folder: Path) -> None:
+        """One line on stderr per skipped tree file, once per invocation."""
+        for error in sorted(library.broken.values(), key=lambda e: (e.pos.file, e.pos.line, e.pos.column)):
+            text = _relative(str(error), folder)
+            if text not in self._warned:
+                self._warned.add(text)
+                print(f"actorbt: warning: skipped {text}", file=sys.stderr)
 
     def world_spec(self) -> dict[str, Any] | None:
         w = dict(self.cfg.world or {})
@@ -129,7 +164,7 @@ class App:
             w["gui"] = True
         return w if w.get("name") else None
 
-    def _start_world(self, rt: Runtime) -> None:
+    def _start_world(self, rt: Runtime, setup: Callable[[Any], None] | None = None) -> None:
         spec = self.world_spec()
         if spec is None:
             return
@@ -140,6 +175,8 @@ class App:
         self.world = start(rt, spec["name"], seed=int(spec.get("seed", 0)),
                            gui=bool(spec.get("gui", False)))
         log.info("world %s (seed %s) started", spec["name"], spec.get("seed", 0))
+        if setup is not None:
+            setup(self.world)
 
     def close(self, rt: Runtime) -> None:
         if self.world is not None and hasattr(self.world, "close"):
@@ -148,6 +185,17 @@ class App:
             except Exception:
                 log.exception("closing the world failed")
         rt.close()
+
+
+def _relative(text: str, folder: Path) -> str:
+    """``text`` with the trees folder's path as the user would type it from here."""
+    try:
+        shown = os.path.relpath(folder)
+    except ValueError:  # another drive
+        return text
+    if shown.startswith(os.pardir) or shown == str(folder):
+        return text
+    return text.replace(str(folder) + os.sep, shown + os.sep)
 
 
 @contextlib.contextmanager

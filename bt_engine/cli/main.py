@@ -35,6 +35,13 @@ def _common(p: argparse.ArgumentParser) -> None:
     p.add_argument("--ros", action="store_true", help="use the ROS 2 transport")
 
 
+def _positive_int(text: str) -> int:
+    n = int(text)
+    if n < 1:
+        raise argparse.ArgumentTypeError(f"expected a positive count, got {text}")
+    return n
+
+
 def _lazy(module: str, name: str) -> Command:
     """The command ``module.name``, imported when it runs (not when the parser is built)."""
     def command(args: argparse.Namespace, app: App) -> int:
@@ -64,13 +71,25 @@ def cmd_catalog(args: argparse.Namespace, app: App) -> int:
 
 
 def cmd_call(args: argparse.Namespace, app: App) -> int:
+    stream = getattr(args, "stream", False)
+    if getattr(args, "count", None) is not None and not stream:
+        raise ActorbtError("--count needs --stream")
     if getattr(args, "ros", False):  # a client of a running `actorbt serve`
+        if stream:
+            raise ActorbtError("--stream is not available with --ros")
         from ..ros.cli import cmd_rcall
         return cmd_rcall(args, app)
     from ..literals import parse_args
     pos, kw = parse_args(args.args)
     rt = app.runtime()
     try:
+        if stream:
+            from .shell import INTERRUPTED, stream_actor
+            status = stream_actor(rt, args.actor, pos, kw, sys.stdout, as_json=args.json,
+                                  count=args.count, timeout=args.timeout)
+            if status == INTERRUPTED:
+                print("actorbt: interrupted", file=sys.stderr)
+            return status
         result = rt.call(args.actor, *pos, timeout=args.timeout, **kw)
     finally:
         app.close(rt)
@@ -92,7 +111,8 @@ def cmd_shell(args: argparse.Namespace, app: App) -> int:
 def build_parser(plugins: list[str]) -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="actorbt", description=__doc__.splitlines()[0])
     parser.add_argument("--config", help="path of actorbt.yaml (default: nearest one)")
-    parser.add_argument("-v", "--verbose", action="store_true", help="debug logging")
+    parser.add_argument("-v", "--verbose", action="count", default=0,
+                        help="log more: -v information, -vv debugging (default: warnings only)")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     sub.required = True
 
@@ -103,11 +123,19 @@ def build_parser(plugins: list[str]) -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true")
     p.set_defaults(func=cmd_catalog)
 
-    p = sub.add_parser("call", help="call one actor: ACTOR ARG... (Python literals, k=v)")
+    p = sub.add_parser("call", help="call one actor: ACTOR ARG... (Python literals, k=v)",
+                       description="Call one actor and print its result; with --stream, print "
+                                   "every value of a stream as it arrives.")
     p.add_argument("actor")
     p.add_argument("args", nargs="*")
-    p.add_argument("--timeout", type=float, help="deadline [s] on the runtime clock")
-    p.add_argument("--json", action="store_true", help="print the result as JSON")
+    p.add_argument("--timeout", type=float, metavar="S",
+                   help="deadline [s] on the runtime clock (with --stream: end the stream then)")
+    p.add_argument("--json", action="store_true", help="print the result (each value) as JSON")
+    p.add_argument("--stream", action="store_true",
+                   help="print each value, one per line, as it arrives, until the stream ends, "
+                        "--count N values, --timeout S or Ctrl-C (exit status 130); a sync or "
+                        "async actor is called again for every value (the iterator mode)")
+    p.add_argument("--count", type=_positive_int, metavar="N", help="with --stream: stop after N values")
     _common(p)
     p.set_defaults(func=cmd_call)
 
@@ -178,15 +206,19 @@ def _config(argv: list[str]) -> Config | None:
         return None
 
 
+#: the root log level for no -v, -v and -vv
+_LOG_LEVELS = (logging.WARNING, logging.INFO, logging.DEBUG)
+
+
 def main(argv: list[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
-    logging.basicConfig(level=logging.INFO, format="%(levelname)s %(name)s: %(message)s")
+    logging.basicConfig(level=logging.WARNING, format="%(levelname)s %(name)s: %(message)s")
+    logging.getLogger().setLevel(logging.WARNING)  # basicConfig does nothing when configured
     try:
         cfg = _config(argv)
         parser = build_parser(cfg.plugins if cfg is not None else [])
         args = parser.parse_args(argv)
-        if args.verbose:
-            logging.getLogger().setLevel(logging.DEBUG)
+        logging.getLogger().setLevel(_LOG_LEVELS[min(args.verbose, len(_LOG_LEVELS) - 1)])
         return int(args.func(args, App(args, cfg)) or 0)
     except ActorbtError as e:
         print(f"actorbt: error: {e}", file=sys.stderr)

@@ -1,15 +1,19 @@
 """``actorbt shell``: type an actor name and its arguments, and it runs.
 
 History (~/.actorbt_history), tab completion of actor names, ``help NAME`` for the
-docstring and signature. Errors print a message; the shell carries on.
+docstring and signature, ``stream NAME ARGS`` for every value of a stream. Errors print
+a message; the shell carries on.
+
+:func:`print_stream` is also what ``actorbt call NAME ARGS --stream`` prints with.
 """
 from __future__ import annotations
 
 import cmd
+import json
 import os
 import pathlib
 import pprint
-from typing import Any
+from typing import Any, Iterable, TextIO
 
 from ..errors import ActorbtError
 from ..runtime import Runtime
@@ -17,10 +21,85 @@ from ..literals import parse_args, split_line
 
 HISTORY = pathlib.Path(os.environ.get("ACTORBT_HISTORY", pathlib.Path.home() / ".actorbt_history"))
 
+#: exit status of a stream ended by Ctrl-C (128 + SIGINT, as a shell reports it)
+INTERRUPTED = 130
+
+
+def format_value(value: Any, as_json: bool = False) -> str:
+    """One value as the terminal shows it: ``pprint`` (Python syntax), or one JSON line."""
+    return json.dumps(value, default=str) if as_json else pprint.pformat(value)
+
+
+def print_stream(values: Iterable[Any], out: TextIO, *, as_json: bool = False,
+                 count: int | None = None) -> int:
+    """Print each of ``values`` on its own line as it arrives (flushed), until the
+    iterator ends or ``count`` values were printed (no further value is asked for).
+
+    Returns the exit status: 0, or :data:`INTERRUPTED` when Ctrl-C (KeyboardInterrupt)
+    stopped it; the caller's ``with rt.stream(...)`` block then closes the source.
+    """
+    if count is not None and count <= 0:
+        return 0
+    printed = 0
+    try:
+        for value in values:
+            out.write(format_value(value, as_json) + "\n")
+            out.flush()
+            printed += 1
+            if count is not None and printed >= count:
+                break
+    except KeyboardInterrupt:
+        return INTERRUPTED
+    return 0
+
+
+def stream_actor(rt: Runtime, name: str, args: list[Any], kwargs: dict[str, Any], out: TextIO, *,
+                 as_json: bool = False, count: int | None = None, timeout: float | None = None) -> int:
+    """Iterate actor ``name`` from the calling thread and print its values
+    (:func:`print_stream`); ``timeout`` [s, runtime clock] ends the stream. Leaving
+    returns only once the source is closed. A sync or async actor is invoked again for
+    every value (the iterator mode)."""
+    try:
+        with rt.stream(name, *args, timeout=timeout, **kwargs) as values:
+            return print_stream(values, out, as_json=as_json, count=count)
+    except KeyboardInterrupt:  # while the stream was being started or closed
+        return INTERRUPTED
+
+
+def _stream_options(tokens: list[str]) -> tuple[list[str], dict[str, Any]]:
+    """Split ``--count N``, ``--timeout S`` and ``--json`` (``--opt=V`` too) from the
+    other tokens of a shell ``stream`` line."""
+    rest: list[str] = []
+    opts: dict[str, Any] = {"count": None, "timeout": None, "as_json": False}
+    i = 0
+    while i < len(tokens):
+        tok = tokens[i]
+        key, eq, val = tok.partition("=")
+        if key in ("--count", "--timeout"):
+            if not eq:
+                i += 1
+                if i >= len(tokens):
+                    raise ActorbtError(f"{key} needs a value")
+                val = tokens[i]
+            try:
+                opts[key[2:]] = int(val) if key == "--count" else float(val)
+            except ValueError:
+                raise ActorbtError(f"{key}: expected a number, got {val!r}") from None
+        elif tok == "--json":
+            opts["as_json"] = True
+        else:
+            rest.append(tok)
+        i += 1
+    return rest, opts
+
 
 class ActorShell(cmd.Cmd):
     intro = ("actorbt shell: type an actor and its arguments (Python literals), e.g. "
-             "`sleep 1.5`.\n`list` shows actors, `help NAME` describes one, `quit` leaves.")
+             "`sleep 1.5`.\n`list` shows actors, `help NAME` describes one, `stream NAME ARGS` "
+             "prints every value of a stream, `quit` leaves.")
+    #: the shell's own commands (the rest of a line is an actor call)
+    commands = ["help", "list", "quit", "stream", "transactions"]
+    stream_options = ["--count", "--json", "--timeout"]
     prompt = "actorbt> "
 
     def __init__(self, rt: Runtime, stdin: Any = None, stdout: Any = None) -> None:
@@ -78,11 +157,34 @@ class ActorShell(cmd.Cmd):
         for t in self.rt.transactions():
             self.stdout.write(f"  {t.id:>6} {t.path} {t.mode.value} since {t.started:.3f}s\n")
 
+    def do_stream(self, arg: str) -> None:
+        """stream NAME ARG... [--count N] [--timeout S] [--json]: print every value of
+        actor NAME, one per line, as it arrives, until the stream ends, N values were
+        printed, S seconds of runtime-clock time passed, or Ctrl-C. A sync or async actor
+        is called again for every value (the iterator mode): give it --count or --timeout."""
+        try:
+            tokens, opts = _stream_options(split_line(arg))
+            if not tokens:
+                self.stdout.write("usage: stream NAME ARG... [--count N] [--timeout S] [--json]\n")
+                return
+            args, kwargs = parse_args(tokens[1:])
+            status = stream_actor(self.rt, tokens[0], args, kwargs, self.stdout, **opts)
+        except ActorbtError as e:
+            self.stdout.write(f"error: {e}\n")
+            return
+        if status == INTERRUPTED:
+            self.stdout.write("interrupted\n")
+
     def do_help(self, arg: str) -> None:
         """help NAME: the actor's signature and docstring."""
         if not arg:
-            self.stdout.write("Commands: list [TEXT], help NAME, transactions, quit.\n"
+            self.stdout.write("Commands: list [TEXT], help NAME, stream NAME ARG... [--count N], "
+                              "transactions, quit.\n"
                               "Anything else: ACTOR ARG... (key=value for keywords).\n")
+            return
+        if arg in self.commands and not self.rt.check_actor(arg):
+            doc = getattr(self, f"do_{arg}").__doc__ or ""
+            self.stdout.write(" ".join(doc.split()) + "\n")
             return
         try:
             ref = self.rt.resolve(arg)
@@ -106,13 +208,21 @@ class ActorShell(cmd.Cmd):
             self.stdout.write("interrupted\n")
             return
         if result is not None:
-            self.stdout.write(pprint.pformat(result) + "\n")
+            self.stdout.write(format_value(result) + "\n")
 
     def completenames(self, text: str, *ignored: Any) -> list[str]:
-        return [n for n in self._names() + ["list", "help", "quit", "transactions"] if n.startswith(text)]
+        return [n for n in self._names() + self.commands if n.startswith(text)]
 
     def complete_help(self, text: str, *ignored: Any) -> list[str]:
-        return [n for n in self._names() if n.startswith(text)]
+        return [n for n in self._names() + self.commands if n.startswith(text)]
+
+    def complete_stream(self, text: str, line: str, begidx: int, endidx: int) -> list[str]:
+        """The actor name first, then the options."""
+        if text.startswith("-"):
+            return [o for o in self.stream_options if o.startswith(text)]
+        if len(line[:begidx].split()) <= 1:  # completing the word after `stream`
+            return [n for n in self._names() if n.startswith(text)]
+        return []
 
     def cmdloop(self, intro: Any = None) -> None:
         while True:

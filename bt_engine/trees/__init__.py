@@ -46,7 +46,8 @@ from ._errors import (
 )
 from ._expr import evaluate, parse_expression
 from ._host import STANDARD_BEHAVIOURS, BehaviourFactory, TreeHost, register_tree_folder, tree_host
-from ._library import TreeInfo, TreeLibrary, check_files, load_mission
+from ._library import (BrokenDependencyError, SkippedTreeError, TreeInfo, TreeLibrary, check_files,
+                       load_mission)
 from ._model import (
     REQUIRED,
     Check,
@@ -93,6 +94,7 @@ __all__ = [
     "STANDARD_BEHAVIOURS",
     "ActorInfo",
     "ArgumentMismatchError",
+    "BrokenDependencyError",
     "BehaviourFactory",
     "Check",
     "CheckEvaluationError",
@@ -131,6 +133,7 @@ __all__ = [
     "Selector",
     "Sequence",
     "SetValues",
+    "SkippedTreeError",
     "SubtreeCycleError",
     "Timeout",
     "TraceRecorder",

@@ -2,7 +2,8 @@
 
 ``register_tree_folder(rt, "trees")`` parses and validates every mission of the folder
 (all at load time, before anything runs) and registers each as a sync actor of the root
-SubSystem, with its inputs as parameters and its outputs as result. Calling that actor
+SubSystem (with ``strict=False``, the trees that do not load are skipped, see
+:attr:`TreeLibrary.broken`, and calling one by name raises the reason), with its inputs as parameters and its outputs as result. Calling that actor
 builds a fresh tree with its own blackboard namespace and ticks it in the caller's
 greenlet until it finishes. So trees call trees with ``do:``, actors call trees with
 ``run_actor`` in every call mode, and a Python program calls one through the runtime.
@@ -10,6 +11,7 @@ greenlet until it finishes. So trees call trees with ``do:``, actors call trees 
 
 from __future__ import annotations
 
+import inspect
 import itertools
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Callable, Mapping
@@ -18,8 +20,8 @@ import py_trees
 import py_trees.behaviours
 
 from ._behaviours import ActorLeaf
-from ._errors import DuplicateTreeError
-from ._library import TreeLibrary
+from ._errors import DuplicateTreeError, MissionError
+from ._library import SkippedTreeError, TreeLibrary
 from ._model import Mission, UseBehaviour, walk
 from ._run import TreeObserver, TreeRun
 
@@ -73,23 +75,71 @@ class TreeHost:
         self._run_ids = itertools.count(1)
         self._runs_by_txn: dict[int, TreeRun] = {}
         self._live: dict[int, TreeRun] = {}
+        self._stubs: set[str] = set()  # names of skipped trees registered as failing actors
 
     # ------------------------------------------------------------ loading and registration
 
     def _resolve(self, name: str) -> Any:
         return self.rt.run_on_hub(self.rt.root.resolve, name)
 
-    def load_folder(self, folder: str | Path) -> list[Mission]:
+    def load_folder(self, folder: str | Path, *, strict: bool = True) -> list[Mission]:
         """Parse, validate and register every ``*.yaml`` of a folder.
 
+        With ``strict`` (the default) it is all or nothing. Without, the files that do
+        not load, and the trees that call them (directly or not), are skipped: see
+        ``library.broken`` for why. A skipped tree name is registered as an actor that
+        raises :class:`SkippedTreeError` with the reason, so calling it says why.
+
+        Returns:
+            the missions registered now.
+
         Raises:
-            MissionError: the first problem in any file; nothing is registered then.
+            MissionError: (strict) the first problem in any file; nothing is registered
+                then. Also without ``strict`` when the folder cannot be listed.
         """
-        missions = self.library.load_folder(folder)
-        self.library.check([m.name for m in missions])
+        if strict:
+            missions = self.library.load_folder(folder)
+            self.library.check([m.name for m in missions])
+            for mission in missions:
+                self.register(mission)
+            return missions
+        missions = self.library.load_folder(folder, strict=False)
         for mission in missions:
+            conflict = self._name_conflict(mission)
+            if conflict is not None:  # it would hide an actor: skip it, under its file
+                self.library.skip(mission.name, conflict, key=mission.file)
+        loaded = set(self.library.names)
+        self.library.check([m.name for m in missions if m.name in loaded], strict=False)
+        loaded = set(self.library.names)
+        registered = [m for m in missions if m.name in loaded and self.library[m.name] is m]
+        for mission in registered:
             self.register(mission)
-        return missions
+        self._register_skipped()
+        return registered
+
+    def _name_conflict(self, mission: Mission) -> MissionError | None:
+        name = mission.name
+        existing = self.rt.run_on_hub(lambda: self.rt.root.actors().get(name))
+        if existing is None or existing.is_tree or name in self._stubs:
+            return None
+        return DuplicateTreeError(
+            mission.pos, f"tree name {name!r} is already the actor {existing.path}, expected a name no root actor has"
+        )
+
+    def _register_skipped(self) -> None:
+        """Register each skipped tree name as an actor that raises the reason."""
+        for name in list(self.library.broken):
+            if not self.library.is_skipped(name):
+                continue
+            existing = self.rt.run_on_hub(lambda n=name: self.rt.root.actors().get(n))
+            if existing is not None and not existing.is_tree and name not in self._stubs:
+                continue  # a real actor of that name: leave it
+            error = self.library.broken[name]
+            self.rt.run_on_hub(
+                self.rt.root.add_actor, name, _skipped_tree(name, error), "sync",
+                doc=f"Skipped tree {name}: {error}", signature=_ANY_ARGUMENTS, replace=True,
+            )
+            self._stubs.add(name)
 
     def load_file(self, path: str | Path) -> Mission:
         """Parse, validate and register one mission file.
@@ -110,7 +160,7 @@ class TreeHost:
         """
         name = mission.name
         existing = self.rt.run_on_hub(lambda: self.rt.root.actors().get(name))
-        if existing is not None and not existing.is_tree:
+        if existing is not None and not existing.is_tree and name not in self._stubs:
             raise DuplicateTreeError(
                 mission.pos, f"tree name {name!r} is already the actor {existing.path}, expected a name no root actor has"
             )
@@ -125,6 +175,7 @@ class TreeHost:
             doc=mission.doc or f"Tree {name} ({mission.file}).", signature=mission.signature(),
             is_tree=True, replace=True,
         )
+        self._stubs.discard(name)
 
     # ------------------------------------------------------------ running
 
@@ -199,6 +250,21 @@ class TreeHost:
         return list(self._live.values())
 
 
+_ANY_ARGUMENTS = inspect.Signature([
+    inspect.Parameter("args", inspect.Parameter.VAR_POSITIONAL),
+    inspect.Parameter("kwargs", inspect.Parameter.VAR_KEYWORD),
+])
+
+
+def _skipped_tree(name: str, error: MissionError) -> Callable[..., Any]:
+    """The actor a skipped tree name stands for: it raises why the tree was skipped."""
+    def skipped_tree(*args: Any, **kwargs: Any) -> Any:
+        raise SkippedTreeError(name, error)
+
+    skipped_tree.__name__ = name
+    return skipped_tree
+
+
 def tree_host(rt: Runtime, create: bool = False) -> TreeHost | None:
     """The TreeHost of a runtime (made now with ``create``), or None.
 
@@ -207,14 +273,15 @@ def tree_host(rt: Runtime, create: bool = False) -> TreeHost | None:
     return rt.extension(EXTENSION_KEY, (lambda: TreeHost(rt)) if create else None)
 
 
-def register_tree_folder(rt: Runtime, folder: str | Path, **options: Any) -> TreeHost:
+def register_tree_folder(rt: Runtime, folder: str | Path, *, strict: bool = True, **options: Any) -> TreeHost:
     """Parse, validate and register every mission in ``folder`` as an actor of ``rt``.
 
     ``options`` go to :class:`TreeHost` the first time; the runtime keeps one host.
+    Without ``strict``, what does not load is skipped (``host.library.broken``).
 
     Raises:
-        MissionError: the first problem found, ``file:line:column: message``.
+        MissionError: (strict) the first problem found, ``file:line:column: message``.
     """
     host = rt.extension(EXTENSION_KEY, lambda: TreeHost(rt, **options))
-    host.load_folder(folder)
+    host.load_folder(folder, strict=strict)
     return host

@@ -60,11 +60,15 @@ class ProgressPrinter(TreeObserver):
     Args:
         stream: where to print (stdout by default).
         ticks: also print one line per tick.
+        outcomes: print how the outermost run ended (``SUCCESS {outputs}`` or ``FAILURE:
+            why``); False when the caller prints the outcome itself (``actorbt run``
+            does). Nested runs, and a stopped outermost run, are always shown.
     """
 
-    def __init__(self, stream: TextIO | None = None, ticks: bool = False) -> None:
+    def __init__(self, stream: TextIO | None = None, ticks: bool = False, outcomes: bool = True) -> None:
         self.stream = stream or sys.stdout
         self.ticks = ticks
+        self.outcomes = outcomes
         self._tips: dict[int, str | None] = {}
 
     def _line(self, run: TreeRun, text: str) -> None:
@@ -101,6 +105,8 @@ class ProgressPrinter(TreeObserver):
 
     def run_finished(self, run: TreeRun, status: Status, outcome: Any) -> None:
         self._tips.pop(run.id, None)
+        if not self.outcomes and run.depth == 0 and status in (Status.SUCCESS, Status.FAILURE):
+            return  # the caller prints the outcome
         if status is Status.SUCCESS:
             self._line(run, f"SUCCESS {outcome}")
         elif status is Status.FAILURE:
