@@ -140,6 +140,7 @@ def test_service_client_actor():
         assert resp.success and resp.message == "set to True"
         resp = rt.call("set_flag", SetBool.Request(data=False))
         assert not resp.success
+        assert rt.call("set_flag", request=SetBool.Request(data=True)).success  # by keyword
         with pytest.raises(Exception) as e:
             rt.call("set_flag", colour="red")
         assert "colour" in str(e.value)

@@ -8,12 +8,13 @@ a message; the shell carries on.
 """
 from __future__ import annotations
 
+import argparse
 import cmd
 import json
 import os
 import pathlib
 import pprint
-from typing import Any, Iterable, TextIO
+from typing import Any, Iterable, NoReturn, TextIO
 
 from ..errors import ActorbtError
 from ..runtime import Runtime
@@ -66,31 +67,27 @@ def stream_actor(rt: Runtime, name: str, args: list[Any], kwargs: dict[str, Any]
         return INTERRUPTED
 
 
+class _OptionError(argparse.ArgumentParser):
+    """An argparse parser that raises (the shell goes on) instead of exiting."""
+
+    def error(self, message: str) -> NoReturn:
+        option, _, problem = message.removeprefix("argument ").partition(": ")
+        if problem == "expected one argument":
+            message = f"{option} needs a value"
+        raise ActorbtError(message)
+
+
+_STREAM_OPTIONS = _OptionError(prog="stream", add_help=False)
+_STREAM_OPTIONS.add_argument("--count", type=int)
+_STREAM_OPTIONS.add_argument("--timeout", type=float)
+_STREAM_OPTIONS.add_argument("--json", dest="as_json", action="store_true")
+
+
 def _stream_options(tokens: list[str]) -> tuple[list[str], dict[str, Any]]:
     """Split ``--count N``, ``--timeout S`` and ``--json`` (``--opt=V`` too) from the
-    other tokens of a shell ``stream`` line."""
-    rest: list[str] = []
-    opts: dict[str, Any] = {"count": None, "timeout": None, "as_json": False}
-    i = 0
-    while i < len(tokens):
-        tok = tokens[i]
-        key, eq, val = tok.partition("=")
-        if key in ("--count", "--timeout"):
-            if not eq:
-                i += 1
-                if i >= len(tokens):
-                    raise ActorbtError(f"{key} needs a value")
-                val = tokens[i]
-            try:
-                opts[key[2:]] = int(val) if key == "--count" else float(val)
-            except ValueError:
-                raise ActorbtError(f"{key}: expected a number, got {val!r}") from None
-        elif tok == "--json":
-            opts["as_json"] = True
-        else:
-            rest.append(tok)
-        i += 1
-    return rest, opts
+    other tokens of a shell ``stream`` line (the actor and its arguments, in order)."""
+    opts, rest = _STREAM_OPTIONS.parse_known_args(tokens)
+    return rest, vars(opts)
 
 
 class ActorShell(cmd.Cmd):

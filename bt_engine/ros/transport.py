@@ -142,39 +142,37 @@ class RosTransport(Transport):
         # Created here, not through host.call: the hub never waits for the executor
         # thread (which may be waiting for the hub), see RosHost.
         client = ActionClient(self.node, action_type, server)
-        host, waiter = self.host, self._waiter
-        goal_type = action_type.Goal
-
-        def send_goal(done: Any, goal: Any = None, **fields: Any) -> Callable[[], None]:
-            msg = build_message(goal_type, goal, fields)
-            call = GoalCall(client, server, waiter, msg, server_timeout=self.server_timeout,
-                            on_result=done, on_error=done.fail)
-            host.post(call.start)
-            return lambda: self._post_quietly(call.cancel)
-
         doc = (f"Send a {action_type.__module__}.{action_type.__name__} goal to action "
                f"{server} and return its result.")
-        return scope.add_actor(name, send_goal, Kind.ASYNC, doc=doc,
-                               signature=_message_signature("goal", goal_type))
+        return self._client_actor(scope, name, GoalCall, client, server, action_type.Goal,
+                                  "goal", doc)
 
     def register_service(self, scope: Any, name: str, srv_type: type, server: str) -> Any:
         """Make async actor ``name(request=None, **fields)`` calling service ``server``;
         the result is the response. Cancelling drops the pending request."""
         client = self.node.create_client(srv_type, server)
-        host, waiter = self.host, self._waiter
-        req_type = srv_type.Request
+        doc = (f"Call service {server} ({srv_type.__module__}.{srv_type.__name__}) and "
+               "return the response.")
+        return self._client_actor(scope, name, ServiceCall, client, server, srv_type.Request,
+                                  "request", doc)
 
-        def call_service(done: Any, request: Any = None, **fields: Any) -> Callable[[], None]:
-            msg = build_message(req_type, request, fields)
-            call = ServiceCall(client, server, waiter, msg, server_timeout=self.server_timeout,
-                               on_result=done, on_error=done.fail)
+    def _client_actor(self, scope: Any, name: str, call_type: type, client: Any, server: str,
+                      msg_type: type, param: str, doc: str) -> Any:
+        """An async actor ``name(<param>=None, **fields)`` that sends one message through
+        ``client`` as a ``call_type`` (GoalCall or ServiceCall) from the executor thread."""
+        host, waiter = self.host, self._waiter
+
+        def send(done: Any, *args: Any, **fields: Any) -> Callable[[], None]:
+            # the signature is (<param>=None, **fields), checked by the runtime
+            message = args[0] if args else fields.pop(param, None)
+            call = call_type(client, server, waiter, build_message(msg_type, message, fields),
+                             server_timeout=self.server_timeout, on_result=done,
+                             on_error=done.fail)
             host.post(call.start)
             return lambda: self._post_quietly(call.cancel)
 
-        doc = (f"Call service {server} ({srv_type.__module__}.{srv_type.__name__}) and "
-               "return the response.")
-        return scope.add_actor(name, call_service, Kind.ASYNC, doc=doc,
-                               signature=_message_signature("request", req_type))
+        return scope.add_actor(name, send, Kind.ASYNC, doc=doc,
+                               signature=_message_signature(param, msg_type))
 
     def _post_quietly(self, fn: Callable[[], Any]) -> None:
         try:

@@ -2,9 +2,9 @@
 
 ``register_tree_folder(rt, "trees")`` parses and validates every mission of the folder
 (all at load time, before anything runs) and registers each as a sync actor of the root
-SubSystem (with ``strict=False``, the trees that do not load are skipped, see
-:attr:`TreeLibrary.broken`, and calling one by name raises the reason), with its inputs as parameters and its outputs as result. Calling that actor
-builds a fresh tree with its own blackboard namespace and ticks it in the caller's
+SubSystem, with its inputs as parameters and its outputs as result. With
+``strict=False`` the trees that do not load are skipped (see ``TreeLibrary.broken``), and
+calling one by name raises the reason. Calling a tree actor builds a fresh tree with its own blackboard namespace and ticks it in the caller's
 greenlet until it finishes. So trees call trees with ``do:``, actors call trees with
 ``run_actor`` in every call mode, and a Python program calls one through the runtime.
 """
@@ -118,6 +118,7 @@ class TreeHost:
         return registered
 
     def _name_conflict(self, mission: Mission) -> MissionError | None:
+        """The error when a root actor that is not a tree already has the mission's name."""
         name = mission.name
         existing = self.rt.run_on_hub(lambda: self.rt.root.actors().get(name))
         if existing is None or existing.is_tree or name in self._stubs:
@@ -158,12 +159,10 @@ class TreeHost:
         Raises:
             DuplicateTreeError: a root actor that is not a tree already has the name.
         """
+        conflict = self._name_conflict(mission)
+        if conflict is not None:
+            raise conflict
         name = mission.name
-        existing = self.rt.run_on_hub(lambda: self.rt.root.actors().get(name))
-        if existing is not None and not existing.is_tree and name not in self._stubs:
-            raise DuplicateTreeError(
-                mission.pos, f"tree name {name!r} is already the actor {existing.path}, expected a name no root actor has"
-            )
 
         def run_tree(*args: Any, **kwargs: Any) -> dict[str, Any]:
             return self.run(name, *args, **kwargs)

@@ -63,6 +63,13 @@ class SkippedTreeError(ActorbtError, LookupError):
         super().__init__(f"tree {name!r} was skipped: {error}")
 
 
+def _duplicate(mission: Mission, other_file: str) -> DuplicateTreeError:
+    return DuplicateTreeError(
+        mission.pos,
+        f"tree name {mission.name!r} is already used by {other_file}, expected one file per tree name",
+    )
+
+
 def _declared_name(path: str | Path) -> str | None:
     """The tree name a mission file declares on a top-level ``name:`` line, if it can
     be read (for files that do not parse)."""
@@ -147,10 +154,7 @@ class TreeLibrary:
         name = mission.name
         other = self._missions.get(name)
         if other is not None and other.file != mission.file:
-            error = DuplicateTreeError(
-                mission.pos,
-                f"tree name {name!r} is already used by {other.file}, expected one file per tree name",
-            )
+            error = _duplicate(mission, other.file)
             if strict:
                 raise error
             del self._missions[name]
@@ -160,10 +164,7 @@ class TreeLibrary:
             previous = self.broken[name]
             if previous.pos.file != mission.file:  # another file that declares this name
                 if not isinstance(previous, DuplicateTreeError):
-                    self.broken[name] = DuplicateTreeError(
-                        mission.pos,
-                        f"tree name {name!r} is already used by {previous.pos.file}, expected one file per tree name",
-                    )
+                    self.broken[name] = _duplicate(mission, previous.pos.file)
                 return None
         self.broken.pop(name, None)  # (re)loaded from its own file
         self._missions[name] = mission
