@@ -134,6 +134,14 @@ class Catcher(SubSystem):
         From a look distance the robot first faces the object and looks again (when
         perception is available): the target is re-measured, and other objects near it are
         marked on the planner's map and kept out of the approach. Returns the target.
+
+        Args:
+            target: the object, as perception reports it: a dict with its axis x, y in
+                the map frame [m] and usually its category
+            category: whose strategy to use (can, bottle); None: the target's category
+
+        Returns:
+            the target as re-measured from close by, with its category
         """
         strategy = self._strategy(target, category)
         cat = strategy.category
@@ -176,7 +184,14 @@ class Catcher(SubSystem):
         """Grasp ``target`` with the category's strategy and lift it.
 
         Fails with GraspError when the fingers close on nothing (and backs off first).
-        Returns what is held: category and finger opening [m].
+
+        Args:
+            target: the object, as approach_object returns it: a dict with its axis x, y
+                in the map frame and its base z [m], and usually its category
+            category: whose strategy to use (can, bottle); None: the target's category
+
+        Returns:
+            what is held: category, and width (the finger opening) [m]
         """
         strategy = self._strategy(target, category)
         g, a = strategy.grasp, strategy.approach
@@ -231,8 +246,18 @@ class Catcher(SubSystem):
     @actor
     def place(self, x: float, y: float, surface: float = 0.0, heading: float | None = None) -> dict:
         """Put the held object down with its axis at (x, y) [m] on a surface ``surface`` [m]
-        high, the base facing ``heading`` [rad] (default: from where it is). Returns where
-        the hand released it."""
+        high, the base facing ``heading`` [rad] (default: from where it is).
+
+        Args:
+            x: where the object's axis goes, map frame x [m]
+            y: where the object's axis goes, map frame y [m]
+            surface: height of the surface it is put on [m]; 0: the floor
+            heading: the base's heading while placing [rad]; None: facing (x, y) from
+                the robot's side, or the nearest side with room for the base
+
+        Returns:
+            where the hand released it: x, y, z [m] in the map frame
+        """
         held = self.get_value("holding")
         if not held:
             raise GraspError("place: nothing is held")
@@ -266,7 +291,18 @@ class Catcher(SubSystem):
     def place_on(self, x: float, y: float, size_x: float, size_y: float, height: float) -> dict:
         """Place the held object on a box-shaped surface (a pallet) centred at (x, y) [m],
         ``size_x`` by ``size_y`` [m], ``height`` [m] high: near the edge the robot can reach
-        best, since the base cannot drive over the surface."""
+        best, since the base cannot drive over the surface.
+
+        Args:
+            x: the surface's centre, map frame x [m]
+            y: the surface's centre, map frame y [m]
+            size_x: the surface's extent along the map's x axis [m]
+            size_y: the surface's extent along the map's y axis [m]
+            height: the surface's height above the floor [m]
+
+        Returns:
+            where the hand released the object: x, y, z [m] in the map frame
+        """
         held = self.get_value("holding")
         if not held:
             raise GraspError("place_on: nothing is held")

@@ -77,7 +77,11 @@ class Manipulator(SubSystem):
 
     @actor
     def move_joint(self, *q: float) -> list[float]:
-        """Plan and move to joint positions ``q`` (joint1..joint4) [rad]; returns where it ended."""
+        """Plan and move to joint positions ``q`` (joint1..joint4) [rad]; returns where it ended.
+
+        Args:
+            *q: the four joint positions, joint1 (base yaw) to joint4 (wrist) [rad]
+        """
         if len(q) != len(self.joints):
             raise MotionError(f"move_joint needs {len(self.joints)} joint values, got {len(q)}")
         start, _, _ = self._state()
@@ -85,12 +89,20 @@ class Manipulator(SubSystem):
 
     @actor
     def move_joint_degree(self, *deg: float) -> list[float]:
-        """As move_joint, in degrees."""
+        """As move_joint, in degrees; returns where it ended [rad].
+
+        Args:
+            *deg: the four joint positions, joint1 (base yaw) to joint4 (wrist) [deg]
+        """
         return self.run_actor("move_joint", *(math.radians(d) for d in deg))
 
     @actor
     def adjust_joint(self, *delta_deg: float) -> list[float]:
-        """Move every joint by ``delta_deg`` [deg] from where it is."""
+        """Move every joint by ``delta_deg`` [deg] from where it is; returns where it ended [rad].
+
+        Args:
+            *delta_deg: the change of each of the four joints, joint1 to joint4 [deg]
+        """
         q, _, _ = self._state()
         if len(delta_deg) != len(q):
             raise MotionError(f"adjust_joint needs {len(q)} deltas, got {len(delta_deg)}")
@@ -98,18 +110,34 @@ class Manipulator(SubSystem):
 
     @actor
     def move_to_pose(self, x: float, y: float, z: float, pitch: float) -> list[float]:
-        """Plan and move the tool to (x, y, z) [m] in base_footprint with ``pitch`` [rad]."""
+        """Plan and move the tool to (x, y, z) [m] in base_footprint with ``pitch`` [rad];
+        returns the joint positions reached [rad].
+
+        Args:
+            x: tool position forward of the base, base_footprint frame [m]
+            y: tool position to the left of the base, base_footprint frame [m]
+            z: tool height above the floor [m]
+            pitch: tool angle below the horizontal; pi/2 points straight down [rad]
+        """
         start, _, _ = self._state()
         return self._run_plan(plan_pose_motion(start, (x, y, z, pitch), self.scene))
 
     @actor
     def open(self, width: float = GRIPPER_OPEN) -> float:
-        """Open the gripper to ``width`` [m]; returns the opening reached."""
+        """Open the gripper to ``width`` [m]; returns the opening reached [m].
+
+        Args:
+            width: finger opening to reach [m]
+        """
         return self._gripper(width)
 
     @actor
     def close(self, width: float = GRIPPER_CLOSED) -> float:
-        """Close the gripper (on an object it stops at the object's width); returns the opening [m]."""
+        """Close the gripper (on an object it stops at the object's width); returns the opening [m].
+
+        Args:
+            width: finger opening to close to; 0 closes fully [m]
+        """
         return self._gripper(width)
 
     # -- execution ---------------------------------------------------------------------

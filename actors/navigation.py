@@ -71,8 +71,13 @@ class Navigation(SubSystem):
 
     @actor
     def mark_obstacles(self, obstacles: list) -> int:
-        """Put perceived objects on the planner's map, replacing those marked before: each
-        a dict with x, y [m] (map frame) and radius [m]. Returns how many are marked."""
+        """Put perceived objects on the planner's map, replacing those marked before.
+        Returns how many are marked.
+
+        Args:
+            obstacles: the objects, each a dict with x, y (map frame) and radius [m];
+                an empty list clears the marks
+        """
         marked = {}
         for i, o in enumerate(obstacles):
             try:
@@ -86,7 +91,12 @@ class Navigation(SubSystem):
 
     @actor
     def clearance(self, x: float, y: float) -> float:
-        """Distance from (x, y) [m] to the nearest obstacle on the map [m] (0 outside it)."""
+        """Distance from (x, y) [m] to the nearest obstacle on the map [m] (0 outside it).
+
+        Args:
+            x: the point's x in the map frame [m]
+            y: the point's y in the map frame [m]
+        """
         costmap = self._planner().costmap
         row, col = costmap.grid.cell_of(x, y)
         if not costmap.grid.contains(row, col):
@@ -101,7 +111,15 @@ class Navigation(SubSystem):
 
     @actor
     def plan_path(self, x: float, y: float) -> list[tuple[float, float]]:
-        """A collision-free path from the robot to (x, y) [m] on the inflated map."""
+        """A collision-free path from the robot to (x, y) [m] on the inflated map.
+
+        Args:
+            x: goal x in the map frame [m]
+            y: goal y in the map frame [m]
+
+        Returns:
+            the waypoints [x, y] in the map frame [m], from the robot to the goal
+        """
         path = self._plan_from_here(x, y)
         if not path.ok:
             raise NavigationError(f"no path to ({x:.2f}, {y:.2f}): {path.message}")
@@ -112,8 +130,16 @@ class Navigation(SubSystem):
     def goto(self, x: float, y: float, theta: float, timeout: float | None = None) -> tuple[float, float, float]:
         """Drive to (x, y) [m] in the map frame and turn to ``theta`` [rad].
 
-        Fails with NavigationError when no path exists or the goal is not reached within
-        ``timeout`` [s] (default: from the path length). Returns the pose reached.
+        Fails with NavigationError when no path exists or the goal is not reached in time.
+
+        Args:
+            x: goal x in the map frame [m]
+            y: goal y in the map frame [m]
+            theta: heading to turn to at the goal, counter-clockwise from the map's x axis [rad]
+            timeout: give up after this long [s]; None: from the path length
+
+        Returns:
+            the pose reached: x [m], y [m], yaw [rad] in the map frame
         """
         plan = self._plan_from_here(x, y)
         if plan.failure is FailureReason.START_INVALID:
@@ -134,7 +160,16 @@ class Navigation(SubSystem):
 
     @actor
     def migrate(self, dx: float, dy: float, dtheta: float) -> tuple[float, float, float]:
-        """Move by (dx, dy) [m] in the robot's frame and turn by ``dtheta`` [rad]."""
+        """Move by (dx, dy) [m] in the robot's frame and turn by ``dtheta`` [rad].
+
+        Args:
+            dx: distance forward (negative: backward) [m]
+            dy: distance to the left (negative: right) [m]
+            dtheta: turn, counter-clockwise positive [rad]
+
+        Returns:
+            the pose reached: x [m], y [m], yaw [rad] in the map frame
+        """
         x, y, yaw = self.get_pose()
         gx = x + dx * math.cos(yaw) - dy * math.sin(yaw)
         gy = y + dx * math.sin(yaw) + dy * math.cos(yaw)
@@ -143,7 +178,13 @@ class Navigation(SubSystem):
     @actor
     def mini_walk(self, distance: float, speed: float = 0.1, tolerance: float = 0.005) -> float:
         """Drive straight by ``distance`` [m] (negative: backwards) without planning, to
-        within ``tolerance`` [m]; returns the distance driven."""
+        within ``tolerance`` [m]; returns the distance driven [m].
+
+        Args:
+            distance: how far to drive, negative backwards [m]
+            speed: top speed [m/s]
+            tolerance: how close to ``distance`` to stop [m]
+        """
         x0, y0, yaw0 = self.get_pose()
         sign = 1.0 if distance >= 0 else -1.0
         deadline = self.runtime.now() + 5.0 + abs(distance) / max(speed, 1e-3) * 2
@@ -166,7 +207,11 @@ class Navigation(SubSystem):
 
     @actor
     def mini_turn(self, angle: float) -> float:
-        """Turn in place by ``angle`` [rad]; returns the yaw reached [rad]."""
+        """Turn in place by ``angle`` [rad]; returns the yaw reached [rad].
+
+        Args:
+            angle: turn, counter-clockwise positive [rad]
+        """
         _, _, yaw = self.get_pose()
         with self._stopping():
             self._turn_to(wrap(yaw + angle), self.runtime.now() + 10.0 + abs(angle) / 0.3)

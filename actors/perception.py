@@ -619,7 +619,12 @@ class Perception(SubSystem):
     def find_object(self, category: str | None = None) -> dict | None:
         """The nearest object of ``category`` (any known category when None) in the next
         RGB-D frame, or None: {category, x, y, z, height, width, distance, bearing,
-        confidence, pixel, ...}; x, y is the object's axis and z its base, map frame [m]."""
+        confidence, pixel, ...}; x, y is the object's axis and z its base, map frame [m].
+
+        Args:
+            category: the object category to look for (can, bottle, or unknown: an
+                object of no known category); None: any known category
+        """
         self._check_category(category)
         found = _targets(detect(self._frame(), self._apps()), category, self._apps())
         return found[0] if found else None
@@ -627,7 +632,13 @@ class Perception(SubSystem):
     @actor
     def pic_find(self, category: str | None = None, seconds: float = 10.0) -> dict | None:
         """Watch the camera for up to ``seconds`` until an object of ``category`` (any known
-        category when None) is seen; the nearest such detection, or None on timeout."""
+        category when None) is seen; the nearest such detection, or None on timeout.
+
+        Args:
+            category: the object category to look for (can, bottle, or unknown: an
+                object of no known category); None: any known category
+            seconds: how long to watch at most [s]
+        """
         self._check_category(category)
         ret = None
         with self.run_actor_mode("rgbd", "timed_iterator", seconds) as frames:
@@ -642,7 +653,13 @@ class Perception(SubSystem):
     def get_found(self, category: str | None = None, looks: int = 5) -> dict | None:
         """A reliable estimate from ``looks`` consecutive frames: sightings are grouped by
         position, outliers dropped, and the median kept. Adds ``sightings``, ``looks`` and
-        ``spread`` [m] to the detection fields; None when nothing was seen."""
+        ``spread`` [m] to the detection fields; None when nothing was seen.
+
+        Args:
+            category: the object category to look for (can, bottle, or unknown: an
+                object of no known category); None: any known category
+            looks: how many consecutive camera frames to combine
+        """
         self._check_category(category)
         looks = max(1, int(looks))
         sightings: list[dict] = []
@@ -661,7 +678,12 @@ class Perception(SubSystem):
     def measure_distance(self, category: str | None = None) -> Iterator[dict | None]:
         """Per frame, the range and bearing to the nearest target (for visual servoing):
         {distance [m], bearing [rad, + left], x, y, category, stamp}, or None when no
-        target is in view."""
+        target is in view.
+
+        Args:
+            category: the object category to look for (can, bottle, or unknown: an
+                object of no known category); None: any known category
+        """
         self._check_category(category)
         with self.run_actor_mode("rgbd", "iterator") as frames:
             for frame in frames:
@@ -677,7 +699,12 @@ class Perception(SubSystem):
     def measure_center(self, category: str | None = None) -> Iterator[dict | None]:
         """Per frame, where the nearest target is in the image: {dx, dy} its pixel offset
         from the principal point normalised by half the image size (-1 left/top .. +1
-        right/bottom), pixel, category, stamp; None when no target is in view."""
+        right/bottom), pixel, category, stamp; None when no target is in view.
+
+        Args:
+            category: the object category to look for (can, bottle, or unknown: an
+                object of no known category); None: any known category
+        """
         self._check_category(category)
         with self.run_actor_mode("rgbd", "iterator") as frames:
             for frame in frames:

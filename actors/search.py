@@ -31,7 +31,11 @@ class Search(SubSystem):
     @actor
     def watch(self, category: str = "any") -> dict:
         """Watch the camera until an object of ``category`` ("any": any known category) is
-        seen, and return its detection (map frame). Runs until found or cancelled."""
+        seen, and return its detection (map frame). Runs until found or cancelled.
+
+        Args:
+            category: the object category to watch for (can, bottle), or any
+        """
         cat = None if category in ANY else category
         while True:
             found = self.run_actor("find_object", cat)
@@ -40,7 +44,11 @@ class Search(SubSystem):
 
     @actor
     def look_around(self, turns: int = 4) -> None:
-        """Turn on the spot in steps, pausing so the camera gets still frames."""
+        """Turn on the spot in steps, pausing so the camera gets still frames.
+
+        Args:
+            turns: how many steps of about 80 degrees (the camera's field of view) to turn
+        """
         for _ in range(max(1, turns)):
             self.run_actor("sleep", LOOK_PAUSE)
             self.run_actor("mini_turn", LOOK_STEP)
@@ -48,7 +56,12 @@ class Search(SubSystem):
     @actor
     def patrol(self, locations: list, turns: int = 4) -> None:
         """Visit each (x, y) [m] of ``locations`` in turn and look around there. Fails with
-        SearchExhausted after the last one: a patrol that ends has found nothing."""
+        SearchExhausted after the last one: a patrol that ends has found nothing.
+
+        Args:
+            locations: the places to visit, each [x, y] in the map frame [m]
+            turns: look_around steps at each place
+        """
         if not locations:
             raise SearchExhausted("no search locations given")
         for i, loc in enumerate(locations):

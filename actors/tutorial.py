@@ -15,13 +15,21 @@ class Tutorial(SubSystem):
 
     @actor
     def sample_actor(self, mes: str) -> str:
-        """Print ``mes`` and return it (the proposal's first actor)."""
+        """Print ``mes`` and return it (the proposal's first actor).
+
+        Args:
+            mes: the text to print
+        """
         print(mes)
         return mes
 
     @actor
     def greet(self, name: str = "world") -> str:
-        """Return a greeting, using the subsystem's persistent ``greeting`` value."""
+        """Return a greeting, using the subsystem's persistent ``greeting`` value.
+
+        Args:
+            name: who to greet
+        """
         return f"{self.get_value('greeting')}, {name}"
 
     @actor("countdown", "multi", hub_only=True)
@@ -29,7 +37,12 @@ class Tutorial(SubSystem):
         """Emit start, start-1, ..., 1 every ``period`` [s], then end (an emit-style stream).
 
         ``hub_only``: it emits from a runtime timer, never from another thread, so the
-        virtual clock may jump while it runs."""
+        virtual clock may jump while it runs.
+
+        Args:
+            start: the first value, counted down to 1
+            period: time between values [s]
+        """
         state = {"n": start}
 
         def tick() -> None:
@@ -44,7 +57,12 @@ class Tutorial(SubSystem):
     @actor
     def count(self, n: int = 3, period: float = 1.0) -> Iterator[int]:
         """Yield 0..n-1, sleeping ``period`` [s] on the runtime clock between values
-        (a generator stream)."""
+        (a generator stream).
+
+        Args:
+            n: how many values
+            period: time between values [s]
+        """
         for i in range(n):
             yield i
             self.run_actor("sleep", period)

@@ -15,6 +15,7 @@ from .clock import Clock, VirtualClock, WallClock
 from .default import (check_actor, close_default_runtime, default_runtime, get_value,
                       register_subsystem, run_actor, run_actor_async, run_actor_mode,
                       set_default_runtime, set_value)
+from .docstrings import param_docs
 from .errors import (ActorbtError, ActorCancelled, ActorError, ActorTimeout,
                      AmbiguousActorError, BadArgumentsError, BadModeError, Cancelled, Failure,
                      HubBlockingError, RuntimeClosedError, UnknownActorError)
@@ -30,6 +31,6 @@ __all__ = [
     "Failure", "HubBlockingError", "Kind", "Mode", "Runtime", "RuntimeClosedError", "Signal",
     "SubNet", "SubSystem", "Transaction", "TxnState", "UnknownActorError", "VirtualClock",
     "WallClock", "actor", "check_actor", "close_default_runtime", "current_runtime",
-    "default_runtime", "get_value", "register_subsystem", "run_actor", "run_actor_async",
-    "run_actor_mode", "set_default_runtime", "set_value",
+    "default_runtime", "get_value", "param_docs", "register_subsystem", "run_actor",
+    "run_actor_async", "run_actor_mode", "set_default_runtime", "set_value",
 ]

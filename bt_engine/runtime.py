@@ -35,7 +35,11 @@ class RootSystem(SubSystem):
 
     @actor
     def sleep(self, seconds: float) -> None:
-        """Wait ``seconds`` [s] on the runtime clock (virtual time jumps)."""
+        """Wait ``seconds`` [s] on the runtime clock (virtual time jumps).
+
+        Args:
+            seconds: how long to wait [s]
+        """
         self._rt.sleep(seconds)
 
 

@@ -241,7 +241,9 @@ class SubSystem(CallApi):
             if not isinstance(msg, msg_type):
                 raise TypeError(f"{name} publishes {msg_type.__name__}, got {type(msg).__name__}")
             pub.publish(msg)
-        publish.__doc__ = f"Publish a {msg_type.__module__}.{msg_type.__name__} on {_topic(topic)}."
+        type_name = f"{msg_type.__module__}.{msg_type.__name__}"
+        publish.__doc__ = (f"Publish a {type_name} on {_topic(topic)}.\n\n"
+                           f"Args:\n    msg: the {type_name} message to publish\n")
         return self.add_actor(name, publish, Kind.SYNC, signature=inspect.Signature(
             [inspect.Parameter("msg", inspect.Parameter.POSITIONAL_OR_KEYWORD, annotation=msg_type)]))
 

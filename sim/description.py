@@ -28,6 +28,9 @@ from pathlib import Path
 import numpy as np
 import yaml
 
+from bt_engine.errors import ActorbtError
+from bt_engine.yaml_hints import syntax_mark, syntax_message
+
 from .objects import CATEGORIES
 
 WORLDS_DIR = Path(__file__).resolve().parent / "worlds"
@@ -35,8 +38,9 @@ ROBOT_RADIUS = 0.26     # circle around base_footprint that covers the Waffle Pi
 DOOR_CLEARANCE = 0.6    # random objects keep this far from wall ends (doorways, corners)
 
 
-class WorldError(ValueError):
-    """A world description is invalid or cannot be realised; the message names file:line."""
+class WorldError(ActorbtError, ValueError):
+    """A world description is invalid or cannot be realised; the message names file:line
+    (an ``ActorbtError``: the command line prints it in one line, exit status 2)."""
 
 
 @dataclass(frozen=True)
@@ -111,8 +115,8 @@ class _Ctx:
         self.path = path
 
     def err(self, node, msg):
-        line = node.start_mark.line + 1 if node is not None else 1
-        return WorldError(f"{self.path}:{line}: {msg}")
+        where = f"{node.start_mark.line + 1}:{node.start_mark.column + 1}" if node is not None else "1:1"
+        return WorldError(f"{self.path}:{where}: {msg}")
 
     def mapping(self, node, what):
         if not isinstance(node, yaml.MappingNode):
@@ -202,9 +206,9 @@ def parse_world(text: str, path: str = "<string>", seed: int = 0) -> WorldSpec:
     try:
         root = yaml.compose(text)
     except yaml.MarkedYAMLError as e:
-        mark = e.problem_mark or e.context_mark
-        line = mark.line + 1 if mark else 1
-        raise WorldError(f"{path}:{line}: YAML syntax error: {e.problem or e}") from None
+        mark = syntax_mark(e)
+        where = f"{mark.line + 1}:{mark.column + 1}" if mark else "1"
+        raise WorldError(f"{path}:{where}: {syntax_message(e)}") from None
     ctx = _Ctx(path)
     if root is None:
         raise WorldError(f"{path}:1: empty world description")

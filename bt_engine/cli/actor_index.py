@@ -18,14 +18,15 @@ from pathlib import Path
 from typing import Any, Iterable
 
 from ..actor import ActorRef
-from ..catalog import tool_schema
+from ..catalog import text_lines, tool_schema
 from ..errors import AmbiguousActorError, UnknownActorError
 
 log = logging.getLogger("actorbt.cli")
 
 
-#: bump when the layout of actors.json changes
-INDEX_VERSION = 1
+#: bump when the layout of actors.json changes (2: tools carry parameter descriptions,
+#: units, details and returns)
+INDEX_VERSION = 2
 
 
 class _Shown:
@@ -60,6 +61,11 @@ class ActorEntry:
     def of(cls, ref: ActorRef) -> "ActorEntry":
         return cls(ref.path, ref.name, ref.kind.value, ref.is_tree, ref.doc, ref.signature,
                    str(ref.signature), tool_schema(ref))
+
+    def text_lines(self) -> list[str]:
+        """What ``actorbt catalog`` prints below the signature: the docstring without
+        its ``Args:`` section, then one line per parameter (description, type, default)."""
+        return text_lines(self.doc, self.tool)
 
     def to_json(self) -> dict[str, Any]:
         sig = self.signature

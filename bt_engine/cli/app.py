@@ -57,12 +57,13 @@ class App:
         clock = clock or getattr(args, "clock", None) or gui_clock or self.cfg.clock
         rt = Runtime(clock=clock, bus=self._transport(), watchdog=watchdog)
         try:
-            if with_world and world_first:
-                self._start_world(rt, world_setup)
-            self._add_subsystems(rt)
-            self._load_trees(rt)
-            if with_world and not world_first:
-                self._start_world(rt, world_setup)
+            with _c_stdout_to_stderr():  # stdout is for results (`call --json`), not banners
+                if with_world and world_first:
+                    self._start_world(rt, world_setup)
+                self._add_subsystems(rt)
+                self._load_trees(rt)
+                if with_world and not world_first:
+                    self._start_world(rt, world_setup)
         except BaseException:
             self.close(rt)
             raise

@@ -22,6 +22,7 @@ from typing import Any
 import yaml
 
 from ..errors import ActorbtError
+from ..yaml_hints import syntax_mark, syntax_message
 
 
 class ConfigError(ActorbtError):
@@ -68,10 +69,12 @@ def load_config(path: "str | pathlib.Path | None" = None) -> Config:
         data = yaml.safe_load(p.read_text()) or {}
     except OSError as e:
         raise ConfigError(f"cannot read {p}: {e.strerror or e}") from None
-    except yaml.YAMLError as e:
-        mark = getattr(e, "problem_mark", None)
+    except yaml.MarkedYAMLError as e:
+        mark = syntax_mark(e)
         where = f"{p}:{mark.line + 1}:{mark.column + 1}" if mark else str(p)
-        raise ConfigError(f"{where}: invalid YAML: {getattr(e, 'problem', e)}") from None
+        raise ConfigError(f"{where}: {syntax_message(e)}") from None
+    except yaml.YAMLError as e:
+        raise ConfigError(f"{p}: invalid YAML: {e}") from None
     if not isinstance(data, dict):
         raise ConfigError(f"{p}: expected a mapping of settings")
     unknown = set(data) - _FIELDS

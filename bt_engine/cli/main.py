@@ -65,8 +65,8 @@ def cmd_catalog(args: argparse.Namespace, app: App) -> int:
         return 0
     for e in entries:
         print(f"{e.path}{e.shown}  [{'tree' if e.is_tree else e.kind}]")
-        for line in (e.doc or "(no docstring)").splitlines():
-            print(f"    {line}")
+        for line in e.text_lines():
+            print(f"    {line}" if line else "")
     return 0
 
 

@@ -16,6 +16,7 @@ import pathlib
 import pprint
 from typing import Any, Iterable, NoReturn, TextIO
 
+from ..catalog import text_lines, tool_schema
 from ..errors import ActorbtError
 from ..runtime import Runtime
 from ..literals import parse_args, split_line
@@ -189,7 +190,7 @@ class ActorShell(cmd.Cmd):
             self.stdout.write(f"error: {e}\n")
             return
         self.stdout.write(f"{ref.path}{ref.signature}  [{'tree' if ref.is_tree else ref.kind.value}]\n")
-        self.stdout.write((ref.doc or "(no docstring)") + "\n")
+        self.stdout.write("".join(f"{line}\n" for line in text_lines(ref.doc, tool_schema(ref))))
 
     def default(self, line: str) -> None:
         try:

@@ -19,6 +19,9 @@ from typing import TYPE_CHECKING, Any, Callable, Mapping
 import py_trees
 import py_trees.behaviours
 
+from ..catalog import json_type
+from ..docstrings import attach as attach_docs
+from ..docstrings import unit_of
 from ._behaviours import ActorLeaf
 from ._errors import DuplicateTreeError, MissionError
 from ._library import SkippedTreeError, TreeLibrary
@@ -169,6 +172,9 @@ class TreeHost:
 
         run_tree.__name__ = name
         run_tree.__doc__ = mission.doc
+        # the catalog's parameter and result descriptions (bt_engine.catalog.tool_schema)
+        attach_docs(run_tree, {spec.name: spec.doc for spec in mission.inputs if spec.doc},
+                    _outputs_schema(mission))
         self.rt.run_on_hub(
             self.rt.root.add_actor, name, run_tree, "sync",
             doc=mission.doc or f"Tree {name} ({mission.file}).", signature=mission.signature(),
@@ -253,6 +259,22 @@ _ANY_ARGUMENTS = inspect.Signature([
     inspect.Parameter("args", inspect.Parameter.VAR_POSITIONAL),
     inspect.Parameter("kwargs", inspect.Parameter.VAR_KEYWORD),
 ])
+
+
+def _outputs_schema(mission: Mission) -> dict[str, Any]:
+    """The tree's result as a JSON-Schema fragment: an object with one property per
+    output, typed and described as declared."""
+    props: dict[str, Any] = {}
+    for spec in mission.outputs:
+        schema = dict(json_type(spec.type.python_type))
+        if spec.doc:
+            schema["description"] = spec.doc
+            unit = unit_of(spec.doc)
+            if unit:
+                schema["unit"] = unit
+        props[spec.name] = schema
+    return {"type": "object", "description": "the outputs (null: not written in this run)",
+            "properties": props}
 
 
 def _skipped_tree(name: str, error: MissionError) -> Callable[..., Any]:

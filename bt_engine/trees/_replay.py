@@ -177,19 +177,78 @@ def read_trace(path: str | Path) -> tuple[dict[str, Any], list[dict[str, Any]]]:
         if not line.strip():
             continue
         try:
-            records.append(json.loads(line))
+            record = json.loads(line)
         except json.JSONDecodeError as exc:
             raise ReplayError(f"{path}:{number}:{exc.colno}: not JSON: {exc.msg}") from None
+        problem = _record_problem(record, first=not records)
+        if problem:
+            raise ReplayError(f"{path}:{number}:1: {problem}")
+        records.append(record)
     if not records or records[0].get("type") != "header" or records[0].get("format") != TRACE_FORMAT:
         raise ReplayError(f"{path}:1:1: not an actorbt trace, expected a header line with format {TRACE_FORMAT!r}")
     header = records[0]
     if header.get("version") != TRACE_VERSION:
         raise ReplayError(f"{path}:1:1: trace version {header.get('version')}, expected {TRACE_VERSION}")
-    start = float(header.get("start", 0.0))
+    problem = _header_problem(header)
+    if problem:
+        raise ReplayError(f"{path}:1:1: header: {problem}")
+    start = float(header.get("start") or 0.0)
     events = records[1:]
     if start:  # times relative to the start of the recording
         events = [{**e, "t": float(e.get("t", start)) - start} for e in events]
     return header, events
+
+
+#: the keys (and their JSON types) every event of a type must have to be replayed and
+#: plotted; the recorder writes more
+_EVENT_KEYS: dict[str, dict[str, tuple[type, ...]]] = {
+    "run": {"run": (int,), "tree": (str,)},
+    "tick": {"run": (int,), "n": (int,)},
+    "status": {"run": (int,), "path": (str,), "old": (str,), "new": (str,)},
+    "call": {"run": (int,), "path": (str,), "call": (int,), "actor": (str,), "args": (list,), "kwargs": (dict,)},
+    "return": {"run": (int,), "path": (str,), "call": (int,), "actor": (str,), "state": (str,)},
+    "write": {"run": (int,), "key": (str,)},
+    "end": {"run": (int,), "status": (str,)},
+}
+_JSON_NAMES = {int: "an integer", str: "a string", list: "a list", dict: "an object", float: "a number"}
+
+
+def _record_problem(record: Any, first: bool) -> str | None:
+    """What makes one line of a trace unusable (``None`` if nothing does)."""
+    if not isinstance(record, dict):
+        return f"expected a JSON object (an event), got {type(record).__name__}"
+    kind = record.get("type")
+    if first or kind == "header":
+        return None  # the header is checked on its own
+    if not isinstance(kind, str):
+        return "an event without a 'type', expected one of " + ", ".join(["log", "txn", *_EVENT_KEYS])
+    t = record.get("t")
+    if isinstance(t, bool) or not isinstance(t, (int, float)):
+        return f"{kind} event: 't' must be a number (seconds), got {json.dumps(t)}"
+    for key, types in _EVENT_KEYS.get(kind, {}).items():
+        value = record.get(key)
+        if key not in record:
+            return f"{kind} event: missing {key!r}"
+        if isinstance(value, bool) or not isinstance(value, types):
+            return f"{kind} event: {key!r} must be {_JSON_NAMES[types[0]]}, got {json.dumps(value)}"
+    return None
+
+
+def _header_problem(header: dict[str, Any]) -> str | None:
+    """What makes a trace's header unusable (``None`` if nothing does)."""
+    if not isinstance(header.get("tree"), str):
+        return f"'tree' must be the recorded tree's name, got {json.dumps(header.get('tree'))}"
+    for key in ("start", "max_period", "behaviour_period"):
+        value = header.get(key)
+        if value is not None and (isinstance(value, bool) or not isinstance(value, (int, float))):
+            return f"{key!r} must be a number (seconds), got {json.dumps(value)}"
+    for key in ("inputs", "trees"):
+        if not isinstance(header.get(key) or {}, dict):
+            return f"{key!r} must be an object, got {json.dumps(header.get(key))}"
+    for name, info in (header.get("trees") or {}).items():
+        if not isinstance(info, dict) or not isinstance(info.get("file", ""), str):
+            return f"trees[{name!r}] must be an object with 'file' and 'sha256', got {json.dumps(info)}"
+    return None
 
 
 def _from_json(value: Any) -> Any:
@@ -326,7 +385,7 @@ def _locate(header: dict[str, Any], trace: Path, trees: str | Path | None) -> tu
                 by_name.setdefault(read_mission(path).name, path)
             except MissionError:
                 continue
-    for name, info in header.get("trees", {}).items():
+    for name, info in (header.get("trees") or {}).items():
         recorded = Path(info.get("file", f"{name}.yaml"))
         if trees is not None:
             candidates = [by_name[name]] if name in by_name else []

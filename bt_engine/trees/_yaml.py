@@ -22,6 +22,7 @@ from yaml.nodes import MappingNode, Node, ScalarNode, SequenceNode
 from yaml.reader import Reader
 
 from ._errors import DuplicateKeyError, LimitError, MissionSyntaxError, Pos, shorten
+from ..yaml_hints import syntax_mark, syntax_message
 
 __all__ = ["MAX_NUMBER_DIGITS", "MAX_SCALAR_LENGTH", "MAX_YAML_DEPTH", "YMap", "YNode", "YScalar", "YSeq",
            "parse_yaml", "plain"]
@@ -247,12 +248,9 @@ def _check_printable(text: str, file: str) -> None:
 
 
 def _syntax_error(file: str, exc: yaml.MarkedYAMLError) -> MissionSyntaxError:
-    mark = exc.problem_mark or exc.context_mark
+    mark = syntax_mark(exc)
     pos = _pos(file, mark) if mark is not None else Pos(file, 1, 1)
-    what = exc.problem or "invalid YAML"
-    if exc.context:
-        what = f"{exc.context}, {what}"
-    return MissionSyntaxError(pos, f"YAML syntax error: {what}")
+    return MissionSyntaxError(pos, syntax_message(exc))
 
 
 def parse_yaml(text: str, file: str) -> YNode | None:
