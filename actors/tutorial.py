@@ -1,4 +1,4 @@
-"""The proposal's first examples as a SubSystem: a starting point for new actors."""
+"""The first examples of actors, one of each kind, as a SubSystem: a starting point for new actors."""
 from __future__ import annotations
 
 from typing import Iterator
@@ -15,7 +15,7 @@ class Tutorial(SubSystem):
 
     @actor
     def sample_actor(self, mes: str) -> str:
-        """Print ``mes`` and return it (the proposal's first actor).
+        """Print ``mes`` and return it (the simplest actor there is).
 
         Args:
             mes: the text to print

@@ -1,4 +1,4 @@
-"""Benchmark of the planning library (issue 5): arm queries, ruckig timing, base planner.
+"""Benchmark of the planning library : arm queries, ruckig timing, base planner.
 
 Run:  .venv/bin/python bench/bench_planning.py [--queries 100] [--seed 0]
 

@@ -1,6 +1,6 @@
 """actorbt engine. Knows nothing of robots.
 
-Layering (DESIGN.md): ``bt_engine`` imports none of ``actors``, ``planning`` or ``sim``,
+Layering (docs/architecture.md): ``bt_engine`` imports none of ``actors``, ``planning`` or ``sim``,
 and inside it imports only go downwards, with no cycles; ``tests/test_layering.py``
 reads every import (relative, in functions, under TYPE_CHECKING) to keep it so.
 The core, bottom to top::

@@ -28,7 +28,7 @@ def actor(*args: Any, kind: "str | Kind | None" = None, buffer: int = DEFAULT_ST
           hub_only: bool = False):
     """Declare a method of a SubSystem or SubNet as an actor.
 
-    Forms, as in the proposal::
+    Forms, as in ros_actor::
 
         @actor                        # name = function name, kind = sync
         @actor('name')                # explicit name

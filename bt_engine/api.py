@@ -1,4 +1,4 @@
-"""The calling API shared by SubSystem, SubNet and Runtime: the proposal's names
+"""The calling API shared by SubSystem, SubNet and Runtime: ros_actor's names
 (``run_actor``, ``run_actor_mode``, ...) and the keyword-only ones (``call``, ``start``,
 ``stream``). Each resolves names from its own scope."""
 from __future__ import annotations
@@ -31,7 +31,7 @@ class CallApi:
             return dispatch(table, self._call_scope().resolve(name), mode, args, kwargs, cb, seconds)
         return call_from_thread(table, self._call_scope(), name, mode, args, kwargs, cb, seconds)
 
-    # -- the proposal's API ----------------------------------------------------------
+    # -- ros_actor's API --------------------------------------------------------------
     def run_actor(self, name: str, /, *args: Any, **kwargs: Any) -> Any:
         """Call actor ``name`` synchronously and return its result."""
         return self._dispatch(name, Mode.SYNC, args, kwargs)

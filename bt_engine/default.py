@@ -1,4 +1,4 @@
-"""The proposal's module-level API, over one default runtime.
+"""The module-level API (ros_actor's names), over one default runtime.
 
 A ros_actor-style program runs by changing only its imports::
 

@@ -1,5 +1,5 @@
 """The call-mode matrix: every mode (how a caller runs an actor) for every kind (how the
-actor is written). See DESIGN.md, "Call modes".
+actor is written). See docs/architecture.md, "The life of a call".
 
 All functions here run on the hub thread. Blocking modes need a task (a greenlet);
 calls from other threads come through :mod:`bt_engine.external` first.

@@ -1,6 +1,6 @@
 """Actor kinds (how an actor is written) and call modes (how it is called).
 
-Strings from the proposal's API are parsed once into these enums.
+Strings of the ros_actor-style API (``run_actor_mode(name, 'timed', ...)``) are parsed once into these enums.
 """
 from __future__ import annotations
 
@@ -65,7 +65,7 @@ class Mode(enum.Enum):
             ) from None
 
     def split_args(self, args: tuple) -> "tuple[Callable | None, float | None, tuple]":
-        """The proposal's positional form: ``(callback, seconds, actor arguments)``.
+        """The ros_actor positional form: ``(callback, seconds, actor arguments)``.
 
         ``async`` and ``multi`` take the callback first; ``timed`` and ``timed_iterator``
         take the seconds first.

@@ -106,7 +106,7 @@ class SubSystem(CallApi):
         self._rt._topology_changed()
         return child
 
-    register_subsystem = add_subsystem  # the proposal's name
+    register_subsystem = add_subsystem  # ros_actor's name
 
     def add_network(self, net_cls: type["SubNet"]) -> "SubNet":
         """Include the actors of a SubNet class in this subsystem."""

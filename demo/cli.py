@@ -6,23 +6,47 @@ import sys
 
 
 def register(sub, common) -> None:
-    p = sub.add_parser("demo", help="the reference pick-and-place mission, headless, with pictures")
-    p.add_argument("--world", default="house")
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--category", default="any", help="can, bottle or any")
-    p.add_argument("--tree", default="bt_pick_place")
-    p.add_argument("--out", default="out/demo", help="folder for the trace and pictures")
+    p = sub.add_parser("demo", help="the reference pick-and-place mission, headless, with pictures",
+                       description="Run the reference pick-and-place mission once, headless on the "
+                                   "virtual clock, printing its progress; leave its trace, a top view "
+                                   "and a timeline in --out.")
+    p.add_argument("--world", default="house", metavar="NAME|FILE",
+                   help="The world to run in: a world's name or its YAML file (default: house).")
+    p.add_argument("--seed", type=int, default=0, metavar="N",
+                   help="The world's seed, which places the objects (default: 0).")
+    p.add_argument("--category", default="any", choices=["can", "bottle", "any"],
+                   help="The kind of object to fetch (default: any).")
+    p.add_argument("--tree", default="bt_pick_place",
+                   help="The mission to run (default: bt_pick_place).")
+    p.add_argument("--out", default="out/demo", metavar="DIR",
+                   help="The folder for the trace and pictures (default: out/demo).")
     p.set_defaults(func=cmd_demo)
 
-    e = sub.add_parser("eval", help="success rate of a mission over many seeds")
-    e.add_argument("tree")
-    e.add_argument("--seeds", type=int, default=10, help="how many seeds (episodes)")
-    e.add_argument("--first-seed", type=int, default=0)
-    e.add_argument("--world", default="house")
-    e.add_argument("--category", default="mixed", choices=["can", "bottle", "mixed"])
-    e.add_argument("--jobs", type=int, default=1, help="episodes run in parallel processes")
-    e.add_argument("--out", default="out/eval", help="folder for traces and the CSV")
+    e = sub.add_parser("eval", help="success rate of a mission over many seeds",
+                       description="Run a mission once per seed, each in a fresh world, and report "
+                                   "its success rate and times per category, with a CSV of every episode.")
+    e.add_argument("tree", help="The mission to evaluate, e.g. bt_pick_place.")
+    e.add_argument("--seeds", type=int, default=10, metavar="N",
+                   help="How many seeds (episodes) to run (default: 10).")
+    e.add_argument("--first-seed", type=int, default=0, metavar="N",
+                   help="The first seed; the others follow it (default: 0).")
+    e.add_argument("--world", default="house", metavar="NAME|FILE",
+                   help="The world to run in: a world's name or its YAML file (default: house).")
+    e.add_argument("--category", default="mixed", choices=["can", "bottle", "mixed"],
+                   help="The kind of object asked for; 'mixed' alternates can and bottle (default: mixed).")
+    e.add_argument("--jobs", type=int, default=1, metavar="N",
+                   help="How many episodes run at once, each in its own process (default: 1).")
+    e.add_argument("--out", default="out/eval", metavar="DIR",
+                   help="The folder for the traces and episodes.csv (default: out/eval).")
     e.set_defaults(func=cmd_eval)
+
+
+def _check_world(world: str, seed: int) -> None:
+    """A world file's mistakes as one error before any episode starts (not one per episode)."""
+    if world == "none":  # the episode says why that cannot run
+        return
+    from sim import load_world
+    load_world(world, seed)
 
 
 def cmd_demo(args, app) -> int:
@@ -30,6 +54,7 @@ def cmd_demo(args, app) -> int:
 
     from .episode import print_outcome, run_episode
     out = pathlib.Path(args.out)
+    _check_world(args.world, args.seed)
     print(f"actorbt demo: {args.tree} in {args.world} (seed {args.seed}), category {args.category}",
           flush=True)
     # the runtime is built from actorbt.yaml, as for every command (subsystems, trees, simulator)
@@ -43,6 +68,7 @@ def cmd_demo(args, app) -> int:
 
 def cmd_eval(args, app) -> int:
     from .evaluate import evaluate, print_table
+    _check_world(args.world, args.first_seed)
     episodes = evaluate(args.tree, args.seeds, args.world, args.category, args.jobs, args.out,
                         first_seed=args.first_seed, config=app.cfg)
     print_table(episodes)

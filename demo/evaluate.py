@@ -69,18 +69,20 @@ def evaluate(tree: str, seeds: int, world: str = "house", category: str = "mixed
                        f"{time.perf_counter() - t0:.0f} s")
         progress.flush()
     tick()
-    if jobs > 1:
-        ctx = multiprocessing.get_context("spawn")  # each worker its own runtime and sim
-        with ctx.Pool(jobs) as pool:
-            for ep in pool.imap_unordered(_one, work):
-                episodes.append(ep)
+    try:
+        if jobs > 1:
+            ctx = multiprocessing.get_context("spawn")  # each worker its own runtime and sim
+            with ctx.Pool(jobs) as pool:
+                for ep in pool.imap_unordered(_one, work):
+                    episodes.append(ep)
+                    tick()
+        else:
+            for job in work:
+                episodes.append(_one(job))
                 tick()
-    else:
-        for job in work:
-            episodes.append(_one(job))
-            tick()
-    if progress is not None:
-        progress.write("\n")
+    finally:  # end the progress line, also when an episode could not start
+        if progress is not None:
+            progress.write("\n")
     episodes.sort(key=lambda e: (e.seed, e.category))
     write_csv(episodes, out / "episodes.csv")
     return episodes

@@ -33,7 +33,7 @@ from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
-import pybullet
+from ._pybullet import pybullet
 
 from .errors import InvalidInputError, SceneError
 from .kinematics import ArmKinematics

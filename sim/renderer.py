@@ -10,7 +10,7 @@ import sys
 import threading
 
 import numpy as np
-import pybullet as p
+from ._pybullet import pybullet as p
 
 log = logging.getLogger("sim.renderer")
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-import pybullet as p
+from ._pybullet import pybullet as p
 
 URDF = Path(__file__).resolve().parent / "models" / "mobile_manipulator.urdf"
 

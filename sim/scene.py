@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import math
 
-import pybullet as p
+from ._pybullet import pybullet as p
 
 from .description import Box, PlacedObject, WorldSpec
 from .objects import CATEGORIES

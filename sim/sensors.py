@@ -5,7 +5,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-import pybullet as p
+from ._pybullet import pybullet as p
 
 from .robot import WHEEL_RADIUS, WHEEL_SEPARATION
 

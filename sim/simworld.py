@@ -8,7 +8,7 @@ import math
 import os
 
 import numpy as np
-import pybullet as p
+from ._pybullet import pybullet as p
 
 from .actuators import TrajectoryError, trajectory_from_msg
 from .description import PlacedObject, WorldSpec, load_world

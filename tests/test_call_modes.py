@@ -1,4 +1,4 @@
-"""Every cell of the mode x kind matrix (DESIGN.md, "Call modes"), on the virtual clock."""
+"""Every cell of the mode x kind matrix (docs/architecture.md, "The life of a call"), on the virtual clock."""
 from __future__ import annotations
 
 import pytest

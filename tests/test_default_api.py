@@ -1,4 +1,4 @@
-"""The proposal's module-level API over the default runtime (bt_engine.default)."""
+"""The module-level API (ros_actor's names) over the default runtime (bt_engine.default)."""
 from __future__ import annotations
 
 import pathlib

@@ -1,4 +1,4 @@
-"""The layering of DESIGN.md, read from the imports of every module.
+"""The layering of docs/architecture.md ("The layers"), read from the imports of every module.
 
 Every import counts: absolute and relative, at module level, inside functions and under
 ``if TYPE_CHECKING:``.

@@ -70,7 +70,7 @@ class App:
         return rt
 
     def _transport(self) -> Any:
-        kind = "ros" if getattr(self.args, "ros", False) else self.cfg.transport
+        kind = getattr(self.args, "bus", None) or self.cfg.transport
         if kind == "local":
             return None
         if kind == "ros":

@@ -28,11 +28,31 @@ Command = Callable[[argparse.Namespace, App], int]
 
 
 def _common(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--world", help="world to simulate (overrides actorbt.yaml; 'none': no sim)")
-    p.add_argument("--seed", type=int, help="world seed")
-    p.add_argument("--gui", action="store_true", help="open pybullet's window (wall clock)")
-    p.add_argument("--clock", choices=["virtual", "wall"], help="runtime clock")
-    p.add_argument("--ros", action="store_true", help="use the ROS 2 transport")
+    """The options of every command that builds a runtime (actors, trees and a world)."""
+    p.add_argument("--world", metavar="NAME|FILE",
+                   help="The world to simulate: a world's name or its YAML file; "
+                        "'none' simulates nothing, so the robot is whatever answers on the bus. "
+                        "Overrides actorbt.yaml.")
+    p.add_argument("--seed", type=int, metavar="N",
+                   help="The world's seed: where its objects are placed (the same seed gives the same world).")
+    p.add_argument("--gui", action="store_true",
+                   help="Open pybullet's window to watch the world; the clock is then the wall clock.")
+    p.add_argument("--clock", choices=["virtual", "wall"],
+                   help="The runtime's clock: 'virtual' jumps over idle time (fast, deterministic), "
+                        "'wall' runs in real time. Overrides actorbt.yaml.")
+    p.add_argument("--bus", choices=["local", "ros"],
+                   help="Where the robot's topics and actions travel: 'local' inside this process, "
+                        "'ros' over ROS 2 (DDS), to reach a robot or an `actorbt sim run --bus ros` "
+                        "in another process. Overrides 'transport:' in actorbt.yaml.")
+    p.add_argument("--ros", action=_Renamed, nargs=0, help=argparse.SUPPRESS)
+
+
+class _Renamed(argparse.Action):
+    """``--ros`` meant two things; each has its own name now. Say which."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        parser.error("--ros is gone: use --bus ros to send the robot's topics over ROS 2, "
+                     "or `actorbt rcall ACTOR ...` to call an actor of a running `actorbt serve`")
 
 
 def _positive_int(text: str) -> int:
@@ -74,11 +94,6 @@ def cmd_call(args: argparse.Namespace, app: App) -> int:
     stream = getattr(args, "stream", False)
     if getattr(args, "count", None) is not None and not stream:
         raise ActorbtError("--count needs --stream")
-    if getattr(args, "ros", False):  # a client of a running `actorbt serve`
-        if stream:
-            raise ActorbtError("--stream is not available with --ros")
-        from ..ros.cli import cmd_rcall
-        return cmd_rcall(args, app)
     from ..literals import parse_args
     pos, kw = parse_args(args.args)
     rt = app.runtime()
@@ -108,38 +123,59 @@ def cmd_shell(args: argparse.Namespace, app: App) -> int:
     return 0
 
 
+DESCRIPTION = ("Run robot skills (actors) and behaviour-tree missions: call them from the terminal "
+               "or a shell, run and check missions, record and replay them, and serve them over ROS 2.")
+EPILOG = ("Each command has its own options: `actorbt COMMAND --help`. The command reads the nearest "
+          "actorbt.yaml (the subsystems, the trees folder, the world, the bus and the clock).")
+
+
+def _command(sub: argparse._SubParsersAction, name: str, summary: str, description: str) -> argparse.ArgumentParser:
+    """A sub-command: ``summary`` in the list of commands, ``description`` in its --help."""
+    return sub.add_parser(name, help=summary, description=description)
+
+
 def build_parser(plugins: list[str]) -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="actorbt", description=__doc__.splitlines()[0])
-    parser.add_argument("--config", help="path of actorbt.yaml (default: nearest one)")
+    parser = argparse.ArgumentParser(prog="actorbt", description=DESCRIPTION, epilog=EPILOG)
+    parser.add_argument("--config", metavar="FILE",
+                        help="The actorbt.yaml to use (default: the nearest one in this folder or above).")
     parser.add_argument("-v", "--verbose", action="count", default=0,
-                        help="log more: -v information, -vv debugging (default: warnings only)")
+                        help="Log more: -v adds information, -vv debugging (default: warnings only).")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     sub.required = True
 
-    p = sub.add_parser("list", help="list actors")
+    p = _command(sub, "list", "list every actor and tree",
+                 "List every actor and tree with its signature, kind and first line of documentation.")
     p.set_defaults(func=cmd_list)
 
-    p = sub.add_parser("catalog", help="describe every actor (--json: JSON-Schema tools)")
-    p.add_argument("--json", action="store_true")
+    p = _command(sub, "catalog", "describe every actor and tree (--json: JSON-Schema tools)",
+                 "Describe every actor and tree: its documentation and each parameter's description, "
+                 "type, default and unit.")
+    p.add_argument("--json", action="store_true",
+                   help="Print the catalog as JSON-Schema tool descriptions, as planners and language models read it.")
     p.set_defaults(func=cmd_catalog)
 
-    p = sub.add_parser("call", help="call one actor: ACTOR ARG... (Python literals, k=v)",
-                       description="Call one actor and print its result; with --stream, print "
-                                   "every value of a stream as it arrives.")
-    p.add_argument("actor")
-    p.add_argument("args", nargs="*")
+    p = _command(sub, "call", "call one actor: ACTOR ARG... (Python literals, k=v)",
+                 "Call one actor in a runtime started here and print its result; with --stream, print "
+                 "every value of a stream as it arrives. To call an actor of a running `actorbt serve`, "
+                 "use `actorbt rcall`.")
+    p.add_argument("actor", help="The actor's name or path, as `actorbt list` shows it.")
+    p.add_argument("args", nargs="*", metavar="ARG",
+                   help="Its arguments: Python literals (1, 2.5, 'text', [1, 2]) or NAME=VALUE for keywords; "
+                        "a word that is no literal is a string.")
     p.add_argument("--timeout", type=float, metavar="S",
-                   help="deadline [s] on the runtime clock (with --stream: end the stream then)")
-    p.add_argument("--json", action="store_true", help="print the result (each value) as JSON")
+                   help="Give up after S seconds on the runtime clock (with --stream: end the stream then).")
+    p.add_argument("--json", action="store_true", help="Print the result (with --stream, each value) as JSON.")
     p.add_argument("--stream", action="store_true",
-                   help="print each value, one per line, as it arrives, until the stream ends, "
+                   help="Print each value, one per line, as it arrives, until the stream ends, "
                         "--count N values, --timeout S or Ctrl-C (exit status 130); a sync or "
-                        "async actor is called again for every value (the iterator mode)")
-    p.add_argument("--count", type=_positive_int, metavar="N", help="with --stream: stop after N values")
+                        "async actor is called again for every value (the iterator mode).")
+    p.add_argument("--count", type=_positive_int, metavar="N", help="With --stream: stop after N values.")
     _common(p)
     p.set_defaults(func=cmd_call)
 
-    p = sub.add_parser("shell", help="interactive actor shell")
+    p = _command(sub, "shell", "interactive actor shell",
+                 "An interactive shell in a runtime started here: call actors by name, stream them, "
+                 "with history, tab completion and `help NAME`.")
     _common(p)
     p.set_defaults(func=cmd_shell)
 
@@ -161,35 +197,53 @@ def _tree_commands(sub: argparse._SubParsersAction) -> None:
     def tree_command(name: str) -> Command:
         return _lazy("bt_engine.trees.cli", f"cmd_{name}")
 
-    p = sub.add_parser("run", help="run a tree with live progress: TREE [--arg k=v ...]")
-    p.add_argument("tree", help="tree name, or a mission file")
+    tree_help = "The tree's name (as `actorbt list` shows it) or the path of a mission YAML file."
+    trace_help = "A trace (.jsonl) written by `run --record`, `demo`, `eval` or `serve`."
+
+    p = _command(sub, "run", "run a tree with live progress: TREE [--arg k=v ...]",
+                 "Run a mission, printing the active node as it goes, then its outcome, outputs, "
+                 "sim and wall time.")
+    p.add_argument("tree", help=tree_help)
     p.add_argument("--arg", action="append", default=[], metavar="NAME=VALUE",
-                   help="an input, parsed by its declared type (repeatable)")
-    p.add_argument("--record", metavar="FILE.jsonl", help="record a trace for replay and plot")
-    p.add_argument("--max-period", type=float, metavar="S", help="tick at least every S seconds")
-    p.add_argument("--quiet", action="store_true", help="no progress, only the result")
-    p.add_argument("--ticks", action="store_true", help="also print every tick")
-    p.add_argument("--json", action="store_true", help="print the outputs as JSON")
+                   help="Set one of the tree's inputs; the value is parsed by the input's declared type. "
+                        "Repeat it for several inputs.")
+    p.add_argument("--record", metavar="FILE.jsonl",
+                   help="Record a trace of the run, for `actorbt replay` and `actorbt plot`.")
+    p.add_argument("--max-period", type=float, metavar="S",
+                   help="Tick the tree at least every S seconds, even when no actor call has ended.")
+    p.add_argument("--quiet", action="store_true", help="Print no progress, only the outcome.")
+    p.add_argument("--ticks", action="store_true", help="Also print a line for every tick.")
+    p.add_argument("--json", action="store_true", help="Print the outputs as JSON.")
     _common(p)
     p.set_defaults(func=tree_command("run"))
 
-    p = sub.add_parser("check", help="validate mission files without running them (default: the trees folder)")
-    p.add_argument("files", nargs="*", help="mission YAML files")
+    p = _command(sub, "check", "validate mission files without running them",
+                 "Validate mission files without running them: YAML, structure, actor names and "
+                 "arguments, references and expressions. Exit status 1 when any file is broken.")
+    p.add_argument("files", nargs="*", metavar="FILE",
+                   help="Mission YAML files to check (default: every file of the trees folder).")
     p.set_defaults(func=tree_command("check"))
 
-    p = sub.add_parser("show", help="draw a tree: ASCII here, --out x.png|svg|pdf|dot for a picture")
-    p.add_argument("tree", help="tree name, or a mission file")
-    p.add_argument("--out", metavar="FILE", help="write a drawing (format from the suffix)")
+    p = _command(sub, "show", "draw a tree: ASCII here, --out x.png|svg|pdf|dot for a picture",
+                 "Draw a mission: as text here, or as a picture with --out.")
+    p.add_argument("tree", help=tree_help)
+    p.add_argument("--out", metavar="FILE",
+                   help="Write a drawing to FILE; its suffix (.png, .svg, .pdf, .dot) gives the format.")
     p.set_defaults(func=tree_command("show"))
 
-    p = sub.add_parser("replay", help="re-run a recorded tree against its recording; exit 1 on a divergence")
-    p.add_argument("trace", help="a .jsonl trace from run --record")
-    p.add_argument("--trees", metavar="DIR", help="find the tree files here (default: the recorded paths)")
+    p = _command(sub, "replay", "re-run a recorded tree against its recording; exit 1 on a divergence",
+                 "Run a recorded tree again with every actor call answered from the recording (no robot, "
+                 "no simulator) and compare what happens; exit status 1 at the first divergence.")
+    p.add_argument("trace", help=trace_help)
+    p.add_argument("--trees", metavar="DIR",
+                   help="Find the tree files in DIR (default: the paths the recording names).")
     p.set_defaults(func=tree_command("replay"))
 
-    p = sub.add_parser("plot", help="draw the timeline of a recorded run")
-    p.add_argument("trace", help="a .jsonl trace from run --record")
-    p.add_argument("--out", required=True, metavar="FILE.png", help="the picture (png, svg or pdf)")
+    p = _command(sub, "plot", "draw the timeline of a recorded run",
+                 "Draw the timeline of a recorded run: each node's running time and each actor call.")
+    p.add_argument("trace", help=trace_help)
+    p.add_argument("--out", required=True, metavar="FILE.png",
+                   help="Where to write the picture; its suffix (.png, .svg, .pdf) gives the format.")
     p.set_defaults(func=tree_command("plot"))
 
 

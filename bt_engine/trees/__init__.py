@@ -1,6 +1,6 @@
 """Missions: YAML behaviour trees, their loader and validator.
 
-Layering (see DESIGN.md, "Layout and layering"): this package is part of ``bt_engine``
+Layering (see docs/architecture.md, "The layers"): this package is part of ``bt_engine``
 and imports none of ``actors``, ``planning`` or ``sim``. It reaches actors only through
 a resolver (``rt.root.resolve``) handed to it. Inside the package::
 

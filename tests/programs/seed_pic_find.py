@@ -1,4 +1,4 @@
-"""The proposal's pic_find, written ros_actor style: module-level API, a camera driver
+"""A camera search program written ros_actor style: module-level API, a camera driver
 thread feeding an async actor, a timed iterator over it. Run: python seed_pic_find.py
 [virtual|wall]. Prints the can's pixel, the runtime time and the wall time it took."""
 import sys

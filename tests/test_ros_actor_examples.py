@@ -1,4 +1,5 @@
-"""The proposal's own examples, written as they appear in seed/, doing what the text says."""
+"""The classic ros_actor examples (a camera search, a subsystem of skills), written as a
+ros_actor user writes them, doing what their documentation says."""
 from __future__ import annotations
 
 import numpy as np
