@@ -8,6 +8,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Any, Callable
 
 from ..errors import ActorbtError
+from .actions import LocalActionServer, OnGoal, local_client_actor
 from .transport import Transport
 
 if TYPE_CHECKING:
@@ -76,6 +77,7 @@ class LocalBus(Transport):
     def __init__(self, hub: "Hub") -> None:
         self._hub = hub
         self._topics: dict[str, _Topic] = {}
+        self._actions: dict[str, LocalActionServer] = {}
 
     def _topic(self, name: str, msg_type: type) -> _Topic:
         t = self._topics.get(name)
@@ -99,6 +101,19 @@ class LocalBus(Transport):
     def subscription_count(self, topic: str) -> int:
         t = self._topics.get(topic)
         return len(t.subs) if t is not None else 0
+
+    def action_server(self, name: str, action_type: type, on_goal: OnGoal) -> LocalActionServer:
+        """Serve action ``name`` in this process (one server per name)."""
+        current = self._actions.get(name)
+        if current is not None:
+            raise ActorbtError(f"action {name} is already served on the local bus")
+        server = self._actions[name] = LocalActionServer(self._actions, name, action_type, on_goal)
+        return server
+
+    def register_action(self, scope: Any, name: str, action_type: type, server: str) -> Any:
+        """Async actor ``name(goal=None, **fields)`` sending goals to local action ``server``
+        (served by ``action_server`` in this process by the time a goal is sent)."""
+        return local_client_actor(scope, name, action_type, server, self._actions)
 
     def _deliver(self, t: _Topic, msg: Any) -> None:
         if not t.subs:

@@ -47,6 +47,11 @@ class Transport:
         raise ActorbtError(f"the {self.name} transport has no action clients; "
                            "use the ros transport (transport: ros in actorbt.yaml)")
 
+    def action_server(self, name: str, action_type: type, on_goal: Callable[[Any], None]) -> Any:
+        """Serve action ``name``: ``on_goal(goal)`` runs on the hub with each goal's
+        :class:`~bt_engine.bus.actions.ServerGoal`. Returns a handle with ``close()``."""
+        raise ActorbtError(f"the {self.name} transport cannot serve actions")
+
     def register_service(self, scope: Any, name: str, srv_type: type, server: str) -> Any:
         raise ActorbtError(f"the {self.name} transport has no service clients; "
                            "use the ros transport (transport: ros in actorbt.yaml)")

@@ -1,0 +1,225 @@
+"""Actions on the bus: a server takes goals, sends feedback and ends each goal with a
+result; a client sends a goal, waits for its result and may cancel it. Robots offer
+their long skills this way (``/navigate_to_pose``, ``/arm_controller/follow_joint_trajectory``,
+``/gripper_controller/gripper_cmd``), so a simulated robot serves the same actions and
+an actor that drives it is a client, whichever transport carries them.
+
+The server side is the same on every transport: ``transport.action_server(name,
+action_type, on_goal)`` calls ``on_goal(goal)`` on the hub with a :class:`ServerGoal`;
+the server answers through it, from the hub, when it likes (a controller ends its goal
+from a timer, steps later). The client side is an async actor made by
+``transport.register_action(scope, name, action_type, server)``.
+
+Outcomes as a client sees them: the ``Result`` of a succeeded goal; an aborted or
+canceled goal fails the call with :class:`ActionGoalError` (carrying the result, whose
+error fields say why); a rejected goal fails with :class:`GoalRejectedError`.
+"""
+from __future__ import annotations
+
+import inspect
+import itertools
+from typing import Any, Callable
+
+from ..errors import ActorbtError
+from ..modes import Kind
+
+#: GoalStatus codes (action_msgs/msg/GoalStatus) by name
+STATUS_NAMES = {0: "unknown", 1: "accepted", 2: "executing", 3: "canceling", 4: "succeeded",
+                5: "canceled", 6: "aborted"}
+STATUS_SUCCEEDED, STATUS_CANCELED, STATUS_ABORTED = 4, 5, 6
+
+
+class ServerUnavailableError(ActorbtError, TimeoutError):
+    """No action or service server answered within the wait."""
+
+    def __init__(self, server: str, seconds: float, hint: str = "") -> None:
+        self.server = server
+        self.seconds = seconds
+        super().__init__(f"no server for {server} within {seconds:g} s"
+                         + (f" ({hint})" if hint else ""))
+
+
+class GoalRejectedError(ActorbtError):
+    """The action server rejected the goal."""
+
+    def __init__(self, server: str, reason: str = "") -> None:
+        self.server = server
+        self.reason = reason
+        super().__init__(f"{server} rejected the goal" + (f": {reason}" if reason else ""))
+
+
+class ActionGoalError(ActorbtError):
+    """The goal ended without succeeding (aborted, or canceled by the server)."""
+
+    def __init__(self, server: str, status: int, result: Any) -> None:
+        self.server = server
+        self.status = status
+        self.result = result
+        super().__init__(f"goal on {server} ended {STATUS_NAMES.get(status, status)}"
+                         + (f": {result_detail(result)}" if result_detail(result) else ""))
+
+
+def result_detail(result: Any) -> str:
+    """The words a result gives for its outcome: the ``error_msg`` / ``error_string`` /
+    ``status`` / ``error`` field it has (ROS actions name it differently), with the code."""
+    for text_field in ("error_msg", "error_string", "status", "error"):
+        text = getattr(result, text_field, "")
+        if isinstance(text, str) and text:
+            code = getattr(result, "error_code", None)
+            return f"{text} (error_code {code})" if code else text
+    code = getattr(result, "error_code", None)
+    return f"error_code {code}" if code else ""
+
+
+def build_message(msg_type: type, value: Any, fields: dict[str, Any]) -> Any:
+    """A ``msg_type`` from an instance, a mapping of fields, or keyword fields."""
+    if isinstance(value, msg_type):
+        msg = value
+    elif value is None:
+        msg = msg_type()
+    elif isinstance(value, dict):
+        msg = msg_type()
+        fields = {**value, **fields}
+    else:
+        raise TypeError(f"expected a {msg_type.__name__} or a mapping of its fields, "
+                        f"got {type(value).__name__}")
+    known = msg_type.get_fields_and_field_types()
+    for key, val in fields.items():
+        if key not in known:
+            raise TypeError(f"{msg_type.__name__} has no field {key!r}; fields: {', '.join(known)}")
+        setattr(msg, key, val)
+    return msg
+
+
+def message_signature(first: str, msg_type: type) -> inspect.Signature:
+    """``(first: msg_type = None, *, field=default, ...)`` for a goal or request type."""
+    P = inspect.Parameter
+    params = [P(first, P.POSITIONAL_OR_KEYWORD, default=None, annotation=msg_type)]
+    default = msg_type()
+    for field in msg_type.get_fields_and_field_types():
+        if field == first:
+            continue
+        params.append(P(field, P.KEYWORD_ONLY, default=getattr(default, field)))
+    return inspect.Signature(params)
+
+
+class ServerGoal:
+    """One goal as its server sees it. Every method runs on the hub.
+
+    The server ends the goal once, with :meth:`succeed`, :meth:`abort` or
+    :meth:`canceled` (later calls are ignored). A client's cancel request calls the
+    handler given to :meth:`on_cancel`; without one the goal is canceled at once with
+    an empty result.
+    """
+
+    _ids = itertools.count(1)
+
+    def __init__(self, server: str, action_type: type, request: Any,
+                 finish: Callable[[int, Any], None], feedback: Callable[[Any], None]) -> None:
+        self.server = server
+        self.action_type = action_type
+        self.request = request
+        self.id = next(self._ids)
+        self.active = True
+        self.cancel_requested = False
+        self._finish = finish
+        self._feedback = feedback
+        self._on_cancel: Callable[[], None] | None = None
+
+    def publish_feedback(self, feedback: Any) -> None:
+        if self.active:
+            self._feedback(feedback)
+
+    def succeed(self, result: Any = None) -> None:
+        self._end(STATUS_SUCCEEDED, result)
+
+    def abort(self, result: Any = None) -> None:
+        self._end(STATUS_ABORTED, result)
+
+    def canceled(self, result: Any = None) -> None:
+        self._end(STATUS_CANCELED, result)
+
+    def on_cancel(self, handler: Callable[[], None]) -> None:
+        """``handler()`` runs when a client asks to cancel; it ends the goal (perhaps
+        after stopping the motion), usually with :meth:`canceled`."""
+        self._on_cancel = handler
+
+    def request_cancel(self) -> None:
+        """A client asked to cancel (called by the transport)."""
+        if not self.active or self.cancel_requested:
+            return
+        self.cancel_requested = True
+        if self._on_cancel is not None:
+            self._on_cancel()
+        else:
+            self.canceled()
+
+    def _end(self, status: int, result: Any) -> None:
+        if not self.active:
+            return
+        self.active = False
+        self._finish(status, result if result is not None else self.action_type.Result())
+
+
+OnGoal = Callable[[ServerGoal], None]
+
+
+class LocalActionServer:
+    """An action served on the local bus (see ``LocalBus.action_server``)."""
+
+    def __init__(self, registry: dict[str, "LocalActionServer"], name: str, action_type: type,
+                 on_goal: OnGoal) -> None:
+        self.name = name
+        self.action_type = action_type
+        self.on_goal = on_goal
+        self.goals: dict[int, ServerGoal] = {}
+        self._registry = registry
+        self.closed = False
+
+    def close(self) -> None:
+        """Stop serving; goals still running are aborted."""
+        if self.closed:
+            return
+        self.closed = True
+        if self._registry.get(self.name) is self:
+            del self._registry[self.name]
+        for goal in list(self.goals.values()):
+            goal.abort()
+
+
+def local_client_actor(scope: Any, name: str, action_type: type, server: str,
+                       servers: dict[str, LocalActionServer]) -> Any:
+    """Async actor ``name(goal=None, **fields)`` sending goals to the local server
+    ``server`` (see the module docstring for its outcomes). It completes only on the hub."""
+
+    def send(done: Any, *args: Any, **fields: Any) -> Callable[[], None]:
+        goal_msg = build_message(action_type.Goal, args[0] if args else fields.pop("goal", None), fields)
+        target = servers.get(server)
+        if target is None:
+            done.fail(ServerUnavailableError(server, 0, "nothing serves it on the local bus"))
+            return lambda: None
+
+        withdrawn = False  # the call was cancelled: its transaction ends without us
+
+        def finish(status: int, result: Any) -> None:
+            target.goals.pop(goal.id, None)
+            if withdrawn:
+                return
+            if status == STATUS_SUCCEEDED:
+                done(result)
+            else:
+                done.fail(ActionGoalError(server, status, result))
+
+        def cancel() -> None:
+            nonlocal withdrawn
+            withdrawn = True
+            goal.request_cancel()
+        goal = ServerGoal(server, action_type, goal_msg, finish, feedback=lambda fb: None)
+        target.goals[goal.id] = goal
+        target.on_goal(goal)
+        return cancel
+
+    doc = (f"Send a {action_type.__module__}.{action_type.__name__} goal to action {server} "
+           "and return its result.")
+    return scope.add_actor(name, send, Kind.ASYNC, doc=doc, hub_only=True,
+                           signature=message_signature("goal", action_type.Goal))
