@@ -20,6 +20,10 @@ WHEELS = ("wheel_left_joint", "wheel_right_joint")
 ARM = ("joint1", "joint2", "joint3", "joint4")
 GRIPPER = ("gripper_left_joint", "gripper_right_joint")
 JOINT_STATE_NAMES = WHEELS + ARM + GRIPPER
+# The robot's links form their own collision group (they still collide with everything), so
+# the lidar's rays can leave the robot's body out (sim/lidar.py). Bullet's defaults are
+# group 1 for dynamic bodies and 2 for static ones.
+ROBOT_COLLISION_GROUP = 1 << 6
 # OpenManipulator-X "home": folded up, out of the camera's view
 ARM_HOME = (0.0, -1.0, 0.3, 0.7)
 GRIPPER_FORCE = 10.0      # N per finger
@@ -45,6 +49,8 @@ class Robot:
             self.link[info[12].decode()] = j
             self.limits[name] = (info[8], info[9], info[10], info[11])   # lower, upper, effort, vel
         b = self.body
+        for link in range(-1, p.getNumJoints(b, physicsClientId=cid)):
+            p.setCollisionFilterGroupMask(b, link, ROBOT_COLLISION_GROUP, -1, physicsClientId=cid)
         # fingers are siblings: their inner faces touch when closed, they must not collide
         p.setCollisionFilterPair(b, b, self.joint["gripper_left_joint"], self.joint["gripper_right_joint"],
                                  0, physicsClientId=cid)

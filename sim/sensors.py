@@ -1,4 +1,5 @@
-"""Sensor models: wheel odometry with noise, and the RGB-D camera's geometry."""
+"""Sensor models: the RGB-D camera's geometry here; wheel odometry in sim/odometry.py and
+the LDS-01 lidar in sim/lidar.py (both re-exported)."""
 from __future__ import annotations
 
 import math
@@ -7,51 +8,10 @@ from dataclasses import dataclass
 import numpy as np
 from ._pybullet import pybullet as p
 
-from .robot import WHEEL_RADIUS, WHEEL_SEPARATION
+from .lidar import Lidar, LidarModel
+from .odometry import OdomNoise, WheelOdometry
 
-
-@dataclass
-class OdomNoise:
-    """Wheel-encoder noise. Each wheel's travel picks up a random walk of ``wheel_noise``
-    metres per square-root metre travelled (independent of the update rate: after 1 m a
-    wheel is off by ``wheel_noise`` m, 1 sigma), plus a constant scale error
-    ``radius_bias`` (a mis-calibrated wheel radius: 0.002 = 0.2 % too long)."""
-    wheel_noise: float = 0.005
-    radius_bias: float = 0.0
-
-
-class WheelOdometry:
-    """Dead reckoning from the two wheel joint angles, in the odom frame (the start pose)."""
-
-    def __init__(self, noise: OdomNoise, rng: np.random.Generator):
-        self.noise = noise
-        self.rng = rng
-        self.x = self.y = self.yaw = 0.0
-        self.v = self.w = 0.0
-        self._last = None
-
-    def update(self, wheel_left: float, wheel_right: float, dt: float):
-        if self._last is None:
-            self._last = (wheel_left, wheel_right)
-            return
-        dl = (wheel_left - self._last[0]) * WHEEL_RADIUS
-        dr = (wheel_right - self._last[1]) * WHEEL_RADIUS
-        self._last = (wheel_left, wheel_right)
-        n = self.noise
-        if n.wheel_noise > 0:
-            e = self.rng.normal(0.0, 1.0, 2)
-            dl += e[0] * n.wheel_noise * math.sqrt(abs(dl))
-            dr += e[1] * n.wheel_noise * math.sqrt(abs(dr))
-        dl *= 1.0 + n.radius_bias
-        dr *= 1.0 + n.radius_bias
-        ds = (dl + dr) / 2
-        dth = (dr - dl) / WHEEL_SEPARATION
-        mid = self.yaw + dth / 2
-        self.x += ds * math.cos(mid)
-        self.y += ds * math.sin(mid)
-        self.yaw = math.atan2(math.sin(self.yaw + dth), math.cos(self.yaw + dth))
-        if dt > 0:
-            self.v, self.w = ds / dt, dth / dt
+__all__ = ["CameraModel", "Lidar", "LidarModel", "OdomNoise", "WheelOdometry"]
 
 
 @dataclass

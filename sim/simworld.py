@@ -15,11 +15,22 @@ from .description import PlacedObject, WorldSpec, load_world
 from .gridmap import RESOLUTION, build_grid
 from .objects import CATEGORIES
 from .renderer import GLThread, Renderer
-from .robot import ARM, Robot
+from .lidar import SCAN_FRAME, Lidar, LidarModel
+from .lidar import episode_rng as lidar_rng
+from .odometry import OdomNoise, WheelOdometry
+from .odometry import episode_rng as odometry_rng
+from .robot import ARM, ROBOT_COLLISION_GROUP, Robot
 from .scene import Scene
-from .sensors import CameraModel, OdomNoise, WheelOdometry
+from .sensors import CameraModel
 
 log = logging.getLogger("sim")
+
+#: Whether /ground_truth/pose goes on the bus when SimWorld(debug_ground_truth=...) is not
+#: given. The robot's own senses are /scan, /odom, /joint_states and the camera; the exact
+#: pose is a debugging aid (scoring and pictures read SimWorld.robot_pose() instead).
+#: True until the actors localise from /scan and /odom (actors/navigation.py and
+#: actors/camera.py still subscribe to /ground_truth/pose).
+DEBUG_GROUND_TRUTH = True
 
 
 def _on_hub(fn):
@@ -41,15 +52,22 @@ class SimWorld:
     with ``advance(seconds)``: the CLI helpers and tests use that.
 
     Timing: physics runs at ``physics_hz`` in ``control_hz`` timer ticks (each tick applies
-    the controllers, then steps ``physics_hz/control_hz`` substeps). Robot state topics go out
-    at ``publish_hz``, the camera at ``camera_hz`` while someone subscribes.
+    the controllers, then steps ``physics_hz/control_hz`` substeps, then integrates the wheel
+    odometry). Robot state topics go out at ``publish_hz``, the lidar at ``lidar.rate_hz``
+    and the camera at ``camera_hz``, each only while someone subscribes.
+
+    Senses: ``odom_noise`` (an :class:`~sim.odometry.OdomNoise`; ``OdomNoise.exact()`` for
+    none) and ``lidar`` (a :class:`~sim.lidar.LidarModel`; ``lidar_noise=False`` for exact
+    ranges) draw their errors from the world seed. ``debug_ground_truth`` puts the exact
+    pose on ``/ground_truth/pose`` (default: :data:`DEBUG_GROUND_TRUTH`).
     """
 
     def __init__(self, runtime=None, world: str | WorldSpec = "house", seed: int = 0, gui: bool = False,
                  *, physics_hz: int = 240, control_hz: int = 60, publish_hz: float = 30.0,
                  camera_hz: float = 5.0, camera_size=(320, 240), odom_noise: OdomNoise | None = None,
                  prefer_egl: bool = True, camera: bool = True, cmd_vel_timeout: float = 0.0,
-                 map_resolution: float = RESOLUTION):
+                 map_resolution: float = RESOLUTION, lidar: LidarModel | None = None,
+                 lidar_noise: bool = True, debug_ground_truth: bool | None = None):
         if physics_hz % control_hz:
             raise ValueError(f"physics_hz ({physics_hz}) must be a multiple of control_hz ({control_hz})")
         self.runtime = runtime
@@ -58,6 +76,10 @@ class SimWorld:
         self.dt = 1.0 / control_hz
         self.substeps = physics_hz // control_hz
         self.publish_every = max(1, round(control_hz / publish_hz))
+        self.lidar_model = lidar or LidarModel()
+        self.scan_every = max(1, round(control_hz / self.lidar_model.rate_hz))
+        self._lidar_noise = lidar_noise
+        self.debug_ground_truth = bool(DEBUG_GROUND_TRUTH if debug_ground_truth is None else debug_ground_truth)
         self.camera_hz = camera_hz
         self.cmd_vel_timeout = cmd_vel_timeout
         self.prefer_egl = prefer_egl
@@ -116,7 +138,9 @@ class SimWorld:
                                            if self._camera_enabled else None)
         self.scene = Scene(cid, self.spec)
         self.robot = Robot(cid, self.spec.robot_start)
-        self.odometry = WheelOdometry(self._odom_noise or OdomNoise(), np.random.default_rng([self.seed, 7]))
+        self.odometry = WheelOdometry(self._odom_noise or OdomNoise(), odometry_rng(self.seed))
+        self.lidar = Lidar(cid, self.lidar_model, lidar_rng(self.seed),
+                           ray_mask=~ROBOT_COLLISION_GROUP, noise=self._lidar_noise)
         self.camera = CameraModel(*self._camera_size)
         self.grid = build_grid(self.spec, self._map_resolution)
         self.t = 0.0                 # simulated seconds since construction
@@ -129,7 +153,7 @@ class SimWorld:
         self.frames_rendered = 0
         self.render_seconds = 0.0
         js = self.robot.joint_states()[0]
-        self.odometry.update(js[0], js[1], 0.0)
+        self.odometry.reset(js[0], js[1], self.robot.base_pose()[0][2])
 
     # ------------------------------------------------------------------ runtime glue
     def start(self):
@@ -209,7 +233,8 @@ class SimWorld:
         self.t = t_next
         self.ticks += 1
         q = self.robot.joint_states()[0]
-        self.odometry.update(q[0], q[1], self.dt)
+        # the encoders see the wheel joints; the gyro (heading) the body's true rotation
+        self.odometry.update(q[0], q[1], self.dt, self.robot.base_pose()[0][2])
 
     @_on_hub
     def advance(self, seconds: float):
@@ -327,6 +352,17 @@ class SimWorld:
         q, v, _ = self.robot.joint_states()
         out += list(q) + list(v) + list(self.odom_pose())
         return np.array(out)
+
+    # ------------------------------------------------------------------ lidar
+    @_on_hub
+    def scan(self):
+        """One lidar scan now: ranges [m] (float32, beam i at i * angle_increment in
+        base_scan; +inf no return, -inf closer than range_min). Draws from the noise stream."""
+        return self.scan_now()
+
+    def scan_now(self):
+        """scan() for hub code (the topics): no hand-over."""
+        return self.lidar.scan(*self.robot.link_pose(SCAN_FRAME))
 
     # ------------------------------------------------------------------ camera
     @property

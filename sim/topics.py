@@ -5,8 +5,12 @@ Subscribed (actuators):
   /arm_controller/joint_trajectory  trajectory_msgs/JointTrajectory  joint1..joint4
   /gripper/command                  std_msgs/Float64          finger opening [m], 0 .. 0.09
 Published (sensors):
-  /odom                             nav_msgs/Odometry         wheel odometry, odom -> base_footprint
-  /ground_truth/pose                geometry_msgs/PoseStamped map -> base_footprint, exact
+  /scan                             sensor_msgs/LaserScan     LDS-01, base_scan, 360 beams, 5 Hz;
+                                                              sensor-data QoS (best effort)
+  /odom                             nav_msgs/Odometry         wheel odometry with a TurtleBot3's
+                                                              errors, odom -> base_footprint
+  /ground_truth/pose                geometry_msgs/PoseStamped map -> base_footprint, exact; only
+                                                              with SimWorld(debug_ground_truth=True)
   /joint_states                     sensor_msgs/JointState    wheels, arm, fingers
   /camera/color/image_raw           sensor_msgs/Image         rgb8
   /camera/depth/image_raw           sensor_msgs/Image         32FC1, metres, NaN = no return
@@ -14,7 +18,8 @@ Published (sensors):
   /map                              nav_msgs/OccupancyGrid    5 cm; sent when the subscriber
                                                               count grows and every 2 s while
                                                               subscribed (a latched topic's stand-in)
-State topics go out only while subscribed; the camera renders only while subscribed.
+State topics go out only while subscribed; the lidar casts and the camera renders only
+while subscribed. (/tf is next: sim/frames.py already gives every edge of the tree.)
 """
 from __future__ import annotations
 
@@ -24,17 +29,21 @@ import math
 from builtin_interfaces.msg import Time
 from geometry_msgs.msg import PoseStamped, Twist
 from nav_msgs.msg import OccupancyGrid, Odometry
-from sensor_msgs.msg import CameraInfo, Image, JointState
+from sensor_msgs.msg import CameraInfo, Image, JointState, LaserScan
 from std_msgs.msg import Float64
 from trajectory_msgs.msg import JointTrajectory
 
+from .frames import odom_transform
 from .gridmap import occupancy_grid_msg
+from .lidar import SCAN_FRAME
 from .robot import JOINT_STATE_NAMES
 
 CMD_VEL = "/cmd_vel"
 ARM_TRAJECTORY = "/arm_controller/joint_trajectory"
 GRIPPER_COMMAND = "/gripper/command"
 ODOM = "/odom"
+SCAN = "/scan"
+SENSOR_QOS = "sensor"  # best effort, keep last 5 (rclpy's qos_profile_sensor_data), as the LDS driver
 GROUND_TRUTH = "/ground_truth/pose"
 JOINT_STATES = "/joint_states"
 COLOR = "/camera/color/image_raw"
@@ -51,17 +60,14 @@ def stamp(t: float) -> Time:
     return Time(sec=sec, nanosec=nsec)
 
 
-def _yaw_quat(q, yaw):
-    q.z = math.sin(yaw / 2)
-    q.w = math.cos(yaw / 2)
-
-
 class SimTopics:
     def __init__(self, sim, rt):
         self.sim = sim
         self.bus = bus = rt.bus
         self.pub_odom = bus.publisher(ODOM, Odometry)
-        self.pub_gt = bus.publisher(GROUND_TRUTH, PoseStamped)
+        self.pub_scan = bus.publisher(SCAN, LaserScan, SENSOR_QOS)
+        # the exact pose only on request (SimWorld(debug_ground_truth=True))
+        self.pub_gt = bus.publisher(GROUND_TRUTH, PoseStamped) if sim.debug_ground_truth else None
         self.pub_js = bus.publisher(JOINT_STATES, JointState)
         self.pub_rgb = bus.publisher(COLOR, Image)
         self.pub_depth = bus.publisher(DEPTH, Image)
@@ -98,11 +104,13 @@ class SimTopics:
             st = None
             if count(ODOM):
                 self.pub_odom.publish(self.odom_msg(now))
-            if count(GROUND_TRUTH):
+            if self.pub_gt is not None and count(GROUND_TRUTH):
                 self.pub_gt.publish(self.ground_truth_msg(now))
             if count(JOINT_STATES):
                 st = st or sim.robot.joint_states()
                 self.pub_js.publish(self.joint_state_msg(now, st))
+        if self._ticks % sim.scan_every == 0 and count(SCAN):
+            self.pub_scan.publish(self.scan_msg(now, sim.scan_now()))
         n = count(MAP)
         if n > self._map_subs or (n and now - self._map_sent >= MAP_REPUBLISH):
             self.publish_map(now)
@@ -118,21 +126,30 @@ class SimTopics:
 
     def odom_msg(self, now) -> Odometry:
         o = self.sim.odometry
+        tf = odom_transform(o)           # the same edge /tf will carry
         msg = Odometry()
         msg.header.stamp = stamp(now)
-        msg.header.frame_id = "odom"
-        msg.child_frame_id = "base_footprint"
-        msg.pose.pose.position.x = o.x
-        msg.pose.pose.position.y = o.y
-        _yaw_quat(msg.pose.pose.orientation, o.yaw)
+        msg.header.frame_id = tf.parent
+        msg.child_frame_id = tf.child
+        pos, q = msg.pose.pose.position, msg.pose.pose.orientation
+        pos.x, pos.y, pos.z = tf.translation
+        q.x, q.y, q.z, q.w = tf.rotation
         msg.twist.twist.linear.x = o.v
         msg.twist.twist.angular.z = o.w
-        cov = [0.0] * 36
-        cov[0] = cov[7] = 1e-3
-        cov[14] = cov[21] = cov[28] = 1e6
-        cov[35] = 1e-3
-        msg.pose.covariance = cov
-        msg.twist.covariance = cov
+        msg.pose.covariance = o.pose_covariance()
+        msg.twist.covariance = o.twist_covariance()
+        return msg
+
+    def scan_msg(self, now, ranges) -> LaserScan:
+        m = self.sim.lidar_model
+        msg = LaserScan()
+        msg.header.stamp = stamp(now)
+        msg.header.frame_id = SCAN_FRAME
+        msg.angle_min, msg.angle_max, msg.angle_increment = m.angle_min, m.angle_max, m.angle_increment
+        msg.time_increment = 0.0          # every beam at the same instant (one ray cast)
+        msg.scan_time = m.scan_time
+        msg.range_min, msg.range_max = m.range_min, m.range_max
+        msg.ranges = ranges               # float32 array
         return msg
 
     def ground_truth_msg(self, now) -> PoseStamped:

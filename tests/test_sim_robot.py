@@ -84,7 +84,8 @@ def _dur(t):
 @pytest.fixture
 def robot():
     rt = Runtime(clock="virtual")
-    sim = SimWorld(rt, "open_floor", seed=0, camera=False).start()
+    # the test reads the exact pose from the bus: ask for it whatever the default
+    sim = SimWorld(rt, "open_floor", seed=0, camera=False, debug_ground_truth=True).start()
     r = Robot(rt, sim)
     r.sleep(0.2)
     yield r
@@ -198,7 +199,7 @@ def test_same_seed_same_state_after_n_steps():
 def test_odometry_noise_model_is_configurable():
     from sim.sensors import OdomNoise
     ends = {}
-    for name, noise in (("exact", OdomNoise(0.0, 0.0)), ("biased", OdomNoise(0.0, 0.05))):
+    for name, noise in (("exact", OdomNoise.exact()), ("biased", OdomNoise.exact(radius_bias=0.05))):
         sim = SimWorld(None, "open_floor", seed=0, camera=False, odom_noise=noise)
         try:
             sim.apply_cmd_vel(0.2, 0.0)

@@ -18,6 +18,10 @@ Deviations, on purpose:
     behind), so a horizontal grasp reaches a can standing on the floor 0.22-0.30 m ahead of
     base_link and a top-down grasp reaches the floor 0.10-0.22 m ahead.
   * Effort limits are the XM430-W350 stall torque (4.1 N m) rather than ROBOTIS' placeholder.
+  * The LDS-01 turret sits at the back of the top plate (x -0.150), behind the arm, so
+    base_scan (the laser's frame, x forward) is at (-0.150, 0, 0.122) in base_link: the
+    Waffle Pi's 0.122 height (a scan plane 0.132 m above the floor), but not its x (-0.064,
+    or -0.024 in turtlebot3_waffle_pi_for_open_manipulator), where the arm base is here.
 """
 from __future__ import annotations
 
@@ -36,6 +40,7 @@ BASE_X = (-0.205, 0.076)  # chassis extent along x in base_link (281 mm)
 BASE_W = 0.306
 CHASSIS_Z = (0.005, 0.091)  # chassis box in base_link z (top plate 0.101 above the floor)
 LDS = dict(x=-0.150, r=0.035, h=0.040)   # lidar turret on the top plate -> 141 mm overall
+SCAN_Z = 0.122            # base_link -> base_scan (the laser plane), as in turtlebot3_waffle_pi.urdf
 ARM_X = -0.035            # arm base (link1) origin on the top plate
 CASTER = dict(x=-0.177, y=0.064, r=0.010)
 CAM = dict(x=0.077, z=0.084, pitch=math.radians(15.0))   # camera_link in base_link
@@ -139,6 +144,9 @@ def joint(name, kind, parent, child, o=(0, 0, 0), r=(0, 0, 0), axis=None, limit=
 
 
 FRAME = dict(mass=1e-4, inertia=(1e-8, 1e-8, 1e-8))   # pure frames: tiny mass, no geometry
+# a massless frame on a fixed joint adds nothing to its parent: the dynamics stay bit-identical
+# (pybullet gives a link without <inertial> 1 kg, so the zero mass is written out)
+MASSLESS = dict(mass=0.0, inertia=(0.0, 0.0, 0.0))
 
 
 def build() -> str:
@@ -247,6 +255,11 @@ def build() -> str:
                 o=(FINGER_X, 0, 0), axis=(0, s, 0), limit=(0.0, FINGER_STROKE, 15.0, 0.1), damping=1.0))
     P(link("end_effector_link", **FRAME, comment="between the fingertips"))
     P(joint("end_effector_joint", "fixed", "link5", "end_effector_link", o=(EE_X, 0, 0)))
+
+    # ---------------- lidar ----------------
+    # last in the file, so the other links keep their pybullet indices
+    P(link("base_scan", **MASSLESS, comment="LDS-01 laser frame: x forward, beams counter-clockwise from x"))
+    P(joint("scan_joint", "fixed", "base_link", "base_scan", o=(LDS["x"], 0, SCAN_Z)))
 
     parts.append("</robot>")
     return "\n".join(parts) + "\n"
