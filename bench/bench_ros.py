@@ -147,11 +147,11 @@ def bench_in_process(tmp: pathlib.Path) -> None:
 
 
 def bench_two_processes(tmp: pathlib.Path) -> None:
-    print("\n-- two processes: `actorbt serve --ros` + client --")
+    print("\n-- two processes: `actorbt serve` on the ROS bus + client --")
     cfg = tmp / "actorbt.yaml"
     cfg.write_text(f"trees: {write_trees(tmp / 'trees2')}\nworld: null\ntransport: ros\nclock: wall\n")
     proc = subprocess.Popen([sys.executable, "-m", "bt_engine.cli.main", "--config", str(cfg),
-                             "serve", "--ros", "--no-record"], cwd=ROOT, stdout=subprocess.PIPE,
+                             "serve", "--no-record"], cwd=ROOT, stdout=subprocess.PIPE,
                             stderr=subprocess.STDOUT, text=True)
     try:
         for line in proc.stdout:

@@ -20,12 +20,11 @@ from __future__ import annotations
 
 import math
 import time
+from typing import Any
 from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.sparse import csr_matrix
-from scipy.sparse.csgraph import dijkstra
 
 from .failure import FailureReason
 from .grid import Costmap, OccupancyGrid, inflate
@@ -87,7 +86,7 @@ class GridPlanner:
         self.smoothing_margin = float(smoothing_margin)
         self._graph = self._build_graph()
 
-    def _build_graph(self) -> csr_matrix:
+    def _build_graph(self) -> Any:  # a scipy.sparse.csr_matrix
         cm = self.costmap
         h, w = cm.lethal.shape
         free = ~cm.lethal
@@ -109,6 +108,7 @@ class GridPlanner:
             dsts += [ib, ia]
             weights += [wv, wv]
         n = h * w
+        from scipy.sparse import csr_matrix  # here, not at import: scipy is slow to import
         return csr_matrix(
             (np.concatenate(weights), (np.concatenate(srcs), np.concatenate(dsts))), shape=(n, n)
         )
@@ -190,6 +190,7 @@ class GridPlanner:
             return fail(FailureReason.GOAL_INVALID if "must be" not in why else FailureReason.INVALID_INPUT, why)
         w = grid.shape[1]
         s_i, g_i = s_rc[0] * w + s_rc[1], g_rc[0] * w + g_rc[1]
+        from scipy.sparse.csgraph import dijkstra
         dist, pred = dijkstra(self._graph, directed=True, indices=s_i, return_predecessors=True)
         if not math.isfinite(dist[g_i]):
             return fail(

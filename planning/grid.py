@@ -20,7 +20,6 @@ from dataclasses import dataclass, field
 from typing import Any, Sequence
 
 import numpy as np
-from scipy import ndimage
 
 from .errors import InvalidInputError
 
@@ -164,6 +163,7 @@ def inflate(
         # Distance from a free cell centre to the nearest obstacle cell's edge:
         # centre-to-centre distance minus half a cell (conservative for the
         # footprint, which must not overlap the obstacle cell).
+        from scipy import ndimage  # here, not at import: scipy costs ~1 s of every start-up
         dist = ndimage.distance_transform_edt(~obstacle) * grid.resolution
         clearance = np.maximum(dist - 0.5 * grid.resolution, 0.0)
         clearance[obstacle] = 0.0

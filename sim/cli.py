@@ -3,44 +3,70 @@
     actorbt sim map --world house --seed 3 --out house.pgm      # map_server PGM + YAML
     actorbt sim snapshot --world house --seed 3 --out world.png [--camera]
     actorbt sim worlds                                           # list the worlds
-    actorbt sim run --world house [--seed N] [--ros] [--gui]     # serve the sim's topics
+    actorbt sim run --world house [--seed N] [--bus ros] [--gui] # serve the sim's topics
 """
 from __future__ import annotations
 
 import argparse
+import dataclasses
+import os
 import signal
+import sys
 import time
+
+#: this module's import time: the start of the process where /proc cannot tell
+_IMPORTED = time.monotonic()
 
 
 def register(sub, common) -> None:
-    p = sub.add_parser("sim", help="the simulated world: map, snapshot, worlds, run")
+    p = sub.add_parser("sim", help="the simulated world: map, snapshot, worlds, run",
+                       description="The simulated world on its own: export its map, draw it, "
+                                   "list the worlds, or run it for other processes.")
     simsub = p.add_subparsers(dest="sim_command", metavar="SIM_COMMAND")
     simsub.required = True
 
-    m = simsub.add_parser("map", help="write the world's occupancy grid as map_server PGM + YAML")
+    m = simsub.add_parser("map", help="write the world's occupancy grid as map_server PGM + YAML",
+                          description="Write the world's occupancy grid as a map_server map: a PGM "
+                                      "image and the YAML beside it.")
     _world_args(m)
-    m.add_argument("--out", default="map.pgm", help="PGM path (the YAML goes beside it)")
-    m.add_argument("--resolution", type=float, default=0.05, help="cell size [m]")
+    m.add_argument("--out", default="map.pgm", metavar="FILE.pgm",
+                   help="Where to write the PGM; the YAML goes beside it (default: map.pgm).")
+    m.add_argument("--resolution", type=float, default=0.05, metavar="M",
+                   help="The cell size in metres (default: 0.05).")
     m.set_defaults(func=cmd_map)
 
-    s = simsub.add_parser("snapshot", help="top view PNG (and a camera frame with --camera)")
+    s = simsub.add_parser("snapshot", help="top view PNG (and a camera frame with --camera)",
+                          description="Draw the world from above as a PNG: walls, furniture, objects "
+                                      "and the robot; with --camera, also the robot's camera frame.")
     _world_args(s)
-    s.add_argument("--out", default="world.png")
-    s.add_argument("--camera", action="store_true", help="also save the robot's camera frame")
+    s.add_argument("--out", default="world.png", metavar="FILE.png",
+                   help="Where to write the top view (default: world.png).")
+    s.add_argument("--camera", action="store_true",
+                   help="Also save what the robot's camera sees, beside the top view.")
     s.set_defaults(func=cmd_snapshot)
 
-    w = simsub.add_parser("worlds", help="list the worlds")
+    w = simsub.add_parser("worlds", help="list the worlds",
+                          description="List the worlds that ship with actorbt (a world YAML file of "
+                                      "your own works wherever a world name does).")
     w.set_defaults(func=cmd_worlds)
 
-    r = simsub.add_parser("run", help="run the world alone, serving its topics until Ctrl-C")
+    r = simsub.add_parser(
+        "run", help="run the world alone, serving its topics until Ctrl-C",
+        description="Run the simulated world alone on the wall clock, its robot's topics on "
+                    "the bus (with --bus ros, for an `actorbt serve --bus ros --world none` or "
+                    "a ROS 2 program in another process), until Ctrl-C. No actors or trees are "
+                    "loaded.")
     common(r)
-    r.add_argument("--seconds", type=float, help="stop after this much sim time")
+    r.add_argument("--seconds", type=float, metavar="S",
+                   help="Stop after this many seconds (default: run until Ctrl-C).")
     r.set_defaults(func=cmd_run)
 
 
 def _world_args(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--world", default="house")
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--world", default="house", metavar="NAME|FILE",
+                   help="The world: a world's name or its YAML file (default: house).")
+    p.add_argument("--seed", type=int, default=0, metavar="N",
+                   help="The world's seed, which places the objects (default: 0).")
 
 
 def cmd_map(args, app) -> int:
@@ -65,22 +91,44 @@ def cmd_worlds(args, app) -> int:
 
 
 def cmd_run(args, app) -> int:
-    """The world alone on the wall clock, its topics on the bus (over DDS with --ros)."""
+    """The world alone on the wall clock, its topics on the bus (over DDS with --bus ros).
+
+    Only the world is built: the subsystems and trees of actorbt.yaml are for the process
+    that drives the robot (``actorbt serve``), and building them here took most of the
+    start-up (the planning layer's imports)."""
+    signal.signal(signal.SIGTERM, _interrupt)  # stop as cleanly on SIGTERM as on Ctrl-C
     if not app.world_spec():
         args.world = "house"
-    rt = app.runtime(clock="wall")
-    signal.signal(signal.SIGTERM, _interrupt)  # stop as cleanly on SIGTERM as on Ctrl-C
+    spec = app.world_spec()
+    bus = getattr(args, "bus", None) or app.cfg.transport
+    print(f"actorbt sim run: starting world {spec['name']} (seed {spec.get('seed', 0)}) on the "
+          f"{bus} bus...", file=sys.stderr, flush=True)
+    world_only = type(app)(args, dataclasses.replace(app.cfg, subsystems={}, trees=None))
+    rt = world_only.runtime(clock="wall")
     try:
-        print(f"world {app.world_spec()['name']} running on the {rt.bus.name} bus; Ctrl-C stops it",
-              flush=True)
+        print(f"world {spec['name']} running on the {rt.bus.name} bus, ready in {_uptime():.1f} s; "
+              "Ctrl-C stops it", flush=True)
         t0 = time.monotonic()
         while args.seconds is None or time.monotonic() - t0 < args.seconds:
             time.sleep(0.2)
     except KeyboardInterrupt:
         pass
     finally:
-        app.close(rt)
+        world_only.close(rt)
     return 0
+
+
+def _uptime() -> float:
+    """Seconds since this process started (from /proc on Linux; else since this module
+    was imported). The same as ``bt_engine.ros.cli.uptime``, which sim may not import."""
+    try:
+        with open("/proc/self/stat") as f:
+            fields = f.read().rpartition(")")[2].split()
+        with open("/proc/uptime") as f:
+            up = float(f.read().split()[0])
+        return max(0.0, up - int(fields[19]) / os.sysconf("SC_CLK_TCK"))
+    except (OSError, ValueError, IndexError, AttributeError):
+        return time.monotonic() - _IMPORTED
 
 
 def _interrupt(signum, frame) -> None:

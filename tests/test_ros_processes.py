@@ -1,11 +1,12 @@
-"""Two processes over real DDS (loopback): ``actorbt serve --ros`` in a subprocess, and
-clients here (action-client actors, the Remote client) and in further subprocesses
-(``actorbt goal``, ``actorbt rcall``). Discovery between processes takes seconds, so
-the server is started once for the module."""
+"""Two processes over real DDS (loopback): ``actorbt serve`` on the ROS bus in a
+subprocess, and clients here (action-client actors, the Remote client) and in further
+subprocesses (``actorbt goal``, ``actorbt rcall``, ``actorbt rshell``). The server is
+started once for the module."""
 from __future__ import annotations
 
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -38,8 +39,8 @@ class Server:
         self.tmp = tmp
         self.cfg = write_config(tmp)
         self.lines: list[str] = []
-        self.proc = actorbt("--config", str(self.cfg), "serve", "--ros",
-                            "--record-dir", str(tmp / "goals"))
+        # the ROS bus: `transport: ros` in the configuration
+        self.proc = actorbt("--config", str(self.cfg), "serve", "--record-dir", str(tmp / "goals"))
         self.ready = threading.Event()
         self._reader = threading.Thread(target=self._read, daemon=True)
         self._reader.start()
@@ -157,6 +158,69 @@ def test_goal_and_rcall_commands(server):
     assert "{'args': [1], 'kwargs': {'k': 'v'}}" in out
     out, _ = bad.communicate(timeout=30)
     assert bad.returncode == 2 and "rejected the goal" in out and "expected int" in out
+
+
+def test_serve_tells_how_its_start_up_goes(server):
+    out = server.output()
+    assert "actorbt serve: loading subsystems work and the trees in" in out
+    assert re.search(r"actorbt serve: actors and trees loaded at \d+\.\d s", out), out
+    assert re.search(r"actorbt serve: ready in \d+\.\d s", out), out
+
+
+def test_goal_for_a_tree_that_is_not_served_fails_at_once(server):
+    t0 = time.monotonic()
+    proc = actorbt("--config", str(server.cfg), "goal", "steps_tre", "--args", "{steps: 1}")
+    out, _ = proc.communicate(timeout=30)
+    took = time.monotonic() - t0
+    assert proc.returncode == 2, out
+    assert "no served tree 'steps_tre'; did you mean: steps_tree?" in out
+    assert "(served: steps_tree)" in out
+    assert took < 8.0, f"{took:.1f} s: it waited for the server instead of failing"  # --wait is 10 s
+
+
+def test_rcall_of_an_unknown_actor_lists_close_matches(server):
+    proc = actorbt("--config", str(server.cfg), "rcall", "work.ech", "1")
+    out, _ = proc.communicate(timeout=30)
+    assert proc.returncode == 2, out
+    assert "rejected the call: unknown actor 'work.ech'; did you mean: work.echo" in out
+
+
+def test_rshell_runs_calls_from_piped_lines(server):
+    lines = "\n".join(["work.echo 1 k='v'", "work.boom", "help work.echo", "no_such_actor",
+                       "trees", "work.echo [2,3]", ""])
+    proc = subprocess.run([sys.executable, "-m", "bt_engine.cli.main", "--config", str(server.cfg),
+                           "rshell"], cwd=ROOT, env=ENV, input=lines, capture_output=True,
+                          text=True, timeout=60)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    out = proc.stdout
+    assert "{'args': [1], 'kwargs': {'k': 'v'}}" in out
+    assert "error: actor work.boom aborted" in out or "error: actor work.boom failed" in out, out
+    assert "kaput" in out
+    assert "work.echo(*args, **kwargs) -> dict  [sync]" in out  # help, from the actor index
+    assert "error: rejected: unknown actor 'no_such_actor'" in out
+    assert "  steps_tree" in out                                 # trees
+    assert "{'args': [[2, 3]], 'kwargs': {}}" in out
+    assert "connected in" in proc.stderr
+
+
+def test_serve_prints_one_line_per_goal(server):
+    # the goals of the tests above, as the server told them
+    def has(pattern: str) -> bool:
+        return any(re.fullmatch(pattern, line) for line in server.lines)
+    gid = r"[0-9a-f]{8}"
+    assert wait_until(lambda: has(rf"goal {gid} steps_tree: succeeded in \d+\.\d+ s "
+                                  r"\(trace .*steps_tree.*\.jsonl\)"), 5.0), server.output()
+    assert has(rf"goal {gid} steps_tree \{{steps: 3, period: 0\.01\}}: accepted")
+    assert has(rf"goal {gid} steps_tree: canceled in \d+\.\d+ s \(trace .*\.jsonl\)")
+    assert has(r"goal steps_tree \{steps: x\}: rejected: .*expected int.*")
+    assert has(rf"call {gid} work\.echo\(1, k='v'\): succeeded in \d+\.\d+ s")
+    assert has(rf"call {gid} work\.boom\(\): failed: .*kaput in \d+\.\d+ s")
+    assert has(r"call work\.ech\(1\): rejected: unknown actor 'work\.ech'; did you mean: work\.echo.*")
+    # one line each: no goal is told twice
+    end = re.compile(rf"(goal|call) {gid} .*: (succeeded|failed|canceled|aborted)")
+    ends = [line for line in server.lines if end.match(line)]
+    ids = [line.split()[1] for line in ends]
+    assert len(ids) == len(set(ids)), ends
 
 
 def test_server_shuts_down_cleanly(server):

@@ -11,8 +11,9 @@
     call_server  ``/actorbt/call`` (CallActor)
     tree_server  ``/actorbt/tree/<name>`` (RunTree): one goal at a time, progress, traces
     server       ``serve(rt)``: the node, its action servers and rejections, shutdown
-    remote       Remote: a client of a running ``actorbt serve``
-    cli          ``actorbt serve``, ``actorbt goal``, ``actorbt rcall``
+    remote       Remote: a client of a running ``actorbt serve``; what it serves (ROS graph)
+    shell        RemoteShell: ``actorbt rshell``, one warm client for many calls
+    cli          ``actorbt serve``, ``actorbt goal``, ``actorbt rcall``, ``actorbt rshell``
 
 Layering: ``ros`` sits above ``bus`` (it implements the bus interface) and the trees
 layer (it serves trees); nothing below imports ``ros``, and only ``bt_engine.cli``,

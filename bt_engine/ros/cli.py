@@ -1,12 +1,18 @@
-"""``actorbt serve``, ``actorbt goal`` and ``actorbt rcall``.
+"""``actorbt serve``, ``actorbt goal``, ``actorbt rcall`` and ``actorbt rshell``.
 
-    actorbt serve [--ros] [--preempt]     # serve trees and actors until Ctrl-C
-    actorbt goal TREE --args '{k: v}'     # run a served tree: live feedback, Ctrl-C cancels
-    actorbt rcall ACTOR ARG... [k=v]      # call an actor of a running `actorbt serve`
+    actorbt serve [--bus ros] [--preempt]  # serve trees and actors until Ctrl-C
+    actorbt goal TREE --args '{k: v}'      # run a served tree: live feedback, Ctrl-C cancels
+    actorbt rcall ACTOR ARG... [k=v]       # call an actor of a running `actorbt serve`
+    actorbt rshell                         # the same, interactively, on one warm node
 
-``goal`` and ``rcall`` are ROS clients (there is no ``ros2`` command from pip). Exit
-status: 0 succeeded; 1 failed, aborted or canceled; 2 rejected or no server (the
-reason is printed); 130 interrupted with Ctrl-C (the goal was cancelled).
+``goal``, ``rcall`` and ``rshell`` are ROS clients of a running ``actorbt serve`` (there
+is no ``ros2`` command from pip). Exit status: 0 succeeded; 1 failed, aborted or
+canceled; 2 rejected, unknown tree or no server (the reason is printed); 130
+interrupted with Ctrl-C (the goal was cancelled).
+
+``serve`` prints how its start-up goes (on stderr), then one line per goal on stdout:
+a tree goal when it is accepted and when it ends (outcome, time, trace), a call of
+``/actorbt/call`` when it ends, and every rejection with its reason.
 
 Nothing here imports rclpy until a command runs.
 """
@@ -14,6 +20,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import pprint
 import signal
 import sys
@@ -21,56 +28,125 @@ import threading
 import time
 from typing import Any, Callable
 
+#: this module's import time: the start of the process where /proc cannot tell
+_IMPORTED = time.monotonic()
+
 
 def register(sub: Any, common: Callable[[argparse.ArgumentParser], None]) -> None:
-    p = sub.add_parser("serve", help="serve trees and actors as ROS 2 actions until Ctrl-C "
-                                     "(/actorbt/call, /actorbt/tree/<name>)")
+    p = sub.add_parser(
+        "serve", help="Serve the trees and actors as ROS 2 actions until Ctrl-C.",
+        description="Serve every tree as its own ROS 2 action (/actorbt/tree/<name>) and any "
+                    "actor through /actorbt/call, until Ctrl-C. One line per goal tells what "
+                    "was asked and how it ended.")
     common(p)
     p.add_argument("--preempt", action="store_true",
-                   help="a goal for a running tree preempts it (default: it is rejected)")
+                   help="A new goal for a tree that is running cancels the running goal "
+                        "(default: the new goal is rejected).")
     p.add_argument("--record-dir", metavar="DIR",
-                   help="where each tree goal's trace is written "
-                        "(default: .actorbt/goals beside actorbt.yaml)")
-    p.add_argument("--no-record", action="store_true", help="do not record goals")
+                   help="The folder where each tree goal's trace is written "
+                        "(default: .actorbt/goals beside actorbt.yaml).")
+    p.add_argument("--no-record", action="store_true",
+                   help="Do not write a trace of each tree goal.")
     p.set_defaults(func=cmd_serve)
 
-    p = sub.add_parser("goal", help="run a served tree over ROS: TREE --args '{yaml}'")
-    p.add_argument("tree", help="tree name (as in /actorbt/tree/<name>)")
+    p = sub.add_parser(
+        "goal", help="Run a tree of a running `actorbt serve`: TREE --args '{yaml}'.",
+        description="Run a tree of a running `actorbt serve` as a ROS 2 goal, printing its "
+                    "feedback as it comes; Ctrl-C cancels the goal. A tree the serve does not "
+                    "offer fails at once, with the close matches.")
+    p.add_argument("tree", help="The tree's name, as in /actorbt/tree/<name> (dots or slashes "
+                                "for a tree in a subsystem).")
     p.add_argument("--args", dest="inputs", default="", metavar="YAML",
-                   help="the tree's inputs as a YAML mapping, e.g. '{category: can}'")
-    p.add_argument("--wait", type=float, default=10.0,
-                   help="seconds to wait for the server (default 10)")
-    p.add_argument("--timeout", type=float, help="cancel the goal after this many seconds")
-    p.add_argument("-q", "--quiet", action="store_true", help="no feedback lines")
+                   help="The tree's inputs as a YAML mapping, e.g. '{category: can}'.")
+    p.add_argument("--wait", type=float, default=10.0, metavar="S",
+                   help="Seconds to wait for a running `actorbt serve` before giving up "
+                        "(default 10).")
+    p.add_argument("--timeout", type=float, metavar="S",
+                   help="Cancel the goal after this many seconds (default: wait for its end).")
+    p.add_argument("-q", "--quiet", action="store_true",
+                   help="Print only the outcome, not each feedback line.")
     p.set_defaults(func=cmd_goal)
 
-    p = sub.add_parser("rcall", help="call an actor of a running `actorbt serve` over ROS: "
-                                     "ACTOR ARG... (Python literals, k=v)")
-    p.add_argument("actor")
-    p.add_argument("args", nargs="*")
-    p.add_argument("--wait", type=float, default=10.0,
-                   help="seconds to wait for the server (default 10)")
-    p.add_argument("--timeout", type=float, help="cancel the call after this many seconds")
-    p.add_argument("--json", action="store_true", help="print the result as JSON")
+    p = sub.add_parser(
+        "rcall", help="Call an actor of a running `actorbt serve`: ACTOR ARG... (Python literals, k=v).",
+        description="Call one actor of a running `actorbt serve` over ROS 2 and print its "
+                    "result. Each rcall is a new process and node; for many calls, "
+                    "`actorbt rshell` keeps one.")
+    p.add_argument("actor", help="The actor's name, as the serve resolves it (e.g. get_pose "
+                                 "or robot.navigation.get_pose).")
+    p.add_argument("args", nargs="*",
+                   help="The actor's arguments: Python literals, and NAME=VALUE for keywords.")
+    p.add_argument("--wait", type=float, default=10.0, metavar="S",
+                   help="Seconds to wait for a running `actorbt serve` before giving up "
+                        "(default 10).")
+    p.add_argument("--timeout", type=float, metavar="S",
+                   help="Cancel the call after this many seconds (default: wait for its end).")
+    p.add_argument("--json", action="store_true",
+                   help="Print the result as JSON (default: as Python would print it).")
     p.set_defaults(func=cmd_rcall)
+
+    p = sub.add_parser(
+        "rshell", help="An interactive actor shell on a running `actorbt serve`.",
+        description="Call actors of a running `actorbt serve` interactively, one call per "
+                    "line, with tab completion and `help NAME`. The shell keeps one ROS node, "
+                    "so each call after the first takes a round trip, not a start-up.")
+    p.add_argument("--wait", type=float, default=10.0, metavar="S",
+                   help="Seconds to wait for a running `actorbt serve` before giving up "
+                        "(default 10).")
+    p.add_argument("--timeout", type=float, metavar="S",
+                   help="Cancel each call after this many seconds (default: wait for its end).")
+    p.set_defaults(func=cmd_rshell)
+
+
+def uptime() -> float:
+    """Seconds since this process started (from /proc on Linux; else since this module
+    was imported)."""
+    try:
+        with open("/proc/self/stat") as f:
+            fields = f.read().rpartition(")")[2].split()
+        with open("/proc/uptime") as f:
+            up = float(f.read().split()[0])
+        return max(0.0, up - int(fields[19]) / os.sysconf("SC_CLK_TCK"))
+    except (OSError, ValueError, IndexError, AttributeError):
+        return time.monotonic() - _IMPORTED
+
+
+def _progress(text: str) -> None:
+    print(f"actorbt serve: {text}", file=sys.stderr, flush=True)
 
 
 # -- serve -------------------------------------------------------------------------------
 def cmd_serve(args: argparse.Namespace, app: Any) -> int:
     from .server import serve
-    rt = app.runtime(clock=getattr(args, "clock", None) or "wall")
-    server = None
     previous = signal.getsignal(signal.SIGTERM)
 
     def on_term(signum: int, frame: Any) -> None:
         raise KeyboardInterrupt
+    rt = server = None
     try:
         if threading.current_thread() is threading.main_thread():
             signal.signal(signal.SIGTERM, on_term)
+        bus = getattr(args, "bus", None) or app.cfg.transport
+        subsystems = ", ".join(app.cfg.subsystems) or "none"
+        folder = app.cfg.trees_dir()
+        trees = f" and the trees in {os.path.relpath(folder)}" if folder and folder.is_dir() else ""
+        loading = f"loading subsystems {subsystems}{trees} ({bus} bus)..."
+        spec = app.world_spec()
+        if spec:
+            _progress(f"starting world {spec['name']} (seed {spec.get('seed', 0)})...")
+        else:
+            _progress(loading)
+
+        def world_up(world: Any) -> None:
+            _progress(f"world {spec['name']} up at {uptime():.1f} s; {loading}")  # type: ignore[index]
+        rt = app.runtime(clock=getattr(args, "clock", None) or "wall", world_first=True,
+                         world_setup=world_up)
+        _progress(f"actors and trees loaded at {uptime():.1f} s; starting the ROS node...")
         record_dir = None
         if not getattr(args, "no_record", False):
             record_dir = getattr(args, "record_dir", None) or str(app.cfg.base / ".actorbt" / "goals")
-        server = serve(rt, preempt=bool(getattr(args, "preempt", False)), record_dir=record_dir)
+        server = serve(rt, preempt=bool(getattr(args, "preempt", False)), record_dir=record_dir,
+                       on_event=lambda line: print(line, flush=True))
         transport = "ros" if rt.bus.name == "ros" else "local"
         print(f"actorbt serve: node /actorbt ({transport} bus, "
               f"{'preempting' if server.preempt else 'rejecting'} a second goal per tree)",
@@ -79,7 +155,7 @@ def cmd_serve(args: argparse.Namespace, app: Any) -> int:
             print(f"  {action}", flush=True)
         if record_dir:
             print(f"actorbt serve: recording tree goals in {record_dir}", flush=True)
-        print("actorbt serve: ready (Ctrl-C stops)", flush=True)
+        print(f"actorbt serve: ready in {uptime():.1f} s (Ctrl-C stops)", flush=True)
         stop = threading.Event()
         while not stop.wait(3600):
             pass
@@ -90,7 +166,8 @@ def cmd_serve(args: argparse.Namespace, app: Any) -> int:
             if server is not None:
                 server.close()
         finally:
-            app.close(rt)
+            if rt is not None:
+                app.close(rt)
             if threading.current_thread() is threading.main_thread():
                 signal.signal(signal.SIGTERM, previous)
     print("actorbt serve: stopped", flush=True)
@@ -122,11 +199,31 @@ def _follow(goal: Any, timeout: float | None) -> int | None:
     return None
 
 
+def _not_sent(err: BaseException | None, what: str = "goal") -> int | None:
+    """Exit status 2, with the reason printed, for a goal that never ran (rejected, no
+    server); None otherwise."""
+    from .client import ActionGoalError, GoalRejectedError, ServerUnavailableError
+    from .remote import NoServeError
+    if err is None or isinstance(err, ActionGoalError):
+        return None
+    if isinstance(err, GoalRejectedError):
+        print(f"actorbt: {err.server} rejected the {what}" + (f": {err.reason}" if err.reason else ""),
+              file=sys.stderr)
+    elif isinstance(err, ServerUnavailableError):
+        print(f"actorbt: {NoServeError(err.seconds)}", file=sys.stderr)
+    else:
+        print(f"actorbt: error: {err}", file=sys.stderr)
+    return 2
+
+
 def cmd_goal(args: argparse.Namespace, app: Any) -> int:
-    from .client import ActionGoalError, GoalRejectedError
-    from .names import tree_action_name
-    from .remote import Remote
+    from .remote import NoServeError, Remote, UnknownTreeError
     with Remote(wait=args.wait) as remote:
+        try:
+            remote.check_tree(args.tree)
+        except (NoServeError, UnknownTreeError) as e:
+            print(f"actorbt: {e}", file=sys.stderr)
+            return 2
         goal = remote.tree_goal(args.tree, args.inputs or "",
                                 on_feedback=None if args.quiet else _print_feedback)
         rc = _follow(goal, args.timeout)
@@ -134,14 +231,9 @@ def cmd_goal(args: argparse.Namespace, app: Any) -> int:
             return rc
         if not args.quiet:
             time.sleep(0.05)  # the last feedback may arrive just after the result
-        err = goal.error
-        if isinstance(err, GoalRejectedError):
-            print(f"actorbt: {tree_action_name(args.tree)} rejected the goal"
-                  + (f": {err.reason}" if err.reason else ""), file=sys.stderr)
-            return 2
-        if err is not None and not isinstance(err, ActionGoalError):
-            print(f"actorbt: error: {err}", file=sys.stderr)
-            return 2
+        rc = _not_sent(goal.error)
+        if rc is not None:
+            return rc
         res = goal.result
         print(f"status: {res.status if res is not None else goal.status}")
         if res is not None and res.outputs_yaml:
@@ -152,27 +244,21 @@ def cmd_goal(args: argparse.Namespace, app: Any) -> int:
 
 
 def cmd_rcall(args: argparse.Namespace, app: Any) -> int:
-    """Also usable as ``actorbt call --ros`` (reads actor, args, timeout, json, wait)."""
+    """``actorbt rcall ACTOR ARG...``: one call through ``/actorbt/call``; the result is
+    printed (``--json``: as JSON)."""
     import yaml
 
     from ..literals import parse_args
-    from .client import ActionGoalError, GoalRejectedError
-    from .names import CALL_ACTION
     from .remote import Remote
     pos, kw = parse_args(list(args.args))
-    with Remote(wait=getattr(args, "wait", None) or 10.0) as remote:
+    with Remote(wait=args.wait) as remote:
         goal = remote.call_goal(args.actor, *pos, **kw)
-        rc = _follow(goal, getattr(args, "timeout", None))
+        rc = _follow(goal, args.timeout)
         if rc is not None:
             return rc
-        err = goal.error
-        if isinstance(err, GoalRejectedError):
-            print(f"actorbt: {CALL_ACTION} rejected the call"
-                  + (f": {err.reason}" if err.reason else ""), file=sys.stderr)
-            return 2
-        if err is not None and not isinstance(err, ActionGoalError):
-            print(f"actorbt: error: {err}", file=sys.stderr)
-            return 2
+        rc = _not_sent(goal.error, "call")
+        if rc is not None:
+            return rc
         res = goal.result
         if res is None or not res.success:
             detail = (res.error if res is not None else "") or goal.status
@@ -180,6 +266,24 @@ def cmd_rcall(args: argparse.Namespace, app: Any) -> int:
             return 1
         value = yaml.safe_load(res.result_yaml) if res.result_yaml else None
         if value is not None:
-            print(json.dumps(value, default=str) if getattr(args, "json", False)
-                  else pprint.pformat(value))
+            print(json.dumps(value, default=str) if args.json else pprint.pformat(value))
         return 0
+
+
+def cmd_rshell(args: argparse.Namespace, app: Any) -> int:
+    from .remote import NoServeError, Remote
+    from .shell import RemoteShell
+    print("actorbt rshell: looking for a running `actorbt serve`...", file=sys.stderr, flush=True)
+    with Remote(wait=args.wait) as remote:
+        try:
+            trees = [a for a in remote.wait_for_serve() if a.startswith("/actorbt/tree/")]
+        except NoServeError as e:
+            print(f"actorbt: {e}", file=sys.stderr)
+            return 2
+        print(f"actorbt rshell: connected in {uptime():.1f} s ({len(trees)} trees served)",
+              file=sys.stderr, flush=True)
+        interactive = sys.stdin.isatty()
+        shell = RemoteShell(remote, app.actors_with_trees, timeout=args.timeout,
+                            stdin=None if interactive else sys.stdin)
+        shell.cmdloop()
+    return 0

@@ -14,9 +14,20 @@ A goal's way through (thread in brackets):
 
 Subclasses say what a goal means (:meth:`GoalServer.admit`), how feedback and results
 look, and may wait their turn before the work starts (a tree runs one goal at a time).
+
+Each goal is told to the owner's :meth:`Owner.announce` in one line per event, e.g.
+
+    goal 3f2a1b9c bt_pick_place {category: can}: accepted
+    goal 3f2a1b9c bt_pick_place: succeeded in 12.3 s (trace .actorbt/goals/...jsonl)
+    call 5e6f7a8b robot.navigation.goto(1.0, 2.0, 0.0): succeeded in 8.21 s
+    goal bt_pick {category: 3}: rejected: input 'category' expects str, got int
+
+(a rejected goal has no id: the action protocol gives none to the goal callback).
 """
 from __future__ import annotations
 
+import os
+import time
 from typing import TYPE_CHECKING, Any, Protocol
 
 from ..errors import Cancelled, Failure
@@ -43,6 +54,9 @@ class Owner(Protocol):
 
     def reject(self, action: str, goal: Any, reason: str) -> None: ...
 
+    def announce(self, line: str) -> None:
+        """Tell about a goal: one line (accepted, rejected, how it ended)."""
+
 
 class ServedGoal:
     """One accepted goal. Each method says the thread it runs on."""
@@ -59,6 +73,13 @@ class ServedGoal:
         self.resolved = False
         self.outcome = Future()   # the work's result or Failure; set on the executor thread
         self.finished = Future()  # set when the execute coroutine has ended
+        self.accepted_at = time.monotonic()
+        self.end_status = "aborted"  # the Result's status, once it is known
+
+    @property
+    def short_id(self) -> str:
+        """The goal id's first 8 hex digits (as in the trace file's name)."""
+        return self.key.hex()[:8]
 
     # -- any thread ------------------------------------------------------------------------
     def start(self) -> None:
@@ -148,6 +169,11 @@ class GoalServer:
         action_type: the action type (RunTree, CallActor).
     """
 
+    #: the first word of this server's announce lines
+    label = "goal"
+    #: announce acceptance too (not only the end)
+    announce_accepted = True
+
     def __init__(self, owner: Owner, action: str, action_type: type) -> None:
         self.owner = owner
         self.action = action
@@ -181,6 +207,31 @@ class GoalServer:
     def concluding(self, g: ServedGoal, outcome: Any) -> None:
         """The work of ``g`` ended with ``outcome``; the result goes out next."""
 
+    def describe(self, call: Invocation) -> str:
+        """What an accepted goal runs, short, for announce lines."""
+        return call.path
+
+    def describe_request(self, goal: Any) -> str:
+        """A goal message (perhaps malformed), short, for announce lines."""
+        return self.action
+
+    def end_note(self, g: ServedGoal) -> str:
+        """What follows the outcome in the goal's last line (e.g. its trace)."""
+        return ""
+
+    def _announce(self, line: str) -> None:
+        try:
+            self.owner.announce(line)
+        except Exception:  # telling must never break serving
+            pass
+
+    def _announce_end(self, g: ServedGoal) -> None:
+        took = time.monotonic() - g.accepted_at
+        # the arguments are in the accepted line, when there is one
+        subject = g.call.path if self.announce_accepted else self.describe(g.call)
+        self._announce(f"{self.label} {g.short_id} {subject}: {one_line(g.end_status)} "
+                       f"in {seconds(took)}{self.end_note(g)}")
+
     # -- rclpy (executor thread) -----------------------------------------------------------
     def create(self, node: Any, result_timeout: int) -> None:
         from rclpy.action import ActionServer
@@ -202,6 +253,7 @@ class GoalServer:
             call = self.admit(goal)
         except GoalError as e:
             self.owner.reject(self.action, goal, str(e))
+            self._announce(f"{self.label} {self.describe_request(goal)}: rejected: {one_line(str(e))}")
             return GoalResponse.REJECT
         self._admitted = (goal, call)
         return GoalResponse.ACCEPT
@@ -214,6 +266,8 @@ class GoalServer:
             raise RuntimeError(f"{self.action}: accepted a goal that was not admitted")
         g = self.new_goal(handle, admitted[1])
         self.goals[g.key] = g
+        if self.announce_accepted:
+            self._announce(f"{self.label} {g.short_id} {self.describe(g.call)}: accepted")
         handle.execute()
 
     def _on_cancel(self, handle: Any) -> Any:
@@ -229,11 +283,11 @@ class GoalServer:
             await self.take_turn(g)
             if handle.is_cancel_requested:
                 handle.canceled()
-                return self.result(False, "canceled", None, "goal canceled")
+                return self._result(g, False, "canceled", None, "goal canceled")
             if self.owner.closing:
                 handle.abort()
-                return self.result(False, "aborted: the server is shutting down", None,
-                                   "the server is shutting down")
+                return self._result(g, False, "aborted: the server is shutting down", None,
+                                    "the server is shutting down")
             g.send_feedback(self.feedback("running"))
             g.start()
             outcome = await g.outcome
@@ -242,20 +296,50 @@ class GoalServer:
             self.leave(g)
             self.goals.pop(g.key, None)
             g.finished.set_result(True)
+            self._announce_end(g)
+
+    def _result(self, g: ServedGoal, success: bool, status: str, value: Any, error: str) -> Any:
+        g.end_status = status
+        return self.result(success, status, value, error)
 
     def _conclude(self, g: ServedGoal, outcome: Any) -> Any:
         handle = g.handle
         self.concluding(g, outcome)
         if not isinstance(outcome, Failure):
             handle.succeed()
-            return self.result(True, "succeeded", outcome, "")
+            return self._result(g, True, "succeeded", outcome, "")
         exc = outcome.exception
         if outcome.cancelled or isinstance(exc, Cancelled):
             reason = getattr(exc, "reason", "") or str(exc)
             if handle.is_cancel_requested:
                 handle.canceled()
-                return self.result(False, "canceled", None, reason)
+                return self._result(g, False, "canceled", None, reason)
             handle.abort()
-            return self.result(False, f"aborted: {reason}", None, reason)
+            return self._result(g, False, f"aborted: {reason}", None, reason)
         handle.abort()
-        return self.result(False, f"failed: {exc}", None, f"{type(exc).__name__}: {exc}")
+        return self._result(g, False, f"failed: {exc}", None, f"{type(exc).__name__}: {exc}")
+
+
+# -- announce lines -------------------------------------------------------------------------
+#: the longest piece of text (arguments, a reason) an announce line carries
+LINE_PIECE = 160
+
+
+def one_line(text: str, limit: int = LINE_PIECE) -> str:
+    """``text`` on one line (whitespace runs become one space), cut at ``limit``."""
+    text = " ".join(str(text).split())
+    return text if len(text) <= limit else text[:limit - 1] + "\u2026"
+
+
+def seconds(value: float) -> str:
+    """``0.03 s``, ``8.21 s``, ``12.3 s``."""
+    return f"{value:.2f} s" if value < 10 else f"{value:.1f} s"
+
+
+def shown_path(path: str) -> str:
+    """``path`` relative to the working folder when it is inside it."""
+    try:
+        rel = os.path.relpath(path)
+    except ValueError:
+        return path
+    return path if rel.startswith(os.pardir) else rel

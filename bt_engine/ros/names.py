@@ -19,7 +19,7 @@ REJECTIONS_TOPIC = "/actorbt/rejections"
 REJECTIONS_DEPTH = 50
 
 __all__ = ["CALL_ACTION", "NODE_NAME", "REJECTIONS_DEPTH", "REJECTIONS_TOPIC", "TREE_PREFIX",
-           "goal_text", "rejections_qos", "tree_action_name"]
+           "goal_text", "rejections_qos", "tree_action_name", "tree_of_action"]
 
 
 def tree_action_name(tree: str) -> str:
@@ -32,6 +32,14 @@ def tree_action_name(tree: str) -> str:
         if part:
             parts.append(part)
     return TREE_PREFIX + "/".join(parts)
+
+
+def tree_of_action(action: str) -> str | None:
+    """The tree path an action name serves (``/actorbt/tree/nav/patrol`` -> ``nav.patrol``),
+    or None when it is not a tree action."""
+    if not action.startswith(TREE_PREFIX) or len(action) == len(TREE_PREFIX):
+        return None
+    return action[len(TREE_PREFIX):].replace("/", ".")
 
 
 def goal_text(goal: Any) -> str:

@@ -8,10 +8,17 @@ goals to ``/actorbt/tree/<name>``, calls through ``/actorbt/call``.
 Blocking methods wait in the calling thread; rclpy runs in the Remote's own executor
 thread (its own Context), so Ctrl-C reaches the caller as KeyboardInterrupt and
 :meth:`RemoteGoal.cancel` can cancel the goal.
+
+What is served is read from the ROS graph (no extra service): :meth:`Remote.served_actions`
+and :meth:`Remote.served_trees` list the discovered ``/actorbt/...`` action servers, and
+:meth:`Remote.check_tree` fails at once with close matches when a tree is not served.
+One Remote keeps its node, so calls after the first skip start-up and discovery
+(``actorbt rshell``).
 """
 from __future__ import annotations
 
 import collections
+import difflib
 import os
 import threading
 import time
@@ -22,12 +29,49 @@ import yaml
 
 from ..errors import ActorbtError, ActorTimeout
 from .client import (STATUS_NAMES, ActionGoalError, GoalCall, GoalNotSentError,
-                     GoalRejectedError, ServerWait)
+                     GoalRejectedError, ServerUnavailableError, ServerWait)
 from .host import RosClosedError, RosHost
-from .names import CALL_ACTION, REJECTIONS_TOPIC, goal_text, rejections_qos, tree_action_name
+from .names import (CALL_ACTION, NODE_NAME, REJECTIONS_TOPIC, goal_text, rejections_qos,
+                    tree_action_name, tree_of_action)
 from .yamlio import dump
 
-__all__ = ["Remote", "RemoteCallError", "RemoteGoal"]
+__all__ = ["NoServeError", "Remote", "RemoteCallError", "RemoteGoal", "UnknownTreeError"]
+
+#: what every action of ``actorbt serve`` starts with
+SERVE_PREFIX = f"/{NODE_NAME}/"
+
+
+class NoServeError(ServerUnavailableError):
+    """No ``actorbt serve`` was discovered within the wait."""
+
+    def __init__(self, seconds: float) -> None:
+        super().__init__(CALL_ACTION, seconds)
+        self.args = (str(self),)
+
+    def __str__(self) -> str:
+        return (f"no actorbt serve found within {self.seconds:g} s; start one with "
+                "`actorbt serve` (ROS_DOMAIN_ID and ROS_AUTOMATIC_DISCOVERY_RANGE must match "
+                "on both sides)")
+
+
+class UnknownTreeError(ActorbtError, LookupError):
+    """The running ``actorbt serve`` serves no tree of that name."""
+
+    def __init__(self, tree: str, served: list[str]) -> None:
+        self.tree = tree
+        self.served = sorted(served)
+        self.suggestions = close_matches(tree, self.served)
+        hint = f"; did you mean: {', '.join(self.suggestions)}?" if self.suggestions else ""
+        listed = ", ".join(self.served) if self.served else "none"
+        super().__init__(f"no served tree {tree!r}{hint} (served: {listed})")
+
+
+def close_matches(name: str, known: list[str], n: int = 5) -> list[str]:
+    """Names of ``known`` that contain ``name``, then difflib's close matches."""
+    low = name.lower()
+    found = [k for k in known if low and low in k.lower()]
+    found += difflib.get_close_matches(name, known, n=n, cutoff=0.5)
+    return list(dict.fromkeys(found))[:n]
 
 
 class RemoteCallError(ActorbtError):
@@ -129,7 +173,8 @@ class Remote:
         self.wait = wait
         self.host = RosHost("client")
         try:
-            self.node = self.host.create_node(node_name or f"actorbt_client_{os.getpid()}_{self.host.id}")
+            self.node = self.host.create_node(
+                node_name or f"actorbt_client_{os.getpid()}_{self.host.id}", lean=True)
             self._waiter = ServerWait(self.node)
             self._clients: dict[str, Any] = {}
             self._created: dict[str, float] = {}
@@ -168,10 +213,68 @@ class Remote:
                     return ""
                 self._rej_cond.wait(left)
 
+    # -- what is served (the ROS graph) ---------------------------------------------------
+    #: once a serve is discovered, how long its list of actions must stay the same before
+    #: a tree missing from it counts as not served (its endpoints arrive one by one) [s]
+    GRAPH_SETTLE = 0.5
+
+    def served_actions(self) -> list[str]:
+        """The ``/actorbt/...`` actions that have a server in the ROS graph now."""
+        def query() -> list[str]:
+            from rclpy.action.graph import get_action_names_and_types
+            node = self.node
+            return sorted(name for name, _ in get_action_names_and_types(node)
+                          if name.startswith(SERVE_PREFIX)
+                          and node.count_services(f"{name}/_action/send_goal") > 0)
+        return self.host.call(query)
+
+    def served_trees(self) -> list[str]:
+        """The trees served now (``nav.patrol`` for ``/actorbt/tree/nav/patrol``)."""
+        return [t for t in map(tree_of_action, self.served_actions()) if t]
+
+    def wait_for_serve(self, timeout: float | None = None) -> list[str]:
+        """Wait until an ``actorbt serve`` is discovered and return its actions.
+
+        Raises:
+            NoServeError: none within ``timeout`` (default: this Remote's ``wait``) [s].
+        """
+        seconds = self.wait if timeout is None else timeout
+        deadline = time.monotonic() + seconds
+        while True:
+            actions = self.served_actions()
+            if actions:
+                return actions
+            if time.monotonic() >= deadline:
+                raise NoServeError(seconds)
+            time.sleep(0.02)
+
+    def check_tree(self, tree: str, timeout: float | None = None) -> None:
+        """Return once ``tree`` is served. Fails at once (after :data:`GRAPH_SETTLE`) when a
+        serve is up without it.
+
+        Raises:
+            NoServeError: no ``actorbt serve`` within ``timeout`` [s] (default ``wait``).
+            UnknownTreeError: the serve has no such tree (with close matches).
+        """
+        action = tree_action_name(tree)
+        seconds = self.wait if timeout is None else timeout
+        deadline = time.monotonic() + seconds
+        actions = self.wait_for_serve(seconds)
+        changed = time.monotonic()
+        while action not in actions:
+            now = time.monotonic()
+            if now - changed >= self.GRAPH_SETTLE or now >= deadline:
+                raise UnknownTreeError(tree, [t for t in map(tree_of_action, actions) if t])
+            time.sleep(0.02)
+            latest = self.served_actions()
+            if latest != actions:
+                actions, changed = latest, time.monotonic()
+
     # -- goals ---------------------------------------------------------------------------
     #: a new action client's feedback subscription needs a moment to be matched by the
     #: server's publisher, even once the server is discovered; feedback published
-    #: before that is lost (ROS 2 feedback is volatile), so the first goal waits this [s]
+    #: before that is lost (ROS 2 feedback is volatile), so the first goal with a
+    #: feedback callback waits this [s] (goals without one do not)
     SETTLE = 0.25
 
     def _client(self, action_type: type, action: str) -> Any:
@@ -228,7 +331,7 @@ class Remote:
         def begin() -> None:
             from unique_identifier_msgs.msg import UUID
             client = self._client(action_type, action)
-            settled = self._created[action] + self.SETTLE
+            settled = self._created[action] + (self.SETTLE if on_feedback is not None else 0.0)
             goal_id = uuid.uuid4().bytes
             self._prune_feedback()
             if on_feedback is not None:
@@ -268,9 +371,17 @@ class Remote:
 
     def call(self, actor: str, *args: Any, timeout: float | None = None, **kwargs: Any) -> Any:
         """Call ``actor`` in the served runtime and return its result (as YAML data)."""
-        g = self.call_goal(actor, *args, **kwargs)
-        self._finish(g, timeout, f"actor {actor}")
-        return yaml.safe_load(g.result.result_yaml) if g.result.result_yaml else None
+        return self.finish(self.call_goal(actor, *args, **kwargs), timeout, f"actor {actor}")
+
+    def finish(self, g: RemoteGoal, timeout: float | None = None, what: str | None = None) -> Any:
+        """Wait for goal ``g`` and return its value as YAML data: a call's result, a tree's
+        outputs. Cancels it after ``timeout`` [s] or on Ctrl-C; raises as :meth:`call`."""
+        self._finish(g, timeout, what or g.action)
+        res = g.result
+        text = getattr(res, "result_yaml", None)
+        if text is None:
+            text = getattr(res, "outputs_yaml", "")
+        return yaml.safe_load(text) if text else None
 
     def _finish(self, g: RemoteGoal, timeout: float | None, what: str) -> None:
         try:

@@ -32,8 +32,11 @@ Goal semantics (the goal's way through is in :mod:`bt_engine.ros.goal_server`):
   layer's TraceRecorder, runtime transactions included). ``actorbt serve`` records by
   default. The recorder observes every run of the runtime, so tree goals that overlap
   in time also see each other's events.
+- ``on_event(line)`` hears one line per goal event (tree goal accepted, any goal
+  rejected or ended, with its outcome and time; see :mod:`bt_engine.ros.goal_server`);
+  ``actorbt serve`` prints them. They are logged at INFO level either way.
 
-With the ROS transport (``--ros``) the node lives in the transport's context and
+With the ROS transport (``--bus ros``, ``transport: ros``) the node lives in the transport's context and
 executor thread; otherwise the server makes its own :class:`RosHost`.
 """
 from __future__ import annotations
@@ -41,7 +44,7 @@ from __future__ import annotations
 import logging
 import pathlib
 import time
-from typing import Any
+from typing import Any, Callable
 
 import yaml
 
@@ -74,17 +77,20 @@ class Server:
             long timeout makes each goal slower (rclpy's default, 900 s, added about
             16 us per kept goal to every round trip here). rclpy clients ask for the
             result as soon as the goal is accepted, so a few seconds is plenty.
+        on_event: called with one line per goal event (executor thread; must not block).
     """
 
     def __init__(self, rt: Any, *, preempt: bool = False, node_name: str = NODE_NAME,
                  record_dir: "str | pathlib.Path | None" = None,
-                 result_timeout: int = RESULT_TIMEOUT) -> None:
+                 result_timeout: int = RESULT_TIMEOUT,
+                 on_event: Callable[[str], None] | None = None) -> None:
         from actorbt_interfaces.action import CallActor, RunTree
         from std_msgs.msg import String
 
         self.rt = rt
         self.preempt = preempt
         self.record_dir = record_dir
+        self.on_event = on_event
         self.closing = False
         self._closed = False
         self._String = String
@@ -126,13 +132,21 @@ class Server:
 
     def reject(self, action: str, goal: Any, reason: str) -> None:
         """Log and publish why ``goal`` on ``action`` was rejected (executor thread)."""
-        log.warning("%s: goal rejected: %s", action, reason)
+        # a warning, unless it is told through on_event anyway (`actorbt serve`)
+        log.log(logging.INFO if self.on_event is not None else logging.WARNING,
+                "%s: goal rejected: %s", action, reason)
         text = yaml.safe_dump({"action": action, "goal": goal_text(goal), "reason": reason},
                               sort_keys=False)
         try:
             self._rejections.publish(self._String(data=text))
         except Exception:
             log.exception("publishing a rejection failed")
+
+    def announce(self, line: str) -> None:
+        """One line about a goal: logged, and handed to ``on_event``."""
+        log.info("%s", line)
+        if self.on_event is not None:
+            self.on_event(line)
 
     # -- lifecycle -----------------------------------------------------------------------
     def close(self, grace: float = 3.0) -> None:
@@ -181,9 +195,11 @@ class Server:
 
 
 def serve(rt: Any, *, preempt: bool = False, node_name: str = NODE_NAME,
-          record_dir: "str | pathlib.Path | None" = None) -> Server:
+          record_dir: "str | pathlib.Path | None" = None,
+          on_event: Callable[[str], None] | None = None) -> Server:
     """Expose ``rt``'s actors and trees as ROS 2 actions (see the module docstring).
 
     Returns the :class:`Server`; ``close()`` it before closing the runtime.
     """
-    return Server(rt, preempt=preempt, node_name=node_name, record_dir=record_dir)
+    return Server(rt, preempt=preempt, node_name=node_name, record_dir=record_dir,
+                  on_event=on_event)

@@ -1,7 +1,7 @@
 """The ROS 2 transport: the bus interface (:class:`bt_engine.bus.Transport`) over rclpy
 and Fast DDS.
 
-``Runtime(bus=RosTransport)`` (``transport: ros`` in actorbt.yaml, or ``--ros``) keeps
+``Runtime(bus=RosTransport)`` (``transport: ros`` in actorbt.yaml, or ``--bus ros``) keeps
 the actor-facing API of the local bus: ``register_publisher`` / ``register_subscriber``
 make the same actors, and ``register_action`` / ``register_service`` make async actors
 that send goals and requests to servers in this or other processes.

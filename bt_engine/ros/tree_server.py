@@ -24,9 +24,9 @@ import time
 from typing import Any
 
 from ..errors import Failure
-from .goal_server import GoalServer, Owner, ServedGoal
+from .goal_server import GoalServer, Owner, ServedGoal, one_line, shown_path
 from .goals import GoalError, Invocation, decode_tree_goal
-from .yamlio import dump
+from .yamlio import dump, flow
 
 log = logging.getLogger("actorbt.ros.server")
 
@@ -207,6 +207,17 @@ class TreeServer(GoalServer):
 
     def new_goal(self, handle: Any, call: Invocation) -> TreeGoal:
         return TreeGoal(self, handle, call)
+
+    def describe(self, call: Invocation) -> str:
+        return f"{call.path} {one_line(flow(call.kwargs))}" if call.kwargs else call.path
+
+    def describe_request(self, goal: Any) -> str:
+        text = one_line(goal.inputs_yaml)
+        return f"{self.ref.path} {text}" if text else self.ref.path
+
+    def end_note(self, g: ServedGoal) -> str:
+        path = getattr(g, "trace_path", None)
+        return f" (trace {shown_path(path)})" if path else ""
 
     def feedback(self, status: str, active: str = "", ticks: int = 0) -> Any:
         return self.action_type.Feedback(status=status, active_node=active,

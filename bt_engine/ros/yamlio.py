@@ -48,3 +48,9 @@ def dump(value: Any) -> str:
     """YAML text of ``value`` (see the module docstring)."""
     return yaml.safe_dump(to_plain(value), default_flow_style=None, sort_keys=False,
                           allow_unicode=True)
+
+
+def flow(value: Any) -> str:
+    """``value`` as one line of YAML flow style, e.g. ``{category: can, n: 2}``."""
+    return yaml.safe_dump(to_plain(value), default_flow_style=True, sort_keys=False,
+                          allow_unicode=True, width=1 << 30).strip().removesuffix("\n...").strip()
