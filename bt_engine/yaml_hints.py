@@ -45,6 +45,8 @@ def syntax_hint(exc: yaml.MarkedYAMLError) -> str:
                 "between them: check its braces and commas")
     if "alias" in context or "undefined alias" in problem:
         return "'*' starts an alias in YAML: put the value in quotes"
+    if "<stream end>" in problem or "end of stream" in problem:
+        return "the text ends inside a value: close the bracket, brace or quote opened before it"
     if "could not find expected ':'" in problem:
         return f"line {start} is not a 'key: value' line: add ': ' after its key, or indent it as part of the value above"
     if problem.startswith("expected <block end>"):

@@ -32,6 +32,8 @@ def error_of(text: str) -> yaml.MarkedYAMLError:
     ("a: @foo\n", "cannot start with '@'"),
     ("a: `foo`\n", "cannot start with '`'"),
     ("a: *x\n", "'*' starts an alias"),
+    # the text ends inside a value
+    ("a: [", "the text ends inside a value"),
     # text after a quoted value
     ("a: \"x\" y\n", "quote the whole value"),
 ])

@@ -18,6 +18,7 @@ from typing import Any
 import yaml
 
 from ..errors import ActorbtError
+from ..yaml_hints import syntax_mark, syntax_message
 
 __all__ = ["GoalError", "Invocation", "decode_call_goal", "decode_tree_goal",
            "parse_call_args", "parse_inputs"]
@@ -91,11 +92,12 @@ def _load(text: str, what: str) -> Any:
         return None
     try:
         return yaml.safe_load(text)
-    except yaml.YAMLError as e:
-        mark = getattr(e, "problem_mark", None)
+    except yaml.MarkedYAMLError as e:
+        mark = syntax_mark(e)
         where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
-        raise GoalError(f"{what} is not valid YAML{where}: "
-                        f"{getattr(e, 'problem', None) or e}") from None
+        raise GoalError(f"{what} is not valid YAML{where}: {syntax_message(e)}") from None
+    except yaml.YAMLError as e:
+        raise GoalError(f"{what} is not valid YAML: {e}") from None
 
 
 def _check_keys(mapping: dict, what: str) -> None:
