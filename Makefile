@@ -5,6 +5,12 @@ PYTHON ?= python3.11
 VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
+# The real robot's ROS message packages that have no pip wheel (tf2_msgs, control_msgs,
+# nav2_msgs) are built from interfaces/upstream, a separate distribution with its own stamp:
+# a change to pyproject.toml does not rebuild them (about 3 minutes). See interfaces/README.md.
+MSGS_STAMP := $(VENV)/.upstream-msgs
+MSGS_SRC   := $(addprefix interfaces/upstream/,pyproject.toml CMakeLists.txt) \
+  $(wildcard $(addprefix interfaces/upstream/*/,CMakeLists.txt package.xml msg/*.msg srv/*.srv action/*.action))
 # Debian packages: cmake/g++ build the ROS action types, EGL renders the camera headless,
 # graphviz draws trees.
 DEBS   := cmake g++ libegl1 libegl-mesa0 graphviz
@@ -20,10 +26,21 @@ deps:
 	  apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq $$missing; \
 	fi
 
-$(STAMP): pyproject.toml interfaces/CMakeLists.txt interfaces/package.xml $(wildcard interfaces/action/*.action)
+define venv_ready
 	@$(MAKE) --no-print-directory deps
 	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install -q --upgrade pip
+endef
+
+$(MSGS_STAMP): $(MSGS_SRC)
+	$(venv_ready)
+	$(PY) -m pip install -q ./interfaces/upstream
+	@touch $(MSGS_STAMP)
+
+# Order-only on the message packages: they are built first, but rebuilding them does not
+# reinstall actorbt.
+$(STAMP): pyproject.toml interfaces/CMakeLists.txt interfaces/package.xml $(wildcard interfaces/action/*.action) | $(MSGS_STAMP)
+	$(venv_ready)
 	$(PY) -m pip install -q -e ".[test]"
 	@touch $(STAMP)
 
