@@ -14,13 +14,15 @@ class Echo(SubSystem):
     """Serves /echo: succeeds after 1 s with the goal's text, aborts on 'fail', and
     stops when cancelled."""
 
-    def __init__(self) -> None:
+    def __init__(self, name: str = "/echo") -> None:
         super().__init__()
         self.cancelled: list[str] = []
-        self.server = self._rt.bus.action_server("/echo", CallActor, self.on_goal)
-        self.register_action("echo", CallActor, "/echo")
+        self.started = 0
+        self.server = self._rt.bus.action_server(name, CallActor, self.on_goal)
+        self.register_action("echo", CallActor, name)
 
     def on_goal(self, goal) -> None:
+        self.started += 1
         if goal.request.actor == "fail":
             goal.abort(CallActor.Result(success=False, error="told to fail"))
             return

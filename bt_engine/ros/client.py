@@ -10,32 +10,16 @@ from __future__ import annotations
 import time
 from typing import Any, Callable
 
+from ..bus.actions import (STATUS_NAMES, STATUS_SUCCEEDED, ActionGoalError, GoalRejectedError,
+                           ServerUnavailableError, build_message)
 from ..errors import ActorbtError
 
-#: GoalStatus codes by name
-STATUS_NAMES = {0: "unknown", 1: "accepted", 2: "executing", 3: "canceling", 4: "succeeded",
-                5: "canceled", 6: "aborted"}
-STATUS_SUCCEEDED = 4
+__all__ = ["STATUS_NAMES", "ActionGoalError", "GoalCall", "GoalNotSentError", "GoalRejectedError",
+           "ServerUnavailableError", "ServerWait", "ServiceCall", "build_message"]
 
-
-class ServerUnavailableError(ActorbtError, TimeoutError):
-    """No action or service server answered within the wait."""
-
-    def __init__(self, server: str, seconds: float) -> None:
-        self.server = server
-        self.seconds = seconds
-        super().__init__(f"no server for {server} within {seconds:g} s "
-                         "(is it running? ROS_AUTOMATIC_DISCOVERY_RANGE and ROS_DOMAIN_ID "
-                         "must match on both sides)")
-
-
-class GoalRejectedError(ActorbtError):
-    """The action server rejected the goal."""
-
-    def __init__(self, server: str, reason: str = "") -> None:
-        self.server = server
-        self.reason = reason
-        super().__init__(f"{server} rejected the goal" + (f": {reason}" if reason else ""))
+#: why a ROS server may not be found (the hint of ServerUnavailableError)
+DISCOVERY_HINT = ("is it running? ROS_AUTOMATIC_DISCOVERY_RANGE and ROS_DOMAIN_ID must match "
+                  "on both sides")
 
 
 class GoalNotSentError(ActorbtError):
@@ -44,38 +28,6 @@ class GoalNotSentError(ActorbtError):
     def __init__(self, server: str) -> None:
         self.server = server
         super().__init__(f"goal for {server} cancelled before it was sent")
-
-
-class ActionGoalError(ActorbtError):
-    """The goal ended without succeeding (aborted or canceled by the server)."""
-
-    def __init__(self, server: str, status: int, result: Any) -> None:
-        self.server = server
-        self.status = status
-        self.result = result
-        detail = getattr(result, "status", "") or getattr(result, "error", "")
-        super().__init__(f"goal on {server} ended {STATUS_NAMES.get(status, status)}"
-                         + (f": {detail}" if detail else ""))
-
-
-def build_message(msg_type: type, value: Any, fields: dict[str, Any]) -> Any:
-    """A ``msg_type`` from an instance, a mapping of fields, or keyword fields."""
-    if isinstance(value, msg_type):
-        msg = value
-    elif value is None:
-        msg = msg_type()
-    elif isinstance(value, dict):
-        msg = msg_type()
-        fields = {**value, **fields}
-    else:
-        raise TypeError(f"expected a {msg_type.__name__} or a mapping of its fields, "
-                        f"got {type(value).__name__}")
-    known = msg_type.get_fields_and_field_types()
-    for key, val in fields.items():
-        if key not in known:
-            raise TypeError(f"{msg_type.__name__} has no field {key!r}; fields: {', '.join(known)}")
-        setattr(msg, key, val)
-    return msg
 
 
 class ServerWait:
@@ -154,7 +106,7 @@ class GoalCall:
             self.client.server_is_ready, self._timeout, self._send, self._unavailable)
 
     def _unavailable(self) -> None:
-        self._finish_error(ServerUnavailableError(self.server, self._timeout))
+        self._finish_error(ServerUnavailableError(self.server, self._timeout, DISCOVERY_HINT))
 
     def _send(self) -> None:
         if self.cancelled:
@@ -237,7 +189,7 @@ class ServiceCall:
     def start(self) -> None:
         self._wait_entry = self._waiter.when_ready(
             self.client.service_is_ready, self._timeout, self._send,
-            lambda: self._on_error(ServerUnavailableError(self.server, self._timeout)))
+            lambda: self._on_error(ServerUnavailableError(self.server, self._timeout, DISCOVERY_HINT)))
 
     def _send(self) -> None:
         if self.cancelled:

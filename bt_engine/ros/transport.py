@@ -16,14 +16,14 @@ rule of :class:`bt_engine.clock.VirtualClock`): a deadline never overtakes a rep
 """
 from __future__ import annotations
 
-import inspect
 import logging
 import os
 from typing import TYPE_CHECKING, Any, Callable
 
 from ..bus.transport import Transport
 from ..modes import Kind
-from .client import GoalCall, ServerWait, ServiceCall, build_message
+from ..bus.actions import build_message, message_signature
+from .client import GoalCall, ServerWait, ServiceCall
 from .host import RosClosedError, RosHost
 from .qos import qos_profile
 
@@ -108,6 +108,7 @@ class RosTransport(Transport):
             raise
         self._waiter = ServerWait(self.node)
         self._subs: set[RosSubscription] = set()
+        self._servers: list[Any] = []
         self._closed = False
 
     # -- topics --------------------------------------------------------------------------
@@ -147,6 +148,18 @@ class RosTransport(Transport):
         return self._client_actor(scope, name, GoalCall, client, server, action_type.Goal,
                                   "goal", doc)
 
+    def action_server(self, name: str, action_type: type, on_goal: Callable[[Any], None]) -> Any:
+        """Serve action ``name`` from this node; ``on_goal(goal)`` runs on the hub with a
+        :class:`~bt_engine.bus.actions.ServerGoal` (see :mod:`bt_engine.ros.action_server`)."""
+        from .action_server import RosActionServer
+        server = RosActionServer(self, name, action_type, on_goal)
+        self._servers.append(server)
+        return server
+
+    @property
+    def rt(self) -> "Runtime":
+        return self._rt
+
     def register_service(self, scope: Any, name: str, srv_type: type, server: str) -> Any:
         """Make async actor ``name(request=None, **fields)`` calling service ``server``;
         the result is the response. Cancelling drops the pending request."""
@@ -172,7 +185,7 @@ class RosTransport(Transport):
             return lambda: self._post_quietly(call.cancel)
 
         return scope.add_actor(name, send, Kind.ASYNC, doc=doc,
-                               signature=_message_signature(param, msg_type))
+                               signature=message_signature(param, msg_type))
 
     def _post_quietly(self, fn: Callable[[], Any]) -> None:
         try:
@@ -189,16 +202,6 @@ class RosTransport(Transport):
         for sub in list(self._subs):
             sub.closed = True
         self._subs.clear()
+        for server in self._servers:
+            server.close()
         self.host.close()
-
-
-def _message_signature(first: str, msg_type: type) -> inspect.Signature:
-    """``(first: msg_type = None, *, field=default, ...)`` for a goal or request type."""
-    P = inspect.Parameter
-    params = [P(first, P.POSITIONAL_OR_KEYWORD, default=None, annotation=msg_type)]
-    default = msg_type()
-    for field in msg_type.get_fields_and_field_types():
-        if field == first:
-            continue
-        params.append(P(field, P.KEYWORD_ONLY, default=getattr(default, field)))
-    return inspect.Signature(params)
