@@ -18,21 +18,19 @@ ROS 2 controllers and Nav2 do, so a stock client sees why.
 from __future__ import annotations
 
 import logging
-from typing import TYPE_CHECKING, Any, Callable
+from typing import Any, Callable
 
 from ..bus.actions import STATUS_CANCELED, STATUS_SUCCEEDED, ServerGoal
 from .host import RosClosedError
-
-if TYPE_CHECKING:
-    from .transport import RosTransport
 
 log = logging.getLogger("actorbt.ros")
 
 
 class RosActionServer:
-    """One action served by a :class:`~bt_engine.ros.transport.RosTransport`'s node."""
+    """One action served by a :class:`~bt_engine.ros.transport.RosTransport`'s node
+    (``transport``: its ``node``, ``host`` and ``rt`` are used)."""
 
-    def __init__(self, transport: "RosTransport", name: str, action_type: type,
+    def __init__(self, transport: Any, name: str, action_type: type,
                  on_goal: Callable[[ServerGoal], None]) -> None:
         from rclpy.action import ActionServer
         self.name = name
