@@ -1,4 +1,4 @@
-"""Start-up time of the ROS ways in (issue [ros-dx] B): how long until "ready".
+"""Start-up time of the ROS ways in ([cli-dx] item 12): how long until "ready".
 
     .venv/bin/python bench/bench_ros_startup.py [--rounds 3] [--calls 5] [--warm 20]
 
