@@ -13,10 +13,11 @@ import pytest
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 ENGINE = ROOT / "bt_engine"
 FORBIDDEN = {
-    "bt_engine": {"actors", "planning", "sim"},
-    "planning": {"bt_engine", "sim", "actors"},
-    "actors": {"sim"},
-    "sim": {"actors", "planning"},
+    "bt_engine": {"actors", "planning", "sim", "navstack"},
+    "planning": {"bt_engine", "sim", "actors", "navstack"},
+    "actors": {"sim", "navstack"},
+    "sim": {"actors", "planning", "navstack"},
+    "navstack": {"sim", "actors"},
 }
 
 

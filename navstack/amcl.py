@@ -1,0 +1,284 @@
+"""The localiser's logic, as AMCL's node has it, without any transport.
+
+:class:`Amcl` takes odometry poses and laser scans (plain numbers; :class:`Scan` reads a
+``sensor_msgs/LaserScan``) and keeps a :class:`~navstack.particle_filter.ParticleFilter`:
+
+* a filter update (motion, measurement, resampling) runs on a scan when the odometry has
+  moved more than ``update_min_d`` or turned more than ``update_min_a`` since the last
+  one, and on the first scan after (re)initialisation;
+* between updates the pose follows the odometry: ``pose(odom)`` is ``map_to_odom``
+  composed with any odometry pose, so it is available at the odometry's rate;
+* every scan (moving or not) is scored against the map at the current estimate: the
+  share of beams ending within ``inlier_dist`` of an obstacle, smoothed. When that score
+  stays below ``lost_score``, or below ``lost_drop`` times its slow baseline (its average
+  while localised: a sudden drop, as augmented MCL's w_fast / w_slow), for ``lost_scans``
+  scans, the robot is declared lost (it was kidnapped, or the estimate diverged) and, with
+  ``auto_recover``, the filter is relocalised globally from the current scan (or uniformly,
+  ``recovery="uniform"``), keeping ``keep_share`` of its particles so that a false alarm
+  is undone by the next measurement update.
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from .likelihood_field import LaserModelParams, beam_endpoints_laser_frame
+from .map_io import OccupancyMap
+from .particle_filter import Estimate, FilterParams, ParticleFilter, wrap1
+
+# states
+UNINITIALISED = "uninitialised"
+LOCALISED = "localised"
+UNCERTAIN = "uncertain"       # initialised or relocalising, not converged yet
+LOST = "lost"                 # the scan no longer fits the map at the estimate
+
+
+@dataclass
+class Scan:
+    """A planar laser scan (sensor_msgs/LaserScan's fields that matter)."""
+    ranges: np.ndarray
+    angle_min: float
+    angle_increment: float
+    range_min: float
+    range_max: float
+
+    @classmethod
+    def from_msg(cls, msg) -> Scan:
+        return cls(np.asarray(msg.ranges, dtype=np.float32), msg.angle_min, msg.angle_increment,
+                   msg.range_min, msg.range_max)
+
+    @property
+    def angles(self) -> np.ndarray:
+        return self.angle_min + self.angle_increment * np.arange(len(self.ranges))
+
+    def valid(self) -> np.ndarray:
+        r = self.ranges
+        return np.isfinite(r) & (r >= self.range_min) & (r < self.range_max)
+
+
+@dataclass
+class AmclParams:
+    update_min_d: float = 0.25        # [m]
+    update_min_a: float = 0.2         # [rad]
+    resample_interval: int = 1
+    max_beams: int = 60
+    laser_pose: tuple = (0.0, 0.0, 0.0)   # the laser in the base frame (x, y, yaw)
+    # health and recovery
+    inlier_dist: float = 0.15         # a beam fits when it ends this near an obstacle [m]
+    score_smoothing: float = 0.4      # weight of the newest scan in the smoothed score
+    baseline_smoothing: float = 0.02  # ... and in the slow baseline it is compared with
+    lost_score: float = 0.45          # below this the scan does not fit
+    lost_drop: float = 0.75           # ... nor below this share of the baseline
+    lost_scans: int = 3               # consecutive scans like that: lost
+    min_beams: int = 30               # scans with fewer valid beams are not judged
+    keep_share: float = 0.25          # share of the current particles kept when lost
+    ok_score: float = 0.6             # converged needs at least this ...
+    converged_std_xy: float = 0.12    # ... and the heaviest cluster this tight [m]
+    converged_std_yaw: float = 0.12   # [rad]
+    converged_weight: float = 0.8     # ... holding this share of the weight
+    relocalise_grace: float = 6.0     # after a relocalisation, [s] before lost may be declared again
+    auto_recover: bool = True
+    recovery: str = "informed"        # "informed" (scan-matched seeding) or "uniform"
+
+
+@dataclass
+class Status:
+    state: str = UNINITIALISED
+    score: float = 0.0                # smoothed share of beams that fit the map
+    baseline: float = 0.0             # its slow average while localised
+    std_xy: float = math.inf
+    std_yaw: float = math.inf
+    particles: int = 0
+    clusters: int = 0
+    updates: int = 0
+    recoveries: int = 0               # global relocalisations started because lost
+    lost_count: int = 0               # times lost was declared
+    last_update_ms: float = 0.0
+    last_lost: float | None = None    # when lost was last declared (clock time)
+
+    def as_dict(self) -> dict:
+        return dict(self.__dict__)
+
+
+def compose(a, b):
+    """Pose a (x, y, yaw) composed with pose b expressed in a's frame."""
+    c, s = math.cos(a[2]), math.sin(a[2])
+    return (a[0] + c * b[0] - s * b[1], a[1] + s * b[0] + c * b[1], wrap1(a[2] + b[2]))
+
+
+def inverse(a):
+    c, s = math.cos(a[2]), math.sin(a[2])
+    return (-c * a[0] - s * a[1], s * a[0] - c * a[1], wrap1(-a[2]))
+
+
+class Amcl:
+    """Adaptive Monte Carlo localisation on an occupancy map."""
+
+    def __init__(self, occ_map: OccupancyMap, params: AmclParams | None = None,
+                 filter_params: FilterParams | None = None, laser: LaserModelParams | None = None,
+                 seed: int | None = None, clock=time.monotonic):
+        self.params = params or AmclParams()
+        self.pf = ParticleFilter(occ_map, filter_params, laser, seed)
+        self.rng = self.pf.rng
+        self.clock = clock
+        self.status = Status()
+        self.map_to_odom = (0.0, 0.0, 0.0)
+        self.estimate: Estimate | None = None
+        self._odom_at_update = None      # odometry pose at the last filter update
+        self._last_odom = None           # the newest odometry pose
+        self._force_update = False
+        self._pending_global = None      # share of particles to keep, while an informed global localisation waits for a scan
+        self._low_scans = 0
+        self._grace_until = -math.inf
+        self.update_times: list[float] = []   # [s] per filter update
+        self.search_times: list[float] = []   # [s] per scan-informed global localisation
+
+    # -- inputs ------------------------------------------------------------------------------
+    def set_map(self, occ_map: OccupancyMap) -> None:
+        self.pf.set_map(occ_map)
+
+    def on_odometry(self, odom) -> None:
+        """The newest odometry pose (x, y, yaw), for :meth:`pose` between scans."""
+        self._last_odom = tuple(float(v) for v in odom)
+
+    def initialise(self, pose, cov, odom=None) -> None:
+        """The /initialpose case: particles round ``pose`` (map frame) with 3x3 ``cov``,
+        the robot being at odometry pose ``odom`` (the newest one when None)."""
+        self.pf.initialise(pose, cov)
+        odom = odom if odom is not None else self._last_odom
+        self._restart(odom)
+        self.estimate = self.pf.mean()
+        pose = tuple(float(v) for v in pose)
+        self.map_to_odom = compose(pose, inverse(odom)) if odom is not None else pose
+
+    def global_localisation(self, informed: bool | None = None, keep_share: float = 0.0) -> None:
+        """Forget the pose: uniform particles (AMCL), or seeded from the next scan's
+        matches over the map (``informed``; the default follows ``params.recovery``),
+        keeping ``keep_share`` of the current particles."""
+        if informed is None:
+            informed = self.params.recovery == "informed"
+        if informed:
+            self._pending_global = keep_share   # done on the next scan, which it needs
+        else:
+            n_old = int(round(keep_share * self.pf.params.max_particles))
+            old = self.pf.particles[self.rng.choice(len(self.pf.particles), size=n_old, p=self.pf.weights)] \
+                if n_old and len(self.pf.particles) else np.zeros((0, 3))
+            self.pf.global_localisation()
+            if len(old):
+                self.pf._set(np.vstack([self.pf.particles[len(old):], old]))
+        self._restart(None)
+
+    def _restart(self, odom) -> None:
+        self._force_update = True
+        self._odom_at_update = odom
+        self._low_scans = 0
+        self.status.state = UNCERTAIN
+        self._grace_until = self.clock() + self.params.relocalise_grace
+
+    def beams(self, scan: Scan, k: int | None = None) -> np.ndarray:
+        """End points (K, 2) in the base frame of up to k valid beams, evenly spread with
+        a random phase (all valid beams when k is None)."""
+        valid = np.nonzero(scan.valid())[0]
+        if k is not None and len(valid) > k:
+            step = len(valid) / k
+            pick = (self.rng.uniform(0, step) + step * np.arange(k)).astype(int)
+            valid = valid[np.minimum(pick, len(valid) - 1)]
+        xy = beam_endpoints_laser_frame(scan.ranges[valid], scan.angles[valid])
+        lx, ly, lyaw = self.params.laser_pose
+        if lx or ly or lyaw:
+            c, s = math.cos(lyaw), math.sin(lyaw)
+            xy = np.column_stack([lx + c * xy[:, 0] - s * xy[:, 1], ly + s * xy[:, 0] + c * xy[:, 1]])
+        return xy.astype(np.float32)
+
+    def on_scan(self, scan: Scan, odom) -> bool:
+        """A scan taken at odometry pose ``odom`` (x, y, yaw). Returns True when the
+        filter updated. Does nothing before initialise/global_localisation."""
+        if self.status.state == UNINITIALISED and self._pending_global is None:
+            return False
+        odom = tuple(float(v) for v in odom)
+        self._last_odom = odom
+        updated = False
+        if self._pending_global is not None:
+            t0 = time.perf_counter()
+            self.pf.global_localisation_informed(self.beams(scan, None), scan.range_max, self._pending_global)
+            self._pending_global = None
+            self._restart(odom)
+            self.search_times.append(time.perf_counter() - t0)
+        if self._odom_at_update is None:
+            self._odom_at_update = odom
+            self._force_update = True
+        old = self._odom_at_update
+        moved = math.hypot(odom[0] - old[0], odom[1] - old[1]) > self.params.update_min_d \
+            or abs(wrap1(odom[2] - old[2])) > self.params.update_min_a
+        if moved or self._force_update:
+            t0 = time.perf_counter()
+            self.pf.predict(old, odom)
+            self.pf.update(self.beams(scan, self.params.max_beams), scan.range_max)
+            self.status.updates += 1
+            self.estimate = est = self.pf.estimate()
+            if self.status.updates % self.params.resample_interval == 0:
+                self.pf.resample()
+            self.map_to_odom = compose(tuple(est.pose), inverse(odom))
+            self._odom_at_update = odom
+            self._force_update = False
+            dt = time.perf_counter() - t0
+            self.update_times.append(dt)
+            self.status.last_update_ms = dt * 1000
+            updated = True
+        self._check_health(scan, odom)
+        return updated
+
+    # -- outputs -------------------------------------------------------------------------------
+    def pose(self, odom=None):
+        """The base pose (x, y, yaw) in the map frame at odometry pose ``odom`` (the
+        newest one when None)."""
+        if odom is None:
+            odom = self._last_odom or self._odom_at_update or (0.0, 0.0, 0.0)
+        return compose(self.map_to_odom, tuple(odom))
+
+    def covariance(self) -> np.ndarray:
+        return self.estimate.cov if self.estimate is not None else np.diag([1e3, 1e3, 1e3])
+
+    def match_score(self, scan: Scan, pose) -> float:
+        """The share of valid beams ending within inlier_dist of an obstacle, seen from
+        ``pose`` (map frame)."""
+        xy = self.beams(scan, None)
+        if len(xy) == 0:
+            return 0.0
+        d = self.pf.field.beam_distances(np.asarray([pose], float), xy)[0]
+        return float(np.mean(d < self.params.inlier_dist))
+
+    # -- health ----------------------------------------------------------------------------------
+    def _check_health(self, scan: Scan, odom) -> None:
+        p, st = self.params, self.status
+        st.particles = len(self.pf.particles)
+        if np.count_nonzero(scan.valid()) < p.min_beams:
+            return                      # too little to judge by (a blocked or empty view)
+        score = self.match_score(scan, self.pose(odom))
+        a = p.score_smoothing
+        st.score = score if st.updates <= 1 and st.score == 0 else (1 - a) * st.score + a * score
+        if st.state == LOCALISED:
+            b = p.baseline_smoothing
+            st.baseline = st.score if st.baseline == 0 else (1 - b) * st.baseline + b * st.score
+        est = self.estimate
+        if est is not None:
+            st.std_xy, st.std_yaw, st.clusters = est.std_xy, est.std_yaw, est.clusters
+        now = self.clock()
+        low = st.score < p.lost_score or st.score < p.lost_drop * st.baseline
+        self._low_scans = self._low_scans + 1 if low else 0
+        if self._low_scans >= p.lost_scans and now >= self._grace_until:
+            st.state = LOST
+            st.last_lost = now
+            st.lost_count += 1
+            if p.auto_recover:
+                st.recoveries += 1
+                self.global_localisation(informed=p.recovery == "informed", keep_share=p.keep_share)
+            return
+        if st.state in (UNCERTAIN, LOCALISED):
+            converged = est is not None and st.score >= p.ok_score \
+                and est.std_xy <= p.converged_std_xy and est.std_yaw <= p.converged_std_yaw \
+                and est.weight >= p.converged_weight
+            st.state = LOCALISED if converged else UNCERTAIN
