@@ -164,3 +164,13 @@ def test_a_user_file_error_is_one_line_from_the_command(project):
     assert done.stdout == ""
     assert done.stderr.count("\n") == 1 and "Traceback" not in done.stderr, done.stderr
     assert "unknown category 'juice'" in done.stderr
+
+
+def test_a_reader_that_stops_early_is_no_error(project):
+    env = {**os.environ, "PYTHONPATH": str(REPO)}
+    proc = subprocess.Popen([sys.executable, "-m", "bt_engine.cli.main", "--config", str(project / "actorbt.yaml"),
+                             "catalog", "--json"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env, cwd=project)
+    proc.stdout.close()  # as `| head` does when it has read enough, here before any output
+    err = proc.stderr.read().decode()
+    assert proc.wait(timeout=60) == 0
+    assert "Traceback" not in err and "BrokenPipe" not in err

@@ -13,6 +13,7 @@ import argparse
 import importlib
 import json
 import logging
+import os
 import pprint
 import sys
 from typing import Callable
@@ -280,6 +281,9 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("actorbt: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:  # the reader went away (`actorbt catalog --json | head`): not an error
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # no second error at exit
+        return 0
 
 
 if __name__ == "__main__":
