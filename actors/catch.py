@@ -51,6 +51,17 @@ def _target_xy(target: Any) -> tuple[float, float]:
         raise ActorbtError(f"a target needs numeric 'x' and 'y' (map frame), got {target!r}") from None
 
 
+def _holds(strategy: Strategy, grip: dict) -> bool:
+    """Does a gripper result (Manipulator.close) mean the object is held? The fingers
+    stalled on something, at a width that fits the category."""
+    return bool(grip["stalled"]) and strategy.holding(grip["width"])
+
+
+def _grip_text(grip: dict) -> str:
+    how = "stalled" if grip["stalled"] else "closed" if grip["reached_goal"] else "stopped"
+    return f"fingers {how} at {grip['width'] * 1000:.0f} mm"
+
+
 class Catcher(SubSystem):
     """Per-category approach, pick and place."""
 
@@ -201,37 +212,39 @@ class Catcher(SubSystem):
         self.run_actor("move_to_pose", a.reach, 0.0, height, g.pitch)
         distance = self._face(xy, strategy)
         driven = self.run_actor("mini_walk", distance - a.reach, tolerance=DRIVE_IN_TOLERANCE)
-        width = self.run_actor("close")
-        if not strategy.holding(width):
+        grip = self.run_actor("close")
+        if not _holds(strategy, grip):
             self._back_off(driven, g.open_width)
-            raise GraspError(f"{strategy.category} grasp missed: fingers closed to "
-                             f"{width * 1000:.0f} mm, expected {g.closed_min * 1000:.0f}.."
+            raise GraspError(f"{strategy.category} grasp missed: {_grip_text(grip)}, expected "
+                             f"them to stall on it at {g.closed_min * 1000:.0f}.."
                              f"{g.closed_max * 1000:.0f} mm")
-        # Test lift: a slip shows in the finger opening, and the object drops only a little
-        # (a can dropped from the full lift height may fall over).
+        # Test lift: a slip shows when the fingers close again, and the object drops only
+        # a little (a can dropped from the full lift height may fall over).
         for x, z in ((a.reach, height + TEST_LIFT), (a.reach - 0.02, height + g.lift)):
             self.run_actor("move_to_pose", x, 0.0, z, g.pitch)
-            width = self.run_actor("gripper_width")
-            if not strategy.holding(width):
+            grip = self.run_actor("grip_check")
+            if not _holds(strategy, grip):
                 self._back_off(driven, g.open_width)
                 raise GraspError(f"{strategy.category} slipped out while lifting "
-                                 f"(fingers at {width * 1000:.0f} mm)")
-        held = {"category": strategy.category, "width": width}
+                                 f"({_grip_text(grip)})")
+        held = {"category": strategy.category, "width": grip["width"]}
         self.set_value("holding", held)
         return held
 
     @actor
-    def gripper_width(self) -> float:
-        """The finger opening now [m]."""
-        return float(self.run_actor("get_status")["gripper"])
+    def grip_check(self) -> dict:
+        """Close the gripper again and return the controller's result (see ``close``):
+        it stalls on what the fingers hold, and reaches the closed end when they are empty."""
+        return self.run_actor("close")
 
     @actor
     def verify_grasp(self) -> bool:
-        """True while the gripper holds what the last pick took (by finger opening)."""
+        """True while the gripper holds what the last pick took: closing the gripper
+        again, the fingers stall at a width that fits the object."""
         held = self.get_value("holding")
         if not held:
             return False
-        return strategy_for(held["category"]).holding(self.run_actor("gripper_width"))
+        return _holds(strategy_for(held["category"]), self.run_actor("grip_check"))
 
     def _back_off(self, distance: float, open_width: float) -> None:
         self.run_actor("open", open_width)

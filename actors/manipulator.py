@@ -1,21 +1,27 @@
-"""The arm and gripper as actors: plan with OMPL, time with ruckig, execute on topics.
+"""The arm and gripper as actors: plan with OMPL, time with ruckig, execute through the
+robot's ros2_control controllers' actions.
 
-Execution publishes the timed trajectory on ``/arm_controller/joint_trajectory`` and
-follows ``/joint_states`` until the arm converges or a deadline passes. Cancelling a
-motion sends a jerk-limited stop computed with ruckig, not a freeze.
+The arm moves through ``/arm_controller/follow_joint_trajectory``
+(control_msgs/FollowJointTrajectory): the timed trajectory is the goal, with a goal
+tolerance per joint and a time to settle, and the controller's result says whether the
+arm got there. Cancelling a motion cancels the goal; the controller brings the arm to
+rest. The gripper moves through ``/gripper_controller/gripper_cmd``
+(control_msgs/GripperCommand): its result's ``stalled`` and ``position`` tell a grasp on
+something from fingers that closed on nothing.
 """
 from __future__ import annotations
 
 import math
 from typing import Any
 
+from control_msgs.action import FollowJointTrajectory, GripperCommand
+from control_msgs.msg import JointTolerance
 from sensor_msgs.msg import JointState
-from std_msgs.msg import Float64
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
-from bt_engine import ActorbtError, Cancelled, SubSystem, actor
+from bt_engine import ActorbtError, ActorTimeout, SubSystem, actor
 from planning import (ArmKinematics, JointLimits, MotionPlan, PlanningScene, TimedTrajectory,
-                      plan_joint_motion, plan_pose_motion, stop_trajectory, time_trajectory)
+                      plan_joint_motion, plan_pose_motion, time_trajectory)
 
 from .ros_conv import duration_msg, named
 
@@ -24,9 +30,47 @@ HOME = (0.0, -1.05, 0.35, 0.70)
 GRIPPER_OPEN = 0.085    # finger opening [m]
 GRIPPER_CLOSED = 0.0
 FINGERS = ("gripper_left_joint", "gripper_right_joint")
-SAMPLE_DT = 0.02        # spacing of published trajectory points [s]
-CONVERGED = 0.01        # joint position tolerance at the end of a motion [rad]
+SAMPLE_DT = 0.02        # spacing of the trajectory's points [s]
+CONVERGED = 0.01        # goal tolerance of each joint at the end of a motion [rad]
 SETTLE_TIME = 2.0       # how long past the trajectory's end the arm may take to settle [s]
+GRIPPER_TIMEOUT = 5.0   # how long a gripper command may take to end [s]
+ARM_ACTION = "/arm_controller/follow_joint_trajectory"
+GRIPPER_ACTION = "/gripper_controller/gripper_cmd"
+
+#: The gripper controller's position scale [m] (the OpenManipulator-X's gripper_left_joint:
+#: -0.010 closed .. 0.019 open) and the finger opening it spans on this robot [m]: the
+#: simulated robot's widened gripper opens 0 .. 90 mm over that range (sim/actuators.py,
+#: ``gripper_opening``, is the definition; tests/test_sim_controllers.py keeps the two
+#: equal). A real OpenManipulator-X would be calibrated here.
+GRIPPER_POSITIONS = (-0.010, 0.019)
+GRIPPER_OPENINGS = (0.0, 0.090)
+
+
+def gripper_command_position(width: float) -> float:
+    """The gripper controller's position [m] for a finger opening ``width`` [m]."""
+    (p0, p1), (w0, w1) = GRIPPER_POSITIONS, GRIPPER_OPENINGS
+    f = min(max((width - w0) / (w1 - w0), 0.0), 1.0)
+    return p0 + f * (p1 - p0)
+
+
+def gripper_width(position: float) -> float:
+    """The finger opening [m] at a gripper controller position [m]."""
+    (p0, p1), (w0, w1) = GRIPPER_POSITIONS, GRIPPER_OPENINGS
+    f = min(max((position - p0) / (p1 - p0), 0.0), 1.0)
+    return w0 + f * (w1 - w0)
+
+
+def goal_result(error: BaseException) -> Any:
+    """The result an action goal ended with, from a failed call's exception chain (an
+    aborted or canceled goal fails the call with it), or None."""
+    seen = set()
+    while error is not None and id(error) not in seen:
+        seen.add(id(error))
+        result = getattr(error, "result", None)
+        if result is not None and hasattr(result, "get_fields_and_field_types"):
+            return result
+        error = error.__cause__ or error.__context__
+    return None
 
 
 class MotionError(ActorbtError):
@@ -48,25 +92,26 @@ class Manipulator(SubSystem):
         self.limits = JointLimits.from_kinematics(
             self.kinematics, acceleration=acceleration, jerk=jerk, velocity_scale=velocity_scale)
         self.joints = tuple(self.kinematics.joint_names)
-        self.register_publisher("arm_command", JointTrajectory, "/arm_controller/joint_trajectory")
-        self.register_publisher("gripper_command", Float64, "/gripper/command")
+        self.register_action("follow_joint_trajectory", FollowJointTrajectory, ARM_ACTION)
+        self.register_action("gripper_cmd", GripperCommand, GRIPPER_ACTION)
         self.register_subscriber("joint_states", JointState, "/joint_states", 1)
         self.set_value("last_plan", None)
+        self.set_value("gripper", None)
 
     # -- state -------------------------------------------------------------------------
-    def _state(self) -> tuple[list[float], list[float], float]:
+    def _state(self) -> tuple[list[float], list[float]]:
         msg = self.run_actor("joint_states")
         q = named(msg.name, msg.position, self.joints)
         qd = named(msg.name, msg.velocity, self.joints)
-        width = sum(named(msg.name, msg.position, FINGERS))
-        return q, qd, width
+        return q, qd
 
     @actor
     def get_status(self) -> dict:
-        """Current arm joints [rad], joint speeds [rad/s], gripper opening [m] and tool pose."""
-        q, qd, width = self._state()
+        """Current arm joints [rad], joint speeds [rad/s], tool pose, and the gripper as its
+        last command left it (see ``close``; None before the first)."""
+        q, qd = self._state()
         pose = self.kinematics.fk_pose(q)
-        return {"joints": q, "velocities": qd, "gripper": width,
+        return {"joints": q, "velocities": qd, "gripper": self.get_value("gripper"),
                 "pose": {"x": pose.x, "y": pose.y, "z": pose.z, "pitch": pose.pitch}}
 
     # -- motions -----------------------------------------------------------------------
@@ -84,7 +129,7 @@ class Manipulator(SubSystem):
         """
         if len(q) != len(self.joints):
             raise MotionError(f"move_joint needs {len(self.joints)} joint values, got {len(q)}")
-        start, _, _ = self._state()
+        start, _ = self._state()
         return self._run_plan(plan_joint_motion(start, q, self.scene))
 
     @actor
@@ -103,7 +148,7 @@ class Manipulator(SubSystem):
         Args:
             *delta_deg: the change of each of the four joints, joint1 to joint4 [deg]
         """
-        q, _, _ = self._state()
+        q, _ = self._state()
         if len(delta_deg) != len(q):
             raise MotionError(f"adjust_joint needs {len(q)} deltas, got {len(delta_deg)}")
         return self.run_actor("move_joint", *(a + math.radians(d) for a, d in zip(q, delta_deg)))
@@ -119,12 +164,12 @@ class Manipulator(SubSystem):
             z: tool height above the floor [m]
             pitch: tool angle below the horizontal; pi/2 points straight down [rad]
         """
-        start, _, _ = self._state()
+        start, _ = self._state()
         return self._run_plan(plan_pose_motion(start, (x, y, z, pitch), self.scene))
 
     @actor
-    def open(self, width: float = GRIPPER_OPEN) -> float:
-        """Open the gripper to ``width`` [m]; returns the opening reached [m].
+    def open(self, width: float = GRIPPER_OPEN) -> dict:
+        """Open the gripper to ``width`` [m]; returns the gripper's state as ``close`` does.
 
         Args:
             width: finger opening to reach [m]
@@ -132,8 +177,11 @@ class Manipulator(SubSystem):
         return self._gripper(width)
 
     @actor
-    def close(self, width: float = GRIPPER_CLOSED) -> float:
-        """Close the gripper (on an object it stops at the object's width); returns the opening [m].
+    def close(self, width: float = GRIPPER_CLOSED) -> dict:
+        """Close the gripper; on an object the fingers stall at its width. Returns the
+        controller's result: ``width`` (the finger opening) [m], ``position`` (on the
+        controller's scale) [m], ``effort`` [N], ``stalled`` (stopped short of ``width``:
+        something is between the fingers) and ``reached_goal``.
 
         Args:
             width: finger opening to close to; 0 closes fully [m]
@@ -141,16 +189,24 @@ class Manipulator(SubSystem):
         return self._gripper(width)
 
     # -- execution ---------------------------------------------------------------------
-    def _gripper(self, width: float) -> float:
-        self.run_actor("gripper_command", Float64(data=float(width)))
-        last = None
-        for _ in range(40):  # settle: the opening stops changing (or reaches the target)
-            self.run_actor("sleep", 0.05)
-            _, _, w = self._state()
-            if last is not None and abs(w - last) < 2e-4:
-                break
-            last = w
-        return self._state()[2]
+    def _gripper(self, width: float) -> dict:
+        goal = GripperCommand.Goal()
+        goal.command.position = gripper_command_position(float(width))
+        try:
+            result = self.run_actor_mode("gripper_cmd", "timed", GRIPPER_TIMEOUT, goal)
+        except ActorTimeout as e:   # the goal is canceled: the fingers hold where they are
+            raise MotionError(f"the gripper did not settle within {GRIPPER_TIMEOUT:g} s") from e
+        except ActorbtError as e:
+            # the controller aborts a goal on which the fingers stalled (allow_stalling
+            # false, as on the TurtleBot3): a grasp, which its result reports
+            result = goal_result(e)
+            if result is None or not result.stalled:
+                raise
+        state = {"width": gripper_width(result.position), "position": float(result.position),
+                 "effort": float(result.effort), "stalled": bool(result.stalled),
+                 "reached_goal": bool(result.reached_goal)}
+        self.set_value("gripper", state)
+        return state
 
     def _run_plan(self, plan: MotionPlan) -> list[float]:
         self.set_value("last_plan", plan)
@@ -159,7 +215,7 @@ class Manipulator(SubSystem):
         traj = time_trajectory(plan.path, self.limits)
         return self._execute(traj)
 
-    def _publish(self, traj: TimedTrajectory) -> None:
+    def _trajectory_msg(self, traj: TimedTrajectory) -> JointTrajectory:
         sampled = traj.sample(SAMPLE_DT)
         msg = JointTrajectory()
         msg.joint_names = list(self.joints)
@@ -169,35 +225,24 @@ class Manipulator(SubSystem):
             pt.velocities = [float(a) for a in v]
             pt.time_from_start = duration_msg(float(t))
             msg.points.append(pt)
-        self.run_actor("arm_command", msg)
+        msg.points[-1].velocities = [0.0] * len(self.joints)   # the controller wants it at rest
+        return msg
 
     def _execute(self, traj: TimedTrajectory) -> list[float]:
-        rt = self.runtime
-        goal = traj.final_position
-        t0 = rt.now()
-        self._publish(traj)
+        goal = FollowJointTrajectory.Goal()
+        goal.trajectory = self._trajectory_msg(traj)
+        goal.goal_tolerance = [JointTolerance(name=j, position=CONVERGED) for j in self.joints]
+        goal.goal_time_tolerance = duration_msg(SETTLE_TIME)
         try:
-            deadline = t0 + traj.duration + SETTLE_TIME
-            with self.run_actor_mode("joint_states", "iterator") as states:
-                for msg in states:
-                    q = named(msg.name, msg.position, self.joints)
-                    err = max(abs(a - b) for a, b in zip(q, goal))
-                    if rt.now() - t0 >= traj.duration and err < CONVERGED:
-                        return q
-                    if rt.now() > deadline:
-                        raise MotionError(f"arm did not converge: {err:.4f} rad from the goal "
-                                          f"{SETTLE_TIME} s after the trajectory ended")
-        except Cancelled:
-            self._stop_along(traj, rt.now() - t0)
-            raise
-        raise MotionError("joint states stopped arriving")
-
-    def _stop_along(self, traj: TimedTrajectory, elapsed: float) -> None:
-        """Replace the running trajectory by ruckig's jerk-limited stop from its current state."""
-        if elapsed >= traj.duration:
-            return
-        q, qd, qdd = traj.at(max(0.0, elapsed))
-        self._publish(stop_trajectory(q, qd, qdd, self.limits))
+            self.run_actor("follow_joint_trajectory", goal)
+        except ActorbtError as e:
+            result = goal_result(e)
+            if result is None:
+                raise
+            raise MotionError(f"the arm did not reach its goal: {result.error_string} "
+                              f"(error_code {result.error_code})") from e
+        q, _ = self._state()
+        return q
 
     def _last_plan(self) -> Any:
         return self.get_value("last_plan")

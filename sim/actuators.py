@@ -1,28 +1,53 @@
-"""Arm trajectory tracking: JointTrajectory points interpolated over time_from_start.
+"""The arm's trajectories and the gripper's position scale: the controllers' arithmetic.
 
-Like ros2_control's joint_trajectory_controller: a new trajectory replaces the old one from
-its start time; the segment before the first point starts at the current position; cubic
-Hermite interpolation where both ends of a segment carry velocities, linear otherwise; after
-the last point the last positions are held.
+Arm (``joint_trajectory_controller``): trajectory_msgs/JointTrajectory points interpolated
+over time_from_start. A new trajectory replaces the old one from its start time; the
+segment before the first point starts at the state the caller gives (the controller passes
+the running trajectory's desired state: ``open_loop_control`` as on the TurtleBot3); cubic
+Hermite interpolation where both ends of a segment carry velocities, linear otherwise;
+after the last point the last positions are held. :func:`trajectory_from_msg` validates a
+message as the controller does and says why it refuses one (:class:`TrajectoryError`,
+with the FollowJointTrajectory error code). :func:`stop_trajectory` is the smooth stop
+the simulated controller makes on a cancel.
+
+Gripper (``gripper_action_controller``): the one place that maps the real
+OpenManipulator-X's gripper position onto the simulated fingers, see
+:func:`gripper_opening`.
 """
 from __future__ import annotations
 
 import bisect
+import math
+
+from .robot import GRIPPER_MAX_OPENING
+
+#: control_msgs/action/FollowJointTrajectory Result error codes (the subset validation gives)
+INVALID_GOAL = -1
+INVALID_JOINTS = -2
+OLD_HEADER_TIMESTAMP = -3
 
 
 class TrajectoryError(ValueError):
-    pass
+    """A trajectory the controller refuses; ``code`` is the FollowJointTrajectory
+    error_code that says why (INVALID_GOAL, INVALID_JOINTS, OLD_HEADER_TIMESTAMP)."""
+
+    def __init__(self, message: str, code: int = INVALID_GOAL):
+        super().__init__(message)
+        self.code = code
 
 
 class ArmTrajectory:
-    def __init__(self, joint_names, start_time, start_positions, points):
+    def __init__(self, joint_names, start_time, start_positions, points, start_velocities=None):
         """joint_names: the arm joints, in the robot's order.
-        points: list of (t_from_start, {name: pos}, {name: vel} or None), t increasing."""
+        start_positions / start_velocities: the state the first segment starts from
+        (velocities None: at rest, and the first segment is linear unless its end has
+        velocities). points: list of (t_from_start, {name: pos}, {name: vel} or None),
+        t increasing."""
         self.names = list(joint_names)
         self.t0 = start_time
         self.times = [0.0]
         self.pos = [list(start_positions)]
-        self.vel = [[0.0] * len(self.names)]
+        self.vel = [list(start_velocities) if start_velocities is not None else [0.0] * len(self.names)]
         have_vel = [True]
         for t, pos, vel in points:
             if t < self.times[-1] or (t == self.times[-1] and len(self.times) > 1):
@@ -42,6 +67,10 @@ class ArmTrajectory:
     @property
     def end_time(self):
         return self.t0 + self.times[-1]
+
+    @property
+    def final_positions(self):
+        return list(self.pos[-1])
 
     def sample(self, now):
         """(positions, velocities) at absolute time ``now``."""
@@ -69,28 +98,107 @@ class ArmTrajectory:
         return pos, vel
 
 
+def stop_trajectory(joint_names, now, positions, velocities, deceleration):
+    """Come to rest from (positions, velocities) at ``now`` with every joint decelerating
+    uniformly, all ending together after ``max |v| / deceleration`` seconds: the velocity
+    ramps down linearly (a cubic Hermite segment with the end velocity 0 is exactly that)."""
+    duration = max((abs(v) for v in velocities), default=0.0) / deceleration
+    if duration < 1e-3:
+        return ArmTrajectory(joint_names, now, positions, [])
+    end = {n: p + v * duration / 2 for n, p, v in zip(joint_names, positions, velocities)}
+    return ArmTrajectory(joint_names, now, positions, [(duration, end, {n: 0.0 for n in joint_names})],
+                         start_velocities=velocities)
+
+
 def duration_to_sec(d) -> float:
     return float(d.sec) + float(d.nanosec) * 1e-9
 
 
-def trajectory_from_msg(msg, arm_names, now, current_positions):
-    """Build an ArmTrajectory from a trajectory_msgs/JointTrajectory."""
+def trajectory_from_msg(msg, arm_names, now, start_positions, start_velocities=None, *,
+                        allow_partial=False):
+    """Build an ArmTrajectory from a trajectory_msgs/JointTrajectory, or raise
+    :class:`TrajectoryError` for what joint_trajectory_controller refuses: no joint
+    names, a joint named twice or not the arm's, only some of the arm's joints (unless
+    ``allow_partial``), no points, a point whose sizes do not match the joints or that
+    holds a NaN, times that do not increase, a last point with a velocity, a header stamp
+    so old that the whole trajectory lies in the past."""
     names = list(msg.joint_names)
+    if not names:
+        raise TrajectoryError("empty joint names on incoming trajectory", INVALID_JOINTS)
+    if len(set(names)) != len(names):
+        raise TrajectoryError(f"joints named twice on incoming trajectory: {names}", INVALID_JOINTS)
     unknown = [n for n in names if n not in arm_names]
     if unknown:
-        raise TrajectoryError(f"unknown joints {unknown} (arm joints: {list(arm_names)})")
+        raise TrajectoryError(f"incoming joints {unknown} are not the controller's "
+                              f"(arm joints: {list(arm_names)})", INVALID_JOINTS)
+    if not allow_partial and len(names) != len(arm_names):
+        missing = [n for n in arm_names if n not in names]
+        raise TrajectoryError(f"the trajectory leaves out joints {missing}; this controller "
+                              "takes all of its joints (allow_partial_joints_goal false)", INVALID_JOINTS)
     if not msg.points:
-        raise TrajectoryError("trajectory has no points")
+        raise TrajectoryError("empty trajectory: no points")
     pts = []
+    last_t = -1.0
     for i, pt in enumerate(msg.points):
         if len(pt.positions) != len(names):
             raise TrajectoryError(f"point {i}: {len(pt.positions)} positions for {len(names)} joints")
-        vel = None
-        if len(pt.velocities):
-            if len(pt.velocities) != len(names):
-                raise TrajectoryError(f"point {i}: {len(pt.velocities)} velocities for {len(names)} joints")
-            vel = dict(zip(names, pt.velocities))
-        pts.append((duration_to_sec(pt.time_from_start), dict(zip(names, pt.positions)), vel))
+        if any(not math.isfinite(x) for x in pt.positions):
+            raise TrajectoryError(f"point {i}: a position is not a number")
+        for field in ("velocities", "accelerations"):
+            n = len(getattr(pt, field))
+            if n and n != len(names):
+                raise TrajectoryError(f"point {i}: {n} {field} for {len(names)} joints")
+        t = duration_to_sec(pt.time_from_start)
+        if t < 0.0 or (t <= last_t):
+            raise TrajectoryError(f"time_from_start of point {i} ({t:g} s) does not increase "
+                                  f"from the point before ({last_t:g} s)" if i else
+                                  f"time_from_start of point 0 is negative ({t:g} s)")
+        last_t = t
+        vel = dict(zip(names, pt.velocities)) if len(pt.velocities) else None
+        pts.append((t, dict(zip(names, pt.positions)), vel))
+    last = msg.points[-1]
+    if any(v != 0.0 for v in last.velocities):
+        raise TrajectoryError("the velocity of the last trajectory point is not zero")
     stamp = float(msg.header.stamp.sec) + float(msg.header.stamp.nanosec) * 1e-9
+    if stamp > 0.0 and stamp + last_t < now:
+        raise TrajectoryError(f"the trajectory (header stamp {stamp:.3f} s) ended "
+                              f"{now - stamp - last_t:.3f} s ago", OLD_HEADER_TIMESTAMP)
     start = stamp if stamp > now else now
-    return ArmTrajectory(arm_names, start, current_positions, pts)
+    return ArmTrajectory(arm_names, start, start_positions, pts, start_velocities)
+
+
+# ---------------------------------------------------------------------------- gripper
+#: The OpenManipulator-X's gripper as its ros2_control ``gripper_controller`` takes it
+#: (``/gripper_controller/gripper_cmd``, joint ``gripper_left_joint``): position [m] from
+#: closed to open, the real robot's joint range.
+GRIPPER_POSITION_CLOSED = -0.010
+GRIPPER_POSITION_OPEN = 0.019
+
+
+def gripper_opening(position: float) -> float:
+    """The simulated fingers' opening [m] (gap between their inner faces, = the sum of
+    gripper_left_joint and gripper_right_joint in /joint_states) for a gripper
+    controller ``position`` [m].
+
+    This is the only place the two scales meet. The simulated gripper is wider than the
+    real one (each finger strokes 0..45 mm, see sim/models/build_urdf.py), so the real
+    robot's position range GRIPPER_POSITION_CLOSED .. GRIPPER_POSITION_OPEN
+    (-0.010 .. 0.019, 29 mm) is stretched linearly onto the opening 0 .. 0.090 m:
+
+        opening = (position + 0.010) / 0.029 * 0.090      (about 3.1 mm of opening per mm)
+
+    Monotonic (increasing); positions outside the range clamp to the stroke's ends."""
+    span = GRIPPER_POSITION_OPEN - GRIPPER_POSITION_CLOSED
+    f = (position - GRIPPER_POSITION_CLOSED) / span
+    return min(max(f, 0.0), 1.0) * GRIPPER_MAX_OPENING
+
+
+def gripper_position(opening: float) -> float:
+    """Inverse of :func:`gripper_opening`: the controller position [m] of an opening [m]."""
+    f = min(max(opening / GRIPPER_MAX_OPENING, 0.0), 1.0)
+    return GRIPPER_POSITION_CLOSED + f * (GRIPPER_POSITION_OPEN - GRIPPER_POSITION_CLOSED)
+
+
+def gripper_speed(opening_rate: float) -> float:
+    """A rate of the opening [m/s] on the controller's position scale [m/s]."""
+    return opening_rate * (GRIPPER_POSITION_OPEN - GRIPPER_POSITION_CLOSED) / GRIPPER_MAX_OPENING

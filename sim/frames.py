@@ -1,11 +1,11 @@
-"""The robot's coordinate frames, as /tf and /tf_static will carry them.
+"""The robot's coordinate frames, as /tf and /tf_static carry them (REP 105).
 
     map --(a localiser)--> odom --(wheel odometry)--> base_footprint --(URDF)--> base_link
         base_link -> base_scan (lidar), camera_link -> camera_optical_frame,
         wheel_*_link, caster_*, link1 -> link2 .. link5 -> gripper_*_link, end_effector_link
 
-Nothing is published yet (tf2_msgs is being built); this module already gives each edge as
-a :class:`Transform`, from the same sources the topics use, so publishing is a wrapper:
+This module gives each edge as a :class:`Transform`, from the same sources the topics use;
+sim/topics.py wraps them in tf2_msgs/TFMessage (the simulator never publishes map -> odom):
 
 * :func:`static_transforms`: every fixed joint of the URDF (robot_state_publisher's
   /tf_static);

@@ -250,9 +250,21 @@ class SimWorld:
         self._last_cmd_vel = self.now()
         self.robot.set_base_velocity(v, w)
 
+    @property
+    def arm_trajectory(self):
+        """The arm's running :class:`~sim.actuators.ArmTrajectory` (None before the first)."""
+        return self._traj
+
+    def set_arm_trajectory(self, traj):
+        """Hub code (the arm controller): make ``traj`` the arm's trajectory now."""
+        self._traj = traj
+
     @_on_hub
     def apply_joint_trajectory(self, msg):
-        """trajectory_msgs/JointTrajectory for the arm joints (subset allowed)."""
+        """trajectory_msgs/JointTrajectory for joint1..joint4, as if it came on
+        /arm_controller/joint_trajectory; False (and a warning) when refused."""
+        if self.topics is not None:
+            return self.topics.arm.on_trajectory(msg)
         try:
             self._traj = trajectory_from_msg(msg, ARM, self.now(), self.robot.arm_positions())
         except TrajectoryError as e:
@@ -276,7 +288,9 @@ class SimWorld:
 
     @_on_hub
     def set_gripper(self, width: float):
-        """Finger opening in metres (0 closed .. 0.09 open); fingers push with 10 N each."""
+        """Finger opening in metres (0 closed .. 0.09 open); fingers push with 10 N each.
+        (The robot's interface is the gripper action on the controller's position scale,
+        sim/controllers.py; this sets the simulated fingers directly.)"""
         self.robot.set_gripper(width)
 
     # ------------------------------------------------------------------ ground truth

@@ -1,14 +1,25 @@
-"""The simulator's ROS topics on the runtime's bus (real ROS 2 message classes).
+"""The simulator's ROS interfaces on the runtime's bus (real ROS 2 message classes): what
+a TurtleBot3 Waffle Pi with an OpenManipulator-X offers (turtlebot3_node, the LDS-01 and
+camera drivers, ros2_control's controllers, robot_state_publisher).
 
 Subscribed (actuators):
   /cmd_vel                          geometry_msgs/Twist       linear.x, angular.z; TB3 limits
   /arm_controller/joint_trajectory  trajectory_msgs/JointTrajectory  joint1..joint4
-  /gripper/command                  std_msgs/Float64          finger opening [m], 0 .. 0.09
+Actions served (sim/controllers.py, ros2_control's controllers):
+  /arm_controller/follow_joint_trajectory  control_msgs/FollowJointTrajectory  joint1..joint4
+  /gripper_controller/gripper_cmd          control_msgs/GripperCommand  position -0.010
+                                            (closed) .. 0.019 (open) [m], stalled / reached_goal
 Published (sensors):
   /scan                             sensor_msgs/LaserScan     LDS-01, base_scan, 360 beams, 5 Hz;
                                                               sensor-data QoS (best effort)
   /odom                             nav_msgs/Odometry         wheel odometry with a TurtleBot3's
                                                               errors, odom -> base_footprint
+  /tf                               tf2_msgs/TFMessage        odom -> base_footprint (the same
+                                                              odometry) and the movable joints
+                                                              (wheels, arm, fingers), with /odom
+  /tf_static                        tf2_msgs/TFMessage        the URDF's fixed joints; latched:
+                                                              sent again whenever the subscriber
+                                                              count grows
   /ground_truth/pose                geometry_msgs/PoseStamped map -> base_footprint, exact; only
                                                               with SimWorld(debug_ground_truth=True)
   /joint_states                     sensor_msgs/JointState    wheels, arm, fingers
@@ -19,7 +30,7 @@ Published (sensors):
                                                               count grows and every 2 s while
                                                               subscribed (a latched topic's stand-in)
 State topics go out only while subscribed; the lidar casts and the camera renders only
-while subscribed. (/tf is next: sim/frames.py already gives every edge of the tree.)
+while subscribed. map -> odom is never published here: that is the localiser's.
 """
 from __future__ import annotations
 
@@ -27,21 +38,22 @@ import array
 import math
 
 from builtin_interfaces.msg import Time
-from geometry_msgs.msg import PoseStamped, Twist
+from geometry_msgs.msg import PoseStamped, TransformStamped, Twist
 from nav_msgs.msg import OccupancyGrid, Odometry
 from sensor_msgs.msg import CameraInfo, Image, JointState, LaserScan
-from std_msgs.msg import Float64
-from trajectory_msgs.msg import JointTrajectory
+from tf2_msgs.msg import TFMessage
 
-from .frames import odom_transform
+from .controllers import ArmController, GripperController
+from .frames import joint_transforms, odom_transform, static_transforms
 from .gridmap import occupancy_grid_msg
 from .lidar import SCAN_FRAME
 from .robot import JOINT_STATE_NAMES
 
 CMD_VEL = "/cmd_vel"
-ARM_TRAJECTORY = "/arm_controller/joint_trajectory"
-GRIPPER_COMMAND = "/gripper/command"
 ODOM = "/odom"
+TF = "/tf"
+TF_STATIC = "/tf_static"
+LATCHED_QOS = "latched"   # reliable, transient local, keep last 1 (robot_state_publisher's /tf_static)
 SCAN = "/scan"
 SENSOR_QOS = "sensor"  # best effort, keep last 5 (rclpy's qos_profile_sensor_data), as the LDS driver
 GROUND_TRUTH = "/ground_truth/pose"
@@ -60,6 +72,18 @@ def stamp(t: float) -> Time:
     return Time(sec=sec, nanosec=nsec)
 
 
+def transform_stamped(tf, t: Time) -> TransformStamped:
+    """A geometry_msgs/TransformStamped of a :class:`sim.frames.Transform`."""
+    msg = TransformStamped()
+    msg.header.stamp = t
+    msg.header.frame_id = tf.parent
+    msg.child_frame_id = tf.child
+    tr, q = msg.transform.translation, msg.transform.rotation
+    tr.x, tr.y, tr.z = (float(x) for x in tf.translation)
+    q.x, q.y, q.z, q.w = (float(x) for x in tf.rotation)
+    return msg
+
+
 class SimTopics:
     def __init__(self, sim, rt):
         self.sim = sim
@@ -73,11 +97,12 @@ class SimTopics:
         self.pub_depth = bus.publisher(DEPTH, Image)
         self.pub_info = bus.publisher(CAMERA_INFO, CameraInfo)
         self.pub_map = bus.publisher(MAP, OccupancyGrid)
-        self.subs = [
-            bus.subscribe(CMD_VEL, Twist, self._on_cmd_vel),
-            bus.subscribe(ARM_TRAJECTORY, JointTrajectory, sim.apply_joint_trajectory),
-            bus.subscribe(GRIPPER_COMMAND, Float64, self._on_gripper),
-        ]
+        self.pub_tf = bus.publisher(TF, TFMessage)
+        self.pub_tf_static = bus.publisher(TF_STATIC, TFMessage, LATCHED_QOS)
+        self.subs = [bus.subscribe(CMD_VEL, Twist, self._on_cmd_vel)]
+        self.arm = ArmController(sim, bus)
+        self.gripper = GripperController(sim, bus)
+        self._static_subs = 0
         self._map_msg = None
         self._map_subs = 0
         self._map_sent = -math.inf
@@ -87,21 +112,24 @@ class SimTopics:
         for s in self.subs:
             s.close()
         self.subs = []
+        self.arm.close()
+        self.gripper.close()
 
     # ---------------- actuators ----------------
     def _on_cmd_vel(self, msg: Twist):
         self.sim.apply_cmd_vel(msg.linear.x, msg.angular.z)
-
-    def _on_gripper(self, msg: Float64):
-        self.sim.set_gripper(msg.data)
 
     # ---------------- sensors ----------------
     def after_step(self):
         sim, count = self.sim, self.bus.subscription_count
         self._ticks += 1
         now = sim.now()
+        st = None
+        if self.arm.active is not None or self.gripper.active is not None:
+            st = sim.robot.joint_states()
+            self.arm.update(now, st)
+            self.gripper.update(now, st)
         if self._ticks % sim.publish_every == 0:
-            st = None
             if count(ODOM):
                 self.pub_odom.publish(self.odom_msg(now))
             if self.pub_gt is not None and count(GROUND_TRUTH):
@@ -109,6 +137,13 @@ class SimTopics:
             if count(JOINT_STATES):
                 st = st or sim.robot.joint_states()
                 self.pub_js.publish(self.joint_state_msg(now, st))
+            if count(TF):
+                st = st or sim.robot.joint_states()
+                self.pub_tf.publish(self.tf_msg(now, st))
+        n = count(TF_STATIC)
+        if n > self._static_subs:       # latched: a new subscriber gets the tree at once
+            self.pub_tf_static.publish(self.tf_static_msg(now))
+        self._static_subs = n
         if self._ticks % sim.scan_every == 0 and count(SCAN):
             self.pub_scan.publish(self.scan_msg(now, sim.scan_now()))
         n = count(MAP)
@@ -139,6 +174,19 @@ class SimTopics:
         msg.pose.covariance = o.pose_covariance()
         msg.twist.covariance = o.twist_covariance()
         return msg
+
+    def tf_msg(self, now, st) -> TFMessage:
+        """odom -> base_footprint from the odometry (as /odom), and the movable joints at
+        their positions in ``st`` (robot_state_publisher's share of /tf)."""
+        t = stamp(now)
+        edges = [odom_transform(self.sim.odometry)]
+        edges += joint_transforms(dict(zip(JOINT_STATE_NAMES, st[0])))
+        return TFMessage(transforms=[transform_stamped(e, t) for e in edges])
+
+    def tf_static_msg(self, now) -> TFMessage:
+        """Every fixed joint of the URDF (robot_state_publisher's /tf_static)."""
+        t = stamp(now)
+        return TFMessage(transforms=[transform_stamped(e, t) for e in static_transforms()])
 
     def scan_msg(self, now, ranges) -> LaserScan:
         m = self.sim.lidar_model

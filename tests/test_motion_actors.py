@@ -1,4 +1,5 @@
-"""Manipulator and navigation actors driving the simulated robot through topics."""
+"""Manipulator and navigation actors driving the simulated robot through its topics and
+its controllers' actions."""
 from __future__ import annotations
 
 import math
@@ -63,8 +64,13 @@ def test_unreachable_pose_is_a_clean_failure(open_floor):
 
 def test_gripper_opens_and_closes(open_floor):
     rt, _ = open_floor
-    assert rt.call("open") == pytest.approx(0.085, abs=0.003)
-    assert rt.call("close") == pytest.approx(0.0, abs=0.003)
+    opened = rt.call("open")
+    assert opened["width"] == pytest.approx(0.085, abs=0.003) and opened["reached_goal"]
+    closed = rt.call("close")                 # on nothing: reaches the closed end
+    assert closed["width"] == pytest.approx(0.0, abs=0.003)
+    assert closed["reached_goal"] and not closed["stalled"]
+    assert closed["position"] == pytest.approx(-0.010, abs=0.001)
+    assert rt.call("get_status")["gripper"] == closed
 
 
 def test_cancelling_a_trajectory_stops_the_arm_smoothly(open_floor):

@@ -1,5 +1,5 @@
-"""The simulated robot through its ROS topics, under the virtual clock, on open_floor:
-driving, turning, arm trajectories, a friction grasp, determinism."""
+"""The simulated robot through its ROS topics (and its gripper action), under the virtual
+clock, on open_floor: driving, turning, arm trajectories, a friction grasp, determinism."""
 from __future__ import annotations
 
 import math
@@ -11,11 +11,13 @@ from builtin_interfaces.msg import Duration
 from geometry_msgs.msg import PoseStamped, Twist
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import JointState
-from std_msgs.msg import Float64
+from control_msgs.action import GripperCommand
+from control_msgs.msg import GripperCommand as GripperCommandMsg
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 from bt_engine import Runtime
 from sim import SimWorld
+from sim.actuators import gripper_position
 
 ARM = ["joint1", "joint2", "joint3", "joint4"]
 
@@ -32,7 +34,8 @@ class Robot:
                      bus.subscribe("/joint_states", JointState, self._keep("js"))]
         self.cmd_vel = bus.publisher("/cmd_vel", Twist)
         self.traj = bus.publisher("/arm_controller/joint_trajectory", JointTrajectory)
-        self.gripper = bus.publisher("/gripper/command", Float64)
+        self.grip_goal = rt.run_on_hub(bus.register_action, rt.root, "_grip", GripperCommand,
+                                       "/gripper_controller/gripper_cmd")
 
     def _keep(self, key):
         def cb(msg):
@@ -61,7 +64,10 @@ class Robot:
         self.sleep(seconds + 0.3)
 
     def grip(self, width, seconds=1.0):
-        self.gripper.publish(Float64(data=float(width)))
+        """Send the gripper to a finger opening [m] and wait ``seconds`` (the goal may end
+        stalled on an object: aborted, which is fine here)."""
+        goal = GripperCommand.Goal(command=GripperCommandMsg(position=gripper_position(width)))
+        self.rt.run_on_hub(lambda: self.rt.start("_grip", goal, on_done=lambda r: None))
         self.sleep(seconds)
 
     def odom(self):

@@ -92,15 +92,41 @@ def build_message(msg_type: type, value: Any, fields: dict[str, Any]) -> Any:
 
 
 def message_signature(first: str, msg_type: type) -> inspect.Signature:
-    """``(first: msg_type = None, *, field=default, ...)`` for a goal or request type."""
+    """``(first: msg_type = None, *, field: type = default, ...)`` for a goal or request
+    type; each field is annotated with its Python type (a nested message's class, ``list``
+    for a sequence), so the catalog can tell its JSON type."""
     P = inspect.Parameter
     params = [P(first, P.POSITIONAL_OR_KEYWORD, default=None, annotation=msg_type)]
     default = msg_type()
     for field in msg_type.get_fields_and_field_types():
         if field == first:
             continue
-        params.append(P(field, P.KEYWORD_ONLY, default=getattr(default, field)))
+        value = getattr(default, field)
+        kind = type(value)
+        annotation = list if isinstance(value, (list, tuple)) or kind.__name__ == "array" else kind
+        params.append(P(field, P.KEYWORD_ONLY, default=value, annotation=annotation))
     return inspect.Signature(params)
+
+
+def message_doc(summary: str, first: str, msg_type: type) -> str:
+    """A client actor's docstring: ``summary`` and an ``Args:`` entry for ``first`` (the
+    whole message) and for each field of ``msg_type`` (a goal or request type)."""
+    lines = [summary, "", "Args:",
+             f"    {first}: the whole message, or a mapping of its fields (fields given as "
+             "keywords override it)"]
+    default = msg_type()
+    for field, ros_type in msg_type.get_fields_and_field_types().items():
+        if field != first:   # a nested message's class is in the catalog's type already
+            nested = hasattr(getattr(default, field), "get_fields_and_field_types")
+            lines.append(f"    {field}: the message's {field}" + ("" if nested else f" ({ros_type})"))
+    return "\n".join(lines)
+
+
+def public_name(cls: type) -> str:
+    """``package.msg.Name`` of a ROS message or action class (without the private
+    module it is defined in)."""
+    module = ".".join(p for p in cls.__module__.split(".") if not p.startswith("_"))
+    return f"{module}.{cls.__name__}"
 
 
 class ServerGoal:
@@ -219,7 +245,7 @@ def local_client_actor(scope: Any, name: str, action_type: type, server: str,
         target.on_goal(goal)
         return cancel
 
-    doc = (f"Send a {action_type.__module__}.{action_type.__name__} goal to action {server} "
-           "and return its result.")
+    doc = message_doc(f"Send a {public_name(action_type)} goal to action {server} and return "
+                      "its result.", "goal", action_type.Goal)
     return scope.add_actor(name, send, Kind.ASYNC, doc=doc, hub_only=True,
                            signature=message_signature("goal", action_type.Goal))
