@@ -4,6 +4,7 @@
     actorbt sim snapshot --world house --seed 3 --out world.png [--camera]
     actorbt sim worlds                                           # list the worlds
     actorbt sim run --world house [--seed N] [--bus ros] [--gui] # serve the sim's topics
+    actorbt sim interfaces --world house [--json]                # the topics and actions it offers
 """
 from __future__ import annotations
 
@@ -61,6 +62,18 @@ def register(sub, common) -> None:
                    help="Stop after this many seconds (default: run until Ctrl-C).")
     r.set_defaults(func=cmd_run)
 
+    i = simsub.add_parser(
+        "interfaces", help="the topics, actions and services the simulated robot offers",
+        description="List what the simulated robot offers, with ROS type names: the topics it "
+                    "publishes and subscribes to, the actions and services it serves. The list "
+                    "is read from the bus of the world, started here for a moment, so it is "
+                    "what the world really offers; a real robot should offer the same.")
+    _world_args(i)
+    i.add_argument("--json", action="store_true",
+                   help="Print the interfaces as one JSON object: topics, actions and services, "
+                        "each with its name and type.")
+    i.set_defaults(func=cmd_interfaces)
+
 
 def _world_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--world", default="house", metavar="NAME|FILE",
@@ -116,6 +129,64 @@ def cmd_run(args, app) -> int:
     finally:
         world_only.close(rt)
     return 0
+
+
+def cmd_interfaces(args, app) -> int:
+    """What the world offers, from its bus: the world is started alone (no subsystems, no
+    trees) on the local bus and the virtual clock, listed, and closed."""
+    import json
+    offered = world_interfaces(args, app)
+    if args.json:
+        print(json.dumps(offered, indent=2))
+        return 0
+    print(f"World {offered['world']} (seed {offered['seed']}): what the simulated robot offers, "
+          "as its bus shows it")
+    sections = [
+        ("Topics it publishes", [t for t in offered["topics"] if "publish" in t["direction"]]),
+        ("Topics it subscribes to", [t for t in offered["topics"] if "subscribe" in t["direction"]]),
+        ("Actions it serves", offered["actions"]),
+        ("Services it serves", offered["services"]),
+    ]
+    rows = [row for _, items in sections for row in items]
+    width = max((len(r["name"]) for r in rows), default=0) + 2
+    type_width = max((len(r["type"]) for r in rows), default=0) + 2
+    for title, items in sections:
+        print(f"\n{title}:" if items else f"\n{title}: none")
+        for r in items:
+            qos = r.get("qos", "")
+            print(f"  {r['name']:<{width}}{r['type']:<{type_width if qos else 0}}{qos}".rstrip())
+    return 0
+
+
+def world_interfaces(args, app) -> dict:
+    """``{"world", "seed", "topics": [{"name", "type", "direction", "qos"}], "actions":
+    [{"name", "type"}], "services": [...]}`` of the world ``args`` names, read from the bus
+    of that world started alone on the local bus. ``direction`` is the robot's:
+    ``publishes``, ``subscribes`` or both."""
+    from bt_engine.errors import ActorbtError
+    if args.world == "none":
+        raise ActorbtError("sim interfaces needs a world, e.g. --world house")
+    only = argparse.Namespace(**{**vars(args), "bus": "local", "clock": "virtual", "gui": False})
+    cfg = dataclasses.replace(app.cfg, subsystems={}, trees=None,
+                              simulator=app.cfg.simulator or "sim:start_world")
+    world_only = type(app)(only, cfg)
+    rt = world_only.runtime(clock="virtual", watchdog=None)
+    try:
+        bus = rt.bus
+        topics, actions, services = rt.run_on_hub(
+            lambda: (bus.topics(), bus.actions(), bus.services()))
+    finally:
+        world_only.close(rt)
+    spec = world_only.world_spec()
+
+    def direction(t) -> str:
+        roles = (("publishes", t.publishers), ("subscribes", t.subscribers))
+        return " and ".join(role for role, count in roles if count)
+    return {"world": spec["name"], "seed": int(spec.get("seed", 0)),
+            "topics": [{"name": t.name, "type": t.type, "direction": direction(t), "qos": t.qos}
+                       for t in topics],
+            "actions": [{"name": a.name, "type": a.type} for a in actions],
+            "services": [{"name": s.name, "type": s.type} for s in services]}
 
 
 def _uptime() -> float:

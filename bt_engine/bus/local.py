@@ -9,7 +9,8 @@ from typing import TYPE_CHECKING, Any, Callable
 
 from ..errors import ActorbtError
 from .actions import LocalActionServer, OnGoal, local_client_actor
-from .transport import Transport
+from .messages import type_name
+from .transport import EndpointInfo, TopicInfo, Transport, qos_label
 
 if TYPE_CHECKING:
     from ..hub import Hub
@@ -20,12 +21,16 @@ class TopicTypeError(ActorbtError, TypeError):
 
 
 class _Topic:
-    __slots__ = ("name", "msg_type", "subs")
+    __slots__ = ("name", "msg_type", "subs", "publishers", "qos")
 
     def __init__(self, name: str, msg_type: type) -> None:
         self.name = name
         self.msg_type = msg_type
         self.subs: list[LocalSubscription] = []
+        #: publishers made for it (a local publisher is never closed)
+        self.publishers = 0
+        #: the QoS setting of its first publisher (what a ROS robot would offer)
+        self.qos: Any = None
 
 
 class LocalPublisher:
@@ -89,7 +94,11 @@ class LocalBus(Transport):
         return t
 
     def publisher(self, topic: str, msg_type: type, qos: Any = 10) -> LocalPublisher:
-        return LocalPublisher(self, self._topic(topic, msg_type))
+        t = self._topic(topic, msg_type)
+        if not t.publishers:
+            t.qos = qos
+        t.publishers += 1
+        return LocalPublisher(self, t)
 
     def subscribe(self, topic: str, msg_type: type, callback: Callable[[Any], None],
                   qos: Any = 10) -> LocalSubscription:
@@ -101,6 +110,19 @@ class LocalBus(Transport):
     def subscription_count(self, topic: str) -> int:
         t = self._topics.get(topic)
         return len(t.subs) if t is not None else 0
+
+    def topics(self) -> list[TopicInfo]:
+        """Every topic used in this process: its type, publishers made, live subscribers,
+        and the QoS its first publisher asked for (the local bus delivers every message
+        alike; a ROS robot would offer that QoS)."""
+        return [TopicInfo(t.name, type_name(t.msg_type), t.publishers, len(t.subs),
+                          qos_label(t.qos) if t.publishers else "")
+                for t in sorted(self._topics.values(), key=lambda t: t.name)]
+
+    def actions(self) -> list[EndpointInfo]:
+        """The actions served on this bus."""
+        return [EndpointInfo(name, type_name(server.action_type))
+                for name, server in sorted(self._actions.items())]
 
     def action_server(self, name: str, action_type: type, on_goal: OnGoal) -> LocalActionServer:
         """Serve action ``name`` in this process (one server per name)."""

@@ -6,9 +6,48 @@ default; :mod:`bt_engine.ros.transport` implements the same interface over rclpy
 """
 from __future__ import annotations
 
-from typing import Any, Callable, Protocol
+from typing import Any, Callable, NamedTuple, Protocol
 
 from ..errors import ActorbtError
+
+
+class TopicInfo(NamedTuple):
+    """One topic as a transport sees it (``transport.topics()``)."""
+
+    name: str
+    #: the ROS type name, e.g. ``sensor_msgs/msg/LaserScan``
+    type: str
+    publishers: int
+    subscribers: int
+    #: what the publishers offer, when the transport knows: ``reliable``, ``best effort``,
+    #: with ``, transient local`` for a latched topic; ``""`` when unknown
+    qos: str = ""
+
+
+class EndpointInfo(NamedTuple):
+    """An action or service (``transport.actions()``, ``transport.services()``)."""
+
+    name: str
+    #: the ROS type name, e.g. ``control_msgs/action/FollowJointTrajectory``
+    type: str
+
+
+def qos_label(qos: Any) -> str:
+    """What a QoS setting (see :mod:`bt_engine.bus.qos`) offers: ``reliable`` or ``best
+    effort``, with ``, transient local`` for a latched one."""
+    if isinstance(qos, str):
+        if qos in ("sensor", "sensor_data"):
+            return "best effort"
+        if qos in ("latched", "transient_local"):
+            return "reliable, transient local"
+        return "reliable"
+    if isinstance(qos, int) or qos is None:
+        return "reliable"
+    # an rclpy QoSProfile: read its policies by name (no rclpy import here)
+    reliability = getattr(getattr(qos, "reliability", None), "name", "RELIABLE")
+    durability = getattr(getattr(qos, "durability", None), "name", "VOLATILE")
+    text = "best effort" if reliability == "BEST_EFFORT" else "reliable"
+    return text + (", transient local" if durability == "TRANSIENT_LOCAL" else "")
 
 
 class Publisher(Protocol):
@@ -55,6 +94,19 @@ class Transport:
     def register_service(self, scope: Any, name: str, srv_type: type, server: str) -> Any:
         raise ActorbtError(f"the {self.name} transport has no service clients; "
                            "use the ros transport (transport: ros in actorbt.yaml)")
+
+    def topics(self) -> list[TopicInfo]:
+        """Every topic the transport knows of, by name: with a publisher or a subscriber
+        in this process (local), or anywhere in the discovered graph (ROS)."""
+        raise ActorbtError(f"the {self.name} transport cannot list its topics")
+
+    def actions(self) -> list[EndpointInfo]:
+        """The actions served, by name (on the ROS transport: those discovered)."""
+        return []
+
+    def services(self) -> list[EndpointInfo]:
+        """The services served, by name (on the ROS transport: those discovered)."""
+        return []
 
     def close(self) -> None:
         pass

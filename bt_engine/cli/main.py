@@ -1,6 +1,7 @@
 """The ``actorbt`` command.
 
-Core commands and the tree commands are declared here; ``bt_engine.ros.cli`` and the
+Core commands and the tree commands are declared here, ``topic`` in
+:mod:`bt_engine.cli.topic`; ``bt_engine.ros.cli`` and the
 plugins named in actorbt.yaml add their own (each module has ``register(subparsers,
 common)`` and sets ``func(args, app) -> exit code``). Declaring a command imports nothing
 heavy: a command's implementation is imported when it runs, so ``actorbt --help`` and
@@ -19,6 +20,7 @@ import sys
 from typing import Callable
 
 from ..errors import ActorbtError
+from . import topic
 from .app import App
 from .config import Config, load_config
 
@@ -181,6 +183,7 @@ def build_parser(plugins: list[str]) -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_shell)
 
     _tree_commands(sub)
+    topic.register(sub, _common)
     for mod_name in BUILTIN_EXTENSIONS + plugins:
         try:
             mod = importlib.import_module(mod_name)

@@ -20,7 +20,7 @@ import logging
 import os
 from typing import TYPE_CHECKING, Any, Callable
 
-from ..bus.transport import Transport
+from ..bus.transport import EndpointInfo, TopicInfo, Transport
 from ..modes import Kind
 from ..bus.actions import build_message, message_signature
 from .client import GoalCall, ServerWait, ServiceCall
@@ -129,6 +129,29 @@ class RosTransport(Transport):
         if self.host.closed:
             return 0
         return self.node.count_subscribers(topic)
+
+    # -- the graph (not from the hub: these wait for the executor thread) ----------------
+    def topics(self) -> list[TopicInfo]:
+        """Every visible topic this node has discovered, in every process (see
+        :mod:`bt_engine.ros.graph`); discovery takes a moment after the node starts."""
+        from .graph import topic_infos
+        return self.host.call(topic_infos, self.node)
+
+    def actions(self) -> list[EndpointInfo]:
+        """Every action discovered (served or called anywhere in the graph)."""
+        from .graph import action_infos
+        return self.host.call(action_infos, self.node)
+
+    def services(self) -> list[EndpointInfo]:
+        """Every visible service discovered."""
+        from .graph import service_infos
+        return self.host.call(service_infos, self.node)
+
+    def matching_qos(self, topic: str) -> Any:
+        """A subscription QoS that hears every publisher of ``topic`` now (best effort if
+        any publisher is, transient local if all are), as ``ros2 topic echo`` picks it."""
+        from .graph import matching_qos
+        return self.host.call(matching_qos, self.node, topic)
 
     # -- actions and services ----------------------------------------------------------
     def register_action(self, scope: Any, name: str, action_type: type, server: str) -> Any:
