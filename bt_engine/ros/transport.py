@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING, Any, Callable
 
 from ..bus.transport import EndpointInfo, TopicInfo, Transport
 from ..modes import Kind
-from ..bus.actions import build_message, message_signature
+from ..bus.actions import build_message, message_doc, message_signature, public_name
 from .client import GoalCall, ServerWait, ServiceCall
 from .host import RosClosedError, RosHost
 from .qos import qos_profile
@@ -166,8 +166,8 @@ class RosTransport(Transport):
         # Created here, not through host.call: the hub never waits for the executor
         # thread (which may be waiting for the hub), see RosHost.
         client = ActionClient(self.node, action_type, server)
-        doc = (f"Send a {action_type.__module__}.{action_type.__name__} goal to action "
-               f"{server} and return its result.")
+        doc = message_doc(f"Send a {public_name(action_type)} goal to action {server} and return "
+                          "its result.", "goal", action_type.Goal)
         return self._client_actor(scope, name, GoalCall, client, server, action_type.Goal,
                                   "goal", doc)
 
@@ -187,8 +187,8 @@ class RosTransport(Transport):
         """Make async actor ``name(request=None, **fields)`` calling service ``server``;
         the result is the response. Cancelling drops the pending request."""
         client = self.node.create_client(srv_type, server)
-        doc = (f"Call service {server} ({srv_type.__module__}.{srv_type.__name__}) and "
-               "return the response.")
+        doc = message_doc(f"Call service {server} ({public_name(srv_type)}) and return the response.",
+                          "request", srv_type.Request)
         return self._client_actor(scope, name, ServiceCall, client, server, srv_type.Request,
                                   "request", doc)
 
