@@ -93,3 +93,13 @@ def test_no_server_is_a_clear_error():
 def test_one_server_per_name(rt):
     with pytest.raises(ActorbtError, match="already served"):
         rt.run_on_hub(lambda: rt.bus.action_server("/echo", CallActor, lambda goal: None))
+
+
+def test_nested_message_fields_can_be_given_as_mappings():
+    from control_msgs.action import GripperCommand
+
+    from bt_engine.bus.actions import build_message
+    goal = build_message(GripperCommand.Goal, None, {"command": {"position": 0.01, "max_effort": 2.0}})
+    assert goal.command.position == 0.01 and goal.command.max_effort == 2.0
+    with pytest.raises(TypeError, match="has no field 'positon'"):
+        build_message(GripperCommand.Goal, {"command": {"positon": 0.01}}, {})

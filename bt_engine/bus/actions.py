@@ -87,6 +87,9 @@ def build_message(msg_type: type, value: Any, fields: dict[str, Any]) -> Any:
     for key, val in fields.items():
         if key not in known:
             raise TypeError(f"{msg_type.__name__} has no field {key!r}; fields: {', '.join(known)}")
+        current = getattr(msg, key)
+        if isinstance(val, dict) and hasattr(current, "get_fields_and_field_types"):
+            val = build_message(type(current), val, {})  # a nested message from its fields
         setattr(msg, key, val)
     return msg
 
