@@ -8,7 +8,6 @@ actor               kind                               what it gives
 ``color_raw``       stream (subscriber)                ``sensor_msgs/Image`` from the colour topic
 ``depth_raw``       stream (subscriber)                ``sensor_msgs/Image`` from the depth topic
 ``camera_info``     stream (subscriber)                ``sensor_msgs/CameraInfo``
-``camera_base_pose`` stream (subscriber)               ``geometry_msgs/PoseStamped`` map -> base
 ``pic``             stream                             BGR ``uint8`` array (H, W, 3), OpenCV order
 ``depth``           stream                             ``float32`` array (H, W), metres, NaN = none
 ``rgbd``            stream                             :class:`RGBDFrame`: colour + depth with the
@@ -16,36 +15,36 @@ actor               kind                               what it gives
 ``intrinsics``      sync                               fx, fy, cx, cy, width, height, frame_id
 ==================  =================================  ==========================================
 
-The camera pose of a frame is the base pose at the frame's stamp (interpolated between the
-two pose messages around it) times the fixed base -> optical-frame transform, read from the
-robot URDF (``planning.read_urdf``) for the frame id the image carries. Nothing here imports
-the simulator.
+The camera pose of a frame is looked up on the robot's transform tree (``/tf`` and
+``/tf_static``, :mod:`actors.tf_listener`) at the frame's stamp, from the frame id the image
+carries: map -> odom (the localiser) -> base_footprint (the odometry, interpolated to the
+stamp) -> base_link -> camera_link -> camera_optical_frame (the robot description). A frame
+whose pose tf cannot give within ``MAX_POSE_GAP`` of its stamp (the robot is not localised
+yet) is dropped. Nothing here imports the simulator.
 """
 from __future__ import annotations
 
-import functools
-import math
 from dataclasses import dataclass
 from typing import Iterator
 
 import numpy as np
-from geometry_msgs.msg import PoseStamped
 from sensor_msgs.msg import CameraInfo, Image
 
 from bt_engine import ActorbtError, SubSystem, actor
-from planning import read_urdf
-from planning.urdf import origin_transform
+
+from .tf_listener import TransformError, tf_listener
 
 COLOR_TOPIC = "/camera/color/image_raw"
 DEPTH_TOPIC = "/camera/depth/image_raw"
 INFO_TOPIC = "/camera/camera_info"
-POSE_TOPIC = "/ground_truth/pose"       # map -> base_footprint; remap to AMCL's pose on a robot
+MAP_FRAME = "map"
 BASE_FRAME = "base_footprint"
-MAX_POSE_GAP = 0.25                     # [s] a frame further than this from any pose is dropped
+MAX_POSE_GAP = 0.25                     # [s] how long a frame may wait for tf to pose it
+TF_POLL = 0.02                          # [s] between two tries meanwhile
 
 
 class CameraError(ActorbtError):
-    """An image could not be decoded, or the camera frame is not in the robot model."""
+    """An image could not be decoded."""
 
 
 # ----------------------------------------------------------------------------- conversions
@@ -84,63 +83,6 @@ def image_to_array(msg: Image) -> np.ndarray:
         out[mm == 0] = np.nan
         return out
     raise CameraError(f"unsupported image encoding {enc!r}")
-
-
-def quat_matrix(x: float, y: float, z: float, w: float) -> np.ndarray:
-    """Rotation matrix (3, 3) of a unit quaternion."""
-    n = math.sqrt(x * x + y * y + z * z + w * w) or 1.0
-    x, y, z, w = x / n, y / n, z / n, w / n
-    return np.array([
-        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
-
-
-def pose_matrix(pose) -> np.ndarray:
-    """Homogeneous transform (4, 4) of a geometry_msgs Pose."""
-    t = np.eye(4)
-    q = pose.orientation
-    t[:3, :3] = quat_matrix(q.x, q.y, q.z, q.w)
-    t[:3, 3] = (pose.position.x, pose.position.y, pose.position.z)
-    return t
-
-
-def _interpolate(ta: float, Ta: np.ndarray, tb: float, Tb: np.ndarray, t: float) -> np.ndarray:
-    """Pose at ``t`` between two poses (linear position, yaw-plane-safe rotation blend)."""
-    if tb <= ta:
-        return Tb
-    f = min(1.0, max(0.0, (t - ta) / (tb - ta)))
-    out = np.eye(4)
-    out[:3, 3] = (1 - f) * Ta[:3, 3] + f * Tb[:3, 3]
-    # rotation: R_a * exp(f * log(R_a^T R_b)), by the axis-angle of the relative rotation
-    Rr = Ta[:3, :3].T @ Tb[:3, :3]
-    angle = math.acos(max(-1.0, min(1.0, (np.trace(Rr) - 1) / 2)))
-    if angle < 1e-9:
-        out[:3, :3] = Tb[:3, :3]
-        return out
-    axis = np.array([Rr[2, 1] - Rr[1, 2], Rr[0, 2] - Rr[2, 0], Rr[1, 0] - Rr[0, 1]]) / (2 * math.sin(angle))
-    a = f * angle
-    k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
-    out[:3, :3] = Ta[:3, :3] @ (np.eye(3) + math.sin(a) * k + (1 - math.cos(a)) * (k @ k))
-    return out
-
-
-@functools.lru_cache(maxsize=16)
-def camera_extrinsics(frame_id: str, base_frame: str = BASE_FRAME, urdf: str | None = None) -> np.ndarray:
-    """Fixed transform (4, 4) from ``base_frame`` to the camera frame ``frame_id``, composed
-    from the robot URDF's joint origins (every joint on the chain must be fixed)."""
-    robot = read_urdf(urdf)
-    try:
-        chain = robot.chain(base_frame, frame_id)
-    except Exception as e:  # ModelError: unknown link or not below the base
-        raise CameraError(f"camera frame {frame_id!r} is not below {base_frame!r} in the URDF: {e}") from e
-    T = np.eye(4)
-    for j in chain:
-        if j.movable:
-            raise CameraError(f"camera frame {frame_id!r} moves with joint {j.name!r}; "
-                              "only a fixed camera mount is supported")
-        T = T @ origin_transform(j)
-    return T
 
 
 @dataclass(frozen=True)
@@ -184,18 +126,32 @@ class RGBDFrame:
 
 # ----------------------------------------------------------------------------- subsystem
 class Camera(SubSystem):
-    """An RGB-D camera reached through its ROS topics, posed by the robot's localisation."""
+    """An RGB-D camera reached through its ROS topics, posed by the robot's transform tree
+    (the localisation's map frame)."""
 
     def __init__(self, color_topic: str = COLOR_TOPIC, depth_topic: str = DEPTH_TOPIC,
-                 info_topic: str = INFO_TOPIC, pose_topic: str = POSE_TOPIC,
-                 base_frame: str = BASE_FRAME, urdf: str | None = None) -> None:
+                 info_topic: str = INFO_TOPIC, map_frame: str = MAP_FRAME,
+                 base_frame: str = BASE_FRAME) -> None:
         super().__init__()
         self.register_subscriber("color_raw", Image, color_topic, 2)
         self.register_subscriber("depth_raw", Image, depth_topic, 2)
         self.register_subscriber("camera_info", CameraInfo, info_topic, 1)
-        self.register_subscriber("camera_base_pose", PoseStamped, pose_topic, 60)
+        self.tf = tf_listener(self)
+        self.set_value("camera_map_frame", map_frame)
         self.set_value("camera_base_frame", base_frame)
-        self.set_value("camera_urdf", urdf)
+
+    def _poses(self, frame_id: str, t: float) -> tuple[np.ndarray, np.ndarray] | None:
+        """(T_map_cam, T_map_base) at stamp ``t`` from tf, waiting up to MAX_POSE_GAP for
+        the transforms to reach it; None when they do not."""
+        map_frame, base_frame = self.get_value("camera_map_frame"), self.get_value("camera_base_frame")
+        end = self.runtime.now() + MAX_POSE_GAP
+        while True:
+            try:
+                return (self.tf.lookup(map_frame, frame_id, t), self.tf.lookup(map_frame, base_frame, t))
+            except TransformError:
+                if self.runtime.now() >= end:
+                    return None
+            self.run_actor("sleep", TF_POLL)
 
     @actor
     def pic(self) -> Iterator[np.ndarray]:
@@ -219,37 +175,25 @@ class Camera(SubSystem):
     @actor
     def rgbd(self) -> Iterator[RGBDFrame]:
         """Synchronised RGB-D frames: colour and depth with the same header stamp, the
-        intrinsics, and the camera pose in the map frame at that stamp."""
-        base_frame = self.get_value("camera_base_frame")
-        urdf = self.get_value("camera_urdf")
+        intrinsics, and the camera pose in the map frame at that stamp (from tf)."""
         info: Intrinsics | None = None
         with self.run_actor_mode("camera_info", "iterator") as infos, \
                 self.run_actor_mode("color_raw", "iterator") as colors, \
-                self.run_actor_mode("depth_raw", "iterator") as depths, \
-                self.run_actor_mode("camera_base_pose", "iterator") as poses:
+                self.run_actor_mode("depth_raw", "iterator") as depths:
             dmsg = None
-            before: tuple[float, np.ndarray] | None = None
-            after: tuple[float, np.ndarray] | None = None
             for cmsg in colors:
                 t = stamp_seconds(cmsg.header)
                 while dmsg is None or stamp_seconds(dmsg.header) < t - 1e-6:
                     dmsg = next(depths)
                 if stamp_seconds(dmsg.header) > t + 1e-6:
                     continue                      # this colour frame has no depth twin
-                while after is None or after[0] < t - 1e-6:
-                    before = after
-                    pmsg = next(poses)
-                    after = (stamp_seconds(pmsg.header), pose_matrix(pmsg.pose))
-                if before is not None and before[0] <= t <= after[0]:
-                    T_map_base = _interpolate(before[0], before[1], after[0], after[1], t)
-                elif abs(after[0] - t) <= MAX_POSE_GAP:
-                    T_map_base = after[1]
-                else:
-                    continue                      # no pose near this frame
                 if info is None or (info.width, info.height) != (cmsg.width, cmsg.height):
                     info = Intrinsics.from_msg(next(infos))   # sent with the images
                 frame_id = cmsg.header.frame_id or info.frame_id
-                T_base_cam = camera_extrinsics(frame_id, base_frame, urdf)
+                poses = self._poses(frame_id, t)
+                if poses is None:
+                    continue                      # tf cannot pose it: not localised
+                T_map_cam, T_map_base = poses
                 yield RGBDFrame(stamp=t, bgr=image_to_array(cmsg), depth=image_to_array(dmsg),
-                                intrinsics=info, T_map_cam=T_map_base @ T_base_cam,
-                                T_map_base=T_map_base, frame_id=frame_id)
+                                intrinsics=info, T_map_cam=T_map_cam, T_map_base=T_map_base,
+                                frame_id=frame_id)

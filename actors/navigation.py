@@ -1,29 +1,53 @@
-"""The mobile base as actors: plan on /map, follow the path on /cmd_vel.
+"""The mobile base as actors: a client of the robot's navigation, and short precise moves.
 
-Localisation is the ``/ground_truth/pose`` topic (map frame); on a real robot, remap it
-to AMCL's pose. Cancelling any motion stops the base.
+What the robot offers, as a TurtleBot3 running Nav2 and AMCL does (in the simulator,
+navstack stands in for both):
+
+* where it is: the transform map -> base_footprint on ``/tf`` (the localiser's map -> odom
+  composed with the odometry's odom -> base_footprint, the robot's fixed frames on
+  ``/tf_static``): ``get_pose``;
+* getting somewhere: the ``/navigate_to_pose`` action (nav2_msgs/NavigateToPose), which
+  plans on the map, drives around what the laser sees and turns to the goal's heading:
+  ``goto`` sends a goal and waits for its end; cancelling the call cancels the goal, which
+  stops the base;
+* what else is in the way: perceived objects (``mark_obstacles``) go to the navigation on
+  ``/perceived_obstacles`` (sensor_msgs/PointCloud2, map frame, transient local: a
+  costmap observation source) and onto this SubSystem's own copy of the map, which
+  answers ``clearance`` and ``plan_path``;
+* short relative moves for grasping (``mini_walk``, ``mini_turn``, ``migrate``) on
+  ``/odom`` and ``/cmd_vel`` directly: over a few decimetres the odometry is precise and
+  never jumps, as a localiser's correction may.
+
+Cancelling any motion stops the base.
 """
 from __future__ import annotations
 
+import array
 import math
 
-from geometry_msgs.msg import PoseStamped, Twist
+import numpy as np
+from geometry_msgs.msg import Twist
+from nav2_msgs.action import NavigateToPose
 from nav_msgs.msg import OccupancyGrid as OccupancyGridMsg
 from nav_msgs.msg import Odometry
+from sensor_msgs.msg import PointCloud2, PointField
 
-from bt_engine import ActorbtError, Cancelled, SubSystem, actor
-from planning import BasePath, FailureReason, GridPlanner, OccupancyGrid, inflate, with_obstacles
+from bt_engine import ActorbtError, ActorError, ActorTimeout, SubSystem, actor
+from bt_engine.bus.actions import ActionGoalError
+from planning import BasePath, GridPlanner, OccupancyGrid, inflate, with_obstacles
+from planning.viewpoints import viewpoints
 
 from .ros_conv import pose2d, wrap
+from .tf_listener import BASE, MAP, TransformError, tf_listener
 
-MAX_SPEED = 0.22        # [m/s]   (TurtleBot3 Waffle: 0.26)
 MAX_TURN = 1.2          # [rad/s] (TurtleBot3 Waffle: 1.82)
-LOOKAHEAD = 0.25        # pure-pursuit look-ahead distance [m]
-ROBOT_RADIUS = 0.20     # footprint radius used to inflate the map [m]
+ROBOT_RADIUS = 0.20     # footprint radius used to inflate the map [m] (the navigation's)
 INFLATION = 0.45        # distance over which the map cost decays [m]
-XY_TOLERANCE = 0.04     # goal position tolerance [m]
-YAW_TOLERANCE = math.radians(0.5)
-RECOVERY_BACKUP = 0.15  # how far to back away when the start is too close to something [m]
+YAW_TOLERANCE = math.radians(0.5)   # mini_turn's
+POSE_WAIT = 5.0         # [s] how long get_pose waits for map -> base_footprint
+ACTION = "/navigate_to_pose"
+PERCEIVED = "/perceived_obstacles"
+MARK_SPACING = 0.025    # [m] between the points that mark a perceived object's disc
 
 
 class NavigationError(ActorbtError):
@@ -37,15 +61,55 @@ def _twist(v: float = 0.0, w: float = 0.0) -> Twist:
     return msg
 
 
+def disc_points(circles) -> np.ndarray:
+    """(N, 2) points covering each circle (x, y, radius) every MARK_SPACING."""
+    out = []
+    for x, y, r in circles:
+        k = int(math.ceil(r / MARK_SPACING))
+        g = np.arange(-k, k + 1) * MARK_SPACING
+        dx, dy = np.meshgrid(g, g)
+        inside = dx ** 2 + dy ** 2 <= r * r + 1e-12
+        out.append(np.column_stack([x + dx[inside], y + dy[inside]]))
+    return np.vstack(out) if out else np.zeros((0, 2))
+
+
+def cloud_msg(points: np.ndarray, frame: str = MAP) -> PointCloud2:
+    """A PointCloud2 of (N, 2) points on the floor (float32 x, y, z)."""
+    msg = PointCloud2()
+    msg.header.frame_id = frame
+    msg.height, msg.width = 1, len(points)
+    msg.fields = [PointField(name=n, offset=4 * i, datatype=PointField.FLOAT32, count=1)
+                  for i, n in enumerate("xyz")]
+    msg.is_bigendian = False
+    msg.point_step, msg.row_step = 12, 12 * len(points)
+    xyz = np.zeros((len(points), 3), "<f4")
+    xyz[:, :2] = points
+    msg.data = array.array("B", xyz.tobytes())
+    msg.is_dense = True
+    return msg
+
+
+def _goal_msg(x: float, y: float, theta: float) -> NavigateToPose.Goal:
+    goal = NavigateToPose.Goal()
+    goal.pose.header.frame_id = MAP
+    goal.pose.pose.position.x, goal.pose.pose.position.y = float(x), float(y)
+    goal.pose.pose.orientation.z = math.sin(theta / 2)
+    goal.pose.pose.orientation.w = math.cos(theta / 2)
+    return goal
+
+
 class Navigation(SubSystem):
-    """Differential-drive base: planning on the occupancy grid and a path follower."""
+    """Differential-drive base: the robot's navigation as a client, a copy of the map for
+    queries, and odometry-driven short moves."""
 
     def __init__(self) -> None:
         super().__init__()
         self.register_publisher("cmd_vel", Twist, "/cmd_vel")
-        self.register_subscriber("pose", PoseStamped, "/ground_truth/pose", 1)
         self.register_subscriber("odom", Odometry, "/odom", 1)
-        self.register_subscriber("map", OccupancyGridMsg, "/map", 1)
+        self.register_subscriber("map", OccupancyGridMsg, "/map", "latched")   # map_server latches it
+        self.register_action("navigate_to_pose", NavigateToPose, ACTION)
+        self._perceived = self.runtime.bus.publisher(PERCEIVED, PointCloud2, "latched")
+        self.tf = tf_listener(self)
         self.set_value("grid", None)        # the static map, once received
         self.set_value("obstacles", {})     # perceived objects marked on it
         self.set_value("planner", None)     # built from both
@@ -54,8 +118,20 @@ class Navigation(SubSystem):
     # -- queries -----------------------------------------------------------------------
     @actor
     def get_pose(self) -> tuple[float, float, float]:
-        """The base pose (x [m], y [m], yaw [rad]) in the map frame."""
-        return pose2d(self.run_actor("pose"))
+        """The base pose (x [m], y [m], yaw [rad]) in the map frame, as the robot's
+        localisation has it (tf: map -> base_footprint)."""
+        end = self.runtime.now() + POSE_WAIT
+        while True:
+            try:
+                return self.tf.pose(MAP, BASE)
+            except TransformError as e:
+                if self.runtime.now() >= end:
+                    raise NavigationError(f"the robot is not localised: no {MAP} -> {BASE} transform "
+                                          f"on /tf after {POSE_WAIT:g} s (give /initialpose): {e}") from None
+            self.run_actor("sleep", 0.05)
+
+    def _odometry(self) -> tuple[float, float, float]:
+        return pose2d(self.run_actor_mode("odom", "timed", 5.0))
 
     def _planner(self) -> GridPlanner:
         planner = self.get_value("planner")
@@ -71,8 +147,9 @@ class Navigation(SubSystem):
 
     @actor
     def mark_obstacles(self, obstacles: list) -> int:
-        """Put perceived objects on the planner's map, replacing those marked before.
-        Returns how many are marked.
+        """Put perceived objects on the map, replacing those marked before: the
+        navigation plans around them, and clearance and plan_path see them. Returns how
+        many are marked.
 
         Args:
             obstacles: the objects, each a dict with x, y (map frame) and radius [m];
@@ -87,6 +164,7 @@ class Navigation(SubSystem):
         if marked != self.get_value("obstacles"):
             self.set_value("obstacles", marked)
             self.set_value("planner", None)  # rebuilt with them on the next query
+            self._perceived.publish(cloud_msg(disc_points(marked.values())))
         return len(marked)
 
     @actor
@@ -102,6 +180,19 @@ class Navigation(SubSystem):
         if not costmap.grid.contains(row, col):
             return 0.0
         return float(costmap.clearance[row, col])
+
+    @actor
+    def search_views(self, view_range: float = 2.5) -> list[list[float]]:
+        """Places [x, y] [m] from which the camera sees all the floor the base can reach
+        from where it is, in a visiting order from here (for a search given no
+        locations: a map the robot built, a user's map).
+
+        Args:
+            view_range: how far the camera is trusted to see an object [m]
+        """
+        x, y, _ = self.get_pose()
+        return [[round(px, 2), round(py, 2)]
+                for px, py in viewpoints(self._planner().costmap, (x, y), view_range=view_range)]
 
     def _plan_from_here(self, x: float, y: float) -> BasePath:
         sx, sy, _ = self.get_pose()
@@ -130,37 +221,38 @@ class Navigation(SubSystem):
     def goto(self, x: float, y: float, theta: float, timeout: float | None = None) -> tuple[float, float, float]:
         """Drive to (x, y) [m] in the map frame and turn to ``theta`` [rad].
 
-        Fails with NavigationError when no path exists or the goal is not reached in time.
+        Fails with NavigationError when no path exists, the way stays blocked or the goal
+        is not reached in time.
 
         Args:
             x: goal x in the map frame [m]
             y: goal y in the map frame [m]
             theta: heading to turn to at the goal, counter-clockwise from the map's x axis [rad]
-            timeout: give up after this long [s]; None: from the path length
+            timeout: give up after this long [s]; None: when the navigation gives up
 
         Returns:
             the pose reached: x [m], y [m], yaw [rad] in the map frame
         """
-        plan = self._plan_from_here(x, y)
-        if plan.failure is FailureReason.START_INVALID:
-            # Recovery: the robot stands too close to something (a newly marked object, a
-            # wall after a pick); back away and plan again.
-            self.run_actor("mini_walk", -RECOVERY_BACKUP)
-            plan = self._plan_from_here(x, y)
-        if not plan.ok:
-            raise NavigationError(f"no path to ({x:.2f}, {y:.2f}): {plan.message}")
-        path = [tuple(p) for p in plan.waypoints]
-        length = sum(math.dist(a, b) for a, b in zip(path, path[1:]))
-        budget = timeout if timeout is not None else 20.0 + 3.0 * length / MAX_SPEED
-        deadline = self.runtime.now() + budget
-        with self._stopping():
-            self._follow(path, deadline)
-            self._turn_to(theta, deadline)
+        goal = _goal_msg(x, y, theta)
+        try:
+            if timeout is None:
+                self.run_actor("navigate_to_pose", goal)
+            else:
+                self.run_actor_mode("navigate_to_pose", "timed", timeout, goal)
+        except (ActorError, ActorTimeout) as e:
+            root = e.root_cause if isinstance(e, ActorError) else e
+            if isinstance(root, ActionGoalError):
+                detail = getattr(root.result, "error_msg", "") or str(root)
+                raise NavigationError(f"goto ({x:.2f}, {y:.2f}) failed: {detail}") from None
+            if isinstance(root, ActorTimeout):
+                raise NavigationError(f"goto ({x:.2f}, {y:.2f}) timed out after {timeout:g} s") from None
+            raise
         return self.get_pose()
 
     @actor
     def migrate(self, dx: float, dy: float, dtheta: float) -> tuple[float, float, float]:
-        """Move by (dx, dy) [m] in the robot's frame and turn by ``dtheta`` [rad].
+        """Move by (dx, dy) [m] in the robot's frame and turn by ``dtheta`` [rad], on the
+        odometry and without planning (a short move: nothing may be in the way).
 
         Args:
             dx: distance forward (negative: backward) [m]
@@ -170,27 +262,37 @@ class Navigation(SubSystem):
         Returns:
             the pose reached: x [m], y [m], yaw [rad] in the map frame
         """
-        x, y, yaw = self.get_pose()
-        gx = x + dx * math.cos(yaw) - dy * math.sin(yaw)
-        gy = y + dx * math.sin(yaw) + dy * math.cos(yaw)
-        return self.run_actor("goto", gx, gy, wrap(yaw + dtheta))
+        dist = math.hypot(dx, dy)
+        if dist > 1e-3:
+            bearing = math.atan2(dy, dx)
+            if abs(bearing) > math.pi / 2:          # behind: back up instead of turning round
+                bearing = wrap(bearing + math.pi)
+                dist = -dist
+            if abs(bearing) > 1e-3:
+                self.run_actor("mini_turn", bearing)
+            self.run_actor("mini_walk", dist)
+            dtheta -= bearing
+        if abs(wrap(dtheta)) > 1e-3:
+            self.run_actor("mini_turn", wrap(dtheta))
+        return self.get_pose()
 
     @actor
     def mini_walk(self, distance: float, speed: float = 0.1, tolerance: float = 0.005) -> float:
-        """Drive straight by ``distance`` [m] (negative: backwards) without planning, to
-        within ``tolerance`` [m]; returns the distance driven [m].
+        """Drive straight by ``distance`` [m] (negative: backwards) on the odometry,
+        without planning, to within ``tolerance`` [m]; returns the distance driven [m].
 
         Args:
             distance: how far to drive, negative backwards [m]
             speed: top speed [m/s]
             tolerance: how close to ``distance`` to stop [m]
         """
-        x0, y0, yaw0 = self.get_pose()
+        x0, y0, yaw0 = self._odometry()
         sign = 1.0 if distance >= 0 else -1.0
         deadline = self.runtime.now() + 5.0 + abs(distance) / max(speed, 1e-3) * 2
+        along = 0.0
         with self._stopping():
-            with self.run_actor_mode("pose", "iterator") as poses:
-                for msg in poses:
+            with self.run_actor_mode("odom", "iterator") as odoms:
+                for msg in odoms:
                     x, y, yaw = pose2d(msg)
                     along = (x - x0) * math.cos(yaw0) + (y - y0) * math.sin(yaw0)
                     remaining = distance - along
@@ -202,19 +304,29 @@ class Navigation(SubSystem):
                     if sign * remaining < 0:
                         v = -v * 0.5
                     self.run_actor("cmd_vel", _twist(v, 2.0 * wrap(yaw0 - yaw)))
-        x, y, _ = self.get_pose()
-        return (x - x0) * math.cos(yaw0) + (y - y0) * math.sin(yaw0)
+        return along
 
     @actor
     def mini_turn(self, angle: float) -> float:
-        """Turn in place by ``angle`` [rad]; returns the yaw reached [rad].
+        """Turn in place by ``angle`` [rad] on the odometry; returns the yaw reached in
+        the map frame [rad].
 
         Args:
             angle: turn, counter-clockwise positive [rad]
         """
-        _, _, yaw = self.get_pose()
+        _, _, yaw0 = self._odometry()
+        target = wrap(yaw0 + angle)
+        deadline = self.runtime.now() + 10.0 + abs(angle) / 0.3
         with self._stopping():
-            self._turn_to(wrap(yaw + angle), self.runtime.now() + 10.0 + abs(angle) / 0.3)
+            with self.run_actor_mode("odom", "iterator") as odoms:
+                for msg in odoms:
+                    err = wrap(target - pose2d(msg)[2])
+                    if abs(err) < YAW_TOLERANCE:
+                        break
+                    if self.runtime.now() > deadline:
+                        raise NavigationError(f"turn timed out {math.degrees(err):.1f} deg short")
+                    w = math.copysign(min(MAX_TURN, max(0.05, 2.0 * abs(err))), err)
+                    self.run_actor("cmd_vel", _twist(0.0, w))
         return self.get_pose()[2]
 
     @actor
@@ -235,72 +347,3 @@ class Navigation(SubSystem):
                 nav.run_actor("cmd_vel", _twist())
                 return False
         return _Stop()
-
-    def _follow(self, path: list[tuple[float, float]], deadline: float) -> None:
-        """Pure pursuit along ``path`` until within XY_TOLERANCE of its end."""
-        gx, gy = path[-1]
-        seg = 0
-        with self.run_actor_mode("pose", "iterator") as poses:
-            for msg in poses:
-                x, y, yaw = pose2d(msg)
-                if math.hypot(gx - x, gy - y) < XY_TOLERANCE:
-                    return
-                if self.runtime.now() > deadline:
-                    raise NavigationError(
-                        f"goto timed out {math.hypot(gx - x, gy - y):.2f} m from ({gx:.2f}, {gy:.2f})")
-                seg, (tx, ty) = _lookahead_point(path, seg, (x, y))
-                heading = wrap(math.atan2(ty - y, tx - x) - yaw)
-                dist_goal = math.hypot(gx - x, gy - y)
-                if abs(heading) > math.radians(50):
-                    v = 0.0  # face the path first
-                else:
-                    v = min(MAX_SPEED, 0.8 * dist_goal + 0.03) * math.cos(heading)
-                w = max(-MAX_TURN, min(MAX_TURN, 2.5 * heading))
-                self.run_actor("cmd_vel", _twist(v, w))
-
-    def _turn_to(self, theta: float, deadline: float) -> None:
-        with self.run_actor_mode("pose", "iterator") as poses:
-            for msg in poses:
-                err = wrap(theta - pose2d(msg)[2])
-                if abs(err) < YAW_TOLERANCE:
-                    return
-                if self.runtime.now() > deadline:
-                    raise NavigationError(f"turn timed out {math.degrees(err):.1f} deg short")
-                w = math.copysign(min(MAX_TURN, max(0.05, 2.0 * abs(err))), err)
-                self.run_actor("cmd_vel", _twist(0.0, w))
-
-
-def _lookahead_point(path: list[tuple[float, float]], seg: int,
-                     here: tuple[float, float]) -> tuple[int, tuple[float, float]]:
-    """The point LOOKAHEAD ahead of the robot's projection on the path (segment index kept
-    monotonic so the robot never skips back)."""
-    px, py = here
-    best, best_d = seg, math.inf
-    for i in range(seg, len(path) - 1):
-        (ax, ay), (bx, by) = path[i], path[i + 1]
-        dx, dy = bx - ax, by - ay
-        L2 = dx * dx + dy * dy or 1e-12
-        t = max(0.0, min(1.0, ((px - ax) * dx + (py - ay) * dy) / L2))
-        d = math.hypot(ax + t * dx - px, ay + t * dy - py)
-        if d < best_d - 1e-9:
-            best, best_d = i, d
-        if d > best_d + 0.5:
-            break
-    remaining = LOOKAHEAD
-    (ax, ay), (bx, by) = path[best], path[best + 1]
-    dx, dy = bx - ax, by - ay
-    L = math.hypot(dx, dy) or 1e-12
-    t = max(0.0, min(1.0, ((px - ax) * dx + (py - ay) * dy) / (L * L)))
-    cx, cy = ax + t * dx, ay + t * dy
-    i = best
-    while True:
-        bx, by = path[i + 1]
-        d = math.hypot(bx - cx, by - cy)
-        if d >= remaining or i + 2 >= len(path):
-            if d >= remaining and d > 0:
-                f = remaining / d
-                return best, (cx + f * (bx - cx), cy + f * (by - cy))
-            return best, (bx, by)
-        remaining -= d
-        cx, cy = bx, by
-        i += 1

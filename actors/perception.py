@@ -590,7 +590,7 @@ class Perception(SubSystem):
     A ``camera`` child subsystem holds the camera's stream actors (``pic``, ``depth``,
     ``camera_info``, ``rgbd``). ``appearances`` maps category names to
     :class:`Appearance` (default :data:`APPEARANCES`); other keyword arguments go to
-    :class:`actors.camera.Camera` (topics, base frame, URDF).
+    :class:`actors.camera.Camera` (topics, map and base frames).
     """
 
     def __init__(self, appearances: dict[str, Appearance] | None = None, **camera: object) -> None:

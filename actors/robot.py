@@ -11,7 +11,10 @@ from .search import Search
 
 
 class Robot(SubSystem):
-    """A TurtleBot3-like base with an OpenManipulator-X-like arm, reached through topics."""
+    """A TurtleBot3-like base with an OpenManipulator-X-like arm, reached through topics
+    and actions: the robot's localisation on /tf and its navigation's /navigate_to_pose
+    (Nav2 and AMCL on a robot; navstack's stand-in in the simulator), the arm's and the
+    gripper's controllers, the camera."""
 
     def __init__(self) -> None:
         super().__init__()

@@ -5,9 +5,12 @@ The mission runs ``patrol`` and ``watch`` in parallel; the first sighting ends t
 """
 from __future__ import annotations
 
+import logging
 import math
 
-from bt_engine import ActorbtError, SubSystem, actor
+from bt_engine import ActorbtError, ActorError, SubSystem, actor
+
+log = logging.getLogger("actors.search")
 
 #: a "category" meaning any category the perception knows
 ANY = ("any", "mixed", "", None)
@@ -55,21 +58,37 @@ class Search(SubSystem):
 
     @actor
     def patrol(self, locations: list, turns: int = 4) -> None:
-        """Visit each (x, y) [m] of ``locations`` in turn and look around there. Fails with
-        SearchExhausted after the last one: a patrol that ends has found nothing.
+        """Visit each (x, y) [m] of ``locations`` in turn and look around there. A place
+        the base cannot reach (something stands on it, the way is blocked) is looked
+        around from where the base stopped, if it got anywhere, and the patrol goes on.
+        Fails with SearchExhausted after the last one: a patrol that ends has found nothing.
 
         Args:
-            locations: the places to visit, each [x, y] in the map frame [m]
+            locations: the places to visit, each [x, y] in the map frame [m]; empty:
+                places chosen from the map (search_views)
             turns: look_around steps at each place
         """
         if not locations:
-            raise SearchExhausted("no search locations given")
+            locations = self.run_actor("search_views")
+            if not locations:
+                raise SearchExhausted("no search locations given, and the map has no reachable free space")
+        places = []
         for i, loc in enumerate(locations):
             try:
-                x, y = float(loc[0]), float(loc[1])
+                places.append((float(loc[0]), float(loc[1])))
             except (TypeError, ValueError, IndexError):
                 raise ActorbtError(f"search location {i} must be [x, y], got {loc!r}") from None
+        missed = []
+        for x, y in places:
             rx, ry, _ = self.run_actor("get_pose")
-            self.run_actor("goto", x, y, math.atan2(y - ry, x - rx))
+            try:
+                self.run_actor("goto", x, y, math.atan2(y - ry, x - rx))
+            except ActorError as e:
+                missed.append(f"({x:.2f}, {y:.2f}): {e.root_cause}")
+                log.info("search location (%.2f, %.2f) not reached: %s", x, y, e.root_cause)
+                sx, sy, _ = self.run_actor("get_pose")
+                if math.hypot(sx - rx, sy - ry) < 0.5:
+                    continue                    # it did not get anywhere new
             self.run_actor("look_around", turns)
-        raise SearchExhausted(f"visited {len(locations)} search locations and saw nothing")
+        raise SearchExhausted(f"visited {len(places)} search locations and saw nothing"
+                              + (f"; {len(missed)} not reached: " + "; ".join(missed) if missed else ""))

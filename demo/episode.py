@@ -1,24 +1,38 @@
 """One episode of a mission in a fresh simulated world, with its trace, its outcome
-checked against ground truth, and pictures."""
+checked against the simulator's truth, and pictures.
+
+The episode plays the user and the referee, never the robot: it tells the robot where it
+starts (``/initialpose`` from the world's start pose, as RViz's "2D Pose Estimate" does),
+and it reads the simulator's own state (``SimWorld.robot_pose()``, object poses) to score
+the outcome, draw the robot's true path and measure the localisation's error (the robot's
+map -> base_footprint on /tf against the true pose, every :data:`LOC_PERIOD` s).
+"""
 from __future__ import annotations
 
 import argparse
+import math
 import pathlib
 import sys
 import time
 from dataclasses import dataclass, field
 from typing import Any, TextIO
 
-from geometry_msgs.msg import PoseStamped
+from geometry_msgs.msg import PoseWithCovarianceStamped
+from tf2_msgs.msg import TFMessage
 
 from bt_engine import ActorError, Runtime
 from bt_engine.cli.app import App
 from bt_engine.cli.config import Config, ConfigError, find_config, load_config
 from bt_engine.trees import TraceRecorder, TreeObserver, tree_host
+from planning.tf_buffer import TransformBuffer, TransformError, pose2d
 from sim import SimWorld
 
 #: the reference application's own actorbt.yaml, used when none is found from here
 REPO_CONFIG = pathlib.Path(__file__).resolve().parents[1] / "actorbt.yaml"
+#: [s] between two samples of the localisation error, and of the true path
+LOC_PERIOD, PATH_PERIOD = 0.5, 0.1
+#: the /initialpose the user gives: the start pose, to within these standard deviations
+INITIAL_STD_XY, INITIAL_STD_YAW = 0.05, 0.03
 
 
 def episode_app(world: str, seed: int, app: App | None = None, config: Config | None = None) -> App:
@@ -50,12 +64,79 @@ class Episode:
     sim_time: float = 0.0
     wall_time: float = 0.0
     trace: str = ""
+    loc_rmse_m: float = float("nan")   # localisation error (position) over the episode
+    loc_max_m: float = float("nan")
     path: list = field(default_factory=list, repr=False)
     detections: list = field(default_factory=list, repr=False)
+    loc_errors: list = field(default_factory=list, repr=False)   # (t, error [m])
 
     @property
     def realtime_factor(self) -> float:
         return self.sim_time / self.wall_time if self.wall_time else float("nan")
+
+
+class TruthProbe:
+    """The referee's view, sampled as the episode runs: the true path
+    (``sim.robot_pose()``) every PATH_PERIOD, and the localisation error (the robot's
+    map -> base_footprint on /tf against the true pose) every LOC_PERIOD. Sampled on each
+    /tf message carrying the odometry, when /tf and the simulator are at the same instant."""
+
+    def __init__(self, rt: Runtime, sim: SimWorld, ep: Episode) -> None:
+        self.sim, self.ep, self.rt = sim, ep, rt
+        self.buf = TransformBuffer()
+        self._path_t = self._loc_t = -math.inf
+        self._subs = [rt.bus.subscribe("/tf", TFMessage, self._on_tf, 100),
+                      rt.bus.subscribe("/tf_static", TFMessage,
+                                       lambda m: self.buf.add_message(m, static=True), "latched")]
+
+    def close(self) -> None:
+        for s in self._subs:
+            s.close()
+        self._subs = []
+
+    def _on_tf(self, msg: TFMessage) -> None:
+        base = None
+        for ts in msg.transforms:
+            if ts.child_frame_id == "odom":
+                self.buf.add_message(ts)            # the localiser's map -> odom
+            elif ts.child_frame_id == "base_footprint":
+                base = ts
+        now = self.rt.now()
+        if base is None or (now - self._path_t < PATH_PERIOD - 1e-9 and now - self._loc_t < LOC_PERIOD - 1e-9):
+            return
+        self.buf.add_message(base)                  # only the newest is looked up
+        if now - self._path_t >= PATH_PERIOD - 1e-9:
+            self._path_t = now
+            x, y, yaw = self.sim.robot_pose()
+            self.ep.path.append((x, y))
+        if now - self._loc_t >= LOC_PERIOD - 1e-9:
+            try:
+                ex, ey, _ = pose2d(self.buf.lookup("map", "base_footprint"))
+            except TransformError:
+                return                       # not localised yet
+            self._loc_t = now
+            x, y, _ = self.sim.robot_pose()
+            self.ep.loc_errors.append((now, math.hypot(ex - x, ey - y)))
+
+    def summarise(self) -> None:
+        errs = [e for _, e in self.ep.loc_errors]
+        if errs:
+            self.ep.loc_rmse_m = math.sqrt(sum(e * e for e in errs) / len(errs))
+            self.ep.loc_max_m = max(errs)
+
+
+def initial_pose_msg(pose) -> PoseWithCovarianceStamped:
+    """/initialpose at ``pose`` (x, y, yaw), map frame, with the user's uncertainty."""
+    x, y, yaw = pose
+    msg = PoseWithCovarianceStamped()
+    msg.header.frame_id = "map"
+    msg.pose.pose.position.x, msg.pose.pose.position.y = float(x), float(y)
+    msg.pose.pose.orientation.z, msg.pose.pose.orientation.w = math.sin(yaw / 2), math.cos(yaw / 2)
+    cov = [0.0] * 36
+    cov[0] = cov[7] = INITIAL_STD_XY ** 2
+    cov[35] = INITIAL_STD_YAW ** 2
+    msg.pose.covariance = cov
+    return msg
 
 
 class DemoProgress(TreeObserver):
@@ -147,11 +228,14 @@ def run_episode(tree: str = "bt_pick_place", world: str = "house", seed: int = 0
         if "place" in params and pl is not None:  # this world's place location
             args.setdefault("place", {"x": pl.x, "y": pl.y, "size_x": pl.sx,
                                       "size_y": pl.sy, "height": pl.sz})
+        if "locations" in params and sim.spec.search_locations:   # this world's, if it lists them
+            args.setdefault("locations", [list(p) for p in sim.spec.search_locations])
+        start = tuple(sim.spec.robot_start)   # the world's known start pose
         if "home" in params:
-            hx, hy, hyaw = sim.robot_pose()
-            args.setdefault("home", {"x": hx, "y": hy, "yaw": hyaw})
-        sub = rt.bus.subscribe("/ground_truth/pose", PoseStamped, lambda m: ep.path.append(
-            (m.pose.position.x, m.pose.position.y)))
+            args.setdefault("home", {"x": start[0], "y": start[1], "yaw": start[2]})
+        # the user tells the localiser where the robot starts (RViz's 2D Pose Estimate)
+        rt.bus.publisher("/initialpose", PoseWithCovarianceStamped).publish(initial_pose_msg(start))
+        probe = TruthProbe(rt, sim, ep)
         recorder = None
         if out is not None:
             out.mkdir(parents=True, exist_ok=True)
@@ -170,7 +254,8 @@ def run_episode(tree: str = "bt_pick_place", world: str = "house", seed: int = 0
             ep.failed_node = getattr(cause, "path", "") or _failed_node(str(ep.reason))
         finally:
             ep.sim_time = rt.now() - sim0
-            sub.close()
+            probe.close()
+            probe.summarise()
             if recorder is not None:
                 recorder.close()
         ep.success = ep.tree_status == "SUCCESS"
@@ -232,4 +317,7 @@ def print_outcome(ep: Episode, out: TextIO = sys.stdout) -> None:
         out.write(f"FAILURE at {ep.failed_node or '?'}: {ep.reason}\n")
     out.write(f"sim time {ep.sim_time:.1f} s, wall time {ep.wall_time:.1f} s "
               f"({ep.realtime_factor:.1f}x real time)\n")
+    if ep.loc_errors:
+        out.write(f"localisation error: {ep.loc_rmse_m * 100:.1f} cm rms, {ep.loc_max_m * 100:.1f} cm max "
+                  f"({len(ep.loc_errors)} samples)\n")
 

@@ -17,7 +17,7 @@ from bt_engine.cli.config import Config
 from .episode import Episode, episode_app, run_episode
 
 CSV_FIELDS = ["tree", "world", "seed", "category", "success", "tree_status", "failed_node",
-              "reason", "placed_object", "sim_time", "wall_time", "trace"]
+              "reason", "placed_object", "sim_time", "wall_time", "loc_rmse_m", "loc_max_m", "trace"]
 
 #: this process's App (one per worker, so each skipped tree is reported once per process)
 _app: App | None = None
@@ -96,6 +96,8 @@ def write_csv(episodes: list[Episode], path: pathlib.Path) -> None:
             row = {k: v for k, v in asdict(e).items() if k in CSV_FIELDS}
             row["sim_time"] = f"{e.sim_time:.2f}"
             row["wall_time"] = f"{e.wall_time:.2f}"
+            row["loc_rmse_m"] = f"{e.loc_rmse_m:.4f}"
+            row["loc_max_m"] = f"{e.loc_max_m:.4f}"
             w.writerow(row)
 
 
@@ -104,13 +106,18 @@ def print_table(episodes: list[Episode], out: TextIO = sys.stdout) -> None:
     for e in episodes:
         by_cat[e.category].append(e)
     out.write(f"\n{'category':10s} {'episodes':>8s} {'success':>8s} {'rate':>7s} "
-              f"{'sim s (median)':>15s} {'wall s (median)':>16s} {'x real time':>12s}\n")
+              f"{'sim s (median)':>15s} {'wall s (median)':>16s} {'x real time':>12s} "
+              f"{'loc rms cm':>11s} {'loc max cm':>11s}\n")
     for cat, eps in sorted(by_cat.items()) + [("all", episodes)]:
         ok = sum(e.success for e in eps)
+        rms = [e.loc_rmse_m for e in eps if e.loc_rmse_m == e.loc_rmse_m]
+        worst = [e.loc_max_m for e in eps if e.loc_max_m == e.loc_max_m]
         out.write(f"{cat:10s} {len(eps):8d} {ok:8d} {100 * ok / len(eps):6.1f}% "
                   f"{statistics.median(e.sim_time for e in eps):15.1f} "
                   f"{statistics.median(e.wall_time for e in eps):16.1f} "
-                  f"{statistics.median(e.realtime_factor for e in eps):12.1f}\n")
+                  f"{statistics.median(e.realtime_factor for e in eps):12.1f} "
+                  f"{100 * statistics.median(rms) if rms else float('nan'):11.1f} "
+                  f"{100 * max(worst) if worst else float('nan'):11.1f}\n")
     failures = collections.Counter(e.failed_node or "?" for e in episodes if not e.success)
     if failures:
         out.write("\nfailures by node:\n")

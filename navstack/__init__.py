@@ -1,4 +1,4 @@
-"""The robot-side stand-in for AMCL + Nav2: a localiser (and, next, a navigation server).
+"""The robot-side stand-in for AMCL + Nav2: a localiser and a navigation server.
 
 A plain library (numpy, scipy) at its core, with no transport:
 
@@ -8,9 +8,18 @@ A plain library (numpy, scipy) at its core, with no transport:
   clusters, uniform and scan-informed global localisation, augmented MCL);
 * :mod:`navstack.amcl`: AMCL's node logic: update thresholds, the pose between updates,
   delocalisation detection and recovery;
+* :mod:`navstack.smoothing`: a Kalman filter on the published pose (odometry as motion,
+  each estimate as a measurement), against the estimate's update-to-update jitter;
 * :mod:`navstack.synthetic`: a synthetic robot and world for tests and benchmarks.
 
-:mod:`navstack.localiser` puts it on the runtime's bus as a SubSystem (AMCL's topics).
+On the runtime's bus (SubSystems, imported on first use):
+
+* :mod:`navstack.localiser`: AMCL's topics (map -> odom on /tf, /amcl_pose);
+* :mod:`navstack.navigator`: Nav2's ``/navigate_to_pose`` action (plan, follow, avoid);
+* :mod:`navstack.stack`: :class:`NavStack`, both under one SubSystem (actorbt.yaml's
+  ``navstack: navstack:NavStack``);
+* :mod:`navstack.tf`: the tf listener they share the code of.
+
 navstack may import bt_engine and planning, never sim or actors.
 """
 from .amcl import Amcl, AmclParams, Scan, Status
@@ -18,6 +27,15 @@ from .likelihood_field import LaserModelParams, LikelihoodField
 from .map_io import MapError, OccupancyMap, read_map_yaml, write_map_yaml
 from .particle_filter import Estimate, FilterParams, ParticleFilter
 
-__all__ = ["Amcl", "AmclParams", "Scan", "Status", "LaserModelParams", "LikelihoodField",
+
+def __getattr__(name: str):
+    # the SubSystems need bt_engine and the ROS messages: imported on first use (PEP 562)
+    if name == "NavStack":
+        from .stack import NavStack
+        return NavStack
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+__all__ = ["NavStack", "Amcl", "AmclParams", "Scan", "Status", "LaserModelParams", "LikelihoodField",
            "MapError", "OccupancyMap", "read_map_yaml", "write_map_yaml", "Estimate",
            "FilterParams", "ParticleFilter"]

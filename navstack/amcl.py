@@ -171,6 +171,11 @@ class Amcl:
                 self.pf._set(np.vstack([self.pf.particles[len(old):], old]))
         self._restart(None)
 
+    def request_nomotion_update(self) -> None:
+        """Run a filter update on the next scan even if the robot has not moved (AMCL's
+        request_nomotion_update service)."""
+        self._force_update = True
+
     def _restart(self, odom) -> None:
         self._force_update = True
         self._odom_at_update = odom

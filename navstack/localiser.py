@@ -2,18 +2,47 @@
 
 Subscribed: ``/map`` (nav_msgs/OccupancyGrid), ``/odom`` (nav_msgs/Odometry), ``/scan``
 (sensor_msgs/LaserScan, sensor-data QoS), ``/initialpose``
-(geometry_msgs/PoseWithCovarianceStamped). Published: ``/amcl_pose``
-(PoseWithCovarianceStamped, map frame, latched): after every filter update, as AMCL, and
-(``pose_rate``, 10 Hz by default) the odometry-predicted pose between updates, since the
-map -> odom transform is not on /tf yet.
+(geometry_msgs/PoseWithCovarianceStamped), ``/tf_static`` (the laser's mounting).
 
-NEXT STEP: publish map -> odom on /tf once tf2_msgs is available; :attr:`Localiser.map_to_odom`
-already holds it (``(x, y, yaw)``, valid at the last filter update's odometry), computed
-as AMCL does: the estimate composed with the inverse of the odometry pose.
+Published:
 
-The laser's pose on the base (``laser_pose``) is the URDF's base_footprint -> base_scan
-until /tf_static carries it. Each scan is paired with the odometry pose interpolated at
-its stamp. All the work runs in the bus callbacks (a few ms a filter update; a global
+* ``/tf`` (tf2_msgs/TFMessage): **map -> odom**, as AMCL: the estimate composed with the
+  inverse of the odometry pose at the last filter update. It goes out after every filter
+  update and, in between, on the odometry's messages at most ``tf_rate`` (20 Hz) times a
+  second (15 Hz on the simulator's 30 Hz odometry: every second message), each time
+  stamped ``transform_tolerance`` (0.2 s) into the future, as AMCL future-dates it: a
+  lookup of map -> base_footprint "now" (the odometry's newest stamp) then never has to
+  wait for the localiser, and a lookup at a past stamp (a camera image's) uses the
+  correction that was current ``transform_tolerance`` before it. AMCL's default is 1 s;
+  0.2 s covers three republication periods on one machine and keeps that lag short, so a
+  correction reaches the camera's poses a fifth of a second after the base's pose. The
+  stamps only grow (a filter update never goes out stamped before the last republication).
+* ``/amcl_pose`` (PoseWithCovarianceStamped, map frame, transient local): after every
+  filter update, as AMCL (``pose_rate`` > 0 adds the odometry-predicted pose in between).
+
+Both carry the filter's estimate smoothed (``smoothing``, :mod:`navstack.smoothing`): a
+Kalman filter with the odometry as motion and each estimate as a measurement, so that
+map-frame poses do not jump by the estimate's update-to-update jitter (~1 cm) while the
+robot measures an object and drives up to it. While the filter converges or relocalises,
+and on any correction larger than drift explains, the estimate goes out as it is. And
+map -> odom is held while the robot manoeuvres within ``hold_radius`` of where it last
+stood still (:class:`navstack.smoothing.LocalHold`): a look, an approach and a grasp
+then see one rigid map frame, moving with the odometry alone; the corrections made
+meanwhile are applied once the robot has left (this is not AMCL's behaviour; on a robot
+with AMCL, the mission has to cope with such jumps by measuring the object again).
+
+Nothing is on /tf before the localiser knows where the robot is: from an ``/initialpose``
+(RViz's "2D Pose Estimate"; or ``initial_pose``, AMCL's ``set_initial_pose``) at once, or
+from a global localisation once it has converged. Without either, ``global_after``
+seconds (odometry time) after the first scan with a map the localiser localises globally
+from the scan (None: wait for /initialpose for ever, as AMCL does), and runs a filter
+update on every scan (AMCL's no-motion update) until it has converged, since nothing
+moves the robot before it knows where it is.
+
+The laser's pose on the base (``laser_pose``) is read from /tf_static (base_footprint ->
+the scan's frame) once it is there, and is the URDF's base_footprint -> base_scan
+(:data:`LASER_POSE`) until then. Each scan is paired with the odometry pose interpolated
+at its stamp. All the work runs in the bus callbacks (a few ms a filter update; a global
 relocalisation's search about 0.2 s).
 """
 from __future__ import annotations
@@ -29,18 +58,26 @@ import numpy as np
 from geometry_msgs.msg import PoseWithCovarianceStamped
 from nav_msgs.msg import OccupancyGrid, Odometry
 from sensor_msgs.msg import LaserScan
+from tf2_msgs.msg import TFMessage
 
 from bt_engine import SubSystem, actor
 
-from .amcl import LOCALISED, Amcl, AmclParams, Scan
+from .amcl import LOCALISED, UNINITIALISED, Amcl, AmclParams, Scan, compose
 from .likelihood_field import LaserModelParams
 from .map_io import OccupancyMap
 from .particle_filter import FilterParams
+from .smoothing import LocalHold, PoseSmoother, SmootherParams
+from .tf import TF, TfListener, TransformError, planar_transform
 
 #: base_footprint -> base_scan in sim/models/mobile_manipulator.urdf (x, y, yaw)
 LASER_POSE = (-0.15, 0.0, 0.0)
 #: AMCL's default initial covariance (0.5 m, 0.5 m, pi/12 rad standard deviations)
 INITIAL_COV = np.diag([0.5 ** 2, 0.5 ** 2, (math.pi / 12) ** 2])
+#: [s] how far map -> odom is stamped into the future (AMCL's transform_tolerance)
+TRANSFORM_TOLERANCE = 0.2
+#: [Hz] at most this often map -> odom goes out between filter updates
+TF_RATE = 20.0
+GLOBAL_FRAME, ODOM_FRAME, BASE_FRAME = "map", "odom", "base_footprint"
 
 
 def _yaw(q) -> float:
@@ -79,15 +116,33 @@ class Localiser(SubSystem):
             /initialpose or localise_globally
         pose_rate: [Hz] publish the odometry-predicted pose on /amcl_pose this often
             between filter updates (0: only after updates, as AMCL)
+        tf_rate: [Hz] republish map -> odom on /tf at most this often between filter updates
+        transform_tolerance: [s] map -> odom is stamped this far into the future
+        global_after: [s] of odometry time after the first scan with a map, with no
+            initial pose yet: localise globally from the scan (None: never by itself)
+        smoothing: smooth the published pose (:mod:`navstack.smoothing`; a dict overrides
+            SmootherParams); False: publish each filter update's estimate as it is (AMCL)
+        hold_radius: [m] keep map -> odom while the robot manoeuvres this near where it
+            last stood still (:class:`navstack.smoothing.LocalHold`); 0: never
     """
 
     def __init__(self, params: dict | None = None, seed: int = 0,
-                 initial_pose: tuple | None = None, pose_rate: float = 10.0) -> None:
+                 initial_pose: tuple | None = None, pose_rate: float = 0.0,
+                 tf_rate: float = TF_RATE, transform_tolerance: float = TRANSFORM_TOLERANCE,
+                 global_after: float | None = None, smoothing: bool | dict = True,
+                 hold_radius: float = 0.75) -> None:
         super().__init__()
+        self.hold = LocalHold(hold_radius) if hold_radius > 0 else None
+        self._target = None                     # the newest map -> odom, held or not
+        self.smoother = None if smoothing is False else PoseSmoother(
+            SmootherParams(**smoothing) if isinstance(smoothing, dict) else None)
         self._params = split_params(params)
         self._seed = seed
         self._initial_pose = initial_pose
         self._pose_period = 1.0 / pose_rate if pose_rate > 0 else math.inf
+        self._tf_period = 1.0 / tf_rate if tf_rate > 0 else math.inf
+        self._tolerance = float(transform_tolerance)
+        self._global_after = global_after
         self._lock = threading.RLock()
         self.amcl: Amcl | None = None
         self._map_key = None
@@ -95,9 +150,16 @@ class Localiser(SubSystem):
         self._odom = deque(maxlen=200)          # (t, (x, y, yaw)), by stamp
         self._last_pub = -math.inf
         self._pending_initial = None            # an /initialpose before the map
+        self._first_scan = None                 # odometry time of the first scan with a map
+        self._tf_valid = False                  # map -> odom may go out
+        self._tf_sent = -math.inf               # odometry time of the last map -> odom
+        self._tf_stamp = -math.inf              # the stamp it carried
+        self._laser_from_tf = False
         self.map_to_odom = (0.0, 0.0, 0.0)
         bus = self.runtime.bus
         self._pub = bus.publisher("/amcl_pose", PoseWithCovarianceStamped, "latched")
+        self._tf_pub = bus.publisher(TF, TFMessage, 100)
+        self.tf = TfListener(bus, children=())  # /tf_static only: the laser's mounting
         self._subs = [
             bus.subscribe("/map", OccupancyGrid, self._on_map, "latched"),
             bus.subscribe("/odom", Odometry, self._on_odom, 50),
@@ -110,6 +172,7 @@ class Localiser(SubSystem):
         for s in self._subs:
             s.close()
         self._subs = []
+        self.tf.close()
 
     # -- bus callbacks --------------------------------------------------------------------
     def _on_map(self, msg: OccupancyGrid) -> None:
@@ -129,9 +192,50 @@ class Localiser(SubSystem):
                 start = self._pending_initial or (
                     (tuple(self._initial_pose), INITIAL_COV) if self._initial_pose is not None else None)
                 if start is not None:
-                    self.amcl.initialise(*start)
+                    self._initialise(*start)
             else:
                 self.amcl.set_map(occ)
+
+    def _initialise(self, pose, cov) -> None:
+        """Start from a pose the user gave: map -> odom is known at once."""
+        self.amcl.initialise(pose, cov)
+        self.map_to_odom = self._target = self.amcl.map_to_odom
+        if self.hold is not None:
+            self.hold.release()
+        if self.smoother is not None:
+            self.smoother.reset(pose, self._odom[-1][1] if self._odom else (0.0, 0.0, 0.0))
+        self._tf_valid = True
+        self._send_tf()
+
+    def _estimate(self, odom) -> None:
+        """map -> odom from the filter's new estimate at odometry pose ``odom``: smoothed
+        while localised, as it is otherwise (converging, relocalising); held while the
+        robot manoeuvres near where it stood still, unless the correction is one that
+        drift cannot explain."""
+        localised = self.amcl.status.state == LOCALISED
+        big = not localised
+        if self.smoother is None:
+            target = self.amcl.map_to_odom
+        else:
+            resets = self.smoother.resets
+            if localised:
+                self.smoother.update(self.amcl.pose(odom), odom)
+            else:
+                self.smoother.reset(self.amcl.pose(odom), odom)
+            big = big or self.smoother.resets != resets
+            target = self.smoother.map_to_odom()
+        self._target = target
+        if self.hold is not None and self.hold.holding and not big:
+            return                                  # kept until the robot moves away
+        if big and self.hold is not None:
+            self.hold.release()
+        self.map_to_odom = target
+
+    def pose(self, odom=None):
+        """The robot's map pose as published (at the newest odometry pose when None)."""
+        if odom is None:
+            odom = self._odom[-1][1] if self._odom else (0.0, 0.0, 0.0)
+        return compose(self.map_to_odom, tuple(odom))
 
     def _on_odom(self, msg: Odometry) -> None:
         p = msg.pose.pose
@@ -140,14 +244,22 @@ class Localiser(SubSystem):
         with self._lock:
             if self._odom and t < self._odom[-1][0]:
                 self._odom.clear()         # time went backwards (a new episode)
+                self._tf_sent = self._tf_stamp = -math.inf
             self._odom.append((t, pose))
             self._now = max(self._now, t)
             if self.amcl is None:
                 return
             self.amcl.on_odometry(pose)
+            if self.hold is not None and self.hold.on_odometry(t, pose) \
+                    and self._target is not None and self._target != self.map_to_odom:
+                self.map_to_odom = self._target      # the hold ended: apply what was kept
+                if self._tf_valid:
+                    self._send_tf()
+            if self._tf_valid and t - self._tf_sent >= self._tf_period - 1e-9:
+                self._send_tf()
             if self.amcl.status.state == LOCALISED or self.amcl.status.updates:
                 if t - self._last_pub >= self._pose_period - 1e-9:
-                    self._publish(msg.header.stamp, self.amcl.pose(pose))
+                    self._publish(msg.header.stamp, self.pose(pose))
 
     def odom_at(self, t: float):
         """The odometry pose interpolated at time t (the newest one outside the history)."""
@@ -162,6 +274,19 @@ class Localiser(SubSystem):
         (t0, a), (t1, b) = self._odom[i - 1], self._odom[i]
         return _interpolate(a, b, (t - t0) / (t1 - t0) if t1 > t0 else 1.0)
 
+    def _laser_pose(self, frame: str) -> None:
+        """The laser's mounting from /tf_static, once it is there."""
+        if self._laser_from_tf or not frame:
+            return
+        try:
+            pose = self.tf.pose(BASE_FRAME, frame)
+        except TransformError:
+            return
+        self._laser_from_tf = True
+        self._params[0].laser_pose = pose
+        if self.amcl is not None:
+            self.amcl.params.laser_pose = pose
+
     def _on_scan(self, msg: LaserScan) -> None:
         with self._lock:
             if self.amcl is None:
@@ -171,9 +296,22 @@ class Localiser(SubSystem):
             if odom is None:
                 return
             self._now = max(self._now, t)
+            self._laser_pose(msg.header.frame_id)
+            if self._first_scan is None:
+                self._first_scan = t
+            if not self._tf_valid and self._global_after is not None:
+                if self.amcl.status.state == UNINITIALISED and t - self._first_scan >= self._global_after:
+                    self.amcl.global_localisation()     # nobody said where the robot is
+                elif self.amcl.status.state != UNINITIALISED:
+                    # converge while standing still: the robot waits for its pose
+                    self.amcl.request_nomotion_update()
             if self.amcl.on_scan(Scan.from_msg(msg), odom):
-                self.map_to_odom = self.amcl.map_to_odom   # NEXT STEP: on /tf
-                self._publish(msg.header.stamp, self.amcl.pose(odom))
+                self._estimate(odom)
+                if not self._tf_valid and self.amcl.status.state == LOCALISED:
+                    self._tf_valid = True           # a global localisation converged
+                if self._tf_valid:
+                    self._send_tf()
+                self._publish(msg.header.stamp, self.pose(odom))
 
     def _on_initial_pose(self, msg: PoseWithCovarianceStamped) -> None:
         p = msg.pose.pose
@@ -186,12 +324,20 @@ class Localiser(SubSystem):
             if self.amcl is None:
                 self._pending_initial = (pose, cov)
             else:
-                self.amcl.initialise(pose, cov)
+                self._initialise(pose, cov)
+
+    def _send_tf(self) -> None:
+        """map -> odom on /tf, stamped transform_tolerance ahead of the odometry's time
+        (and after the last one sent)."""
+        stamp = max(self._now + self._tolerance, self._tf_stamp + 1e-3)
+        self._tf_pub.publish(TFMessage(transforms=[
+            planar_transform(GLOBAL_FRAME, ODOM_FRAME, self.map_to_odom, stamp)]))
+        self._tf_sent, self._tf_stamp = self._now, stamp
 
     def _publish(self, stamp, pose) -> None:
         msg = PoseWithCovarianceStamped()
         msg.header.stamp = stamp
-        msg.header.frame_id = "map"
+        msg.header.frame_id = GLOBAL_FRAME
         msg.pose.pose.position.x, msg.pose.pose.position.y = float(pose[0]), float(pose[1])
         msg.pose.pose.orientation.z = math.sin(pose[2] / 2)
         msg.pose.pose.orientation.w = math.cos(pose[2] / 2)
@@ -238,6 +384,6 @@ class Localiser(SubSystem):
                 return {"state": "uninitialised", "pose": None, "map": False}
             st = self.amcl.status.as_dict()
             st.pop("last_lost", None)
-            st["pose"] = [round(float(v), 4) for v in self.amcl.pose()]
+            st["pose"] = [round(float(v), 4) for v in self.pose()]
             st["map"] = True
             return {k: (float(v) if isinstance(v, (np.floating,)) else v) for k, v in st.items()}

@@ -13,6 +13,7 @@ Modules, one concept each:
 * :mod:`planning.trajectory`: ruckig timing and the jerk-limited stop.
 * :mod:`planning.grid`: occupancy grids and their inflation.
 * :mod:`planning.base_planner`: base paths on the inflated grid.
+* :mod:`planning.viewpoints`: places from which a search sees a whole map.
 * :mod:`planning.tf_buffer`: the transform tree (tf2's buffer) fed from ``/tf``.
 * :mod:`planning.errors`, :mod:`planning.failure`: exceptions and failure reasons.
 

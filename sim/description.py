@@ -14,6 +14,7 @@ Format (all lengths in metres, angles in radians)::
       - {name: sofa, center: [1, 3], size: [1.8, 0.8, 0.45], yaw: 0, color: [r, g, b]}
     place_location: {name: pallet, center: [8, 7], size: [0.6, 0.4, 0.1], yaw: 0}
     robot: {start: [1, 1, 0]}
+    search_locations: [[1.8, 2.0], [4.8, 1.6]]   # optional: where a search looks around
     placement: {clearance: 0.3, tries: 500}
     objects:
       - {category: can, count: 1, room: kitchen}   # random, seeded
@@ -93,6 +94,7 @@ class WorldSpec:
     place: Box | None = None
     robot_start: tuple = (0.0, 0.0, 0.0)
     objects: list = field(default_factory=list)      # [PlacedObject]
+    search_locations: list = field(default_factory=list)   # [(x, y)]; empty: from the map
     seed: int = 0
 
     @property
@@ -214,7 +216,8 @@ def parse_world(text: str, path: str = "<string>", seed: int = 0) -> WorldSpec:
         raise WorldError(f"{path}:1: empty world description")
     top = ctx.mapping(root, "world")
     ctx.keys(top, {"name", "bounds", "wall", "walls", "rooms", "furniture", "place_location",
-                   "robot", "objects", "placement", "description"}, "world")
+                   "robot", "objects", "placement", "description",
+                   "search_locations"}, "world")
     if "bounds" not in top:
         raise ctx.err(root, "world: missing 'bounds' [xmin, ymin, xmax, ymax]")
     name = ctx.str_(top["name"][1], "name") if "name" in top else Path(path).stem
@@ -260,6 +263,13 @@ def parse_world(text: str, path: str = "<string>", seed: int = 0) -> WorldSpec:
         ctx.keys(rm, {"start"}, "robot")
         if "start" in rm:
             spec.robot_start = ctx.vec(rm["start"][1], 3, "robot.start")
+
+    for i, ln in enumerate(ctx.seq(top["search_locations"][1], "search_locations")
+                           if "search_locations" in top else []):
+        x, y = ctx.vec(ln, 2, f"search_locations[{i}]")
+        if not (bounds[0] <= x <= bounds[2] and bounds[1] <= y <= bounds[3]):
+            raise ctx.err(ln, f"search_locations[{i}]: ({x:g}, {y:g}) is outside the bounds {list(bounds)}")
+        spec.search_locations.append((x, y))
 
     clearance, tries = 0.30, 500
     if "placement" in top:

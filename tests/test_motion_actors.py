@@ -13,13 +13,25 @@ from tests.conftest import run_in_actor
 sim_mod = pytest.importorskip("sim")
 
 
+def robot_on(rt, world):
+    """The robot's actors and the navigation stack (as actorbt.yaml starts them), told
+    where the robot starts (/initialpose, as a user does)."""
+    from actors.robot import Robot
+    from demo.episode import initial_pose_msg
+    from geometry_msgs.msg import PoseWithCovarianceStamped
+    from navstack import NavStack
+    rt.add_subsystem("robot", Robot)
+    rt.add_subsystem("navstack", NavStack)
+    rt.bus.publisher("/initialpose", PoseWithCovarianceStamped).publish(
+        initial_pose_msg(tuple(world.spec.robot_start)))
+
+
 @pytest.fixture(scope="module")
 def open_floor():
-    from actors.robot import Robot
     rt = Runtime()
     world = sim_mod.SimWorld(rt, world="open_floor", seed=0)
     world.start()
-    rt.add_subsystem("robot", Robot)
+    robot_on(rt, world)
     yield rt, world
     rt.run_on_hub(world.close)
     rt.close()
@@ -120,11 +132,10 @@ def test_cancelling_goto_stops_the_base(open_floor):
 
 
 def test_goto_across_two_rooms_of_the_house():
-    from actors.robot import Robot
     with Runtime() as rt:
         world = sim_mod.SimWorld(rt, world="house", seed=0)
         world.start()
-        rt.add_subsystem("robot", Robot)
+        robot_on(rt, world)
         goal = (2.6, 5.4, math.pi / 2)  # living room -> bedroom, through a doorway
         rt.call("goto", *goal)
         x, y, yaw = world.robot_pose()

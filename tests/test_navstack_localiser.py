@@ -6,13 +6,17 @@ import math
 from pathlib import Path
 
 import numpy as np
+import pytest
 from geometry_msgs.msg import PoseWithCovarianceStamped
 from nav_msgs.msg import OccupancyGrid, Odometry
 from sensor_msgs.msg import LaserScan
+from tf2_msgs.msg import TFMessage
 
-from navstack.localiser import LASER_POSE, Localiser
+from navstack.localiser import LASER_POSE, TRANSFORM_TOLERANCE, Localiser
 from navstack.map_io import read_map_yaml
 from navstack.synthetic import LaserSpec, SyntheticWorld, world_boxes
+from navstack.tf import planar_transform
+from planning.tf_buffer import TransformBuffer, planar, pose2d
 
 FIXTURES = Path(__file__).parent / "fixtures"
 
@@ -51,8 +55,11 @@ class Feed:
         self.odom = bus.publisher("/odom", Odometry)
         self.scan = bus.publisher("/scan", LaserScan)
         self.initial = bus.publisher("/initialpose", PoseWithCovarianceStamped)
+        self.tf_static = bus.publisher("/tf_static", TFMessage)
         self.poses = []
+        self.tf = []          # (receive time, map -> odom message)
         self.sub = bus.subscribe("/amcl_pose", PoseWithCovarianceStamped, self.poses.append)
+        self.tf_sub = bus.subscribe("/tf", TFMessage, lambda m: self.tf.append((self.world.t, m)))
 
     def run(self, seconds):
         end = self.world.t + seconds
@@ -90,9 +97,21 @@ def test_localiser_subsystem_tracks_and_relocalises(rt):
     st = rt.call("localisation_status")
     assert st["state"] == "localised" and st["updates"] > 5
     assert math.hypot(st["pose"][0] - s.truth[0], st["pose"][1] - s.truth[1]) < 0.1
-    # /amcl_pose at >= 10 Hz, the last one right
-    stamps = [p.header.stamp.sec + p.header.stamp.nanosec * 1e-9 for p in feed.poses]
-    assert len([t for t in stamps if t > t0 + 1]) >= 10 * 13
+    # map -> odom on /tf at >= 10 Hz, future-dated; /amcl_pose after each filter update
+    sent = [(t, m.transforms[0]) for t, m in feed.tf if t > t0 + 1]
+    assert len(sent) >= 10 * 13
+    assert all((ts.header.frame_id, ts.child_frame_id) == ("map", "odom") for _, ts in sent)
+    t, ts = sent[-1]
+    assert _seconds(ts.header.stamp) == pytest.approx(t + TRANSFORM_TOLERANCE, abs=0.06)
+    stamps = [_seconds(ts.header.stamp) for _, ts in sent]
+    assert stamps == sorted(stamps)
+    buf = TransformBuffer()
+    buf.add_message(ts)
+    buf.set("odom", "base_footprint", planar(*s.odom), s.t)
+    x, y, yaw = pose2d(buf.lookup("map", "base_footprint"))
+    assert math.hypot(x - s.truth[0], y - s.truth[1]) < 0.1
+    assert abs(math.remainder(yaw - s.truth[2], 2 * math.pi)) < 0.05
+    assert 5 < len([p for p in feed.poses if _seconds(p.header.stamp) > t0 + 1]) < 100
     last = feed.poses[-1].pose.pose.position
     assert math.hypot(last.x - s.truth[0], last.y - s.truth[1]) < 0.1
     assert feed.poses[-1].header.frame_id == "map"
@@ -106,3 +125,76 @@ def test_localiser_subsystem_tracks_and_relocalises(rt):
     st = rt.call("localisation_status")
     assert st["state"] == "localised"
     assert math.hypot(st["pose"][0] - s.truth[0], st["pose"][1] - s.truth[1]) < 0.1
+
+
+def _seconds(stamp):
+    return stamp.sec + stamp.nanosec * 1e-9
+
+
+def test_localiser_reads_the_laser_mounting_from_tf_static(rt):
+    occ = read_map_yaml(FIXTURES / "house.yaml")
+    world = SyntheticWorld(occ, world_boxes(FIXTURES / "house_world.yaml"), seed=3)
+    loc = rt.add_subsystem("localiser", Localiser, seed=1, initial_pose=world.truth)
+    feed = Feed(rt, world)
+    feed.map.publish(occ.to_msg())
+    feed.run(0.5)
+    assert loc.amcl.params.laser_pose == LASER_POSE          # the URDF's, until /tf_static says
+    mount = (-0.1, 0.02, 0.0)
+    feed.tf_static.publish(TFMessage(transforms=[
+        planar_transform("base_footprint", "base_link", (0.0, 0.0, 0.0), 0.0),
+        planar_transform("base_link", "base_scan", mount, 0.0)]))
+    feed.run(0.5)
+    assert loc.amcl.params.laser_pose == pytest.approx(mount)
+    assert feed.tf, "map -> odom went out from the initial pose on"
+
+
+def test_without_an_initial_pose_the_localiser_localises_globally(rt):
+    occ = read_map_yaml(FIXTURES / "house.yaml")
+    world = SyntheticWorld(occ, world_boxes(FIXTURES / "house_world.yaml"), seed=5)
+    rt.add_subsystem("localiser", Localiser, seed=2, global_after=1.0)
+    feed = Feed(rt, world)
+    feed.map.publish(occ.to_msg())
+    feed.run(0.8)
+    assert rt.call("localisation_status")["state"] == "uninitialised" and not feed.tf
+    s = feed.run(10)
+    st = rt.call("localisation_status")
+    assert st["state"] == "localised"
+    assert math.hypot(st["pose"][0] - s.truth[0], st["pose"][1] - s.truth[1]) < 0.1
+    assert feed.tf, "map -> odom goes out once the global localisation converged"
+
+
+def test_the_smoother_removes_the_estimates_jitter_and_follows_a_relocalisation():
+    from navstack.smoothing import PoseSmoother
+    rng = np.random.default_rng(0)
+    sm = PoseSmoother()
+    raw_jumps, smooth_jumps, errors = [], [], []
+    last_raw = last = None
+    for k in range(200):                       # a straight drive, an update every 0.25 m
+        truth = (0.25 * k, 1.0, 0.0)
+        odom = (0.25 * k * 1.01, 0.0, 0.0)     # the odometry runs 1 % long
+        est = (truth[0] + rng.normal(0, 0.015), truth[1] + rng.normal(0, 0.015), rng.normal(0, 0.005))
+        out = sm.update(est, odom)
+        if last is not None:
+            raw_jumps.append(math.hypot(est[0] - last_raw[0] - 0.25, est[1] - last_raw[1]))
+            smooth_jumps.append(math.hypot(out[0] - last[0] - 0.25, out[1] - last[1]))
+        last_raw, last = est, out
+        errors.append(math.hypot(out[0] - truth[0], out[1] - truth[1]))
+    assert np.median(smooth_jumps) < 0.5 * np.median(raw_jumps)
+    assert np.sqrt(np.mean(np.square(errors[20:]))) < 0.015     # and it follows the odometry's drift
+    # a relocalisation (a correction drift cannot explain) is taken at once
+    out = sm.update((truth[0] + 1.0, 1.0, 0.0), (0.25 * 200 * 1.01, 0.0, 0.0))
+    assert out == pytest.approx((truth[0] + 1.0, 1.0, 0.0)) and sm.resets == 1
+
+
+def test_the_local_hold_keeps_the_frame_until_the_robot_has_moved_away():
+    from navstack.smoothing import LocalHold
+    hold = LocalHold(radius=0.5)
+    assert not hold.on_odometry(0.0, (0.0, 0.0, 0.0)) and not hold.holding
+    assert not hold.on_odometry(0.1, (0.0, 0.0, 0.0)) and hold.holding     # it stands still
+    for k in range(1, 6):                                                  # manoeuvres near by
+        assert not hold.on_odometry(0.1 + k, (0.09 * k, 0.0, 0.1 * k)) and hold.holding
+    assert hold.on_odometry(7.0, (0.6, 0.0, 0.0)) and not hold.holding    # left: released once
+    assert not hold.on_odometry(7.1, (0.62, 0.0, 0.0)) and not hold.holding   # driving on
+    assert not hold.on_odometry(9.0, (0.62, 0.0, 0.0)) and hold.holding       # stopped again
+    released = [hold.on_odometry(9.0 + 0.1 * k, (0.62, 0.0, 0.15 * k)) for k in range(1, 6)]
+    assert released == [False] * 4 + [True]                                   # turned 0.75 rad

@@ -10,7 +10,9 @@ import math
 
 import numpy as np
 import pytest
+from geometry_msgs.msg import TransformStamped
 from sensor_msgs.msg import CameraInfo, Image
+from tf2_msgs.msg import TFMessage
 
 from actors.camera import RGBDFrame, image_to_array, stamp_seconds
 from actors.perception import APPEARANCES, Perception, combine_sightings, fit_circle_fixed
@@ -18,6 +20,7 @@ from bt_engine import ActorError, Runtime
 from sim import SimWorld
 from sim.description import load_world
 from sim.objects import CATEGORIES, Category
+from sim.odometry import OdomNoise
 
 from tests.conftest import run_in_actor
 
@@ -39,9 +42,12 @@ def world():
     spec = load_world("open_floor", 0)
     spec.robot_start = ROBOT
     rt = Runtime(clock="virtual")
-    sim = SimWorld(rt, spec, seed=0).start()
+    # exact odometry and, as a static_transform_publisher would, map -> odom where it
+    # started: the camera is posed exactly (these tests are about perception, not localisation)
+    sim = SimWorld(rt, spec, seed=0, odom_noise=OdomNoise.exact()).start()
     try:
         rt.add_subsystem("perception", Perception)
+        rt.bus.publisher("/tf_static", TFMessage).publish(TFMessage(transforms=[_map_to_odom(ROBOT)]))
         names = {"can": "can_1", "bottle": "bottle_1", "box": "box_1"}
         for k in DISTRACTORS:
             names[k] = sim.add_object(k, *PARK)
@@ -51,6 +57,14 @@ def world():
         rt.close()
         for k in added:
             CATEGORIES.pop(k, None)
+
+
+def _map_to_odom(pose) -> TransformStamped:
+    ts = TransformStamped()
+    ts.header.frame_id, ts.child_frame_id = "map", "odom"
+    ts.transform.translation.x, ts.transform.translation.y = pose[0], pose[1]
+    ts.transform.rotation.z, ts.transform.rotation.w = math.sin(pose[2] / 2), math.cos(pose[2] / 2)
+    return ts
 
 
 def _in_front(d: float, bearing: float) -> tuple[float, float]:
@@ -141,7 +155,8 @@ def test_camera_streams_and_the_posed_rgbd_frame(world):
     assert red.sum() > 100
     frame = rt.call("rgbd")
     assert isinstance(frame, RGBDFrame)
-    # the camera pose from /ground_truth/pose x URDF extrinsics is where the sim has the link
+    # the camera pose from tf (map -> odom -> base_footprint -> ... -> camera_optical_frame)
+    # is where the sim has the link
     pos, orn = sim.link_pose("camera_optical_frame")
     import pybullet as p
     R = np.array(p.getMatrixFromQuaternion(orn)).reshape(3, 3)

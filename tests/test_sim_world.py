@@ -82,6 +82,15 @@ def test_bad_yaml_names_file_and_line(tmp_path):
     f.write_text("name: bad\nbounds: [0, 0, 5, 5]\nrobots: {start: [1, 1, 0]}\n")
     with pytest.raises(WorldError, match=r"bad\.yaml:3:1: world: unknown key 'robots'"):
         load_world(f)
+    f.write_text("name: bad\nbounds: [0, 0, 5, 5]\nsearch_locations: [[1, 1], [7, 1]]\n")
+    with pytest.raises(WorldError, match=r"bad\.yaml:3:28: search_locations\[1\]: \(7, 1\) is outside the bounds"):
+        load_world(f)
+
+
+def test_search_locations_are_optional():
+    assert load_world("open_floor", 0).search_locations == []
+    house = load_world("house", 0).search_locations
+    assert len(house) == 9 and house[0] == (1.8, 2.0)
 
 
 def test_unplaceable_object_is_a_clear_error(tmp_path):
