@@ -27,10 +27,9 @@ log = logging.getLogger("sim")
 
 #: Whether /ground_truth/pose goes on the bus when SimWorld(debug_ground_truth=...) is not
 #: given. The robot's own senses are /scan, /odom, /joint_states and the camera; the exact
-#: pose is a debugging aid (scoring and pictures read SimWorld.robot_pose() instead).
-#: True until the actors localise from /scan and /odom (actors/navigation.py and
-#: actors/camera.py still subscribe to /ground_truth/pose).
-DEBUG_GROUND_TRUTH = True
+#: pose is a debugging aid (scoring and pictures read SimWorld.robot_pose() instead), and
+#: the actors localise from /scan and /odom without it (tests/test_ground_truth_guard.py).
+DEBUG_GROUND_TRUTH = False
 
 
 def _on_hub(fn):

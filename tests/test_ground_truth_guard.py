@@ -50,13 +50,13 @@ def test_the_guard_catches_what_it_should():
 
 
 def test_a_demo_episode_puts_no_truth_on_the_bus(monkeypatch, tmp_path):
-    """With the debug flag off, nothing on the bus carries /ground_truth/pose, and the
-    reference mission still succeeds."""
+    """With the debug flag off (the default), nothing on the bus carries
+    /ground_truth/pose, and the reference mission still succeeds."""
     sim_world = pytest.importorskip("sim.simworld")
     from bt_engine.bus.local import LocalBus
     from demo.episode import run_episode
 
-    monkeypatch.setattr(sim_world, "DEBUG_GROUND_TRUTH", False)
+    assert sim_world.DEBUG_GROUND_TRUTH is False
     topics: set[str] = set()
     publisher, subscribe = LocalBus.publisher, LocalBus.subscribe
 
