@@ -18,7 +18,7 @@ On the runtime's bus (SubSystems, imported on first use):
 * :mod:`navstack.navigator`: Nav2's ``/navigate_to_pose`` action (plan, follow, avoid);
 * :mod:`navstack.stack`: :class:`NavStack`, both under one SubSystem (actorbt.yaml's
   ``navstack: navstack:NavStack``);
-* :mod:`navstack.tf`: the tf listener they share the code of.
+* :mod:`navstack.tf`: the tf listener (from planning) and the map -> odom message.
 
 navstack may import bt_engine and planning, never sim or actors.
 """

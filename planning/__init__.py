@@ -15,6 +15,7 @@ Modules, one concept each:
 * :mod:`planning.base_planner`: base paths on the inflated grid.
 * :mod:`planning.viewpoints`: places from which a search sees a whole map.
 * :mod:`planning.tf_buffer`: the transform tree (tf2's buffer) fed from ``/tf``.
+* :mod:`planning.tf_listener`: that buffer kept up to date from a bus (tf2_ros's listener).
 * :mod:`planning.errors`, :mod:`planning.failure`: exceptions and failure reasons.
 
 Planners return frozen result values with ``ok``, ``failure`` and ``message``

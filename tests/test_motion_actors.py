@@ -105,32 +105,6 @@ def test_cancelling_a_trajectory_stops_the_arm_smoothly(open_floor):
     assert speeds[-1] < 0.02, f"joint speeds after 1 s: {speeds[-1]:.3f} rad/s"
 
 
-def test_mini_walk_and_turn(open_floor):
-    rt, world = open_floor
-    x0, y0, _ = world.robot_pose()
-    driven = rt.call("mini_walk", 0.3)
-    assert driven == pytest.approx(0.3, abs=0.01)
-    yaw = rt.call("mini_turn", math.pi / 2)
-    _, _, true_yaw = world.robot_pose()
-    assert abs(math.remainder(yaw - true_yaw, 2 * math.pi)) < 0.01
-
-
-def test_cancelling_goto_stops_the_base(open_floor):
-    rt, world = open_floor
-    x, y, _ = world.robot_pose()
-
-    def body():
-        txn = rt.start("goto", x + 2.0, y, 0.0)
-        rt.sleep(3.0)
-        txn.cancel("operator stop")
-        rt.sleep(1.0)
-        return txn
-    txn = run_in_actor(rt, body)
-    odom = rt.call("odom")
-    assert txn.cancelled
-    assert abs(odom.twist.twist.linear.x) < 0.01 and abs(odom.twist.twist.angular.z) < 0.02
-
-
 def test_goto_across_two_rooms_of_the_house():
     with Runtime() as rt:
         world = sim_mod.SimWorld(rt, world="house", seed=0)

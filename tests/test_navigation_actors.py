@@ -11,21 +11,10 @@ from nav_msgs.msg import Odometry
 from sensor_msgs.msg import PointCloud2
 
 from bt_engine import ActorError, Runtime
+from demo.episode import initial_pose_msg
 from tests.conftest import run_in_actor
 
 sim_mod = pytest.importorskip("sim")
-
-
-def initial_pose(pose):
-    m = PoseWithCovarianceStamped()
-    m.header.frame_id = "map"
-    m.pose.pose.position.x, m.pose.pose.position.y = pose[0], pose[1]
-    m.pose.pose.orientation.z, m.pose.pose.orientation.w = math.sin(pose[2] / 2), math.cos(pose[2] / 2)
-    cov = [0.0] * 36
-    cov[0] = cov[7] = 0.05 ** 2
-    cov[35] = 0.03 ** 2
-    m.pose.covariance = cov
-    return m
 
 
 def robot_in(world: str, seed: int = 0):
@@ -35,7 +24,7 @@ def robot_in(world: str, seed: int = 0):
     sim = sim_mod.SimWorld(rt, world=world, seed=seed, camera=False).start()
     rt.add_subsystem("navigation", Navigation)
     rt.add_subsystem("navstack", NavStack)
-    rt.bus.publisher("/initialpose", PoseWithCovarianceStamped).publish(initial_pose(sim.spec.robot_start))
+    rt.bus.publisher("/initialpose", PoseWithCovarianceStamped).publish(initial_pose_msg(sim.spec.robot_start))
     return rt, sim
 
 

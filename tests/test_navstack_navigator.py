@@ -13,6 +13,7 @@ from bt_engine import ActorError, Runtime
 from bt_engine.bus.actions import STATUS_ABORTED, ActionGoalError
 from navstack import NavStack
 from navstack.navigator import GOAL_OCCUPIED, GOAL_OUTSIDE_MAP, NO_VALID_PATH, lookahead_point
+from demo.episode import initial_pose_msg
 from tests.conftest import run_in_actor
 
 sim_mod = pytest.importorskip("sim")
@@ -26,18 +27,6 @@ def goal_msg(x, y, yaw=0.0, frame="map"):
     return g
 
 
-def initial_pose(pose):
-    m = PoseWithCovarianceStamped()
-    m.header.frame_id = "map"
-    m.pose.pose.position.x, m.pose.pose.position.y = pose[0], pose[1]
-    m.pose.pose.orientation.z, m.pose.pose.orientation.w = math.sin(pose[2] / 2), math.cos(pose[2] / 2)
-    cov = [0.0] * 36
-    cov[0] = cov[7] = 0.05 ** 2
-    cov[35] = 0.03 ** 2
-    m.pose.covariance = cov
-    return m
-
-
 @pytest.fixture(scope="module")
 def floor():
     """open_floor with the navstack, localised from /initialpose; a client actor ``nav``."""
@@ -45,7 +34,7 @@ def floor():
     world = sim_mod.SimWorld(rt, "open_floor", seed=0, camera=False).start()
     rt.add_subsystem("navstack", NavStack)
     rt.root.register_action("nav", NavigateToPose, "/navigate_to_pose")
-    rt.bus.publisher("/initialpose", PoseWithCovarianceStamped).publish(initial_pose(world.spec.robot_start))
+    rt.bus.publisher("/initialpose", PoseWithCovarianceStamped).publish(initial_pose_msg(world.spec.robot_start))
     rt.call("sleep", 0.5)
     yield rt, world
     world.close()
