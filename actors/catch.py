@@ -194,7 +194,8 @@ class Catcher(SubSystem):
     def pick(self, target: dict, category: str | None = None) -> dict:
         """Grasp ``target`` with the category's strategy and lift it.
 
-        Fails with GraspError when the fingers close on nothing (and backs off first).
+        Fails with GraspError when the fingers close on nothing (and backs off first),
+        and before moving anything when the robot is delocalised (require_localised).
 
         Args:
             target: the object, as approach_object returns it: a dict with its axis x, y
@@ -207,6 +208,7 @@ class Catcher(SubSystem):
         strategy = self._strategy(target, category)
         g, a = strategy.grasp, strategy.approach
         xy = _target_xy(target)
+        self.run_actor("require_localised")       # never grasp where the map pose is a guess
         height = float(target.get("z", 0.0)) + g.height  # the object may stand on something
         self.run_actor("open", g.open_width)
         self.run_actor("move_to_pose", a.reach, 0.0, height, g.pitch)

@@ -26,7 +26,7 @@ import array
 import math
 
 import numpy as np
-from geometry_msgs.msg import Twist
+from geometry_msgs.msg import PoseWithCovarianceStamped, Twist
 from nav2_msgs.action import NavigateToPose
 from nav_msgs.msg import OccupancyGrid as OccupancyGridMsg
 from nav_msgs.msg import Odometry
@@ -45,6 +45,8 @@ ROBOT_RADIUS = 0.20     # footprint radius used to inflate the map [m] (the navi
 INFLATION = 0.45        # distance over which the map cost decays [m]
 YAW_TOLERANCE = math.radians(0.5)   # mini_turn's
 POSE_WAIT = 5.0         # [s] how long get_pose waits for map -> base_footprint
+LOCALISED_STD_XY = 0.10     # [m] position std of /amcl_pose above which the robot is delocalised
+LOCALISED_STD_YAW = 0.10    # [rad] heading std likewise
 ACTION = "/navigate_to_pose"
 PERCEIVED = "/perceived_obstacles"
 MARK_SPACING = 0.025    # [m] between the points that mark a perceived object's disc
@@ -108,6 +110,8 @@ class Navigation(SubSystem):
         self.register_subscriber("odom", Odometry, "/odom", 1)
         self.register_subscriber("map", OccupancyGridMsg, "/map", "latched")   # map_server latches it
         self.register_action("navigate_to_pose", NavigateToPose, ACTION)
+        # the localiser's estimate and its covariance (AMCL latches it)
+        self.register_subscriber("amcl_pose", PoseWithCovarianceStamped, "/amcl_pose", "latched")
         self._perceived = self.runtime.bus.publisher(PERCEIVED, PointCloud2, "latched")
         self.tf = tf_listener(self)
         self.set_value("grid", None)        # the static map, once received
@@ -129,6 +133,39 @@ class Navigation(SubSystem):
                     raise NavigationError(f"the robot is not localised: no {MAP} -> {BASE} transform "
                                           f"on /tf after {POSE_WAIT:g} s (give /initialpose): {e}") from None
             self.run_actor("sleep", 0.05)
+
+    @actor
+    def require_localised(self, max_std_xy: float = LOCALISED_STD_XY,
+                          max_std_yaw: float = LOCALISED_STD_YAW, wait: float = 10.0) -> dict:
+        """Wait until the localiser is sure of the pose (the covariance of its latest
+        /amcl_pose within the limits), and fail with NavigationError if it is not within
+        ``wait``: a robot that does not know where it is must not grasp. Returns the
+        estimate's std_xy [m] and std_yaw [rad].
+
+        Args:
+            max_std_xy: the largest position standard deviation accepted [m]
+            max_std_yaw: the largest heading standard deviation accepted [rad]
+            wait: how long to wait for a good estimate [s]
+        """
+        end = self.runtime.now() + wait
+        last = "no /amcl_pose received"
+        while True:
+            try:
+                msg = self.run_actor_mode("amcl_pose", "timed", 0.5)   # latched: the latest at once
+            except ActorbtError:
+                msg = None
+            if msg is not None:
+                cov = msg.pose.covariance
+                std_xy = math.sqrt(max(cov[0], cov[7], 0.0))
+                std_yaw = math.sqrt(max(cov[35], 0.0))
+                if std_xy <= max_std_xy and std_yaw <= max_std_yaw:
+                    return {"std_xy": round(std_xy, 4), "std_yaw": round(std_yaw, 4)}
+                last = (f"the localisation is uncertain: std {std_xy * 100:.1f} cm, "
+                        f"{math.degrees(std_yaw):.1f} deg (limits {max_std_xy * 100:.0f} cm, "
+                        f"{math.degrees(max_std_yaw):.0f} deg)")
+            if self.runtime.now() >= end:
+                raise NavigationError(f"the robot is delocalised: {last} after {wait:g} s")
+            self.run_actor("sleep", 0.2)
 
     def _odometry(self) -> tuple[float, float, float]:
         return pose2d(self.run_actor_mode("odom", "timed", 5.0))

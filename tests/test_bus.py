@@ -71,3 +71,35 @@ def test_delivery_is_on_the_hub_in_publish_order(rt):
         pub.publish(String(data=word))  # from this (non-hub) thread
     rt.call("sleep", 0.1)
     assert got == ["one", "two", "three"]
+
+
+def test_a_latched_topic_reaches_a_late_latched_subscriber_only(rt):
+    """Transient local as in DDS: the last message waits for latched subscribers."""
+    got: dict[str, list] = {"latched": [], "volatile": []}
+    pub = rt.bus.publisher("/map_name", String, "latched")
+    pub.publish(String(data="first"))
+    pub.publish(String(data="house"))
+
+    def body():
+        subs = [rt.bus.subscribe("/map_name", String, got["latched"].append, "latched"),
+                rt.bus.subscribe("/map_name", String, got["volatile"].append, 10)]
+        rt.sleep(0.1)
+        pub.publish(String(data="flat"))
+        rt.sleep(0.1)
+        for s in subs:
+            s.close()
+    run_in_actor(rt, body)
+    assert [m.data for m in got["latched"]] == ["house", "flat"]
+    assert [m.data for m in got["volatile"]] == ["flat"]
+
+
+def test_a_volatile_topic_keeps_nothing(rt):
+    got: list = []
+    rt.bus.publisher("/chatter", String).publish(String(data="lost"))
+
+    def body():
+        sub = rt.bus.subscribe("/chatter", String, got.append, "latched")
+        rt.sleep(0.1)
+        sub.close()
+    run_in_actor(rt, body)
+    assert got == []

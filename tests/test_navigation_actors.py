@@ -134,3 +134,20 @@ def test_goto_across_two_rooms_of_the_house():
     assert math.hypot(x - goal[0], y - goal[1]) < 0.10
     assert abs(math.degrees(math.remainder(yaw - goal[2], 2 * math.pi))) < 5.0
     assert _error(pose, (x, y)) < 0.06
+
+
+def test_require_localised_reads_the_localisers_covariance():
+    """No sim: /amcl_pose is published by hand, as an uncertain then a sure estimate."""
+    from actors.navigation import Navigation
+    with Runtime(clock="virtual") as rt:
+        rt.add_subsystem("navigation", Navigation)
+        pub = rt.bus.publisher("/amcl_pose", PoseWithCovarianceStamped, "latched")
+        with pytest.raises(ActorError, match="delocalised: no /amcl_pose received after 1 s"):
+            rt.call("require_localised", wait=1.0)
+        unsure = initial_pose_msg((1.0, 2.0, 0.0))
+        unsure.pose.covariance[0] = unsure.pose.covariance[7] = 0.5 ** 2
+        pub.publish(unsure)
+        with pytest.raises(ActorError, match=r"delocalised: the localisation is uncertain: std 50\.0 cm"):
+            rt.call("require_localised", wait=1.0)
+        pub.publish(initial_pose_msg((1.0, 2.0, 0.0)))     # 5 cm, 1.7 degrees
+        assert rt.call("require_localised") == {"std_xy": 0.05, "std_yaw": 0.03}

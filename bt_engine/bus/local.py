@@ -2,6 +2,10 @@
 
 Delivery is deferred to the hub's ready queue in publish order, so a publisher never
 runs subscriber code inside its own call, and a run is deterministic.
+
+Durability as in DDS: a topic whose publisher is latched (transient local) keeps its last
+message, and a latched subscriber that comes later receives it at once (a map, the
+localiser's pose); a volatile subscriber only gets what is published after it subscribed.
 """
 from __future__ import annotations
 
@@ -10,6 +14,7 @@ from typing import TYPE_CHECKING, Any, Callable
 from ..errors import ActorbtError
 from .actions import LocalActionServer, OnGoal, local_client_actor
 from .messages import type_name
+from .qos import is_latched
 from .transport import EndpointInfo, TopicInfo, Transport, qos_label
 
 if TYPE_CHECKING:
@@ -21,7 +26,7 @@ class TopicTypeError(ActorbtError, TypeError):
 
 
 class _Topic:
-    __slots__ = ("name", "msg_type", "subs", "publishers", "qos")
+    __slots__ = ("name", "msg_type", "subs", "publishers", "qos", "last")
 
     def __init__(self, name: str, msg_type: type) -> None:
         self.name = name
@@ -31,6 +36,8 @@ class _Topic:
         self.publishers = 0
         #: the QoS setting of its first publisher (what a ROS robot would offer)
         self.qos: Any = None
+        #: the last message, kept when that publisher is latched
+        self.last: Any = None
 
 
 class LocalPublisher:
@@ -105,6 +112,8 @@ class LocalBus(Transport):
         t = self._topic(topic, msg_type)
         sub = LocalSubscription(t, callback)
         t.subs.append(sub)
+        if t.last is not None and is_latched(qos):
+            self._post(sub._receive, t.last)
         return sub
 
     def subscription_count(self, topic: str) -> int:
@@ -137,10 +146,12 @@ class LocalBus(Transport):
         (served by ``action_server`` in this process by the time a goal is sent)."""
         return local_client_actor(scope, name, action_type, server, self._actions)
 
-    def _deliver(self, t: _Topic, msg: Any) -> None:
-        if not t.subs:
-            return
+    def _post(self, fn: Callable[[Any], None], msg: Any) -> None:
         hub = self._hub
-        post = hub.call_soon if hub.in_hub_thread() else hub.call_soon_threadsafe
+        (hub.call_soon if hub.in_hub_thread() else hub.call_soon_threadsafe)(fn, msg)
+
+    def _deliver(self, t: _Topic, msg: Any) -> None:
+        if is_latched(t.qos):
+            t.last = msg
         for sub in list(t.subs):
-            post(sub._receive, msg)
+            self._post(sub._receive, msg)

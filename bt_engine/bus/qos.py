@@ -44,3 +44,11 @@ def qos_depth(qos: Any) -> int:
     if isinstance(depth, int):
         return max(1, depth)
     raise QosError(f"QoS must be a depth, a name or a QoSProfile, not {qos!r}")
+
+
+def is_latched(qos: Any) -> bool:
+    """True for a transient-local setting: ``"latched"``, ``"transient_local"`` or a
+    QoSProfile with that durability (read by name: no rclpy import here)."""
+    if isinstance(qos, str):
+        return qos in ("latched", "transient_local")
+    return getattr(getattr(qos, "durability", None), "name", "") == "TRANSIENT_LOCAL"

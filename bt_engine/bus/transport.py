@@ -9,6 +9,7 @@ from __future__ import annotations
 from typing import Any, Callable, NamedTuple, Protocol
 
 from ..errors import ActorbtError
+from .qos import is_latched
 
 
 class TopicInfo(NamedTuple):
@@ -38,16 +39,13 @@ def qos_label(qos: Any) -> str:
     if isinstance(qos, str):
         if qos in ("sensor", "sensor_data"):
             return "best effort"
-        if qos in ("latched", "transient_local"):
-            return "reliable, transient local"
-        return "reliable"
+        return "reliable, transient local" if is_latched(qos) else "reliable"
     if isinstance(qos, int) or qos is None:
         return "reliable"
     # an rclpy QoSProfile: read its policies by name (no rclpy import here)
     reliability = getattr(getattr(qos, "reliability", None), "name", "RELIABLE")
-    durability = getattr(getattr(qos, "durability", None), "name", "VOLATILE")
     text = "best effort" if reliability == "BEST_EFFORT" else "reliable"
-    return text + (", transient local" if durability == "TRANSIENT_LOCAL" else "")
+    return text + (", transient local" if is_latched(qos) else "")
 
 
 class Publisher(Protocol):
