@@ -14,6 +14,7 @@ Modules, one concept each:
 * :mod:`planning.grid`: occupancy grids and their inflation.
 * :mod:`planning.base_planner`: base paths on the inflated grid.
 * :mod:`planning.viewpoints`: places from which a search sees a whole map.
+* :mod:`planning.frontiers`: where to drive next to map more (frontier exploration).
 * :mod:`planning.tf_buffer`: the transform tree (tf2's buffer) fed from ``/tf``.
 * :mod:`planning.tf_listener`: that buffer kept up to date from a bus (tf2_ros's listener).
 * :mod:`planning.errors`, :mod:`planning.failure`: exceptions and failure reasons.

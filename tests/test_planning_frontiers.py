@@ -1,0 +1,54 @@
+"""Frontier exploration on hand-made grids: frontiers, their goals, the end of exploring."""
+import math
+
+import numpy as np
+import pytest
+
+from planning import InvalidInputError, OccupancyGrid, inflate
+from planning.frontiers import frontiers, next_frontier, path_distances
+
+RES = 0.05
+
+
+def corridor(known_until: float) -> OccupancyGrid:
+    """A 6 m x 1.5 m corridor along x, walled, known (free) up to x = ``known_until``."""
+    data = np.zeros((30, 120), np.int8)
+    data[0, :] = data[-1, :] = data[:, 0] = data[:, -1] = 100
+    data[:, int(known_until / RES):] = -1
+    return OccupancyGrid(data, RES, (0.0, 0.0))
+
+
+def test_the_frontier_is_where_the_known_corridor_ends():
+    fs = frontiers(inflate(corridor(3.0), 0.2), (0.5, 0.75))
+    assert len(fs) == 1
+    f = fs[0]
+    assert f.middle[0] == pytest.approx(2.975, abs=0.06)
+    gx, gy, yaw = f.goal
+    assert 2.5 < gx < 3.0 and abs(yaw) < 0.3           # just short of it, facing the unknown
+    assert f.distance == pytest.approx(gx - 0.5, abs=0.15)
+
+
+def test_a_fully_known_map_has_nothing_left_to_explore():
+    assert next_frontier(inflate(corridor(6.0), 0.2), (0.5, 0.75)) is None
+
+
+def test_goals_that_failed_are_avoided():
+    cm = inflate(corridor(3.0), 0.2)
+    first = next_frontier(cm, (0.5, 0.75))
+    assert first is not None
+    assert next_frontier(cm, (0.5, 0.75), avoid=[first.goal]) is None
+
+
+def test_path_distances_go_around_walls():
+    data = np.zeros((40, 40), np.int8)
+    data[0:30, 20] = 100                                  # a wall with a gap at the top
+    cm = inflate(OccupancyGrid(data, RES, (0.0, 0.0)), 0.05)
+    d = path_distances(cm, (0.5, 0.5))
+    straight = 1.0
+    around = d[cm.grid.cell_of(1.5, 0.5)]
+    assert around > straight + 1.0 and math.isfinite(around)
+
+
+def test_bad_parameters_are_refused():
+    with pytest.raises(InvalidInputError):
+        frontiers(inflate(corridor(3.0), 0.2), (0.5, 0.75), goal_radius=0)
