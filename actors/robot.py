@@ -1,9 +1,10 @@
-"""The whole robot: navigation, arm, perception, search and catch under one SubSystem."""
+"""The whole robot: navigation, arm, perception, search, catch and exploration under one SubSystem."""
 from __future__ import annotations
 
 from bt_engine import SubSystem
 
 from .catch import Catcher
+from .exploration import Exploration
 from .manipulator import Manipulator
 from .navigation import Navigation
 from .perception import Perception
@@ -23,3 +24,4 @@ class Robot(SubSystem):
         self.add_subsystem("perception", Perception)
         self.add_subsystem("search", Search)
         self.add_subsystem("catch", Catcher)
+        self.add_subsystem("exploration", Exploration)

@@ -14,6 +14,9 @@ def register(sub, common) -> None:
                    help="The world to run in: a world's name or its YAML file (default: house).")
     p.add_argument("--seed", type=int, default=0, metavar="N",
                    help="The world's seed, which places the objects (default: 0).")
+    p.add_argument("--locations", metavar="FILE.yaml",
+                   help="Named places (name: [x, y, theta] per line) for a world built from a map_server map: "
+                        "'start', 'place' and the places to search.")
     p.add_argument("--category", default="any", choices=["can", "bottle", "any"],
                    help="The kind of object to fetch (default: any).")
     p.add_argument("--tree", default="bt_pick_place",
@@ -32,6 +35,9 @@ def register(sub, common) -> None:
                    help="The first seed; the others follow it (default: 0).")
     e.add_argument("--world", default="house", metavar="NAME|FILE",
                    help="The world to run in: a world's name or its YAML file (default: house).")
+    e.add_argument("--locations", metavar="FILE.yaml",
+                   help="Named places (name: [x, y, theta] per line) for a world built from a map_server map: "
+                        "'start', 'place' and the places to search.")
     e.add_argument("--category", default="mixed", choices=["can", "bottle", "mixed"],
                    help="The kind of object asked for; 'mixed' alternates can and bottle (default: mixed).")
     e.add_argument("--jobs", type=int, default=1, metavar="N",
@@ -41,12 +47,12 @@ def register(sub, common) -> None:
     e.set_defaults(func=cmd_eval)
 
 
-def _check_world(world: str, seed: int) -> None:
+def _check_world(world: str, seed: int, locations: str | None = None) -> None:
     """A world file's mistakes as one error before any episode starts (not one per episode)."""
     if world == "none":  # the episode says why that cannot run
         return
     from sim import load_world
-    load_world(world, seed)
+    load_world(world, seed, locations)
 
 
 def cmd_demo(args, app) -> int:
@@ -54,12 +60,12 @@ def cmd_demo(args, app) -> int:
 
     from .episode import print_outcome, run_episode
     out = pathlib.Path(args.out)
-    _check_world(args.world, args.seed)
+    _check_world(args.world, args.seed, args.locations)
     print(f"actorbt demo: {args.tree} in {args.world} (seed {args.seed}), category {args.category}",
           flush=True)
     # the runtime is built from actorbt.yaml, as for every command (subsystems, trees, simulator)
     ep = run_episode(args.tree, args.world, args.seed, args.category, out_dir=out, progress=sys.stdout,
-                     app=app)
+                     app=app, locations=args.locations)
     print_outcome(ep)
     timeline = plot_trace(ep.trace, out / "timeline.png", title=f"{args.tree} (seed {args.seed})")
     print(f"trace:     {ep.trace}\ntop view:  {out / 'top_view.png'}\ntimeline:  {timeline}")
@@ -68,9 +74,9 @@ def cmd_demo(args, app) -> int:
 
 def cmd_eval(args, app) -> int:
     from .evaluate import evaluate, print_table
-    _check_world(args.world, args.first_seed)
+    _check_world(args.world, args.first_seed, args.locations)
     episodes = evaluate(args.tree, args.seeds, args.world, args.category, args.jobs, args.out,
-                        first_seed=args.first_seed, config=app.cfg)
+                        first_seed=args.first_seed, config=app.cfg, locations=args.locations)
     print_table(episodes)
     print(f"\nCSV: {pathlib.Path(args.out) / 'episodes.csv'}")
     return 0 if all(e.success for e in episodes) else 1

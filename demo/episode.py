@@ -35,16 +35,18 @@ LOC_PERIOD, PATH_PERIOD = 0.5, 0.1
 INITIAL_STD_XY, INITIAL_STD_YAW = 0.05, 0.03
 
 
-def episode_app(world: str, seed: int, app: App | None = None, config: Config | None = None) -> App:
+def episode_app(world: str, seed: int, app: App | None = None, config: Config | None = None,
+                locations: str | None = None) -> App:
     """The App an episode builds its runtime with: ``app``'s configuration (else
     ``config``, else the nearest actorbt.yaml, else the repository's), for ``world``
-    and ``seed``. So the subsystems, the trees folder and the simulator are the ones
-    actorbt.yaml names, as for every other command."""
+    and ``seed`` (and ``locations``, a locations YAML for a map-built world). So the
+    subsystems, the trees folder and the simulator are the ones actorbt.yaml names, as
+    for every other command."""
     if app is not None:
-        return app.for_world(world, seed)
+        return app.for_world(world, seed, locations)
     if config is None:
         config = load_config(find_config() or REPO_CONFIG)
-    return App(argparse.Namespace(world=world, seed=seed), config)
+    return App(argparse.Namespace(world=world, seed=seed, locations=locations), config)
 
 
 @dataclass
@@ -187,7 +189,8 @@ def run_episode(tree: str = "bt_pick_place", world: str = "house", seed: int = 0
                 category: str = "any", out_dir: str | pathlib.Path | None = None,
                 progress: TextIO | None = None, world_setup: Any = None,
                 inputs: dict | None = None, observers: list | None = None,
-                app: App | None = None, config: Config | None = None) -> Episode:
+                app: App | None = None, config: Config | None = None,
+                locations: str | None = None) -> Episode:
     """Run ``tree`` once in a fresh ``world`` built from ``seed``.
 
     The runtime is built as every ``actorbt`` command builds it (see :func:`episode_app`):
@@ -197,7 +200,8 @@ def run_episode(tree: str = "bt_pick_place", world: str = "house", seed: int = 0
     Success means the tree succeeded and, for a pick-and-place, an object of the category
     stands on the place location. ``world_setup(world)`` may change the world first and
     ``observers`` watch the tree runs (the fault tests use both); ``inputs`` are more tree
-    inputs. With ``out_dir``, the trace and the top view are written there.
+    inputs. With ``out_dir``, the trace and the top view are written there. ``locations``
+    names places (a YAML file) for a world built from a map_server map.
 
     Raises:
         ConfigError: actorbt.yaml names no world to run in (or ``world`` is ``none``).
@@ -207,7 +211,7 @@ def run_episode(tree: str = "bt_pick_place", world: str = "house", seed: int = 0
     ep = Episode(tree=tree, world=world, seed=seed, category=category)
     out = pathlib.Path(out_dir) if out_dir else None
     wall0 = time.perf_counter()
-    app = episode_app(world, seed, app, config)
+    app = episode_app(world, seed, app, config, locations)
     if app.world_spec() is None:
         raise ConfigError(f"an episode needs a simulated world, got --world {world}")
     rt = app.runtime(watchdog=None, world_first=True, world_setup=world_setup)

@@ -67,6 +67,9 @@ from .likelihood_field import LaserModelParams
 from .map_io import OccupancyMap
 from .particle_filter import FilterParams
 from .smoothing import LocalHold, PoseSmoother, SmootherParams
+from .odometry import interpolate_pose as _interpolate
+from .odometry import seconds as _seconds
+from .odometry import yaw_of as _yaw
 from .tf import TF, TfListener, TransformError, planar_transform
 
 #: base_footprint -> base_scan in sim/models/mobile_manipulator.urdf (x, y, yaw)
@@ -78,19 +81,6 @@ TRANSFORM_TOLERANCE = 0.2
 #: [Hz] at most this often map -> odom goes out between filter updates
 TF_RATE = 20.0
 GLOBAL_FRAME, ODOM_FRAME, BASE_FRAME = "map", "odom", "base_footprint"
-
-
-def _yaw(q) -> float:
-    return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
-
-
-def _seconds(stamp) -> float:
-    return stamp.sec + stamp.nanosec * 1e-9
-
-
-def _interpolate(a, b, f: float):
-    dyaw = math.remainder(b[2] - a[2], 2 * math.pi)
-    return (a[0] + f * (b[0] - a[0]), a[1] + f * (b[1] - a[1]), math.remainder(a[2] + f * dyaw, 2 * math.pi))
 
 
 def split_params(params: dict | None):

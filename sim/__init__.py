@@ -39,25 +39,32 @@ def __dir__() -> list[str]:
     return sorted(set(globals()) | set(__all__))
 
 
-def write_map(world="house", seed=0, out_pgm="map.pgm", resolution=0.05):
-    """Write map_server's PGM + YAML pair for a world; returns (pgm_path, yaml_path)."""
+def write_map(world="house", seed=0, out_pgm="map.pgm", resolution=0.05, height=None, locations=None):
+    """Write map_server's PGM + YAML pair for a world; returns (pgm_path, yaml_path).
+    ``height`` [m]: a slice at that height (see :func:`sim.gridmap.build_grid`); None:
+    every static box."""
     from .description import load_world
     from .gridmap import build_grid, write_pgm_yaml
 
-    return write_pgm_yaml(build_grid(load_world(world, seed), resolution), out_pgm)
+    return write_pgm_yaml(build_grid(load_world(world, seed, locations), resolution, height), out_pgm)
 
 
-def snapshot(world="house", seed=0, out_png="world.png", camera=False, camera_size=(640, 480)):
+def snapshot(world="house", seed=0, out_png="world.png", camera=False, camera_size=(640, 480),
+             locations=None):
     """Top view PNG of the world; with camera=True also <out>_camera.png (RGB | depth).
     Returns the list of files written."""
     from .topview import snapshot as _snapshot
+    if locations is not None:
+        from .description import load_world
+        world = load_world(world, seed, locations)
 
     return _snapshot(world, seed, out_png, camera=camera, camera_size=camera_size)
 
 
-def start_world(runtime, world="house", seed=0, gui=False):
+def start_world(runtime, world="house", seed=0, gui=False, locations=None):
     """Build ``world`` with ``seed`` and put it on ``runtime`` (what actorbt.yaml's
-    ``simulator: sim:start_world`` names). Returns the started SimWorld."""
+    ``simulator: sim:start_world`` names); ``locations``: a locations YAML for a world
+    built from a map_server map. Returns the started SimWorld."""
     from .simworld import SimWorld
 
-    return SimWorld(runtime, world=world, seed=seed, gui=gui).start()
+    return SimWorld(runtime, world=world, seed=seed, gui=gui, locations=locations).start()

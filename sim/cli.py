@@ -1,6 +1,7 @@
 """`actorbt sim ...`: worlds from the terminal (a plugin named in actorbt.yaml).
 
     actorbt sim map --world house --seed 3 --out house.pgm      # map_server PGM + YAML
+    actorbt sim map --world house --height --out slice.pgm      # what the lidar sees
     actorbt sim snapshot --world house --seed 3 --out world.png [--camera]
     actorbt sim worlds                                           # list the worlds
     actorbt sim run --world house [--seed N] [--bus ros] [--gui] # serve the sim's topics
@@ -34,6 +35,12 @@ def register(sub, common) -> None:
                    help="Where to write the PGM; the YAML goes beside it (default: map.pgm).")
     m.add_argument("--resolution", type=float, default=0.05, metavar="M",
                    help="The cell size in metres (default: 0.05).")
+    m.add_argument("--height", nargs="?", const="lidar", type=_height, metavar="H",
+                   help="Export a slice H metres above the floor, as a lidar there sees it: the "
+                        "boxes whose height covers H, and the objects that tall. '--height' alone: "
+                        "the lidar's height (the base_scan frame, 0.132 m), what a map built from "
+                        "the scan should show. Without it: every wall, piece of furniture and the "
+                        "place location, the map the robot plans on.")
     m.set_defaults(func=cmd_map)
 
     s = simsub.add_parser("snapshot", help="top view PNG (and a camera frame with --camera)",
@@ -80,18 +87,37 @@ def _world_args(p: argparse.ArgumentParser) -> None:
                    help="The world: a world's name or its YAML file (default: house).")
     p.add_argument("--seed", type=int, default=0, metavar="N",
                    help="The world's seed, which places the objects (default: 0).")
+    p.add_argument("--locations", metavar="FILE.yaml",
+                   help="Named places (name: [x, y, theta] per line) for a world built from a "
+                        "map_server map: 'start', 'place' and the places to search.")
+
+
+def _height(text: str) -> float:
+    """--height's value [m]: a number >= 0, or 'lidar'."""
+    if text == "lidar":
+        from .gridmap import lidar_height
+        return lidar_height()
+    try:
+        h = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a height in metres or 'lidar', got {text!r}") from None
+    if not h >= 0:
+        raise argparse.ArgumentTypeError(f"expected a height >= 0 m, got {text}")
+    return h
 
 
 def cmd_map(args, app) -> int:
     from . import write_map
-    for f in write_map(args.world, args.seed, args.out, resolution=args.resolution):
+    height = _height(args.height) if isinstance(args.height, str) else args.height  # the const
+    for f in write_map(args.world, args.seed, args.out, resolution=args.resolution,
+                       height=height, locations=args.locations):
         print(f)
     return 0
 
 
 def cmd_snapshot(args, app) -> int:
     from . import snapshot
-    for f in snapshot(args.world, args.seed, args.out, camera=args.camera):
+    for f in snapshot(args.world, args.seed, args.out, camera=args.camera, locations=args.locations):
         print(f)
     return 0
 

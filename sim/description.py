@@ -410,12 +410,24 @@ def world_path(world: str | Path) -> Path:
     return cand
 
 
-def load_world(world: str | Path | WorldSpec = "house", seed: int = 0) -> WorldSpec:
-    """Load a world by name or path (a WorldSpec passes through unchanged)."""
+def load_world(world: str | Path | WorldSpec = "house", seed: int = 0,
+               locations: str | Path | None = None) -> WorldSpec:
+    """Load a world by name or path (a WorldSpec passes through unchanged). A YAML file
+    that is a map_server map (``image:``, ``resolution:``...) is built into a world by
+    :mod:`sim.map_world`, with the named places of ``locations`` (a YAML file)."""
     if isinstance(world, WorldSpec):
         return world
     p = world_path(world)
-    return parse_world(p.read_text(), str(p), seed)
+    text = p.read_text()
+    from .gridmap import is_map_yaml
+    if is_map_yaml(text):
+        from .map_world import build_map_world
+        return build_map_world(p, seed, locations)
+    if locations is not None:
+        raise WorldError(f"{locations}: a locations file goes with a world built from a map_server "
+                         f"map (--world map.yaml); {p} is a world description, which lists its own "
+                         "robot start, place_location and search_locations")
+    return parse_world(text, str(p), seed)
 
 
 def list_worlds() -> list[str]:

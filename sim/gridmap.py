@@ -44,7 +44,11 @@ class GridMap:
         return -1
 
 
-def build_grid(spec: WorldSpec, resolution: float = RESOLUTION) -> GridMap:
+def build_grid(spec: WorldSpec, resolution: float = RESOLUTION, height: float | None = None) -> GridMap:
+    """The world's occupancy grid. ``height`` [m] None: every static box is an obstacle
+    (the grid the robot plans on); a number: a slice at that height above the floor, as a
+    lidar there sees it: the boxes whose vertical extent (0..sz) covers it, and the
+    objects tall enough (what a map built from the scan should show)."""
     x0, y0, x1, y1 = spec.bounds
     w = int(math.ceil((x1 - x0) / resolution - 1e-9))
     h = int(math.ceil((y1 - y0) / resolution - 1e-9))
@@ -53,13 +57,20 @@ def build_grid(spec: WorldSpec, resolution: float = RESOLUTION) -> GridMap:
     X, Y = np.meshgrid(xs, ys)
     occ = np.zeros((h, w), dtype=bool)
     half_cell = resolution / 2
-    for ob in spec.obstacles:
+    obstacles = spec.obstacles if height is None else [ob for ob in spec.obstacles if ob.sz >= height]
+    for ob in obstacles:
         # a cell is occupied if the obstacle covers any part of it (conservative)
         c, s = math.cos(ob.yaw), math.sin(ob.yaw)
         dx, dy = X - ob.x, Y - ob.y
         u, v = c * dx + s * dy, -s * dx + c * dy
         ext = half_cell * (abs(c) + abs(s))    # a cell's half-extent along the box's axes
         occ |= (np.abs(u) <= ob.sx / 2 + ext - 1e-9) & (np.abs(v) <= ob.sy / 2 + ext - 1e-9)
+    if height is not None:
+        from .objects import CATEGORIES
+        for o in spec.objects:      # standing objects as discs (a lidar sees the bottle)
+            cat = CATEGORIES[o.category]
+            if cat.height >= height:
+                occ |= np.hypot(X - o.x, Y - o.y) <= cat.radius + half_cell
     grid = np.full((h, w), -1, dtype=np.int8)
     grid[occ] = 100
     # flood fill the free space reachable from the robot's start
@@ -124,30 +135,187 @@ def write_pgm_yaml(gm: GridMap, out_pgm: str | Path) -> tuple[Path, Path]:
 
 
 def read_pgm_yaml(path_yaml: str | Path) -> GridMap:
-    """Read a map_server pair back (trinary)."""
-    import yaml
+    """Read a map_server pair back (any mode; see :func:`read_map`)."""
+    return read_map(path_yaml).grid
 
-    path_yaml = Path(path_yaml)
-    meta = yaml.safe_load(path_yaml.read_text())
-    raw = (path_yaml.parent / meta["image"]).read_bytes()
-    # header: magic, optional comments, width height, maxval
-    fields, pos = [], 0
-    while len(fields) < 4:
-        while raw[pos:pos + 1].isspace():
+
+# ---------------------------------------------------------------------------------------
+# map_server maps: YAML (checked with file:line:column) + PGM (P5/P2, 8 or 16 bit) or PNG
+
+MAP_KEYS = {"image", "resolution", "origin", "negate", "occupied_thresh", "free_thresh", "mode"}
+OCCUPIED_MIN = 65   # cells >= this are obstacles (nav2's costmap default, 0.65)
+FREE_MAX = 19       # cells <= this are free (map_saver's 0.196)
+
+
+@dataclass
+class MapFile:
+    """A map_server map as read: the grid in OccupancyGrid values (-1 unknown, 0..100), the
+    YAML's path and the mode. ``occupied`` / ``free`` classify the cells for a world."""
+    grid: GridMap
+    path: Path
+    mode: str
+
+    @property
+    def occupied(self) -> np.ndarray:
+        return self.grid.data >= OCCUPIED_MIN
+
+    @property
+    def free(self) -> np.ndarray:
+        return (self.grid.data >= 0) & (self.grid.data <= FREE_MAX)
+
+
+def is_map_yaml(text: str) -> bool:
+    """Whether a YAML text is a map_server map (a mapping with 'image' and 'resolution')
+    rather than a world description. Broken YAML is not a map (the world parser reports it)."""
+    import yaml
+    try:
+        root = yaml.compose(text)
+    except yaml.YAMLError:
+        return False
+    if not isinstance(root, yaml.MappingNode):
+        return False
+    keys = {k.value for k, _ in root.value if isinstance(k, yaml.ScalarNode)}
+    return {"image", "resolution"} <= keys
+
+
+def _pgm_pixels(raw: bytes, where: str) -> np.ndarray:
+    """P5 (binary) or P2 (ASCII) PGM -> uint16 array [rows, cols], top row first, and maxval."""
+    from .description import WorldError
+    magic = raw[:2]
+    if magic not in (b"P5", b"P2"):
+        raise WorldError(f"{where}: not a PGM image (magic {magic!r}; expected P5 or P2)")
+    fields, pos = [], 2
+    while len(fields) < 3:          # width, height, maxval; '#' comments between them
+        while pos < len(raw) and raw[pos:pos + 1].isspace():
             pos += 1
         if raw[pos:pos + 1] == b"#":
-            pos = raw.index(b"\n", pos) + 1
+            pos = raw.find(b"\n", pos) + 1 or len(raw)
             continue
         end = pos
-        while not raw[end:end + 1].isspace():
+        while end < len(raw) and not raw[end:end + 1].isspace():
             end += 1
+        if end == pos:
+            raise WorldError(f"{where}: truncated PGM header")
         fields.append(raw[pos:end])
         pos = end
-    pos += 1
-    w, h = int(fields[1]), int(fields[2])
-    img = np.flipud(np.frombuffer(raw[pos:pos + w * h], dtype=np.uint8).reshape(h, w))
-    data = np.full((h, w), -1, dtype=np.int8)
-    p = (255 - img.astype(float)) / 255.0
-    data[p > meta["occupied_thresh"]] = 100
-    data[p < meta["free_thresh"]] = 0
-    return GridMap(data, float(meta["resolution"]), tuple(meta["origin"][:2]))
+    try:
+        w, h, maxval = (int(f) for f in fields)
+    except ValueError:
+        raise WorldError(f"{where}: bad PGM header {fields!r}") from None
+    if w <= 0 or h <= 0 or not 0 < maxval < 65536:
+        raise WorldError(f"{where}: bad PGM size {w}x{h} or maxval {maxval}")
+    if magic == b"P2":
+        vals = np.array(raw[pos:].split()[:w * h], dtype=np.int64)
+    else:
+        pos += 1                    # exactly one whitespace after maxval
+        dtype = np.dtype(">u2") if maxval > 255 else np.dtype(np.uint8)
+        vals = np.frombuffer(raw[pos:pos + w * h * dtype.itemsize], dtype=dtype)
+    if vals.size != w * h:
+        raise WorldError(f"{where}: PGM data too short ({vals.size} of {w * h} pixels)")
+    return vals.reshape(h, w).astype(np.float64) / maxval
+
+
+def _image_pixels(path: Path, where: str):
+    """(lightness 0..1 [rows, cols] top row first, alpha 0..1 or None) of a map image."""
+    from .description import WorldError
+    try:
+        raw = path.read_bytes()
+    except OSError as e:
+        raise WorldError(f"{where}: cannot read the image {path}: {e.strerror or e}") from None
+    if raw[:2] in (b"P5", b"P2"):
+        return _pgm_pixels(raw, str(path)), None
+    import cv2                      # PNG, BMP...: as map_server (SDL_image) reads them
+    img = cv2.imdecode(np.frombuffer(raw, np.uint8), cv2.IMREAD_UNCHANGED)
+    if img is None:
+        raise WorldError(f"{where}: cannot decode the image {path}")
+    scale = 65535.0 if img.dtype == np.uint16 else 255.0
+    img = img.astype(np.float64) / scale
+    if img.ndim == 2:
+        return img, None
+    alpha = img[..., 3] if img.shape[2] == 4 else None
+    return img[..., :3].mean(axis=2), alpha   # map_server averages the colour channels
+
+
+def read_map(path_yaml: str | Path) -> MapFile:
+    """Read a map_server map as ``map_server`` does: trinary (default), scale or raw mode,
+    ``negate``, the two thresholds; errors name the YAML's file:line:column.
+    The origin's yaw must be 0 (an axis-aligned grid)."""
+    import yaml
+
+    from bt_engine.yaml_hints import syntax_mark, syntax_message
+
+    from .description import WorldError, _Ctx
+    path_yaml = Path(path_yaml)
+    try:
+        text = path_yaml.read_text()
+    except OSError as e:
+        raise WorldError(f"{path_yaml}: cannot read: {e.strerror or e}") from None
+    try:
+        root = yaml.compose(text)
+    except yaml.MarkedYAMLError as e:
+        mark = syntax_mark(e)
+        where = f"{mark.line + 1}:{mark.column + 1}" if mark else "1"
+        raise WorldError(f"{path_yaml}:{where}: {syntax_message(e)}") from None
+    ctx = _Ctx(str(path_yaml))
+    if root is None:
+        raise WorldError(f"{path_yaml}:1: empty map YAML")
+    top = ctx.mapping(root, "map")
+    ctx.keys(top, MAP_KEYS, "map")
+    for req in ("image", "resolution", "origin"):
+        if req not in top:
+            raise ctx.err(root, f"map: missing '{req}'")
+    img_node = top["image"][1]
+    image = Path(ctx.str_(img_node, "image"))
+    if not image.is_absolute():
+        image = path_yaml.parent / image
+    res = ctx.num(top["resolution"][1], "resolution", positive=True)
+    onode = top["origin"][1]
+    origin = ctx.vec(onode, 3, "origin")
+    if abs(origin[2]) > 1e-9:
+        raise ctx.err(onode, f"origin: yaw {origin[2]:g} rad is not supported (only "
+                             "axis-aligned maps, yaw 0); rotate the image instead")
+    negate = ctx.int_(top["negate"][1], "negate") if "negate" in top else 0
+    if negate not in (0, 1):
+        raise ctx.err(top["negate"][1], f"negate must be 0 or 1, got {negate}")
+    occ_t = ctx.num(top["occupied_thresh"][1], "occupied_thresh") if "occupied_thresh" in top else 0.65
+    free_t = ctx.num(top["free_thresh"][1], "free_thresh") if "free_thresh" in top else 0.196
+    if not 0 <= free_t < occ_t <= 1:
+        raise ctx.err(root, f"need 0 <= free_thresh < occupied_thresh <= 1, got {free_t:g} and {occ_t:g}")
+    mode = ctx.str_(top["mode"][1], "mode") if "mode" in top else "trinary"
+    if mode not in ("trinary", "scale", "raw"):
+        raise ctx.err(top["mode"][1], f"mode: unknown '{mode}' (trinary, scale or raw)")
+    img_where = f"{path_yaml}:{img_node.start_mark.line + 1}:{img_node.start_mark.column + 1}"
+    light, alpha = _image_pixels(image, img_where)
+    light = np.flipud(light)          # the image's top row is the map's last row (max y)
+    alpha = np.flipud(alpha) if alpha is not None else None
+    data = np.full(light.shape, -1, dtype=np.int8)
+    if mode == "raw":                 # the pixel value is the cell value (255 -> -1)
+        v = np.rint(light * 255).astype(np.int64)
+        data[v <= 100] = v[v <= 100]
+    else:
+        p = light if negate else 1.0 - light      # occupancy probability
+        data[p > occ_t] = 100
+        data[p < free_t] = 0
+        if mode == "scale":
+            band = (p >= free_t) & (p <= occ_t)
+            data[band] = np.rint(99 * (p[band] - free_t) / (occ_t - free_t)).astype(np.int8)
+            if alpha is not None:
+                data[alpha < 1.0] = -1    # transparent pixels are unknown in scale mode
+    return MapFile(GridMap(data, res, (origin[0], origin[1])), path_yaml, mode)
+
+
+def lidar_height() -> float:
+    """Height of the lidar's beam above the floor [m]: the ``base_scan`` frame's z in
+    ``base_footprint``, summed along the URDF's fixed joints (0.132 m for the Waffle Pi)."""
+    import xml.etree.ElementTree as ET
+    urdf = Path(__file__).resolve().parent / "models" / "mobile_manipulator.urdf"
+    parent_of = {}
+    for j in ET.parse(urdf).getroot().iter("joint"):
+        o = j.find("origin")
+        z = float(o.get("xyz", "0 0 0").split()[2]) if o is not None else 0.0
+        parent_of[j.find("child").get("link")] = (j.find("parent").get("link"), z)
+    link, z = "base_scan", 0.0
+    while link in parent_of and link != "base_footprint":
+        link, dz = parent_of[link]
+        z += dz
+    return z

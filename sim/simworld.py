@@ -59,19 +59,25 @@ class SimWorld:
     none) and ``lidar`` (a :class:`~sim.lidar.LidarModel`; ``lidar_noise=False`` for exact
     ranges) draw their errors from the world seed. ``debug_ground_truth`` puts the exact
     pose on ``/ground_truth/pose`` (default: :data:`DEBUG_GROUND_TRUTH`).
+    ``locations``: a locations YAML for a world built from a map_server map (see
+    :mod:`sim.map_world`).
     """
+
+    #: publish the world's own map on /map (map_server's job); False while the robot maps
+    serve_map = True
 
     def __init__(self, runtime=None, world: str | WorldSpec = "house", seed: int = 0, gui: bool = False,
                  *, physics_hz: int = 240, control_hz: int = 60, publish_hz: float = 30.0,
                  camera_hz: float = 5.0, camera_size=(320, 240), odom_noise: OdomNoise | None = None,
                  prefer_egl: bool = True, camera: bool = True, cmd_vel_timeout: float = 0.0,
                  map_resolution: float = RESOLUTION, lidar: LidarModel | None = None,
-                 lidar_noise: bool = True, debug_ground_truth: bool | None = None):
+                 lidar_noise: bool = True, debug_ground_truth: bool | None = None,
+                 locations=None):
         if physics_hz % control_hz:
             raise ValueError(f"physics_hz ({physics_hz}) must be a multiple of control_hz ({control_hz})")
         self.runtime = runtime
         self.seed = int(seed)
-        self.spec = load_world(world, self.seed)
+        self.spec = load_world(world, self.seed, locations)
         self.dt = 1.0 / control_hz
         self.substeps = physics_hz // control_hz
         self.publish_every = max(1, round(control_hz / publish_hz))

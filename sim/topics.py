@@ -146,7 +146,7 @@ class SimTopics:
         self._static_subs = n
         if self._ticks % sim.scan_every == 0 and count(SCAN):
             self.pub_scan.publish(self.scan_msg(now, sim.scan_now()))
-        n = count(MAP)
+        n = count(MAP) if sim.serve_map else 0
         if n > self._map_subs or (n and now - self._map_sent >= MAP_REPUBLISH):
             self.publish_map(now)
         self._map_subs = n

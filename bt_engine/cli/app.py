@@ -29,10 +29,13 @@ class App:
         self.world: Any = None
         self._warned: set[str] = set()
 
-    def for_world(self, world: str | None, seed: int | None = None) -> App:
+    def for_world(self, world: str | None, seed: int | None = None, locations: str | None = None) -> App:
         """An App with this configuration (and its warnings already given) for another
-        world and seed: what ``demo`` and ``eval`` build each episode's runtime with."""
+        world and seed (and the world's locations file, when given): what ``demo`` and
+        ``eval`` build each episode's runtime with."""
         args = argparse.Namespace(**{**vars(self.args), "world": world, "seed": seed})
+        if locations is not None:
+            args.locations = locations
         other = App(args, self.cfg)
         other._warned = self._warned
         return other
@@ -163,6 +166,9 @@ class App:
             w["seed"] = seed
         if getattr(self.args, "gui", False):
             w["gui"] = True
+        locations = getattr(self.args, "locations", None)
+        if locations:
+            w["locations"] = str(locations)
         return w if w.get("name") else None
 
     def _start_world(self, rt: Runtime, setup: Callable[[Any], None] | None = None) -> None:
@@ -173,8 +179,11 @@ class App:
             raise ConfigError("a world is configured but actorbt.yaml names no simulator "
                               "(e.g. simulator: sim:start_world)")
         start = import_object(self.cfg.simulator, "simulator")
+        # the locations file goes only to a simulator that is given one (the engine does
+        # not read it: it is the simulator's business)
+        extra = {"locations": spec["locations"]} if spec.get("locations") else {}
         self.world = start(rt, spec["name"], seed=int(spec.get("seed", 0)),
-                           gui=bool(spec.get("gui", False)))
+                           gui=bool(spec.get("gui", False)), **extra)
         log.info("world %s (seed %s) started", spec["name"], spec.get("seed", 0))
         if setup is not None:
             setup(self.world)

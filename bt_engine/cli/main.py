@@ -38,6 +38,10 @@ def _common(p: argparse.ArgumentParser) -> None:
                         "Overrides actorbt.yaml.")
     p.add_argument("--seed", type=int, metavar="N",
                    help="The world's seed: where its objects are placed (the same seed gives the same world).")
+    p.add_argument("--locations", metavar="FILE",
+                   help="Named places for the world (name: [x, y, theta] per line), passed to the "
+                        "simulator: for a world built from a map_server map, where the robot "
+                        "starts, the place location and the places to search.")
     p.add_argument("--gui", action="store_true",
                    help="Open pybullet's window to watch the world; the clock is then the wall clock.")
     p.add_argument("--clock", choices=["virtual", "wall"],

@@ -1,0 +1,72 @@
+"""Exploring: drive to the frontiers of the map being built until none is left.
+
+The map comes from whatever publishes ``/map`` while the robot maps (navstack's mapper in
+the simulator, slam_toolbox on a robot); the robot's pose from tf; the driving is the
+navigation's ``goto``. Nothing here knows how the map is made.
+"""
+from __future__ import annotations
+
+import logging
+
+from bt_engine import ActorbtError, ActorError, SubSystem, actor
+from planning import OccupancyGrid, inflate
+from planning.frontiers import next_frontier
+
+from .navigation import ROBOT_RADIUS
+
+log = logging.getLogger("actors.exploration")
+
+MAP_WAIT = 10.0         # [s] for the first /map
+SETTLE = 1.0            # [s] after each goal, so the map takes in the new scans
+
+
+class ExplorationError(ActorbtError):
+    """The exploration could not start (no map) or ran out of time."""
+
+
+class Exploration(SubSystem):
+    """Frontier exploration built from the navigation actors and ``/map``."""
+
+    def _map(self) -> OccupancyGrid:
+        try:
+            return OccupancyGrid.from_msg(self.run_actor_mode("map", "timed", MAP_WAIT))
+        except ActorbtError as e:
+            raise ExplorationError(f"no map on /map to explore ({e}); is a mapper running?") from None
+
+    @actor
+    def explore(self, max_time: float = 900.0, min_frontier: float = 0.3, max_goals: int = 200) -> dict:
+        """Drive to the nearest worthwhile frontier of the map, again and again, until the
+        map has none the base can reach. Goals the base cannot reach are not tried again.
+
+        Args:
+            max_time: give up after this long [s] (ExplorationError)
+            min_frontier: frontiers shorter than this are not worth a trip [m]
+            max_goals: give up after this many goals (ExplorationError)
+
+        Returns:
+            goals (reached), failed (goals not reached), seconds (the time it took)
+        """
+        start = self.runtime.now()
+        failed: list[tuple[float, float, float]] = []
+        reached = 0
+        while True:
+            elapsed = self.runtime.now() - start
+            if elapsed > max_time or reached + len(failed) >= max_goals:
+                raise ExplorationError(f"exploration unfinished after {elapsed:.0f} s and "
+                                       f"{reached + len(failed)} goals ({len(failed)} not reached)")
+            x, y, _ = self.run_actor("get_pose")
+            costmap = inflate(self._map(), ROBOT_RADIUS)
+            frontier = next_frontier(costmap, (x, y), avoid=failed, min_size=min_frontier)
+            if frontier is None:
+                return {"goals": reached, "failed": len(failed),
+                        "seconds": round(self.runtime.now() - start, 1)}
+            gx, gy, gyaw = frontier.goal
+            log.info("frontier of %d cells at (%.2f, %.2f): going to (%.2f, %.2f)",
+                     frontier.size, *frontier.middle, gx, gy)
+            try:
+                self.run_actor("goto", gx, gy, gyaw)
+                reached += 1
+            except ActorError as e:
+                log.info("frontier goal (%.2f, %.2f) not reached: %s", gx, gy, e.root_cause)
+                failed.append(frontier.goal)
+            self.run_actor("sleep", SETTLE)
