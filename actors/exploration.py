@@ -36,7 +36,9 @@ class Exploration(SubSystem):
     @actor
     def explore(self, max_time: float = 900.0, min_frontier: float = 0.3, max_goals: int = 200) -> dict:
         """Drive to the nearest worthwhile frontier of the map, again and again, until the
-        map has none the base can reach. Goals the base cannot reach are not tried again.
+        map has none the base can reach. A goal is not tried twice: one the base could not
+        reach, or one whose frontier stayed (a gap the laser cannot see through), is
+        avoided from then on.
 
         Args:
             max_time: give up after this long [s] (ExplorationError)
@@ -48,24 +50,24 @@ class Exploration(SubSystem):
         """
         start = self.runtime.now()
         failed: list[tuple[float, float, float]] = []
-        reached = 0
+        visited: list[tuple[float, float, float]] = []
         while True:
             elapsed = self.runtime.now() - start
-            if elapsed > max_time or reached + len(failed) >= max_goals:
+            if elapsed > max_time or len(visited) + len(failed) >= max_goals:
                 raise ExplorationError(f"exploration unfinished after {elapsed:.0f} s and "
-                                       f"{reached + len(failed)} goals ({len(failed)} not reached)")
+                                       f"{len(visited) + len(failed)} goals ({len(failed)} not reached)")
             x, y, _ = self.run_actor("get_pose")
             costmap = inflate(self._map(), ROBOT_RADIUS)
-            frontier = next_frontier(costmap, (x, y), avoid=failed, min_size=min_frontier)
+            frontier = next_frontier(costmap, (x, y), avoid=failed + visited, min_size=min_frontier)
             if frontier is None:
-                return {"goals": reached, "failed": len(failed),
+                return {"goals": len(visited), "failed": len(failed),
                         "seconds": round(self.runtime.now() - start, 1)}
             gx, gy, gyaw = frontier.goal
             log.info("frontier of %d cells at (%.2f, %.2f): going to (%.2f, %.2f)",
                      frontier.size, *frontier.middle, gx, gy)
             try:
                 self.run_actor("goto", gx, gy, gyaw)
-                reached += 1
+                visited.append(frontier.goal)
             except ActorError as e:
                 log.info("frontier goal (%.2f, %.2f) not reached: %s", gx, gy, e.root_cause)
                 failed.append(frontier.goal)

@@ -1,5 +1,6 @@
 """`actorbt map ...`: maps the robot builds, and how good they are (a plugin named in actorbt.yaml).
 
+    actorbt map build --world house [--seed 0] --out DIR [--max-time S]
     actorbt map score BUILT.yaml --world house [--seed 0] [--json]
 
 Each sub-command is one ``_add_<name>(mapsub)`` function that declares its parser and
@@ -36,12 +37,32 @@ def _add_score(mapsub) -> None:
     s.set_defaults(func=cmd_score)
 
 
-#: the `map` sub-commands, in the order --help lists them (add `_add_build` here)
-SUBCOMMANDS = (_add_score,)
+def _add_build(mapsub) -> None:
+    b = mapsub.add_parser(
+        "build", help="the robot explores a world with no map and builds one from /scan and /odom",
+        description="Run the world without its map server; the robot explores to the frontiers "
+                    "of what it has mapped so far (navstack's mapper: scan matching, log-odds "
+                    "grid, loop closure) until none is left, then writes the map as map_server "
+                    "YAML + PGM (5 cm cells, trinary). Prints the trajectory error against the "
+                    "simulator's truth.")
+    b.add_argument("--world", default="house", metavar="NAME|FILE",
+                   help="The world to explore: a world's name or its YAML file (default: house).")
+    b.add_argument("--seed", type=int, default=0, metavar="N", help="The world's seed (default: 0).")
+    b.add_argument("--locations", metavar="FILE.yaml",
+                   help="The locations file of a world built from a map_server map.")
+    b.add_argument("--out", default="out/map", metavar="DIR",
+                   help="Where to write map.yaml and map.pgm (default: out/map).")
+    b.add_argument("--max-time", type=float, default=900.0, metavar="S",
+                   help="Give up exploring after this many simulated seconds (default: 900).")
+    b.set_defaults(func=cmd_build)
+
+
+#: the `map` sub-commands, in the order --help lists them
+SUBCOMMANDS = (_add_build, _add_score)
 
 
 def register(sub, common) -> None:
-    p = sub.add_parser("map", help="maps: score a built map against the simulator's truth",
+    p = sub.add_parser("map", help="maps: build one by exploring, score it against the simulator's truth",
                        description="Maps the robot builds and how good they are.")
     mapsub = p.add_subparsers(dest="map_command", metavar="MAP_COMMAND")
     mapsub.required = True
@@ -68,4 +89,25 @@ def cmd_score(args: argparse.Namespace, app) -> int:
           f"{s.tolerance * 100:.0f} cm of a true one)")
     print(f"recall    {s.recall:.3f}  ({s.true_faces} true wall-face cells, within "
           f"{s.tolerance * 100:.0f} cm of a built one)")
+    return 0
+
+
+def cmd_build(args: argparse.Namespace, app) -> int:
+    import sys
+
+    from demo.mapping import build_map
+
+    print(f"actorbt map build: exploring {args.world} (seed {args.seed}) with no map", flush=True)
+    run = build_map(args.world, args.seed, args.out, locations=args.locations,
+                    max_time=args.max_time, progress=sys.stdout)
+    m = run.mapping
+    if run.map_yaml:
+        print(f"map:        {run.map_yaml} ({m.get('width')} x {m.get('height')} cells of "
+              f"{m.get('resolution')} m; {m.get('keyframes')} keyframes, "
+              f"{m.get('loop_closures')} loop closures, {m.get('travelled')} m travelled)")
+    print(f"sim time {run.sim_time:.1f} s, wall time {run.wall_time:.1f} s")
+    print(f"trajectory error: {run.traj_rmse_m * 100:.1f} cm rms, {run.traj_max_m * 100:.1f} cm max")
+    if not run.success:
+        print(f"exploration did not finish: {run.reason}", file=sys.stderr)
+        return 1
     return 0

@@ -17,7 +17,7 @@ robot on the whole map from its scans (so ``actorbt call goto ...`` works on its
 """
 from __future__ import annotations
 
-from bt_engine import SubSystem
+from bt_engine import ActorbtError, SubSystem, actor
 
 from .localiser import Localiser
 from .navigator import Navigator
@@ -50,3 +50,43 @@ class NavStack(SubSystem):
     def close(self) -> None:
         self.navigator.close()
         self.localiser.close()
+
+
+class MappingStack(SubSystem):
+    """slam_toolbox's and Nav2's stand-in while the robot maps: the mapper (``/map`` and
+    map -> odom from /scan and /odom) and the navigation server, with no map_server and
+    no localiser. ``localise_on_map`` then switches to the localiser on the map just
+    made, as slam_toolbox's localization mode does.
+
+    Args:
+        mapper: keyword arguments of :class:`navstack.mapper.Mapper`
+        navigator: overrides of NavigatorParams by name
+        localiser: overrides of the localiser's parameters, for after the mapping
+        seed: the localiser's random seed
+    """
+
+    def __init__(self, mapper: dict | None = None, navigator: dict | None = None,
+                 localiser: dict | None = None, seed: int = 0) -> None:
+        super().__init__()
+        from .mapper import Mapper   # here: the SLAM code is not needed by every run
+        self._localiser_args = {"params": localiser, "seed": seed}
+        self.mapper = self.add_subsystem("mapper", Mapper, **(mapper or {}))
+        self.navigator = self.add_subsystem("navigator", Navigator, params=navigator)
+        self.localiser: Localiser | None = None
+
+    @actor
+    def localise_on_map(self) -> list[float]:
+        """Stop mapping (the map stays on /map, latched) and localise on it from where
+        the robot is now. Returns that pose [x m, y m, yaw rad]."""
+        if self.localiser is not None:
+            raise ActorbtError("already localising on the map made")
+        pose = self.run_actor("stop_mapping")
+        self.localiser = self.add_subsystem("localiser", Localiser, initial_pose=tuple(pose),
+                                            **self._localiser_args)
+        return pose
+
+    def close(self) -> None:
+        self.navigator.close()
+        self.mapper.close()
+        if self.localiser is not None:
+            self.localiser.close()

@@ -96,7 +96,7 @@ class SimTopics:
         self.pub_rgb = bus.publisher(COLOR, Image)
         self.pub_depth = bus.publisher(DEPTH, Image)
         self.pub_info = bus.publisher(CAMERA_INFO, CameraInfo)
-        self.pub_map = bus.publisher(MAP, OccupancyGrid)
+        self.pub_map = bus.publisher(MAP, OccupancyGrid, LATCHED_QOS)   # map_server latches it
         self.pub_tf = bus.publisher(TF, TFMessage)
         self.pub_tf_static = bus.publisher(TF_STATIC, TFMessage, LATCHED_QOS)
         self.subs = [bus.subscribe(CMD_VEL, Twist, self._on_cmd_vel)]

@@ -1,0 +1,318 @@
+"""2-D graph SLAM from odometry and a laser: keyframes, scan matching, loop closure.
+
+:class:`Slam` takes, per scan, the odometry pose and the scan (:meth:`Slam.add`) and keeps
+
+* **keyframes**: a scan becomes one once the odometry says the robot moved more than
+  ``keyframe_dist`` or turned more than ``keyframe_angle`` since the last. A keyframe is
+  matched against the *local map*, the returns of the last ``local_keyframes`` keyframes
+  at their current poses: :class:`~navstack.scan_matcher.CorrelativeMatcher` on a 5 cm
+  likelihood map, then :func:`~navstack.scan_matcher.refine` (Gauss-Newton) on a 2 cm
+  density map of the same returns, weighted by 1 / range noise^2. Matching against
+  recent keyframes only (not the whole map) keeps an old, drifted part of the map from
+  pulling the robot before the loop is closed explicitly;
+* **a pose graph** (:class:`~navstack.pose_graph.PoseGraph`): per keyframe an odometry
+  edge (uncertainty growing with the distance and the turn) and a match edge (the
+  matcher's covariance) from the previous keyframe;
+* **loop closures**: a keyframe is matched against the submap around an old keyframe
+  (``loop_min_travel`` back along the path but within ``loop_radius``), over a wide window;
+  a good score (and a refinement that stays within ``loop_max_refine_shift``) adds a
+  loop edge, the graph is optimised (Cauchy loss, against a wrong closure) and every
+  keyframe moves;
+* **the map**: a :class:`~navstack.log_odds.LogOddsGrid`. Each scan is integrated at its
+  pose when it arrives; after a loop closure the grid is rebuilt from the stored scans at
+  the corrected poses (lazily, on the next :meth:`Slam.map`).
+
+Frames: ``odom`` is the odometry's frame, ``map`` SLAM's; the first keyframe is at
+``initial_pose`` in the map (default: its odometry pose, so map = odom at the start).
+The laser sits at ``sensor_offset`` (x [m], y [m], yaw [rad]) in the base frame: the
+TurtleBot3's LDS-01 ``base_scan`` is 0.15 m behind ``base_footprint``.
+
+Poses are (x [m], y [m], yaw [rad]); times [s].
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .log_odds import LogOddsGrid, LogOddsParams
+from .map_io import OccupancyMap
+from .pose_graph import PoseGraph, compose, relative
+from .scan_matcher import (CorrelativeMatcher, LikelihoodMap, MatcherParams, icp, refine, scan_points,
+                           transform)
+
+IDENTITY = (0.0, 0.0, 0.0)
+
+
+@dataclass
+class SlamParams:
+    resolution: float = 0.05                  # map cells [m]
+    sensor_offset: tuple = (-0.15, 0.0, 0.0)  # the laser in the base frame (TB3 LDS-01)
+    initial_pose: tuple | None = None         # the first keyframe in the map; None: its odometry
+    keyframe_dist: float = 0.2                # [m]
+    keyframe_angle: float = math.radians(15)  # [rad]
+    # the front end
+    local_keyframes: int = 20                 # the local map: the last N keyframes' returns
+    match_window_xy: float = 0.25             # [m] around the odometry's prediction
+    match_window_yaw: float = math.radians(10)
+    match_sigma: float = 0.05                 # the likelihood map's spread [m]
+    match_max_range: float = 3.0              # match only returns nearer than this [m]: near
+    #   range_max, only the returns whose noise made them short survive (biased towards the laser)
+    min_match_score: float = 0.35             # below: trust the odometry
+    refine: str = "gauss_newton"              # off the lattice: "gauss_newton" (on a fine density
+    #                                           map of the local returns), "icp" or "none"
+    refine_resolution: float = 0.02           # that map's cells [m]
+    refine_sigma: float = 0.04                # and its blur [m]
+    range_noise: tuple = (0.01, 0.03)         # the laser's sigma: max(a [m], b * range); weighs
+    #                                           the local map's returns by 1 / sigma^2
+    # odometry edges: standard deviations per metre travelled / per radian turned, with floors
+    # (loose: wheel odometry's errors are systematic - scale, heading drift - not white)
+    odom_xy_per_m: float = 0.1
+    odom_yaw_per_m: float = math.radians(5.0)
+    odom_yaw_per_rad: float = 0.1
+    odom_floor: tuple = (0.01, 0.01, math.radians(1.0))
+    # loop closure
+    loop_min_travel: float = 4.0              # only keyframes this far back along the path [m]
+    loop_radius: float = 1.0                  # and this near in space [m]
+    loop_window_xy: float = 0.8               # search window [m]
+    loop_window_yaw: float = math.radians(20)
+    loop_submap: int = 6                      # the old keyframe's submap: +- this many keyframes
+    loop_min_score: float = 0.55              # accept at this mean likelihood or more
+    loop_max_refine_shift: float = 0.1        # the refinement may not move the match more [m]
+    loop_cov_scale: float = 4.0               # loop edges' covariance x this (they are riskier)
+    loop_candidates: int = 2                  # old keyframes tried per keyframe
+    loop_cooldown: int = 3                    # keyframes between two closures
+    # the map
+    map_all_scans: bool = True                # every scan, not only keyframes
+    grid: LogOddsParams = field(default_factory=LogOddsParams)
+
+
+@dataclass
+class Keyframe:
+    t: float
+    odom: tuple                  # its odometry pose (odom frame)
+    points: np.ndarray           # (K, 2) returns in the base frame [m]
+    weights: np.ndarray          # (K,) their weight in a local map: 1 / range noise^2, relative
+    travel: float                # odometry path length from the start [m]
+    scans: list = field(default_factory=list)   # (relative pose to this keyframe, scan) to rebuild the map
+
+
+@dataclass
+class _Scan:
+    ranges: np.ndarray
+    angles: np.ndarray
+    range_max: float
+    range_min: float
+
+
+class Slam:
+    """Keyframe graph SLAM. Feed :meth:`add`; read :meth:`pose`, :meth:`map`, :meth:`trajectory`."""
+
+    def __init__(self, params: SlamParams | None = None):
+        self.params = p = params or SlamParams()
+        if p.grid.resolution != p.resolution:
+            p.grid = LogOddsParams(**{**p.grid.__dict__, "resolution": p.resolution})
+        self.graph = PoseGraph()
+        self.keyframes: list[Keyframe] = []
+        self.grid = LogOddsGrid(p.grid)
+        self.matcher = CorrelativeMatcher(MatcherParams(window_xy=p.match_window_xy,
+                                                        window_yaw=p.match_window_yaw))
+        self.loop_closures = 0
+        self.last_match_score = float("nan")
+        self._odom = IDENTITY            # the latest odometry pose
+        self._travel = 0.0
+        self._dirty = False              # the grid predates the latest loop closure
+        self._since_closure = 1 << 30
+
+    # -- input ---------------------------------------------------------------------------------
+    def add(self, odom_pose, ranges, angles, range_max: float, t: float = 0.0,
+            range_min: float = 0.0) -> bool:
+        """Take one scan and the odometry pose (x [m], y [m], yaw [rad], odom frame) at its
+        time ``t`` [s]. ``ranges`` [m] and ``angles`` [rad, sensor frame] are the beams;
+        inf or >= ``range_max`` is no return. Returns True when it became a keyframe."""
+        p = self.params
+        odom = tuple(float(v) for v in odom_pose)
+        self._travel += math.hypot(odom[0] - self._odom[0], odom[1] - self._odom[1]) if self.keyframes else 0.0
+        self._odom = odom
+        scan = _Scan(np.asarray(ranges, dtype=np.float32), np.asarray(angles, dtype=np.float64),
+                     float(range_max), float(range_min))
+        if not self.keyframes:
+            self._new_keyframe(t, odom, scan, p.initial_pose or odom)
+            return True
+        last = self.keyframes[-1]
+        delta = relative(last.odom, odom)
+        if math.hypot(delta[0], delta[1]) < p.keyframe_dist and abs(delta[2]) < p.keyframe_angle:
+            if p.map_all_scans:
+                last.scans.append((delta, scan))
+                self._integrate(compose(self.graph.pose(len(self.keyframes) - 1), delta), scan)
+            return False
+        self._new_keyframe(t, odom, scan, None)
+        return True
+
+    # -- output --------------------------------------------------------------------------------
+    def pose(self) -> tuple:
+        """The robot's (base frame's) pose in the map frame, at the latest odometry."""
+        if not self.keyframes:
+            return self.params.initial_pose or self._odom
+        k = len(self.keyframes) - 1
+        return compose(self.graph.pose(k), relative(self.keyframes[k].odom, self._odom))
+
+    def map_to_odom(self) -> tuple:
+        """The map -> odom transform (x [m], y [m], yaw [rad]) that puts the odometry's
+        latest pose on :meth:`pose`."""
+        return compose(self.pose(), relative(self._odom, IDENTITY))
+
+    def map(self) -> OccupancyMap:
+        """The occupancy grid so far as map_server's trinary map (rebuilt first if a loop
+        closure moved the keyframes)."""
+        if self._dirty:
+            self.rebuild_map()
+        return self.grid.to_map()
+
+    def trajectory(self) -> list[tuple]:
+        """The keyframes' corrected poses: [(t [s], x [m], y [m], yaw [rad])]."""
+        return [(kf.t, *self.graph.pose(i)) for i, kf in enumerate(self.keyframes)]
+
+    def rebuild_map(self) -> None:
+        """Re-integrate every stored scan at its keyframe's current pose."""
+        self._dirty = False
+        self.grid.clear()
+        for i, kf in enumerate(self.keyframes):
+            x = self.graph.pose(i)
+            for delta, scan in kf.scans:
+                self._integrate(compose(x, delta), scan)
+
+    # -- the front end -------------------------------------------------------------------------
+    def _new_keyframe(self, t: float, odom: tuple, scan: _Scan, pose) -> None:
+        p = self.params
+        pts = scan_points(scan.ranges, scan.angles, min(scan.range_max, p.match_max_range), scan.range_min,
+                          p.sensor_offset)
+        sensor_xy = np.asarray(p.sensor_offset[:2], dtype=np.float64)
+        sigma = np.maximum(p.range_noise[0], p.range_noise[1] * np.hypot(*(pts - sensor_xy).T))
+        kf = Keyframe(t, odom, pts, (p.range_noise[0] / sigma) ** 2, self._travel, [(IDENTITY, scan)])
+        if pose is not None:                         # the first keyframe
+            self.graph.add_node(pose)
+            self.keyframes.append(kf)
+            self._integrate(pose, scan)
+            return
+        k = len(self.keyframes)
+        prev = self.keyframes[-1]
+        z_odom = relative(prev.odom, odom)
+        predicted = compose(self.graph.pose(k - 1), z_odom)
+        matched, cov = self._match_local(pts, predicted)
+        self.graph.add_node(matched if matched is not None else predicted)
+        self.keyframes.append(kf)
+        self.graph.add_edge(k - 1, k, z_odom, self._odom_information(z_odom), "odom")
+        if matched is not None:
+            self.graph.add_edge(k - 1, k, relative(self.graph.pose(k - 1), matched), _information(cov), "match")
+        self._since_closure += 1
+        if self._since_closure > p.loop_cooldown and self._close_loop(k):
+            self._since_closure = 0
+        self._integrate(self.graph.pose(k), scan)
+
+    def _match_local(self, pts: np.ndarray, predicted):
+        """The keyframe's pose from the local map, and its covariance; (None, None) when
+        the match is too poor to trust."""
+        p = self.params
+        if len(pts) < 20:
+            return None, None
+        local = range(max(0, len(self.keyframes) - p.local_keyframes), len(self.keyframes))
+        ref, weights = self._points_of(local), self._weights_of(local)
+        lmap = LikelihoodMap.from_points(ref, p.resolution, p.match_sigma)
+        res = self.matcher.match(lmap, pts, predicted)
+        self.last_match_score = res.score
+        if res.score < p.min_match_score:
+            return None, None
+        pose = res.pose
+        refined = self._refine(ref, pts, pose, weights)
+        # the refinement stays near the lattice cell it started from, or it is not trusted
+        if math.hypot(refined[0] - pose[0], refined[1] - pose[1]) < 2 * p.resolution:
+            pose = refined
+        return pose, res.covariance
+
+    def _refine(self, ref: np.ndarray, pts: np.ndarray, pose, weights=None) -> tuple:
+        """The lattice pose refined by the configured method."""
+        p = self.params
+        if p.refine == "gauss_newton":
+            fine = LikelihoodMap.from_density(ref, p.refine_resolution, p.refine_sigma, levels=0,
+                                              weights=weights)
+            return refine(fine, pts, pose)[0]
+        if p.refine == "icp":
+            refined, _, inliers = icp(ref, pts, pose)
+            return refined if inliers > 0.5 else pose
+        return pose
+
+    def _odom_information(self, z) -> np.ndarray:
+        p = self.params
+        d, turn = math.hypot(z[0], z[1]), abs(z[2])
+        sx = max(p.odom_floor[0], p.odom_xy_per_m * d)
+        sy = max(p.odom_floor[1], p.odom_xy_per_m * d)
+        st = max(p.odom_floor[2], p.odom_yaw_per_m * d + p.odom_yaw_per_rad * turn)
+        return np.diag([1 / sx ** 2, 1 / sy ** 2, 1 / st ** 2])
+
+    # -- loop closure --------------------------------------------------------------------------
+    def _close_loop(self, k: int) -> bool:
+        """Try to match keyframe k against old keyframes near it; on success add the edge,
+        optimise the graph and mark the map for a rebuild."""
+        p = self.params
+        kf = self.keyframes[k]
+        here = self.graph.pose(k)
+        poses = self.graph.poses
+        travel = np.array([f.travel for f in self.keyframes])
+        old = np.nonzero(kf.travel - travel >= p.loop_min_travel)[0]
+        if len(old) == 0:
+            return False
+        dist = np.hypot(poses[old, 0] - here[0], poses[old, 1] - here[1])
+        near = old[dist <= p.loop_radius]
+        if len(near) == 0:
+            return False
+        order = near[np.argsort(np.hypot(poses[near, 0] - here[0], poses[near, 1] - here[1]))]
+        tried: list[int] = []
+        for j in order:
+            if len(tried) >= p.loop_candidates:
+                break
+            if any(abs(int(j) - i) <= p.loop_submap for i in tried):
+                continue                                  # the same submap again
+            tried.append(int(j))
+            lo, hi = max(0, j - p.loop_submap), min(len(self.keyframes), j + p.loop_submap + 1)
+            hi = min(hi, int(np.searchsorted(travel, kf.travel - p.loop_min_travel, side="right")))
+            ref, weights = self._points_of(range(lo, hi)), self._weights_of(range(lo, hi))
+            if len(ref) < 50:
+                continue
+            lmap = LikelihoodMap.from_points(ref, p.resolution, p.match_sigma, margin=p.loop_window_xy + 1.0)
+            res = self.matcher.match(lmap, kf.points, here, p.loop_window_xy, p.loop_window_yaw)
+            if res.score < p.loop_min_score:
+                continue
+            pose = self._refine(ref, kf.points, res.pose, weights)
+            if math.hypot(pose[0] - res.pose[0], pose[1] - res.pose[1]) > p.loop_max_refine_shift:
+                continue
+            self.graph.add_edge(int(j), k, relative(self.graph.pose(int(j)), pose),
+                                _information(p.loop_cov_scale * res.covariance), "loop")
+            self.graph.optimize(loss="cauchy", f_scale=3.0)
+            self.loop_closures += 1
+            self._dirty = True
+            return True
+        return False
+
+    # -- helpers -------------------------------------------------------------------------------
+    def _points_of(self, indices) -> np.ndarray:
+        """The keyframes' returns in the map frame, at their current poses."""
+        parts = [transform(self.graph.pose(i), self.keyframes[i].points) for i in indices]
+        return np.vstack(parts) if parts else np.zeros((0, 2))
+
+    def _weights_of(self, indices) -> np.ndarray:
+        parts = [self.keyframes[i].weights for i in indices]
+        return np.concatenate(parts) if parts else np.zeros(0)
+
+    def _integrate(self, base_pose, scan: _Scan) -> None:
+        if self._dirty:
+            return                                # rebuilt from scratch on the next map()
+        sensor = compose(base_pose, self.params.sensor_offset)
+        self.grid.integrate(sensor, scan.ranges, scan.angles, scan.range_max, scan.range_min)
+
+
+def _information(cov: np.ndarray) -> np.ndarray:
+    """The inverse of a covariance, symmetrised."""
+    info = np.linalg.inv(np.asarray(cov, dtype=np.float64))
+    return 0.5 * (info + info.T)

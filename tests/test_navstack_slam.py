@@ -1,0 +1,81 @@
+"""navstack.slam on the synthetic house: one loop with wrong odometry and a noisy LDS-01.
+
+The thresholds are set between what Slam reaches (bench/bench_slam.py) and what the
+odometry alone gives: a front end or a loop closure that stops working fails them.
+"""
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from navstack.map_io import read_map_yaml
+from navstack.pose_graph import compose, relative
+from navstack.slam import Slam, SlamParams
+from navstack.synthetic import SyntheticWorld, world_boxes
+
+FIXTURES = Path(__file__).parent / "fixtures"
+
+
+@pytest.fixture(scope="module")
+def house_run():
+    occ = read_map_yaml(FIXTURES / "house.yaml")
+    world = SyntheticWorld(occ, world_boxes(FIXTURES / "house_world.yaml"), seed=0, start=0, reverse=False)
+    slam = Slam(SlamParams(initial_pose=world.truth))
+    samples = []
+    while world.target < len(world.tour) + 2 and world.t < 400:
+        s = world.step()
+        if s.scan is not None:
+            slam.add(s.odom, s.scan.ranges, s.scan.angles, s.scan.range_max, s.t, s.scan.range_min)
+            samples.append(s)
+    return world, slam, samples
+
+
+def test_the_trajectory_beats_the_odometry_by_far(house_run):
+    world, slam, samples = house_run
+    truth = {s.t: s.truth for s in samples}
+    traj = slam.trajectory()
+    assert len(traj) > 80 and all(t in truth for t, *_ in traj)
+    err = np.array([math.hypot(x - truth[t][0], y - truth[t][1]) for t, x, y, _ in traj])
+    rms = float(np.sqrt(np.mean(err ** 2)))
+    o0, x0 = samples[0].odom, samples[0].truth
+    odom = np.array([math.dist(compose(x0, relative(o0, s.odom))[:2], s.truth[:2]) for s in samples])
+    odom_rms = float(np.sqrt(np.mean(odom ** 2)))
+    assert odom_rms > 1.0                     # the odometry alone is lost in the house
+    assert rms < 0.25 and rms < 0.15 * odom_rms
+    # the loop closes: the end is where it started
+    assert math.dist(slam.pose()[:2], samples[-1].truth[:2]) < 0.1
+    assert slam.loop_closures >= 1
+
+
+def test_map_to_odom_and_pose_agree(house_run):
+    world, slam, samples = house_run
+    m2o = slam.map_to_odom()
+    assert compose(m2o, samples[-1].odom) == pytest.approx(slam.pose(), abs=1e-9)
+
+
+def test_the_map_has_the_walls_where_they_are(house_run):
+    world, slam, samples = house_run
+    m = slam.map()
+    assert m.resolution == 0.05 and set(np.unique(m.data)) <= {-1, 0, 100}
+    xs, ys = m.cell_centres(m.occupied())
+    near = world.boxes.contains(xs, ys, margin=0.10)
+    assert len(xs) > 800 and near.mean() > 0.75
+    # the free space is inside the house and mostly off the furniture
+    fx, fy = m.cell_centres(m.free())
+    inside_boxes = world.boxes.contains(fx, fy).mean()
+    outside = 1 - ((fx > -0.1) & (fx < 10.1) & (fy > -0.1) & (fy < 8.1)).mean()
+    print(f"occupied near a box {near.mean():.3f}, free in a box {inside_boxes:.3f}, free outside {outside:.3f}")
+    assert inside_boxes < 0.06 and outside < 0.03
+
+
+def test_a_slam_without_scans_is_its_odometry():
+    slam = Slam()
+    angles = np.linspace(0, 2 * math.pi, 360, endpoint=False)
+    for k in range(10):
+        slam.add((0.1 * k, 0.0, 0.0), np.full(360, np.inf), angles, 3.5, t=k)
+    assert slam.pose() == pytest.approx((0.9, 0.0, 0.0))
+    assert slam.map_to_odom() == pytest.approx((0.0, 0.0, 0.0))
+    assert len(slam.trajectory()) == 5 and slam.loop_closures == 0
