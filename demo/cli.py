@@ -17,6 +17,9 @@ def register(sub, common) -> None:
     p.add_argument("--locations", metavar="FILE.yaml",
                    help="Named places (name: [x, y, theta] per line) for a world built from a map_server map: "
                         "'start', 'place' and the places to search.")
+    p.add_argument("--no-map", action="store_true",
+                   help="Run the world without its map server: navstack maps it as the robot drives "
+                        "(for missions that explore first, e.g. bt_map_then_fetch).")
     p.add_argument("--category", default="any", choices=["can", "bottle", "any"],
                    help="The kind of object to fetch (default: any).")
     p.add_argument("--tree", default="bt_pick_place",
@@ -38,6 +41,9 @@ def register(sub, common) -> None:
     e.add_argument("--locations", metavar="FILE.yaml",
                    help="Named places (name: [x, y, theta] per line) for a world built from a map_server map: "
                         "'start', 'place' and the places to search.")
+    e.add_argument("--no-map", action="store_true",
+                   help="Run the world without its map server: navstack maps it as the robot drives "
+                        "(for missions that explore first, e.g. bt_map_then_fetch).")
     e.add_argument("--category", default="mixed", choices=["can", "bottle", "mixed"],
                    help="The kind of object asked for; 'mixed' alternates can and bottle (default: mixed).")
     e.add_argument("--jobs", type=int, default=1, metavar="N",
@@ -65,7 +71,7 @@ def cmd_demo(args, app) -> int:
           flush=True)
     # the runtime is built from actorbt.yaml, as for every command (subsystems, trees, simulator)
     ep = run_episode(args.tree, args.world, args.seed, args.category, out_dir=out, progress=sys.stdout,
-                     app=app, locations=args.locations)
+                     app=app, locations=args.locations, mapping=args.no_map)
     print_outcome(ep)
     timeline = plot_trace(ep.trace, out / "timeline.png", title=f"{args.tree} (seed {args.seed})")
     print(f"trace:     {ep.trace}\ntop view:  {out / 'top_view.png'}\ntimeline:  {timeline}")
@@ -76,7 +82,8 @@ def cmd_eval(args, app) -> int:
     from .evaluate import evaluate, print_table
     _check_world(args.world, args.first_seed, args.locations)
     episodes = evaluate(args.tree, args.seeds, args.world, args.category, args.jobs, args.out,
-                        first_seed=args.first_seed, config=app.cfg, locations=args.locations)
+                        first_seed=args.first_seed, config=app.cfg, locations=args.locations,
+                        mapping=args.no_map)
     print_table(episodes)
     print(f"\nCSV: {pathlib.Path(args.out) / 'episodes.csv'}")
     return 0 if all(e.success for e in episodes) else 1

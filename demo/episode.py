@@ -33,6 +33,13 @@ REPO_CONFIG = pathlib.Path(__file__).resolve().parents[1] / "actorbt.yaml"
 LOC_PERIOD, PATH_PERIOD = 0.5, 0.1
 #: the /initialpose the user gives: the start pose, to within these standard deviations
 INITIAL_STD_XY, INITIAL_STD_YAW = 0.05, 0.03
+def without_map_server(setup: Any):
+    """A world_setup that first turns the world's map server off, then runs ``setup``."""
+    def run(world: SimWorld) -> None:
+        world.serve_map = False
+        if setup is not None:
+            setup(world)
+    return run
 
 
 def episode_app(world: str, seed: int, app: App | None = None, config: Config | None = None,
@@ -190,7 +197,7 @@ def run_episode(tree: str = "bt_pick_place", world: str = "house", seed: int = 0
                 progress: TextIO | None = None, world_setup: Any = None,
                 inputs: dict | None = None, observers: list | None = None,
                 app: App | None = None, config: Config | None = None,
-                locations: str | None = None) -> Episode:
+                locations: str | None = None, mapping: bool = False) -> Episode:
     """Run ``tree`` once in a fresh ``world`` built from ``seed``.
 
     The runtime is built as every ``actorbt`` command builds it (see :func:`episode_app`):
@@ -201,7 +208,9 @@ def run_episode(tree: str = "bt_pick_place", world: str = "house", seed: int = 0
     stands on the place location. ``world_setup(world)`` may change the world first and
     ``observers`` watch the tree runs (the fault tests use both); ``inputs`` are more tree
     inputs. With ``out_dir``, the trace and the top view are written there. ``locations``
-    names places (a YAML file) for a world built from a map_server map.
+    names places (a YAML file) for a world built from a map_server map. With ``mapping``
+    the world has no map server: for trees that map it first (bt_map_then_fetch calls
+    navstack's ``start_mapping``).
 
     Raises:
         ConfigError: actorbt.yaml names no world to run in (or ``world`` is ``none``).
@@ -211,6 +220,8 @@ def run_episode(tree: str = "bt_pick_place", world: str = "house", seed: int = 0
     ep = Episode(tree=tree, world=world, seed=seed, category=category)
     out = pathlib.Path(out_dir) if out_dir else None
     wall0 = time.perf_counter()
+    if mapping:
+        world_setup = without_map_server(world_setup)
     app = episode_app(world, seed, app, config, locations)
     if app.world_spec() is None:
         raise ConfigError(f"an episode needs a simulated world, got --world {world}")

@@ -25,14 +25,16 @@ _app: App | None = None
 
 def _one(job: tuple) -> Episode:
     global _app
-    tree, world, seed, category, out, config, locations = job
+    tree, world, seed, category, out, config, locations, mapping = job
     if _app is None or _app.cfg != config:
         _app = episode_app(world, seed, config=config)
-    return run_episode(tree, world, seed, category, out_dir=out, app=_app, locations=locations)
+    return run_episode(tree, world, seed, category, out_dir=out, app=_app, locations=locations,
+                       mapping=mapping)
 
 
 def _jobs(tree: str, world: str, seeds: int, first_seed: int, category: str,
-          out: pathlib.Path, config: Config | None = None, locations: str | None = None) -> list[tuple]:
+          out: pathlib.Path, config: Config | None = None, locations: str | None = None,
+          mapping: bool = False) -> list[tuple]:
     cats = ["can", "bottle"] if category == "mixed" else [category]
     jobs = []
     for i in range(seeds):
@@ -40,16 +42,17 @@ def _jobs(tree: str, world: str, seeds: int, first_seed: int, category: str,
         # mixed: both categories are in every world; alternate which one is asked for,
         # so the table shows both strategies
         cat = cats[i % len(cats)]
-        jobs.append((tree, world, seed, cat, out / f"{cat}_seed{seed}", config, locations))
+        jobs.append((tree, world, seed, cat, out / f"{cat}_seed{seed}", config, locations, mapping))
     return jobs
 
 
 def evaluate(tree: str, seeds: int, world: str = "house", category: str = "mixed",
              jobs: int = 1, out_dir: str | pathlib.Path = "out/eval", first_seed: int = 0,
              progress: TextIO | None = sys.stdout, config: Config | None = None,
-             locations: str | None = None) -> list[Episode]:
+             locations: str | None = None, mapping: bool = False) -> list[Episode]:
     """Run ``tree`` for ``seeds`` seeds; returns the episodes in seed order. ``locations``:
-    a locations YAML for a world built from a map_server map (see sim/map_world.py).
+    a locations YAML for a world built from a map_server map (see sim/map_world.py);
+    ``mapping``: the world has no map server, the robot maps it (see :func:`run_episode`).
 
     Each episode's runtime is built from ``config`` (actorbt.yaml; by default the
     nearest one), as ``actorbt`` builds every runtime: see :func:`run_episode`.
@@ -58,7 +61,7 @@ def evaluate(tree: str, seeds: int, world: str = "house", category: str = "mixed
     out.mkdir(parents=True, exist_ok=True)
     if config is None:
         config = episode_app(world, first_seed).cfg
-    work = _jobs(tree, world, seeds, first_seed, category, out, config, locations)
+    work = _jobs(tree, world, seeds, first_seed, category, out, config, locations, mapping)
     episodes: list[Episode] = []
     t0 = time.perf_counter()
 

@@ -1,10 +1,9 @@
 """A mapping run: the robot explores a simulated world it has no map of and builds one from
 ``/scan`` and ``/odom`` (``actorbt map build``).
 
-The world runs without its map server (``SimWorld.serve_map = False``), navstack runs as
-:class:`navstack.stack.MappingStack` (the mapper and the navigation server), and the robot's
-``explore`` actor drives to frontiers until none is left; then ``save_map`` writes the
-map_server map. The referee's side is the episode's: the true path and the error of the
+The world runs without its map server (``SimWorld.serve_map = False``), navstack's
+``start_mapping`` runs the mapper instead of the localiser, and the robot's ``explore``
+actor drives to frontiers until none is left; then ``save_map`` writes the map_server map. The referee's side is the episode's: the true path and the error of the
 mapper's pose (map -> base_footprint on /tf) against the simulator's truth.
 """
 from __future__ import annotations
@@ -20,9 +19,7 @@ from geometry_msgs.msg import PoseWithCovarianceStamped
 from bt_engine import ActorError
 from bt_engine.cli.config import find_config, load_config
 
-from .episode import REPO_CONFIG, Episode, TruthProbe, episode_app, initial_pose_msg
-
-MAPPING_STACK = "navstack.stack:MappingStack"
+from .episode import REPO_CONFIG, Episode, TruthProbe, episode_app, initial_pose_msg, without_map_server
 
 
 @dataclass
@@ -51,11 +48,8 @@ def build_map(world: str, seed: int, out_dir: str | pathlib.Path, *, locations: 
     run = MappingRun(world=world, seed=seed)
     out = pathlib.Path(out_dir)
     wall0 = time.perf_counter()
-    cfg = load_config(find_config() or REPO_CONFIG)
-    cfg = dataclasses.replace(cfg, subsystems={**cfg.subsystems, "navstack": MAPPING_STACK})
-    app = episode_app(world, seed, config=cfg, locations=locations)
-    rt = app.runtime(watchdog=None, world_first=True,
-                     world_setup=lambda w: setattr(w, "serve_map", False))
+    app = episode_app(world, seed, config=load_config(find_config() or REPO_CONFIG), locations=locations)
+    rt = app.runtime(watchdog=None, world_first=True, world_setup=without_map_server(None))
     sim = app.world
     ep = Episode(tree="map_build", world=world, seed=seed, category="")
     probe = TruthProbe(rt, sim, ep)
@@ -64,6 +58,7 @@ def build_map(world: str, seed: int, out_dir: str | pathlib.Path, *, locations: 
             initial_pose_msg(tuple(sim.spec.robot_start)))
         sim0 = rt.now()
         try:
+            rt.call("start_mapping")
             run.explore = rt.call("explore", max_time=max_time)
             run.success = True
         except ActorError as e:

@@ -75,6 +75,8 @@ from .tf import TF, TfListener, TransformError, planar_transform
 #: base_footprint -> base_scan in sim/models/mobile_manipulator.urdf (x, y, yaw)
 LASER_POSE = (-0.15, 0.0, 0.0)
 #: AMCL's default initial covariance (0.5 m, 0.5 m, pi/12 rad standard deviations)
+#: the pose handed over by the mapper: as sure as its scan matching
+RESUME_COV = np.diag([0.05 ** 2, 0.05 ** 2, 0.03 ** 2])
 INITIAL_COV = np.diag([0.5 ** 2, 0.5 ** 2, (math.pi / 12) ** 2])
 #: [s] how far map -> odom is stamped into the future (AMCL's transform_tolerance)
 TRANSFORM_TOLERANCE = 0.2
@@ -146,6 +148,7 @@ class Localiser(SubSystem):
         self._tf_stamp = -math.inf              # the stamp it carried
         self._laser_from_tf = False
         self.map_to_odom = (0.0, 0.0, 0.0)
+        self._paused = False                    # another node (the mapper) owns map -> odom
         bus = self.runtime.bus
         self._pub = bus.publisher("/amcl_pose", PoseWithCovarianceStamped, "latched")
         self._tf_pub = bus.publisher(TF, TFMessage, 100)
@@ -170,8 +173,8 @@ class Localiser(SubSystem):
         key = (info.width, info.height, info.resolution, info.origin.position.x, info.origin.position.y,
                zlib.crc32(np.asarray(msg.data, dtype=np.int8).tobytes()))
         with self._lock:
-            if key == self._map_key:
-                return                     # the same map, republished
+            if self._paused or key == self._map_key:
+                return                     # mapping, or the same map republished
             self._map_key = key
             occ = OccupancyMap.from_msg(msg)
             if self.amcl is None:
@@ -237,7 +240,7 @@ class Localiser(SubSystem):
                 self._tf_sent = self._tf_stamp = -math.inf
             self._odom.append((t, pose))
             self._now = max(self._now, t)
-            if self.amcl is None:
+            if self.amcl is None or self._paused:
                 return
             self.amcl.on_odometry(pose)
             if self.hold is not None and self.hold.on_odometry(t, pose) \
@@ -279,7 +282,7 @@ class Localiser(SubSystem):
 
     def _on_scan(self, msg: LaserScan) -> None:
         with self._lock:
-            if self.amcl is None:
+            if self.amcl is None or self._paused:
                 return
             t = _seconds(msg.header.stamp)
             odom = self.odom_at(t)
@@ -311,6 +314,8 @@ class Localiser(SubSystem):
         if not np.any(cov):
             cov = INITIAL_COV
         with self._lock:
+            if self._paused:
+                return
             if self.amcl is None:
                 self._pending_initial = (pose, cov)
             else:
@@ -336,6 +341,28 @@ class Localiser(SubSystem):
         msg.pose.covariance = cov.ravel().tolist()
         self._pub.publish(msg)
         self._last_pub = _seconds(stamp)
+
+    # -- handing map -> odom to the mapper and back -----------------------------------------
+    def pause(self):
+        """Stop localising while another node (the mapper) owns map -> odom and /map: maps,
+        scans and initial poses are ignored and nothing is published. Returns the best pose
+        known now (x, y, yaw), for the mapper to start from: the user's initial pose, else
+        the estimate, else None."""
+        with self._lock:
+            self._paused = True
+            if self._pending_initial is not None:
+                return tuple(self._pending_initial[0])
+            if self.amcl is not None and self._tf_valid:
+                return tuple(self.pose())
+            return tuple(self._initial_pose) if self._initial_pose is not None else None
+
+    def resume(self, pose, map_msg: OccupancyGrid) -> None:
+        """Localise again, on ``map_msg`` (the map just made), from ``pose`` (x, y, yaw)."""
+        with self._lock:
+            self._paused = False
+            self.amcl, self._map_key, self._tf_valid = None, None, False
+            self._pending_initial = (tuple(pose), RESUME_COV)
+        self._on_map(map_msg)
 
     # -- actors -------------------------------------------------------------------------------
     @actor

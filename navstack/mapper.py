@@ -10,7 +10,7 @@ seconds of scan time, map_server's trinary values) and map -> odom on ``/tf`` af
 scan, stamped ``transform_tolerance`` ahead as AMCL does.
 
 The mapping itself is :class:`navstack.slam.Slam`; this node only feeds it and publishes.
-Actors: ``save_map`` (map_saver's job) and ``mapping_status``.
+:class:`navstack.stack.NavStack` makes it (``start_mapping``) and offers its actors.
 """
 from __future__ import annotations
 
@@ -24,7 +24,7 @@ from nav_msgs.msg import OccupancyGrid, Odometry
 from sensor_msgs.msg import LaserScan
 from tf2_msgs.msg import TFMessage
 
-from bt_engine import ActorbtError, SubSystem, actor
+from bt_engine import ActorbtError, SubSystem
 
 from .map_io import write_map_yaml
 from .odometry import OdomHistory, seconds, yaw_of
@@ -117,6 +117,11 @@ class Mapper(SubSystem):
         self._tf_pub.publish(TFMessage(transforms=[
             planar_transform("map", "odom", self.slam.map_to_odom(), t + TRANSFORM_TOLERANCE)]))
 
+    def map_msg(self) -> OccupancyGrid | None:
+        """The map so far as a nav_msgs/OccupancyGrid (None before the first scan)."""
+        with self._lock:
+            return None if self.slam is None else self.slam.map().to_msg("map")
+
     def publish_map(self, t: float | None = None) -> None:
         with self._lock:
             if self.slam is None:
@@ -128,9 +133,8 @@ class Mapper(SubSystem):
                 self._map_sent = t
             self._map_pub.publish(msg)
 
-    # -- actors -------------------------------------------------------------------------------
-    @actor
-    def save_map(self, path: str) -> dict:
+    # -- what navstack's actors do (NavStack.save_map, mapping_status, localise_on_map) ----
+    def save(self, path: str) -> dict:
         """Write the map as map_server YAML + PGM (nav2's map_saver), and return the files,
         its size and the trajectory's length.
 
@@ -155,8 +159,7 @@ class Mapper(SubSystem):
                 "height": occ.height, "resolution": occ.resolution, "keyframes": len(traj),
                 "travelled": round(length, 2)}
 
-    @actor
-    def mapping_status(self) -> dict:
+    def status(self) -> dict:
         """How the mapping is doing: scans taken, keyframes, loop closures, the pose
         [x m, y m, yaw rad] in the map frame, and whether it is frozen."""
         with self._lock:
@@ -167,8 +170,7 @@ class Mapper(SubSystem):
                     "loop_closures": int(self.slam.loop_closures),
                     "pose": [round(float(v), 4) for v in self.slam.pose()], "frozen": self._frozen}
 
-    @actor
-    def stop_mapping(self) -> list[float]:
+    def stop(self) -> list[float]:
         """Freeze the map: no more scans go in, /map keeps the last one (as map_server
         would serve it) and map -> odom is no longer sent. Returns the robot's map pose
         [x m, y m, yaw rad] at that moment, for a localiser to start from."""
