@@ -8,9 +8,11 @@ from __future__ import annotations
 
 import logging
 
+import numpy as np
+
 from bt_engine import ActorbtError, ActorError, SubSystem, actor
 from planning import OccupancyGrid, inflate
-from planning.frontiers import next_frontier
+from planning.frontiers import next_frontier, path_distances
 
 from .navigation import ROBOT_RADIUS
 
@@ -58,6 +60,12 @@ class Exploration(SubSystem):
                                        f"{len(visited) + len(failed)} goals ({len(failed)} not reached)")
             x, y, _ = self.run_actor("get_pose")
             costmap = inflate(self._map(), ROBOT_RADIUS)
+            if not np.isfinite(path_distances(costmap, (x, y))).any():
+                # a map too young to show free floor around the robot: wait for more scans
+                if elapsed > MAP_WAIT:
+                    raise ExplorationError("the map shows no free floor around the robot")
+                self.run_actor("sleep", SETTLE)
+                continue
             frontier = next_frontier(costmap, (x, y), avoid=failed + visited, min_size=min_frontier)
             if frontier is None:
                 return {"goals": len(visited), "failed": len(failed),

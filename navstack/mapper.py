@@ -105,6 +105,8 @@ class Mapper(SubSystem):
                     return                  # wait for /tf_static
                 self.slam = Slam(SlamParams(**{**self._slam_args, "sensor_offset": laser,
                                                 "initial_pose": self._start}))
+                self._map_sent = t     # the first map after a period of scans: one scan
+                #                        alone leaves the floor unknown (a free cell needs a few)
             ranges = np.asarray(msg.ranges, dtype=float)
             angles = msg.angle_min + msg.angle_increment * np.arange(ranges.size)
             self.slam.add(odom, ranges, angles, msg.range_max, t, range_min=msg.range_min)
