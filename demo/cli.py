@@ -5,21 +5,26 @@ import pathlib
 import sys
 
 
-def register(sub, common) -> None:
-    p = sub.add_parser("demo", help="the reference pick-and-place mission, headless, with pictures",
-                       description="Run the reference pick-and-place mission once, headless on the "
-                                   "virtual clock, printing its progress; leave its trace, a top view "
-                                   "and a timeline in --out.")
+def _world_options(p) -> None:
+    """--world, --locations and --no-map, as demo and eval take them."""
     p.add_argument("--world", default="house", metavar="NAME|FILE",
                    help="The world to run in: a world's name or its YAML file (default: house).")
-    p.add_argument("--seed", type=int, default=0, metavar="N",
-                   help="The world's seed, which places the objects (default: 0).")
     p.add_argument("--locations", metavar="FILE.yaml",
                    help="Named places (name: [x, y, theta] per line) for a world built from a map_server map: "
                         "'start', 'place' and the places to search.")
     p.add_argument("--no-map", action="store_true",
                    help="Run the world without its map server: navstack maps it as the robot drives "
                         "(for missions that explore first, e.g. bt_map_then_fetch).")
+
+
+def register(sub, common) -> None:
+    p = sub.add_parser("demo", help="the reference pick-and-place mission, headless, with pictures",
+                       description="Run the reference pick-and-place mission once, headless on the "
+                                   "virtual clock, printing its progress; leave its trace, a top view "
+                                   "and a timeline in --out.")
+    _world_options(p)
+    p.add_argument("--seed", type=int, default=0, metavar="N",
+                   help="The world's seed, which places the objects (default: 0).")
     p.add_argument("--category", default="any", choices=["can", "bottle", "any"],
                    help="The kind of object to fetch (default: any).")
     p.add_argument("--tree", default="bt_pick_place",
@@ -36,14 +41,7 @@ def register(sub, common) -> None:
                    help="How many seeds (episodes) to run (default: 10).")
     e.add_argument("--first-seed", type=int, default=0, metavar="N",
                    help="The first seed; the others follow it (default: 0).")
-    e.add_argument("--world", default="house", metavar="NAME|FILE",
-                   help="The world to run in: a world's name or its YAML file (default: house).")
-    e.add_argument("--locations", metavar="FILE.yaml",
-                   help="Named places (name: [x, y, theta] per line) for a world built from a map_server map: "
-                        "'start', 'place' and the places to search.")
-    e.add_argument("--no-map", action="store_true",
-                   help="Run the world without its map server: navstack maps it as the robot drives "
-                        "(for missions that explore first, e.g. bt_map_then_fetch).")
+    _world_options(e)
     e.add_argument("--category", default="mixed", choices=["can", "bottle", "mixed"],
                    help="The kind of object asked for; 'mixed' alternates can and bottle (default: mixed).")
     e.add_argument("--jobs", type=int, default=1, metavar="N",

@@ -203,17 +203,23 @@ FURNITURE_RGBA = (0.55, 0.42, 0.30, 1.0)
 PLACE_RGBA = (0.76, 0.60, 0.35, 1.0)
 
 
-def parse_world(text: str, path: str = "<string>", seed: int = 0) -> WorldSpec:
-    """Parse and validate a world description, then place its objects from ``seed``."""
+def compose_yaml(text: str, path: str, empty: str):
+    """(root node, context) of a YAML text whose values keep their file:line:column; a
+    syntax error or an empty file (``empty`` says what was expected) is a WorldError."""
     try:
         root = yaml.compose(text)
     except yaml.MarkedYAMLError as e:
         mark = syntax_mark(e)
         where = f"{mark.line + 1}:{mark.column + 1}" if mark else "1"
         raise WorldError(f"{path}:{where}: {syntax_message(e)}") from None
-    ctx = _Ctx(path)
     if root is None:
-        raise WorldError(f"{path}:1: empty world description")
+        raise WorldError(f"{path}:1: {empty}")
+    return root, _Ctx(path)
+
+
+def parse_world(text: str, path: str = "<string>", seed: int = 0) -> WorldSpec:
+    """Parse and validate a world description, then place its objects from ``seed``."""
+    root, ctx = compose_yaml(text, path, "empty world description")
     top = ctx.mapping(root, "world")
     ctx.keys(top, {"name", "bounds", "wall", "walls", "rooms", "furniture", "place_location",
                    "robot", "objects", "placement", "description",

@@ -240,25 +240,13 @@ def read_map(path_yaml: str | Path) -> MapFile:
     """Read a map_server map as ``map_server`` does: trinary (default), scale or raw mode,
     ``negate``, the two thresholds; errors name the YAML's file:line:column.
     The origin's yaw must be 0 (an axis-aligned grid)."""
-    import yaml
-
-    from bt_engine.yaml_hints import syntax_mark, syntax_message
-
-    from .description import WorldError, _Ctx
+    from .description import WorldError, compose_yaml
     path_yaml = Path(path_yaml)
     try:
         text = path_yaml.read_text()
     except OSError as e:
         raise WorldError(f"{path_yaml}: cannot read: {e.strerror or e}") from None
-    try:
-        root = yaml.compose(text)
-    except yaml.MarkedYAMLError as e:
-        mark = syntax_mark(e)
-        where = f"{mark.line + 1}:{mark.column + 1}" if mark else "1"
-        raise WorldError(f"{path_yaml}:{where}: {syntax_message(e)}") from None
-    ctx = _Ctx(str(path_yaml))
-    if root is None:
-        raise WorldError(f"{path_yaml}:1: empty map YAML")
+    root, ctx = compose_yaml(text, str(path_yaml), "empty map YAML")
     top = ctx.mapping(root, "map")
     ctx.keys(top, MAP_KEYS, "map")
     for req in ("image", "resolution", "origin"):

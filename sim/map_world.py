@@ -25,11 +25,8 @@ import math
 from pathlib import Path
 
 import numpy as np
-import yaml
 
-from bt_engine.yaml_hints import syntax_mark, syntax_message
-
-from .description import Box, PlacedObject, WorldError, WorldSpec, _Ctx
+from .description import Box, PlacedObject, WorldError, WorldSpec, compose_yaml
 from .gridmap import read_map
 from .objects import CATEGORIES
 
@@ -314,15 +311,7 @@ def read_locations(path: str | Path) -> dict:
         text = path.read_text()
     except OSError as e:
         raise WorldError(f"{path}: cannot read the locations file: {e.strerror or e}") from None
-    try:
-        root = yaml.compose(text)
-    except yaml.MarkedYAMLError as e:
-        mark = syntax_mark(e)
-        where = f"{mark.line + 1}:{mark.column + 1}" if mark else "1"
-        raise WorldError(f"{path}:{where}: {syntax_message(e)}") from None
-    ctx = _Ctx(str(path))
-    if root is None:
-        raise WorldError(f"{path}:1: empty locations file (expected name: [x, y, theta] lines)")
+    root, ctx = compose_yaml(text, str(path), "empty locations file (expected name: [x, y, theta] lines)")
     out = {}
     for name, (knode, vnode) in ctx.mapping(root, "locations").items():
         items = ctx.seq(vnode, f"location '{name}'")
