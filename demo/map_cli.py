@@ -93,9 +93,18 @@ def cmd_score(args: argparse.Namespace, app) -> int:
 
 
 def cmd_build(args: argparse.Namespace, app) -> int:
+    import logging
     import sys
 
     from demo.mapping import build_map
+
+    # progress: each frontier the robot drives to (the run takes minutes)
+    log = logging.getLogger("actors.exploration")
+    handler = logging.StreamHandler(sys.stdout)
+    handler.setFormatter(logging.Formatter("  %(message)s"))
+    log.addHandler(handler)
+    log.setLevel(logging.INFO)
+    log.propagate = False
 
     print(f"actorbt map build: exploring {args.world} (seed {args.seed}) with no map", flush=True)
     run = build_map(args.world, args.seed, args.out, locations=args.locations,
