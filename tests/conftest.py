@@ -18,31 +18,53 @@ from bt_engine import Runtime  # noqa: E402
 _probe_ids = itertools.count()
 
 
-def remove_stale_dds_segments(shm: str = "/dev/shm") -> list[str]:
-    """Delete the Fast DDS segments whose owner is gone: a live participant holds a lock on
-    its segment's ``_el`` file. A process killed mid-test leaves its segments behind, and
-    the next participants then start an extra watcher thread (which the shutdown tests,
-    counting threads, would see). Returns the segments removed."""
-    removed = []
-    for lock in glob.glob(os.path.join(shm, "fastrtps_*_el")):
+def _shm_in_use() -> set[str]:
+    """The /dev/shm files some process has mapped or open (from /proc)."""
+    used = set()
+    for maps in glob.glob("/proc/[0-9]*/maps"):
         try:
-            fd = os.open(lock, os.O_RDWR)
+            with open(maps) as f:
+                used.update(line.split(None, 5)[5].strip() for line in f if "/dev/shm/" in line)
+        except (OSError, IndexError):
+            continue
+    for fd in glob.glob("/proc/[0-9]*/fd/*"):
+        try:
+            target = os.readlink(fd)
         except OSError:
             continue
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError:
-            continue                                  # in use
-        else:
-            segment = lock[:-len("_el")]
-            for path in (segment, lock):
-                try:
-                    os.unlink(path)
-                except OSError:
-                    pass
-            removed.append(segment)
-        finally:
-            os.close(fd)
+        if target.startswith("/dev/shm/"):
+            used.add(target)
+    return used
+
+
+def remove_stale_dds_segments(shm: str = "/dev/shm") -> list[str]:
+    """Delete the Fast DDS segments no live process uses (mapped, open or locked). A
+    process killed mid-test leaves its segments behind, and the next participants then
+    start an extra watcher thread (which the shutdown tests, counting threads, would
+    see). Returns the segments removed."""
+    used = _shm_in_use()
+    removed = []
+    for segment in glob.glob(os.path.join(shm, "fastrtps_*")):
+        if segment.endswith("_el") or segment in used or segment + "_el" in used:
+            continue
+        lock = segment + "_el"
+        if os.path.exists(lock):
+            try:
+                fd = os.open(lock, os.O_RDWR)
+            except OSError:
+                continue
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except OSError:
+                continue                          # a live participant holds it
+            finally:
+                os.close(fd)
+        for path in (segment, lock):
+            try:
+                os.unlink(path)
+            except OSError:
+                pass
+        removed.append(segment)
     return removed
 
 
