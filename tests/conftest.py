@@ -6,12 +6,17 @@ import fcntl
 import glob
 import itertools
 import os
+import signal
 import threading
 from typing import Any, Callable
 
 import pytest
 
 os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+# A suite started in the background by a non-interactive shell inherits SIGINT ignored, and
+# so would the commands the Ctrl-C tests start (an ignored signal stays ignored across
+# exec): take the default back, so that they see the Ctrl-C they are sent.
+signal.signal(signal.SIGINT, signal.default_int_handler)
 
 from bt_engine import Runtime  # noqa: E402
 
