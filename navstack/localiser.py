@@ -47,11 +47,9 @@ relocalisation's search about 0.2 s).
 """
 from __future__ import annotations
 
-import bisect
 import math
 import threading
 import zlib
-from collections import deque
 from dataclasses import fields
 
 import numpy as np
@@ -67,7 +65,7 @@ from .likelihood_field import LaserModelParams
 from .map_io import OccupancyMap
 from .particle_filter import FilterParams
 from .smoothing import LocalHold, PoseSmoother, SmootherParams
-from .odometry import interpolate_pose as _interpolate
+from .odometry import OdomHistory
 from .odometry import seconds as _seconds
 from .odometry import yaw_of as _yaw
 from .tf import TF, TfListener, TransformError, planar_transform
@@ -139,7 +137,7 @@ class Localiser(SubSystem):
         self.amcl: Amcl | None = None
         self._map_key = None
         self._now = 0.0
-        self._odom = deque(maxlen=200)          # (t, (x, y, yaw)), by stamp
+        self._odom = OdomHistory()              # (t, (x, y, yaw)), by stamp
         self._last_pub = -math.inf
         self._pending_initial = None            # an /initialpose before the map
         self._first_scan = None                 # odometry time of the first scan with a map
@@ -180,8 +178,8 @@ class Localiser(SubSystem):
             if self.amcl is None:
                 ap, fp, lp = self._params
                 self.amcl = Amcl(occ, ap, fp, lp, seed=self._seed, clock=lambda: self._now)
-                if self._odom:
-                    self.amcl.on_odometry(self._odom[-1][1])
+                if len(self._odom):
+                    self.amcl.on_odometry(self._odom.latest())
                 start = self._pending_initial or (
                     (tuple(self._initial_pose), INITIAL_COV) if self._initial_pose is not None else None)
                 if start is not None:
@@ -196,7 +194,7 @@ class Localiser(SubSystem):
         if self.hold is not None:
             self.hold.release()
         if self.smoother is not None:
-            self.smoother.reset(pose, self._odom[-1][1] if self._odom else (0.0, 0.0, 0.0))
+            self.smoother.reset(pose, self._odom.latest() or (0.0, 0.0, 0.0))
         self._tf_valid = True
         self._send_tf()
 
@@ -227,7 +225,7 @@ class Localiser(SubSystem):
     def pose(self, odom=None):
         """The robot's map pose as published (at the newest odometry pose when None)."""
         if odom is None:
-            odom = self._odom[-1][1] if self._odom else (0.0, 0.0, 0.0)
+            odom = self._odom.latest() or (0.0, 0.0, 0.0)
         return compose(self.map_to_odom, tuple(odom))
 
     def _on_odom(self, msg: Odometry) -> None:
@@ -235,10 +233,8 @@ class Localiser(SubSystem):
         pose = (p.position.x, p.position.y, _yaw(p.orientation))
         t = _seconds(msg.header.stamp)
         with self._lock:
-            if self._odom and t < self._odom[-1][0]:
-                self._odom.clear()         # time went backwards (a new episode)
+            if self._odom.add(t, pose):    # time went backwards (a new episode)
                 self._tf_sent = self._tf_stamp = -math.inf
-            self._odom.append((t, pose))
             self._now = max(self._now, t)
             if self.amcl is None or self._paused:
                 return
@@ -256,16 +252,7 @@ class Localiser(SubSystem):
 
     def odom_at(self, t: float):
         """The odometry pose interpolated at time t (the newest one outside the history)."""
-        if not self._odom:
-            return None
-        times = [s for s, _ in self._odom]
-        i = bisect.bisect_left(times, t)
-        if i <= 0:
-            return self._odom[0][1]
-        if i >= len(times):
-            return self._odom[-1][1]
-        (t0, a), (t1, b) = self._odom[i - 1], self._odom[i]
-        return _interpolate(a, b, (t - t0) / (t1 - t0) if t1 > t0 else 1.0)
+        return self._odom.at(t)
 
     def _laser_pose(self, frame: str) -> None:
         """The laser's mounting from /tf_static, once it is there."""
