@@ -32,6 +32,7 @@ Poses are (x [m], y [m], yaw [rad]); times [s].
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -83,6 +84,8 @@ class SlamParams:
     loop_cov_scale: float = 4.0               # loop edges' covariance x this (they are riskier)
     loop_candidates: int = 2                  # old keyframes tried per keyframe
     loop_cooldown: int = 3                    # keyframes between two closures
+    loop_gate_xy: tuple = (0.05, 0.02)        # a closure may move the keyframe by at most
+    loop_gate_yaw: tuple = (math.radians(2.0), math.radians(0.3))   # a + b * metres travelled since
     # the map
     map_all_scans: bool = True                # every scan, not only keyframes
     grid: LogOddsParams = field(default_factory=LogOddsParams)
@@ -186,8 +189,7 @@ class Slam:
     # -- the front end -------------------------------------------------------------------------
     def _new_keyframe(self, t: float, odom: tuple, scan: _Scan, pose) -> None:
         p = self.params
-        pts = scan_points(scan.ranges, scan.angles, min(scan.range_max, p.match_max_range), scan.range_min,
-                          p.sensor_offset)
+        pts = match_points(scan, p.match_max_range, p.sensor_offset)
         sensor_xy = np.asarray(p.sensor_offset[:2], dtype=np.float64)
         sigma = np.maximum(p.range_noise[0], p.range_noise[1] * np.hypot(*(pts - sensor_xy).T))
         kf = Keyframe(t, odom, pts, (p.range_noise[0] / sigma) ** 2, self._travel, [(IDENTITY, scan)])
@@ -203,9 +205,13 @@ class Slam:
         matched, cov = self._match_local(pts, predicted)
         self.graph.add_node(matched if matched is not None else predicted)
         self.keyframes.append(kf)
-        self.graph.add_edge(k - 1, k, z_odom, self._odom_information(z_odom), "odom")
+        # the scan match, searched around the odometry's prediction, is the chain's link; the
+        # odometry stands in only where the match failed (it slips against obstacles, and
+        # as a second link would pull the chain off every good match by its drift)
         if matched is not None:
             self.graph.add_edge(k - 1, k, relative(self.graph.pose(k - 1), matched), _information(cov), "match")
+        else:
+            self.graph.add_edge(k - 1, k, z_odom, self._odom_information(z_odom), "odom")
         self._since_closure += 1
         if self._since_closure > p.loop_cooldown and self._close_loop(k):
             self._since_closure = 0
@@ -217,7 +223,7 @@ class Slam:
         p = self.params
         if len(pts) < 20:
             return None, None
-        local = range(max(0, len(self.keyframes) - p.local_keyframes), len(self.keyframes))
+        local = self._local_keyframes()
         ref, weights = self._points_of(local), self._weights_of(local)
         lmap = LikelihoodMap.from_points(ref, p.resolution, p.match_sigma)
         res = self.matcher.match(lmap, pts, predicted)
@@ -230,6 +236,23 @@ class Slam:
         if math.hypot(refined[0] - pose[0], refined[1] - pose[1]) < 2 * p.resolution:
             pose = refined
         return pose, res.covariance
+
+    def _local_keyframes(self) -> list[int]:
+        """The keyframes of the local map: those less than ``loop_min_travel`` back along
+        the path (older ones come in only through a loop closure), at most
+        ``local_keyframes`` of them, spread evenly over that stretch. Counting travel, not
+        keyframes, keeps the stretch's oldest keyframes in the map while the robot turns on
+        the spot or dithers: matched only against its own last few keyframes, it would
+        drift with them."""
+        p = self.params
+        n = len(self.keyframes)
+        travel = np.fromiter((kf.travel for kf in self.keyframes), float, n)
+        first = int(np.searchsorted(travel, self._travel - p.loop_min_travel, side="right"))
+        first = min(first, max(0, n - 2))             # at least the last two
+        if n - first <= p.local_keyframes:
+            return list(range(first, n))
+        picks = np.unique(np.round(np.linspace(first, n - 1, p.local_keyframes)).astype(int))
+        return [int(i) for i in picks]
 
     def _refine(self, ref: np.ndarray, pts: np.ndarray, pose, weights=None) -> tuple:
         """The lattice pose refined by the configured method."""
@@ -287,6 +310,8 @@ class Slam:
             pose = self._refine(ref, kf.points, res.pose, weights)
             if math.hypot(pose[0] - res.pose[0], pose[1] - res.pose[1]) > p.loop_max_refine_shift:
                 continue
+            if not self._plausible_correction(here, pose, kf.travel - travel[j]):
+                continue
             self.graph.add_edge(int(j), k, relative(self.graph.pose(int(j)), pose),
                                 _information(p.loop_cov_scale * res.covariance), "loop")
             self.graph.optimize(loss="cauchy", f_scale=3.0)
@@ -294,6 +319,16 @@ class Slam:
             self._dirty = True
             return True
         return False
+
+    def _plausible_correction(self, here, pose, travelled: float) -> bool:
+        """Whether moving the keyframe from ``here`` to ``pose`` is a drift the front end
+        could have made over ``travelled`` metres. A house repeats itself (parallel walls,
+        door after door): a match that would move the robot further than that has found
+        the wrong wall, however good its score."""
+        p = self.params
+        shift = relative(here, pose)
+        return (math.hypot(shift[0], shift[1]) <= p.loop_gate_xy[0] + p.loop_gate_xy[1] * travelled
+                and abs(shift[2]) <= p.loop_gate_yaw[0] + p.loop_gate_yaw[1] * travelled)
 
     # -- helpers -------------------------------------------------------------------------------
     def _points_of(self, indices) -> np.ndarray:
@@ -310,6 +345,24 @@ class Slam:
             return                                # rebuilt from scratch on the next map()
         sensor = compose(base_pose, self.params.sensor_offset)
         self.grid.integrate(sensor, scan.ranges, scan.angles, scan.range_max, scan.range_min)
+
+
+def match_points(scan: _Scan, max_range: float, sensor_offset) -> np.ndarray:
+    """The returns used for matching, as base-frame points: those nearer than ``max_range``
+    [m] by their neighbours' ranges. A cut on a return's own range would keep, of a wall
+    just beyond it, the returns whose noise made them short and so pull the wall (and the
+    robot's pose) towards the laser; the median of the two beams either side carries no
+    information about this beam's noise, so the kept returns stay unbiased."""
+    r = np.asarray(scan.ranges, dtype=np.float64)
+    with np.errstate(invalid="ignore"):
+        valid = np.isfinite(r) & (r >= scan.range_min) & (r < scan.range_max)
+    near = np.where(valid, r, np.nan)
+    sides = np.stack([np.roll(near, d) for d in (-2, -1, 1, 2)])
+    with np.errstate(invalid="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)       # all four neighbours without a return
+        typical = np.nanmedian(sides, axis=0)
+    keep = valid & (typical < max_range)
+    return scan_points(np.where(keep, r, np.inf), scan.angles, scan.range_max, scan.range_min, sensor_offset)
 
 
 def _information(cov: np.ndarray) -> np.ndarray:
