@@ -326,6 +326,16 @@ def read_locations(path: str | Path) -> dict:
     return out
 
 
+def write_locations(path: str | Path, named: dict) -> Path:
+    """Write a locations YAML (see the module's docstring): ``named`` maps a name to
+    (x, y) or (x, y, theta) [m, rad]. Returns the path."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text("".join(f"{name}: [{', '.join(f'{float(v):.4f}' for v in xy)}]\n"
+                            for name, xy in named.items()))
+    return path
+
+
 def _pick(named: dict, names):
     for n in names:
         if n in named:

@@ -1,11 +1,13 @@
 """Worlds built from map_server maps (sim/map_world.py): a small hand-made PGM with a narrow
 door, the cleanup a SLAM map needs, locations files and their errors, the PGM/YAML round
-trip, and a SimWorld on the house's own exported map."""
+trip, a SimWorld on the house's own exported map, and worlds from maps made to look like
+real SLAM maps (sim/map_degrade.py): the house's, and two rooms joined by 1-cell gaps only."""
 from __future__ import annotations
 
 import dataclasses
 import math
 
+import cv2
 import numpy as np
 import pytest
 
@@ -244,3 +246,78 @@ def test_simworld_on_the_house_map_sees_walls(house_map):
         assert sorted(sim.object_names()) == ["bottle_1", "box_1", "can_1"]
     finally:
         sim.close()
+
+
+# ---------------------------------------------------------------------------------------
+# worlds from maps that look like real SLAM maps (sim/map_degrade.py): turned 3°, thin
+# ragged walls with 1-cell gaps, speckles, unknown patches and shadows
+
+@pytest.fixture(scope="module")
+def slam_house(tmp_path_factory):
+    """The house's lidar-height export made SLAM-like, with the house's places in its frame."""
+    from sim.gridmap import lidar_height
+    from sim.map_degrade import write_slam_like
+    out = tmp_path_factory.mktemp("slam_house")
+    src = write_map("house", 0, out / "house.pgm", height=lidar_height())[1]
+    house = load_world("house", 0)
+    places = {"start": house.robot_start}
+    places.update({f"spot_{i}": xy for i, xy in enumerate(house.search_locations)})
+    places["place"] = (house.place.x, house.place.y, house.place.yaw)
+    return write_slam_like(src, out / "slam.pgm", places, seed=5)
+
+
+def free_grid(grid: GridMap) -> GridMap:
+    """``grid`` with every cell that is not occupied free: what stops a robot is the walls
+    alone, not build_grid's flood fill from the start."""
+    return GridMap(np.where(grid.data == 100, 100, 0).astype(np.int8), grid.resolution, grid.origin)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_world_from_a_slam_like_map(slam_house, seed):
+    yml, locs, m = slam_house
+    spec = load_world(yml, seed=seed, locations=locs)
+    # walls merged into boxes: long runs of the staircase walls are one box each
+    cells = sum(round(w.sx / RES) * round(w.sy / RES) for w in spec.walls)
+    assert cells >= (m.grid.data == 100).sum() * 0.8
+    assert len(spec.walls) < cells / 3, (len(spec.walls), cells)
+    assert sum(max(w.sx, w.sy) >= 0.5 for w in spec.walls) >= 20
+    # everything the mission needs is reachable from the start, in the walls the map made
+    grid = build_grid(spec, RES)
+    start = spec.robot_start[:2]
+    assert len(spec.search_locations) == 9
+    for p in spec.search_locations + [(o.x, o.y) for o in spec.objects]:
+        assert plannable(grid, start, p), p
+    clear = cv2.distanceTransform((grid.data == 0).astype(np.uint8), cv2.DIST_L2, cv2.DIST_MASK_PRECISE) * RES
+    for o in spec.objects:
+        assert clear[grid.cell(o.x, o.y)] >= 0.3, o                # not against a ragged wall
+        assert min(math.dist((o.x, o.y), s) for s in spec.search_locations) <= 1.5 + 1e-9
+
+
+def test_one_cell_gaps_in_a_thin_wall_do_not_let_the_robot_through(tmp_path):
+    from sim.map_degrade import slam_like
+    from sim.map_world import write_locations
+    data = room_map(door_cells=0, speckle=False)       # no door: the wall has only gaps
+    for r in range(9, 52, 7):
+        data[r, 50] = 0                                   # 1-cell (5 cm) gaps, 7 of them
+    place = cells_xy(44, 16)
+    drive = [LEFT, cells_xy(12, 12), place, RIGHT, cells_xy(48, 70)]
+    m = slam_like(GridMap(data, RES, ORIGIN), drive, seed=0)
+    _, yml = write_pgm_yaml(m.grid, tmp_path / "gappy.pgm")
+    left, right = m.frame.to_map(*LEFT)[:2], m.frame.to_map(*RIGHT)[:2]
+    named = {"start": left, "place": m.frame.to_map(*place)}
+    spec = load_world(yml, seed=0, locations=write_locations(tmp_path / "start.yaml", named))
+    grid = free_grid(build_grid(spec, RES))
+    # the built wall has the gaps (and the turned map's own 1-cell holes): the rooms touch...
+    _, labels = cv2.connectedComponents((grid.data == 0).astype(np.uint8), connectivity=8)
+    assert labels[grid.cell(*left)] == labels[grid.cell(*right)]
+    # ... but neither the planner (radius 0.20 m) nor the robot's base itself (0.281 m across
+    # at its narrowest: a disc of 0.14 m) passes any of them
+    assert not plannable(grid, left, right)
+    path = plan_base_path(OccupancyGrid(grid.data, RES, grid.origin), left, right, robot_radius=0.14)
+    assert path.failure is not None
+    # so the world keeps to the left room: its search spots, its objects, its place location
+    wall_x = cells_xy(0, 50)[0]
+    for x, y in spec.search_locations + [(o.x, o.y) for o in spec.objects] + [(spec.place.x, spec.place.y)]:
+        assert m.frame.to_source(x, y)[0] < wall_x - 0.1, (x, y)
+    with pytest.raises(WorldError, match="cannot be reached"):
+        load_world(yml, seed=0, locations=write_locations(tmp_path / "far.yaml", {**named, "shelf": right}))
