@@ -46,6 +46,10 @@ class LogOddsParams:
     l_max: float = 3.5                # clamp (p 0.97)
     trace_step: float = 0.5           # ray sampling step [cells]
     free_margin: float = 0.0          # stop clearing this far before a return [m]
+    far_range: float = math.inf       # returns farther than this [m] add only far_occ: a
+    far_occ: float = 0.4              # far return is noisy, and a stray one behind a wall
+    #                                   stays (no later beam clears it); below the occupied
+    #                                   threshold, it takes two to mark a cell
     grow_margin: float = 2.0          # grow the grid by at least this much at a time [m]
     occupied_thresh: float = 0.65     # to_map(): occupied at p >= this
     free_thresh: float = 0.25         # to_map(): free at p <= this
@@ -168,7 +172,7 @@ class LogOddsGrid:
         # returns: assigned after the free cells, so a return wins over a crossing
         if hit.any():
             hc, hr = self.cell_of(sx + r[hit] * c[hit], sy + r[hit] * s[hit])
-            delta[(hr - r0) * ww + (hc - c0)] = p.l_occ
+            delta[(hr - r0) * ww + (hc - c0)] = np.where(r[hit] > p.far_range, p.far_occ, p.l_occ)
         win = self.logodds[r0:r1, c0:c1]
         np.clip(win + delta.reshape(win.shape), p.l_min, p.l_max, out=win)
 

@@ -38,7 +38,7 @@ from __future__ import annotations
 
 import logging
 import math
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, fields, replace
 
 import numpy as np
 from builtin_interfaces.msg import Duration
@@ -97,6 +97,7 @@ class NavigatorParams:
     self_box: tuple = (-0.23, 0.10, 0.18)   # x_min, x_max, |y| max in base_footprint:
     #                                     beams ending there hit the robot or what it holds
     backup_distance: float = 0.15       # start inside the inflation: back up this far
+    escape_distance: float = 0.3        # or else leave it through a free cell this near [m]
     backup_speed: float = 0.08
     # patience
     tf_timeout: float = 5.0             # [s] without map -> base_footprint: abort
@@ -367,7 +368,10 @@ class Navigator(SubSystem):
 
     def _plan(self, g: _Goal) -> None:
         p = self.params
-        path = self._planner(g.marks).plan(g.pose[:2], g.goal[:2])
+        planner = self._planner(g.marks)
+        path = planner.plan(g.pose[:2], g.goal[:2])
+        if path.failure is FailureReason.START_INVALID and "outside" not in path.message:
+            path = plan_out_of(planner, g.pose[:2], g.goal[:2], p.escape_distance) or path
         self.last_path = path
         now = self.runtime.now()
         if path.ok:
@@ -666,3 +670,54 @@ class Navigator(SubSystem):
 
 
 __all__ = ["ACTION", "PERCEIVED", "Navigator", "NavigatorParams", "cloud_points", "lookahead_point"]
+
+
+def plan_out_of(planner: GridPlanner, start, goal, escape_distance: float) -> BasePath | None:
+    """A path from a start inside the inflation (the robot stands where the map says it
+    should not: a wall drawn thick, a speckle of a map being built): through the
+    nearest cell the robot may stand on, within ``escape_distance`` [m], if the straight
+    way there never comes nearer to an obstacle than the start. None when there is none."""
+    cm = planner.costmap
+    grid = cm.grid
+    res = grid.resolution
+    reach = int(math.ceil(escape_distance / res))
+    c0 = int(math.floor((start[0] - grid.origin[0]) / res))
+    r0 = int(math.floor((start[1] - grid.origin[1]) / res))
+    h, w = cm.lethal.shape
+    rows = slice(max(r0 - reach, 0), min(r0 + reach + 1, h))
+    cols = slice(max(c0 - reach, 0), min(c0 + reach + 1, w))
+    rr, cc = np.nonzero(~cm.lethal[rows, cols])
+    if not len(rr):
+        return None
+    xs = grid.origin[0] + (cc + cols.start + 0.5) * res
+    ys = grid.origin[1] + (rr + rows.start + 0.5) * res
+    d = np.hypot(xs - start[0], ys - start[1])
+    for i in np.argsort(d)[:20]:
+        if d[i] > escape_distance:
+            break
+        via = (float(xs[i]), float(ys[i]))
+        if not _never_closer(cm, start, via):
+            continue
+        rest = planner.plan(via, goal)
+        if rest.ok:
+            log.info("start (%.2f, %.2f) is inside the inflation: leaving through (%.2f, %.2f)",
+                     start[0], start[1], *via)
+            return replace(rest, waypoints=(tuple(map(float, start)),) + rest.waypoints,
+                           length=rest.length + float(d[i]))
+    return None
+
+
+def _never_closer(cm, a, b) -> bool:
+    """Whether the straight way a -> b (x, y) [m] stays on the map and never comes nearer
+    to an obstacle than the robot is at ``a``."""
+    grid = cm.grid
+    res = grid.resolution
+    n = max(2, int(math.ceil(math.dist(a, b) / (0.25 * res))) + 1)
+    t = np.linspace(0.0, 1.0, n)
+    cols = np.floor((a[0] + (b[0] - a[0]) * t - grid.origin[0]) / res).astype(int)
+    rows = np.floor((a[1] + (b[1] - a[1]) * t - grid.origin[1]) / res).astype(int)
+    h, w = cm.clearance.shape
+    if rows.min() < 0 or cols.min() < 0 or rows.max() >= h or cols.max() >= w:
+        return False
+    clear = cm.clearance[rows, cols]
+    return bool(clear[0] > 0 and clear.min() >= min(clear[0], cm.robot_radius) - 1e-6)

@@ -88,7 +88,8 @@ class SlamParams:
     loop_gate_yaw: tuple = (math.radians(2.0), math.radians(0.3))   # a + b * metres travelled since
     # the map
     map_all_scans: bool = True                # every scan, not only keyframes
-    grid: LogOddsParams = field(default_factory=LogOddsParams)
+    grid: LogOddsParams = field(default_factory=lambda: LogOddsParams(far_range=2.0))   # returns beyond
+    #                                           2 m (6 cm noise) count less
 
 
 @dataclass
