@@ -84,12 +84,14 @@ class SlamParams:
     loop_cov_scale: float = 4.0               # loop edges' covariance x this (they are riskier)
     loop_candidates: int = 2                  # old keyframes tried per keyframe
     loop_cooldown: int = 3                    # keyframes between two closures
+    rebuild_shift: float = 0.025              # rebuild the grid after a closure that moved a
+    #                                           keyframe this much [m] from where it was mapped
     loop_gate_xy: tuple = (0.05, 0.02)        # a closure may move the keyframe by at most
     loop_gate_yaw: tuple = (math.radians(2.0), math.radians(0.3))   # a + b * metres travelled since
     # the map
     map_all_scans: bool = True                # every scan, not only keyframes
-    grid: LogOddsParams = field(default_factory=lambda: LogOddsParams(far_range=2.0))   # returns beyond
-    #                                           2 m (6 cm noise) count less
+    grid: LogOddsParams = field(default_factory=lambda: LogOddsParams(far_range=3.0))   # returns beyond
+    #                                           3 m (9 cm noise) count less
 
 
 @dataclass
@@ -127,6 +129,7 @@ class Slam:
         self._odom = IDENTITY            # the latest odometry pose
         self._travel = 0.0
         self._dirty = False              # the grid predates the latest loop closure
+        self._integrated_at: list[tuple] = []   # per keyframe, the pose its scans were mapped at
         self._since_closure = 1 << 30
 
     # -- input ---------------------------------------------------------------------------------
@@ -181,6 +184,7 @@ class Slam:
     def rebuild_map(self) -> None:
         """Re-integrate every stored scan at its keyframe's current pose."""
         self._dirty = False
+        self._integrated_at = [tuple(x) for x in self.graph.poses]
         self.grid.clear()
         for i, kf in enumerate(self.keyframes):
             x = self.graph.pose(i)
@@ -197,6 +201,7 @@ class Slam:
         if pose is not None:                         # the first keyframe
             self.graph.add_node(pose)
             self.keyframes.append(kf)
+            self._integrated_at.append(tuple(pose))
             self._integrate(pose, scan)
             return
         k = len(self.keyframes)
@@ -213,9 +218,11 @@ class Slam:
             self.graph.add_edge(k - 1, k, relative(self.graph.pose(k - 1), matched), _information(cov), "match")
         else:
             self.graph.add_edge(k - 1, k, z_odom, self._odom_information(z_odom), "odom")
+        self._integrated_at.append(self.graph.pose(k))      # (its scan goes in below)
         self._since_closure += 1
         if self._since_closure > p.loop_cooldown and self._close_loop(k):
             self._since_closure = 0
+        self._integrated_at[k] = self.graph.pose(k)
         self._integrate(self.graph.pose(k), scan)
 
     def _match_local(self, pts: np.ndarray, predicted):
@@ -317,7 +324,7 @@ class Slam:
                                 _information(p.loop_cov_scale * res.covariance), "loop")
             self.graph.optimize(loss="cauchy", f_scale=3.0)
             self.loop_closures += 1
-            self._dirty = True
+            self._dirty = self._dirty or self._map_moved()
             return True
         return False
 
@@ -330,6 +337,18 @@ class Slam:
         shift = relative(here, pose)
         return (math.hypot(shift[0], shift[1]) <= p.loop_gate_xy[0] + p.loop_gate_xy[1] * travelled
                 and abs(shift[2]) <= p.loop_gate_yaw[0] + p.loop_gate_yaw[1] * travelled)
+
+    def _map_moved(self) -> bool:
+        """Whether some keyframe now stands more than ``rebuild_shift`` from where its scans
+        went into the grid (its yaw counted at ``match_max_range``'s lever arm). A closure
+        in a place mapped well moves little; rebuilding the grid after each one would cost
+        seconds for nothing."""
+        p = self.params
+        now = self.graph.poses
+        then = np.asarray(self._integrated_at, dtype=np.float64)
+        dyaw = np.abs(np.remainder(now[:, 2] - then[:, 2] + math.pi, 2 * math.pi) - math.pi)
+        shift = np.hypot(now[:, 0] - then[:, 0], now[:, 1] - then[:, 1]) + dyaw * p.match_max_range
+        return bool(shift.max() > p.rebuild_shift)
 
     # -- helpers -------------------------------------------------------------------------------
     def _points_of(self, indices) -> np.ndarray:
