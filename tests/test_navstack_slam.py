@@ -79,3 +79,46 @@ def test_a_slam_without_scans_is_its_odometry():
     assert slam.pose() == pytest.approx((0.9, 0.0, 0.0))
     assert slam.map_to_odom() == pytest.approx((0.0, 0.0, 0.0))
     assert len(slam.trajectory()) == 5 and slam.loop_closures == 0
+
+
+def test_matching_returns_near_the_cut_are_not_biased_short():
+    """A round room of radius 3.0 m, the cut at 3.0 m, 9 cm noise: cutting on each return's
+    own range would keep the short ones (mean about 2.93 m); the cut by the neighbours'
+    ranges keeps an unbiased half."""
+    from navstack.slam import _Scan, match_points
+
+    rng = np.random.default_rng(3)
+    angles = np.linspace(0, 2 * math.pi, 3600, endpoint=False)
+    ranges = 3.0 + rng.normal(0, 0.09, angles.size)
+    # the room's radius drifts slowly around the cut, as a wall seen obliquely does
+    ranges += 0.05 * np.sin(4 * angles)
+    pts = match_points(_Scan(ranges.astype(np.float32), angles, 3.5, 0.12), 3.0, (0.0, 0.0, 0.0))
+    kept = np.hypot(pts[:, 0], pts[:, 1])
+    true_kept = 3.0 + 0.05 * np.sin(4 * np.arctan2(pts[:, 1], pts[:, 0]))
+    own_cut = ranges[ranges < 3.0] - (3.0 + 0.05 * np.sin(4 * angles[ranges < 3.0]))
+    assert 0.3 < len(kept) / angles.size < 0.7
+    assert abs(float(np.mean(kept - true_kept))) < 0.01 < abs(float(np.mean(own_cut)))
+
+
+def test_a_loop_closure_must_be_a_drift_the_travel_allows():
+    slam = Slam()
+    here = (2.0, 1.0, 0.3)
+    assert slam._plausible_correction(here, compose(here, (0.08, 0.0, 0.01)), travelled=4.0)
+    assert not slam._plausible_correction(here, compose(here, (0.40, 0.0, 0.0)), travelled=4.0)   # the wrong wall
+    assert slam._plausible_correction(here, compose(here, (0.40, 0.0, 0.0)), travelled=30.0)     # after a long loop
+    assert not slam._plausible_correction(here, compose(here, (0.0, 0.0, 0.3)), travelled=4.0)
+
+
+def test_the_grid_is_rebuilt_only_when_a_closure_moved_the_keyframes(house_run):
+    _, slam, _ = house_run
+    slam.rebuild_map()
+    assert not slam._map_moved()
+    poses = slam.graph._poses
+    saved = list(poses)
+    try:
+        poses[len(poses) // 2] = compose(saved[len(poses) // 2], (0.01, 0.0, 0.0))
+        assert not slam._map_moved()                     # a centimetre: the map stands
+        poses[len(poses) // 2] = compose(saved[len(poses) // 2], (0.05, 0.0, 0.0))
+        assert slam._map_moved()
+    finally:
+        poses[:] = saved
