@@ -34,6 +34,9 @@ def _add_score(mapsub) -> None:
     s.add_argument("--tolerance", type=float, default=0.10, metavar="M",
                    help="How close a cell must be to count as matched, in metres (default: 0.10).")
     s.add_argument("--json", action="store_true", help="Print the figures as one JSON object.")
+    s.add_argument("--png", metavar="FILE.png",
+                   help="Also draw the built map on the truth: matched cells green, cells off "
+                        "the truth red, true wall faces missed blue.")
     s.set_defaults(func=cmd_score)
 
 
@@ -77,6 +80,12 @@ def cmd_score(args: argparse.Namespace, app) -> int:
     built = read_map(args.built).grid
     truth = truth_grid(args.world, args.seed, args.height, args.locations, resolution=built.resolution)
     s = score_maps(built, truth, tolerance=args.tolerance)
+    if args.png:
+        import cv2
+
+        from sim.map_score import overlay_image
+        if not cv2.imwrite(args.png, overlay_image(built, truth, s)[..., ::-1]):
+            raise SystemExit(f"actorbt map score: cannot write {args.png}")
     if args.json:
         print(json.dumps({"built": str(args.built), "world": args.world, "seed": args.seed,
                           **s.as_dict()}, indent=2))

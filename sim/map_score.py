@@ -264,3 +264,30 @@ def score_maps(built: GridMap, truth: GridMap, tolerance: float = TOLERANCE,
     bfield = DistanceField(built.data >= OCCUPIED_MIN, built.resolution, built.origin)
     recall = float(np.mean(bfield(alignment.inverse_apply(faces)) <= tolerance + eps)) if len(faces) else 0.0
     return MapScore(precision, recall, alignment, len(pts), len(faces), tolerance)
+
+
+def overlay_image(built: GridMap, truth: GridMap, score: MapScore, scale: int = 3) -> np.ndarray:
+    """An RGB picture (H x W x 3, uint8, north up) of the built map on the truth's cells:
+    the truth's free floor white, its occupied cells grey; the built map's occupied cells
+    (aligned) green where within the tolerance of a true one, red where not; the true wall
+    faces no built cell came near, blue. ``scale`` pixels per cell."""
+    h, w = truth.data.shape
+    img = np.full((h, w, 3), 205, np.uint8)                       # unknown: grey
+    img[truth.data == 0] = 255
+    img[truth.data == 100] = 150
+    res, (ox, oy) = truth.resolution, truth.origin
+    faces = occupied_points(truth, visible_faces(truth))
+    bfield = DistanceField(built.data >= OCCUPIED_MIN, built.resolution, built.origin)
+    missed = faces[bfield(score.alignment.inverse_apply(faces)) > score.tolerance + 1e-6]
+    pts = score.alignment.apply(occupied_points(built))
+    tfield = DistanceField(truth.data == 100, res, truth.origin)
+    good = tfield(pts) <= score.tolerance + 1e-6
+    for sel, rgb in ((missed, (40, 90, 230)), (pts[good], (30, 160, 60)), (pts[~good], (220, 40, 40))):
+        if not len(sel):
+            continue
+        c = np.floor((sel[:, 0] - ox) / res).astype(int)
+        r = np.floor((sel[:, 1] - oy) / res).astype(int)
+        ok = (r >= 0) & (r < h) & (c >= 0) & (c < w)
+        img[r[ok], c[ok]] = rgb
+    img = img[::-1]                                                # row 0 is the lowest y
+    return np.repeat(np.repeat(img, scale, axis=0), scale, axis=1)

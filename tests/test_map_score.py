@@ -87,3 +87,22 @@ def test_cli_map_score_json(truth, tmp_path, capsys):
     assert main(["--config", str(ROOT / "actorbt.yaml"), "map", "score", str(yml)]) == 0
     text = capsys.readouterr().out
     assert "precision" in text and "recall" in text and "yaw 90" in text
+
+
+def test_overlay_colours_matched_stray_and_missed_cells(truth):
+    from sim.map_score import overlay_image
+    built = truth.data.copy()
+    built[:, : truth.width // 2][built[:, : truth.width // 2] == 100] = -1      # the west half unseen
+    r, c = np.argwhere(truth.data == 0)[len(np.argwhere(truth.data == 0)) // 2]
+    built[r, c] = 100                                                          # a speckle in the open
+    s = score_maps(GridMap(built, truth.resolution, truth.origin), truth, alignment=Alignment(0, 0, 0, 1))
+    img = overlay_image(GridMap(built, truth.resolution, truth.origin), truth, s, scale=2)
+    assert img.shape == (2 * truth.height, 2 * truth.width, 3) and img.dtype == np.uint8
+    colours = {tuple(v) for v in img.reshape(-1, 3)}
+    assert {(30, 160, 60), (220, 40, 40), (40, 90, 230)} <= colours
+    # north up: the speckle's row counts from the top
+    assert tuple(img[2 * (truth.height - 1 - r), 2 * c]) == (220, 40, 40)
+    # the missed faces are in the west half, the matched ones in the east
+    blue = np.argwhere((img == (40, 90, 230)).all(axis=2))[:, 1]
+    green = np.argwhere((img == (30, 160, 60)).all(axis=2))[:, 1]
+    assert np.median(blue) < truth.width < np.median(green)
