@@ -68,7 +68,7 @@ def path_distances(costmap: Costmap, start: tuple[float, float]) -> np.ndarray:
 
 
 def frontiers(costmap: Costmap, start: tuple[float, float], *, min_size: float = 0.3,
-              goal_radius: float = 1.0) -> list[Frontier]:
+              goal_radius: float = 1.0, min_unknown: float = 0.5) -> list[Frontier]:
     """Every frontier of ``costmap``'s grid at least ``min_size`` [m] long, nearest first.
 
     Args:
@@ -76,14 +76,25 @@ def frontiers(costmap: Costmap, start: tuple[float, float], *, min_size: float =
         start: where the robot is (x, y) [m]
         min_size: shorter frontiers are ignored [m]
         goal_radius: a goal is a reachable cell within this distance of the frontier [m]
+        min_unknown: frontiers onto an unknown pocket smaller than this [m^2], closed in by
+            the map (under a bed, inside a counter, behind a wardrobe), are ignored: the
+            laser cannot see into it from anywhere, and there is nothing there to map
     """
     from scipy import ndimage
-    if not (min_size >= 0 and goal_radius > 0):
-        raise InvalidInputError("min_size must be >= 0 m and goal_radius > 0 m")
+    if not (min_size >= 0 and goal_radius > 0 and min_unknown >= 0):
+        raise InvalidInputError("min_size and min_unknown must be >= 0 and goal_radius > 0 m")
     g = costmap.grid
     data = g.data
     free = (data >= 0) & (data < 50)
     unknown = data < 0
+    # the unknown worth exploring: pockets of it that are big, or open to the map's edge
+    pockets, n_pockets = ndimage.label(unknown, structure=np.ones((3, 3), bool))
+    if n_pockets:
+        area = ndimage.sum_labels(unknown, pockets, index=np.arange(1, n_pockets + 1)) * g.resolution ** 2
+        edge = np.unique(np.concatenate([pockets[0], pockets[-1], pockets[:, 0], pockets[:, -1]]))
+        worth = area >= min_unknown
+        worth[edge[edge > 0] - 1] = True
+        unknown = unknown & np.concatenate([[False], worth])[pockets]
     near_unknown = ndimage.binary_dilation(unknown, structure=np.ones((3, 3), bool))
     cells = free & near_unknown
     labels, n = ndimage.label(cells, structure=np.ones((3, 3), bool))

@@ -52,3 +52,19 @@ def test_path_distances_go_around_walls():
 def test_bad_parameters_are_refused():
     with pytest.raises(InvalidInputError):
         frontiers(inflate(corridor(3.0), 0.2), (0.5, 0.75), goal_radius=0)
+
+
+def test_a_small_unknown_pocket_is_not_worth_a_trip_a_closed_room_is():
+    data = np.zeros((60, 80), np.int8)                    # 4 m x 3 m, all seen
+    data[0, :] = data[-1, :] = data[:, 0] = data[:, -1] = 100
+    data[10:20, 10:22] = -1                               # under a table: 0.6 m x 0.5 m unknown
+    data[10:20, 10] = 100                                 # (its legs and back seen, the front open)
+    cm = inflate(OccupancyGrid(data, RES, (0.0, 0.0)), 0.2)
+    assert next_frontier(cm, (3.0, 2.0)) is None
+    assert next_frontier(cm, (3.0, 2.0), min_unknown=0.1) is not None     # a big enough pocket
+    # a room never looked into (1.5 m x 1.5 m behind a door) is explored
+    data[28:59, 48:79] = -1
+    data[28, 48:79] = 100
+    data[28, 55:63] = 0                                   # its door, open
+    f = next_frontier(inflate(OccupancyGrid(data, RES, (0.0, 0.0)), 0.2), (3.0, 0.5))
+    assert f is not None and f.middle[1] == pytest.approx(1.42, abs=0.1) and 2.7 < f.middle[0] < 3.2
