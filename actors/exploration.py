@@ -48,7 +48,8 @@ class Exploration(SubSystem):
             max_goals: give up after this many goals (ExplorationError)
 
         Returns:
-            goals (reached), failed (goals not reached), seconds (the time it took)
+            finished (True), goals (reached), failed (goals not reached), seconds (the
+            time it took)
         """
         start = self.runtime.now()
         failed: list[tuple[float, float, float]] = []
@@ -68,7 +69,7 @@ class Exploration(SubSystem):
                 continue
             frontier = next_frontier(costmap, (x, y), avoid=failed + visited, min_size=min_frontier)
             if frontier is None:
-                return {"goals": len(visited), "failed": len(failed),
+                return {"finished": True, "goals": len(visited), "failed": len(failed),
                         "seconds": round(self.runtime.now() - start, 1)}
             gx, gy, gyaw = frontier.goal
             log.info("frontier of %d cells at (%.2f, %.2f): going to (%.2f, %.2f)",
