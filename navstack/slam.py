@@ -4,23 +4,26 @@
 
 * **keyframes**: a scan becomes one once the odometry says the robot moved more than
   ``keyframe_dist`` or turned more than ``keyframe_angle`` since the last. A keyframe is
-  matched against the *local map*, the returns of the last ``local_keyframes`` keyframes
-  at their current poses: :class:`~navstack.scan_matcher.CorrelativeMatcher` on a 5 cm
-  likelihood map, then :func:`~navstack.scan_matcher.refine` (Gauss-Newton) on a 2 cm
-  density map of the same returns, weighted by 1 / range noise^2. Matching against
-  recent keyframes only (not the whole map) keeps an old, drifted part of the map from
-  pulling the robot before the loop is closed explicitly;
-* **a pose graph** (:class:`~navstack.pose_graph.PoseGraph`): per keyframe an odometry
-  edge (uncertainty growing with the distance and the turn) and a match edge (the
-  matcher's covariance) from the previous keyframe;
+  matched against the *local map*, the returns of the keyframes of the last
+  ``loop_min_travel`` metres of travel (at most ``local_keyframes``) at their current
+  poses: :class:`~navstack.scan_matcher.CorrelativeMatcher` on a 5 cm likelihood map,
+  then :func:`~navstack.scan_matcher.refine` (Gauss-Newton) on a 2 cm density map of the
+  same returns, weighted by 1 / range noise^2 (:func:`match_points`: which returns).
+  Matching against the recent stretch only (not the whole map) keeps an old, drifted part
+  of the map from pulling the robot before the loop is closed explicitly;
+* **a pose graph** (:class:`~navstack.pose_graph.PoseGraph`): per keyframe a match edge
+  (the matcher's covariance) from the previous keyframe, or an odometry edge
+  (uncertainty growing with the distance and the turn) where the match failed;
 * **loop closures**: a keyframe is matched against the submap around an old keyframe
   (``loop_min_travel`` back along the path but within ``loop_radius``), over a wide window;
-  a good score (and a refinement that stays within ``loop_max_refine_shift``) adds a
-  loop edge, the graph is optimised (Cauchy loss, against a wrong closure) and every
-  keyframe moves;
+  a good score, a refinement that stays within ``loop_max_refine_shift`` and a
+  correction no larger than the travel since allows (``loop_gate_xy``, ``loop_gate_yaw``)
+  add a loop edge, the graph is optimised (Cauchy loss, against a wrong closure) and
+  every keyframe moves;
 * **the map**: a :class:`~navstack.log_odds.LogOddsGrid`. Each scan is integrated at its
-  pose when it arrives; after a loop closure the grid is rebuilt from the stored scans at
-  the corrected poses (lazily, on the next :meth:`Slam.map`).
+  pose when it arrives; after a loop closure that moved a keyframe more than
+  ``rebuild_shift`` from where its scans were mapped, the grid is rebuilt from the stored
+  scans at the corrected poses (lazily, on the next :meth:`Slam.map`).
 
 Frames: ``odom`` is the odometry's frame, ``map`` SLAM's; the first keyframe is at
 ``initial_pose`` in the map (default: its odometry pose, so map = odom at the start).
@@ -54,7 +57,7 @@ class SlamParams:
     keyframe_dist: float = 0.2                # [m]
     keyframe_angle: float = math.radians(15)  # [rad]
     # the front end
-    local_keyframes: int = 20                 # the local map: the last N keyframes' returns
+    local_keyframes: int = 20                 # the local map: at most N keyframes' returns
     match_window_xy: float = 0.25             # [m] around the odometry's prediction
     match_window_yaw: float = math.radians(10)
     match_sigma: float = 0.05                 # the likelihood map's spread [m]
@@ -372,7 +375,8 @@ def match_points(scan: _Scan, max_range: float, sensor_offset) -> np.ndarray:
     [m] by their neighbours' ranges. A cut on a return's own range would keep, of a wall
     just beyond it, the returns whose noise made them short and so pull the wall (and the
     robot's pose) towards the laser; the median of the two beams either side carries no
-    information about this beam's noise, so the kept returns stay unbiased."""
+    information about this beam's noise, so the kept returns stay unbiased. (The beams
+    are taken as a ring, as a 360-degree scan's are.)"""
     r = np.asarray(scan.ranges, dtype=np.float64)
     with np.errstate(invalid="ignore"):
         valid = np.isfinite(r) & (r >= scan.range_min) & (r < scan.range_max)
