@@ -669,8 +669,6 @@ class Navigator(SubSystem):
         g.handle.publish_feedback(fb)
 
 
-__all__ = ["ACTION", "PERCEIVED", "Navigator", "NavigatorParams", "cloud_points", "lookahead_point"]
-
 
 def plan_out_of(planner: GridPlanner, start, goal, escape_distance: float) -> BasePath | None:
     """A path from a start inside the inflation (the robot stands where the map says it
@@ -721,3 +719,7 @@ def _never_closer(cm, a, b) -> bool:
         return False
     clear = cm.clearance[rows, cols]
     return bool(clear[0] > 0 and clear.min() >= min(clear[0], cm.robot_radius) - 1e-6)
+
+
+__all__ = ["ACTION", "PERCEIVED", "Navigator", "NavigatorParams", "cloud_points", "lookahead_point",
+           "plan_out_of"]
