@@ -128,7 +128,7 @@ class Mapper(SubSystem):
         with self._lock:
             if self.slam is None:
                 return
-            msg = self.slam.map().to_msg("map")
+            msg = self.slam.map(fresh=t is None).to_msg("map")     # while mapping: rebuilt now and then
             if t is not None:
                 sec, nsec = divmod(int(round(t * 1e9)), 1_000_000_000)
                 msg.header.stamp.sec, msg.header.stamp.nanosec = sec, nsec

@@ -64,6 +64,11 @@ class SlamParams:
     match_max_range: float = 3.0              # match only returns nearer than this [m]: near
     #   range_max, only the returns whose noise made them short survive (biased towards the laser)
     min_match_score: float = 0.35             # below: trust the odometry
+    pair_edges: int = 3                       # link each keyframe to the N before it, each
+    #                                           matched alone (0: one link, the local-map match)
+    pair_sigma: tuple = (0.03, math.radians(1.0))   # those links' sigma [m, rad]
+    optimize_every: int = 5                   # keyframes between two graph optimisations
+    #                                           when pair_edges > 0
     refine: str = "gauss_newton"              # off the lattice: "gauss_newton" (on a fine density
     #                                           map of the local returns), "icp" or "none"
     refine_resolution: float = 0.02           # that map's cells [m]
@@ -87,8 +92,9 @@ class SlamParams:
     loop_cov_scale: float = 4.0               # loop edges' covariance x this (they are riskier)
     loop_candidates: int = 2                  # old keyframes tried per keyframe
     loop_cooldown: int = 3                    # keyframes between two closures
-    rebuild_shift: float = 0.025              # rebuild the grid after a closure that moved a
+    rebuild_shift: float = 0.025              # rebuild the grid once the graph moved a
     #                                           keyframe this much [m] from where it was mapped
+    rebuild_period: float = 10.0              # [s] of scans between two rebuilds, map(fresh=False)
     loop_gate_xy: tuple = (0.05, 0.02)        # a closure may move the keyframe by at most
     loop_gate_yaw: tuple = (math.radians(2.0), math.radians(0.3))   # a + b * metres travelled since
     # the map
@@ -105,6 +111,7 @@ class Keyframe:
     weights: np.ndarray          # (K,) their weight in a local map: 1 / range noise^2, relative
     travel: float                # odometry path length from the start [m]
     scans: list = field(default_factory=list)   # (relative pose to this keyframe, scan) to rebuild the map
+    density: LikelihoodMap | None = None         # of its own returns, for pair edges (lazily)
 
 
 @dataclass
@@ -133,6 +140,7 @@ class Slam:
         self._travel = 0.0
         self._dirty = False              # the grid predates the latest loop closure
         self._integrated_at: list[tuple] = []   # per keyframe, the pose its scans were mapped at
+        self._t = self._rebuilt_t = 0.0  # the latest scan's time, the last rebuild's [s]
         self._since_closure = 1 << 30
 
     # -- input ---------------------------------------------------------------------------------
@@ -143,6 +151,7 @@ class Slam:
         inf or >= ``range_max`` is no return. Returns True when it became a keyframe."""
         p = self.params
         odom = tuple(float(v) for v in odom_pose)
+        self._t = float(t)
         self._travel += math.hypot(odom[0] - self._odom[0], odom[1] - self._odom[1]) if self.keyframes else 0.0
         self._odom = odom
         scan = _Scan(np.asarray(ranges, dtype=np.float32), np.asarray(angles, dtype=np.float64),
@@ -173,10 +182,12 @@ class Slam:
         latest pose on :meth:`pose`."""
         return compose(self.pose(), relative(self._odom, IDENTITY))
 
-    def map(self) -> OccupancyMap:
-        """The occupancy grid so far as map_server's trinary map (rebuilt first if a loop
-        closure moved the keyframes)."""
-        if self._dirty:
+    def map(self, fresh: bool = True) -> OccupancyMap:
+        """The occupancy grid so far as map_server's trinary map, rebuilt first if the graph
+        moved the keyframes since. ``fresh=False`` (a map published every second) rebuilds
+        at most every ``rebuild_period`` seconds of scan time: a rebuild costs a second or
+        more on a house, and in between the grid is off by centimetres."""
+        if self._dirty and (fresh or self._t - self._rebuilt_t >= self.params.rebuild_period):
             self.rebuild_map()
         return self.grid.to_map()
 
@@ -187,6 +198,7 @@ class Slam:
     def rebuild_map(self) -> None:
         """Re-integrate every stored scan at its keyframe's current pose."""
         self._dirty = False
+        self._rebuilt_t = self._t
         self._integrated_at = [tuple(x) for x in self.graph.poses]
         self.grid.clear()
         for i, kf in enumerate(self.keyframes):
@@ -214,14 +226,23 @@ class Slam:
         matched, cov = self._match_local(pts, predicted)
         self.graph.add_node(matched if matched is not None else predicted)
         self.keyframes.append(kf)
-        # the scan match, searched around the odometry's prediction, is the chain's link; the
-        # odometry stands in only where the match failed (it slips against obstacles, and
-        # as a second link would pull the chain off every good match by its drift)
-        if matched is not None:
-            self.graph.add_edge(k - 1, k, relative(self.graph.pose(k - 1), matched), _information(cov), "match")
-        else:
-            self.graph.add_edge(k - 1, k, z_odom, self._odom_information(z_odom), "odom")
         self._integrated_at.append(self.graph.pose(k))      # (its scan goes in below)
+        # The chain's links: the keyframe matched alone against each of the few before it,
+        # from the local map's pose (short baselines: a match against a long stretch of map
+        # is pulled back towards where that map was seen from, a shrink of a few per cent);
+        # else the local-map match; the odometry only where matching failed (it slips
+        # against obstacles, and as an extra link it pulls every good match off by its drift)
+        pairs = self._pair_matches(k, pts, matched) if matched is not None and p.pair_edges else []
+        sx, syaw = p.pair_sigma
+        for i, z in pairs:
+            self.graph.add_edge(i, k, z, np.diag([1 / sx ** 2, 1 / sx ** 2, 1 / syaw ** 2]), "pair")
+        if not pairs and matched is not None:
+            self.graph.add_edge(k - 1, k, relative(self.graph.pose(k - 1), matched), _information(cov), "match")
+        elif not pairs:
+            self.graph.add_edge(k - 1, k, z_odom, self._odom_information(z_odom), "odom")
+        elif k % p.optimize_every == 0:
+            self.graph.optimize(max_iterations=10, loss="cauchy", f_scale=3.0)
+            self._dirty = self._dirty or self._map_moved()
         self._since_closure += 1
         if self._since_closure > p.loop_cooldown and self._close_loop(k):
             self._since_closure = 0
@@ -247,6 +268,24 @@ class Slam:
         if math.hypot(refined[0] - pose[0], refined[1] - pose[1]) < 2 * p.resolution:
             pose = refined
         return pose, res.covariance
+
+    def _pair_matches(self, k: int, pts: np.ndarray, matched) -> list[tuple[int, tuple]]:
+        """Keyframe k (at ``matched``) refined against each of the ``pair_edges`` keyframes
+        before it alone: [(i, relative pose from i to k)]."""
+        p = self.params
+        out = []
+        for i in range(k - 1, max(-1, k - 1 - p.pair_edges), -1):
+            kf = self.keyframes[i]
+            if kf.density is None:
+                if len(kf.points) < 20:
+                    continue
+                kf.density = LikelihoodMap.from_density(kf.points, p.refine_resolution, p.refine_sigma,
+                                                        levels=0, weights=kf.weights)
+            z0 = relative(self.graph.pose(i), matched)
+            z = refine(kf.density, pts, z0)[0]
+            if math.hypot(z[0] - z0[0], z[1] - z0[1]) < 2 * p.resolution:
+                out.append((i, z))
+        return out
 
     def _local_keyframes(self) -> list[int]:
         """The keyframes of the local map: those less than ``loop_min_travel`` back along

@@ -122,3 +122,25 @@ def test_the_grid_is_rebuilt_only_when_a_closure_moved_the_keyframes(house_run):
         assert slam._map_moved()
     finally:
         poses[:] = saved
+
+
+def test_a_map_published_while_mapping_is_rebuilt_at_most_every_rebuild_period(house_run):
+    _, slam, _ = house_run
+    slam.rebuild_map()
+    poses = slam.graph._poses
+    saved = list(poses)
+    try:
+        poses[-1] = compose(saved[-1], (0.10, 0.0, 0.0))
+        slam._dirty = slam._map_moved()
+        assert slam._dirty
+        slam.map(fresh=False)                      # just rebuilt: the grid stays as it is
+        assert slam._dirty
+        slam._t += slam.params.rebuild_period
+        slam.map(fresh=False)
+        assert not slam._dirty
+        poses[-1] = saved[-1]
+        slam._dirty = slam._map_moved()
+        slam.map()                                 # fresh (save_map): rebuilt whatever the time
+        assert not slam._dirty
+    finally:
+        poses[:] = saved
