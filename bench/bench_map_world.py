@@ -29,11 +29,10 @@ from __future__ import annotations
 import argparse
 import math
 import pathlib
-import statistics
 import sys
 import time
 
-from demo.evaluate import evaluate, print_table
+from demo.evaluate import evaluate, print_rates, print_table
 from sim import write_map
 from sim.description import load_world
 from sim.gridmap import lidar_height, read_map
@@ -104,16 +103,8 @@ def main(argv=None) -> int:
         eps = evaluate("bt_pick_place", args.seeds, str(yml), "mixed", args.jobs, OUT / n,
                        first_seed=FIRST_SEED, locations=str(locs))
         print_table(eps)
-        ok = sum(e.success for e in eps)
-        rows.append((n, len(eps), ok, statistics.median(e.realtime_factor for e in eps),
-                     statistics.median(e.wall_time for e in eps),
-                     statistics.median(e.sim_time for e in eps)))
-    print(f"\n{'map':8s} {'success':>12s} {'rate':>7s} {'RTF median':>11s} "
-          f"{'wall/episode':>13s} {'sim/episode':>12s}")
-    for n, total, ok, rtf, wall, sim in rows:
-        flag = "ok" if ok / total >= TARGET_RATE else "MISSED"
-        print(f"{n:8s} {ok:5d}/{total:<6d} {100 * ok / total:6.1f}% {rtf:10.1f}x {wall:11.1f} s "
-              f"{sim:10.1f} s   target >= {TARGET_RATE:.0%}: {flag}")
+        rows.append((n, eps))
+    print_rates(rows, "map", TARGET_RATE)
     print(f"\nseeds {FIRST_SEED}..{FIRST_SEED + args.seeds - 1}, total wall time "
           f"{time.perf_counter() - t0:.0f} s with {args.jobs} parallel jobs; output in {OUT}/")
     return 0

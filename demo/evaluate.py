@@ -132,3 +132,21 @@ def print_table(episodes: list[Episode], out: TextIO = sys.stdout) -> None:
         for e in episodes:
             if not e.success:
                 out.write(f"  seed {e.seed:3d} {e.category:7s} {e.failed_node}: {e.reason[:150]}\n")
+
+
+def print_rates(rows: list[tuple[str, list[Episode]]], label: str, target_rate: float,
+                target_rtf: float | None = None, out: TextIO = sys.stdout) -> None:
+    """One line per (name, episodes): successes, rate, median real-time factor, wall and
+    sim time per episode, and the targets met or MISSED (the benchmarks' summary)."""
+    print(f"\n{label:8s} {'success':>12s} {'rate':>7s} {'RTF median':>11s} "
+          f"{'wall/episode':>13s} {'sim/episode':>12s}", file=out)
+    for name, eps in rows:
+        n, ok = len(eps), sum(e.success for e in eps)
+        rtf = statistics.median(e.realtime_factor for e in eps)
+        line = (f"{name:8s} {ok:5d}/{n:<6d} {100 * ok / n:6.1f}% {rtf:10.1f}x "
+                f"{statistics.median(e.wall_time for e in eps):11.1f} s "
+                f"{statistics.median(e.sim_time for e in eps):10.1f} s   "
+                f"target >= {target_rate:.0%}: {'ok' if ok / n >= target_rate else 'MISSED'}")
+        if target_rtf is not None:
+            line += f"; RTF >= {target_rtf:g}x: {'ok' if rtf >= target_rtf else 'MISSED'}"
+        print(line, file=out)

@@ -1,0 +1,22 @@
+"""demo.evaluate.print_rates: the benchmarks' success summary, one line per group."""
+import io
+
+from demo.episode import Episode
+from demo.evaluate import print_rates
+
+
+def ep(success: bool, sim: float, wall: float) -> Episode:
+    return Episode("bt_pick_place", "house", 0, "can", success=success, sim_time=sim, wall_time=wall)
+
+
+def test_rates_medians_and_targets():
+    out = io.StringIO()
+    print_rates([("can", [ep(True, 100, 20), ep(True, 120, 30), ep(False, 90, 10)]),
+                 ("bottle", [ep(True, 100, 5)] * 4)], "category", 0.9, target_rtf=10.0, out=out)
+    lines = out.getvalue().strip().splitlines()
+    assert lines[0].split()[:3] == ["category", "success", "rate"]
+    can, bottle = lines[1], lines[2]
+    assert "2/3" in can and "66.7%" in can and "5.0x" in can and "20.0 s" in can and "100.0 s" in can
+    assert "target >= 90%: MISSED" in can and "RTF >= 10x: MISSED" in can
+    assert "4/4" in bottle and "100.0%" in bottle and "20.0x" in bottle
+    assert "target >= 90%: ok" in bottle and "RTF >= 10x: ok" in bottle
