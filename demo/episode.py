@@ -33,6 +33,8 @@ REPO_CONFIG = pathlib.Path(__file__).resolve().parents[1] / "actorbt.yaml"
 LOC_PERIOD, PATH_PERIOD = 0.5, 0.1
 #: the /initialpose the user gives: the start pose, to within these standard deviations
 INITIAL_STD_XY, INITIAL_STD_YAW = 0.05, 0.03
+
+
 def without_map_server(setup: Any):
     """A world_setup that first turns the world's map server off, then runs ``setup``."""
     def run(world: SimWorld) -> None:

@@ -694,7 +694,7 @@ def plan_out_of(planner: GridPlanner, start, goal, escape_distance: float) -> Ba
         if d[i] > escape_distance:
             break
         via = (float(xs[i]), float(ys[i]))
-        if not _never_closer(cm, start, via):
+        if not _never_closer(planner, start, via):
             continue
         rest = planner.plan(via, goal)
         if rest.ok:
@@ -705,20 +705,14 @@ def plan_out_of(planner: GridPlanner, start, goal, escape_distance: float) -> Ba
     return None
 
 
-def _never_closer(cm, a, b) -> bool:
+def _never_closer(planner: GridPlanner, a, b) -> bool:
     """Whether the straight way a -> b (x, y) [m] stays on the map and never comes nearer
     to an obstacle than the robot is at ``a``."""
-    grid = cm.grid
-    res = grid.resolution
-    n = max(2, int(math.ceil(math.dist(a, b) / (0.25 * res))) + 1)
-    t = np.linspace(0.0, 1.0, n)
-    cols = np.floor((a[0] + (b[0] - a[0]) * t - grid.origin[0]) / res).astype(int)
-    rows = np.floor((a[1] + (b[1] - a[1]) * t - grid.origin[1]) / res).astype(int)
-    h, w = cm.clearance.shape
-    if rows.min() < 0 or cols.min() < 0 or rows.max() >= h or cols.max() >= w:
+    cells = planner.segment_cells(a, b)
+    if cells is None:
         return False
-    clear = cm.clearance[rows, cols]
-    return bool(clear[0] > 0 and clear.min() >= min(clear[0], cm.robot_radius) - 1e-6)
+    clear = planner.costmap.clearance[cells]
+    return bool(clear[0] > 0 and clear.min() >= min(clear[0], planner.costmap.robot_radius) - 1e-6)
 
 
 __all__ = ["ACTION", "PERCEIVED", "Navigator", "NavigatorParams", "cloud_points", "lookahead_point",

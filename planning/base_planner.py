@@ -139,9 +139,11 @@ class GridPlanner:
             )
         return rc, ""
 
-    def _segment_clearance(self, p: np.ndarray, q: np.ndarray) -> float:
-        """Smallest clearance over points of segment p -> q [m]; -1 if it leaves the map."""
-        cm, grid = self.costmap, self.costmap.grid
+    def segment_cells(self, p, q) -> tuple[np.ndarray, np.ndarray] | None:
+        """(rows, cols) of the cells under segment p -> q (x, y) [m], sampled every quarter
+        cell from p to q; None if it leaves the map."""
+        grid = self.costmap.grid
+        p, q = np.asarray(p, dtype=float), np.asarray(q, dtype=float)
         n = max(2, int(math.ceil(float(np.linalg.norm(q - p)) / (0.25 * grid.resolution))) + 1)
         t = np.linspace(0.0, 1.0, n)[:, None]
         pts = p + (q - p) * t
@@ -149,10 +151,15 @@ class GridPlanner:
         rows = np.floor((pts[:, 1] - grid.origin[1]) / grid.resolution).astype(int)
         h, w = grid.shape
         if rows.min() < 0 or cols.min() < 0 or rows.max() >= h or cols.max() >= w:
+            return None
+        return rows, cols
+
+    def _segment_clearance(self, p: np.ndarray, q: np.ndarray) -> float:
+        """Smallest clearance over points of segment p -> q [m]; -1 if it leaves the map."""
+        cells = self.segment_cells(p, q)
+        if cells is None or self.costmap.lethal[cells].any():
             return -1.0
-        if cm.lethal[rows, cols].any():
-            return -1.0
-        return float(cm.clearance[rows, cols].min())
+        return float(self.costmap.clearance[cells].min())
 
     def _smooth(self, pts: list[np.ndarray], clear: np.ndarray) -> list[np.ndarray]:
         want = self.costmap.robot_radius + self.smoothing_margin
