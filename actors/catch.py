@@ -87,12 +87,13 @@ class Catcher(SubSystem):
 
     def _free_standoff(self, robot_xy: tuple[float, float], xy: tuple[float, float],
                        strategy: Strategy, extra: float = 0.0, others: list[dict] = (),
-                       corridor: bool = True) -> list[tuple[float, float, float]]:
+                       corridor: bool = True, object_yaw: float | None = None
+                       ) -> list[tuple[float, float, float]]:
         """Standoff poses with room for the base around them and (with ``corridor``) a
         clear straight approach to the object, best first (``others``: perceived objects
-        to keep clear of)."""
+        to keep clear of; ``object_yaw``: a box's measured yaw, for square approaches)."""
         free = []
-        for pose in strategy.standoff_poses(robot_xy, xy, extra):
+        for pose in strategy.standoff_poses(robot_xy, xy, extra, object_yaw):
             if (self.run_actor("clearance", pose[0], pose[1]) >= STANDOFF_CLEARANCE
                     and (not corridor or self._corridor_clear(pose, xy, strategy, others))):
                 free.append(pose)
@@ -149,7 +150,8 @@ class Catcher(SubSystem):
         Args:
             target: the object, as perception reports it: a dict with its axis x, y in
                 the map frame [m] and usually its category
-            category: whose strategy to use (can, bottle); None: the target's category
+            category: whose strategy to use (can, bottle, carton, ...); None: the
+                target's category
 
         Returns:
             the target as re-measured from close by, with its category
@@ -171,9 +173,11 @@ class Catcher(SubSystem):
                 if not look or math.dist((rx, ry), xy) <= look + 0.3:
                     continue  # close enough already
                 extra = look - strategy.approach.reach - strategy.approach.standoff
-                poses = self._free_standoff((rx, ry), xy, strategy, extra, others)
+                poses = self._free_standoff((rx, ry), xy, strategy, extra, others,
+                                            object_yaw=target.get("yaw"))
             else:
-                poses = self._free_standoff((rx, ry), xy, strategy, others=others)
+                poses = self._free_standoff((rx, ry), xy, strategy, others=others,
+                                            object_yaw=target.get("yaw"))
             self._goto_first(poses, xy)
         self._face(xy, strategy)
         return {**target, "category": cat}
@@ -200,7 +204,8 @@ class Catcher(SubSystem):
         Args:
             target: the object, as approach_object returns it: a dict with its axis x, y
                 in the map frame and its base z [m], and usually its category
-            category: whose strategy to use (can, bottle); None: the target's category
+            category: whose strategy to use (can, bottle, carton, ...); None: the
+                target's category
 
         Returns:
             what is held: category, and width (the finger opening) [m]

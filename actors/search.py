@@ -17,6 +17,9 @@ ANY = ("any", "mixed", "", None)
 LOOK_STEP = math.radians(80)   # turn per look, about the camera's field of view [rad]
 LOOK_PAUSE = 0.6               # time to hold still at each look [s]
 HAND_RANGE = 0.45              # detections closer than this may be in the gripper [m]
+WAYPOINT_CLEARANCE = 0.25      # room a search location needs for the base [m] (navigation
+                               # plans with a 0.20 m robot radius)
+MAX_SHIFT = 1.0                # how far a blocked search location may be moved [m]
 
 
 def _in_own_hand(detection: dict) -> bool:
@@ -37,7 +40,8 @@ class Search(SubSystem):
         seen, and return its detection (map frame). Runs until found or cancelled.
 
         Args:
-            category: the object category to watch for (can, bottle), or any
+            category: the object category to watch for (a registered one: can, bottle,
+                carton, ...), or any
         """
         cat = None if category in ANY else category
         while True:
@@ -56,11 +60,27 @@ class Search(SubSystem):
             self.run_actor("sleep", LOOK_PAUSE)
             self.run_actor("mini_turn", LOOK_STEP)
 
+    def _free_spot_near(self, x: float, y: float) -> tuple[float, float] | None:
+        """(x, y) itself if the base fits there, else the nearest spot within MAX_SHIFT
+        where it does (rings of 10 cm, 16 directions), else None."""
+        if self.run_actor("clearance", x, y) >= WAYPOINT_CLEARANCE:
+            return x, y
+        for k in range(1, int(round(MAX_SHIFT / 0.1)) + 1):
+            r = 0.1 * k
+            for j in range(16):
+                a = j * math.pi / 8
+                px, py = x + r * math.cos(a), y + r * math.sin(a)
+                if self.run_actor("clearance", px, py) >= WAYPOINT_CLEARANCE:
+                    return px, py
+        return None
+
     @actor
     def patrol(self, locations: list, turns: int = 4) -> None:
         """Visit each (x, y) [m] of ``locations`` in turn and look around there. A place
-        the base cannot reach (something stands on it, the way is blocked) is looked
-        around from where the base stopped, if it got anywhere, and the patrol goes on.
+        where the base does not fit (an object or furniture stands on it) is moved to the
+        nearest spot within 1 m where it does, or skipped. A place the base cannot reach
+        (the way is blocked) is looked around from where the base stopped, if it got
+        anywhere, and the patrol goes on.
         Fails with SearchExhausted after the last one: a patrol that ends has found nothing.
 
         Args:
@@ -79,7 +99,15 @@ class Search(SubSystem):
             except (TypeError, ValueError, IndexError):
                 raise ActorbtError(f"search location {i} must be [x, y], got {loc!r}") from None
         missed = []
-        for x, y in places:
+        for x0, y0 in places:
+            spot = self._free_spot_near(x0, y0)
+            if spot is None:
+                missed.append(f"({x0:.2f}, {y0:.2f}): no room for the base within {MAX_SHIFT:.1f} m")
+                log.info("search location (%.2f, %.2f) skipped: no room for the base near it", x0, y0)
+                continue
+            x, y = spot
+            if (x, y) != (x0, y0):
+                log.info("search location (%.2f, %.2f) is blocked; looking from (%.2f, %.2f)", x0, y0, x, y)
             rx, ry, _ = self.run_actor("get_pose")
             try:
                 self.run_actor("goto", x, y, math.atan2(y - ry, x - rx))

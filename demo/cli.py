@@ -25,8 +25,9 @@ def register(sub, common) -> None:
     _world_options(p)
     p.add_argument("--seed", type=int, default=0, metavar="N",
                    help="The world's seed, which places the objects (default: 0).")
-    p.add_argument("--category", default="any", choices=["can", "bottle", "any"],
-                   help="The kind of object to fetch (default: any).")
+    p.add_argument("--category", default="any", metavar="NAME",
+                   help="The kind of object to fetch: a registered category (can, bottle, carton, "
+                        "or one from actorbt.yaml's imports) or any (default: any).")
     p.add_argument("--tree", default="bt_pick_place",
                    help="The mission to run (default: bt_pick_place).")
     p.add_argument("--out", default="out/demo", metavar="DIR",
@@ -42,13 +43,22 @@ def register(sub, common) -> None:
     e.add_argument("--first-seed", type=int, default=0, metavar="N",
                    help="The first seed; the others follow it (default: 0).")
     _world_options(e)
-    e.add_argument("--category", default="mixed", choices=["can", "bottle", "mixed"],
-                   help="The kind of object asked for; 'mixed' alternates can and bottle (default: mixed).")
+    e.add_argument("--category", default="mixed", metavar="NAME",
+                   help="The kind of object asked for: a registered category (can, bottle, carton, "
+                        "or one from actorbt.yaml's imports), or mixed: every registered category "
+                        "in turn (default: mixed).")
     e.add_argument("--jobs", type=int, default=1, metavar="N",
                    help="How many episodes run at once, each in its own process (default: 1).")
     e.add_argument("--out", default="out/eval", metavar="DIR",
                    help="The folder for the traces and episodes.csv (default: out/eval).")
     e.set_defaults(func=cmd_eval)
+
+
+def _check_category(category: str, wildcard: str) -> None:
+    """An unknown category fails before any episode starts, with close matches."""
+    if category != wildcard:
+        import categories
+        categories.get(category)
 
 
 def _check_world(world: str, seed: int, locations: str | None = None) -> None:
@@ -64,6 +74,7 @@ def cmd_demo(args, app) -> int:
 
     from .episode import print_outcome, run_episode
     out = pathlib.Path(args.out)
+    _check_category(args.category, "any")
     _check_world(args.world, args.seed, args.locations)
     print(f"actorbt demo: {args.tree} in {args.world} (seed {args.seed}), category {args.category}",
           flush=True)
@@ -78,6 +89,7 @@ def cmd_demo(args, app) -> int:
 
 def cmd_eval(args, app) -> int:
     from .evaluate import evaluate, print_table
+    _check_category(args.category, "mixed")
     _check_world(args.world, args.first_seed, args.locations)
     episodes = evaluate(args.tree, args.seeds, args.world, args.category, args.jobs, args.out,
                         first_seed=args.first_seed, config=app.cfg, locations=args.locations,

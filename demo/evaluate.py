@@ -11,6 +11,7 @@ import time
 from dataclasses import asdict
 from typing import TextIO
 
+import categories
 from bt_engine.cli.app import App
 from bt_engine.cli.config import Config
 
@@ -35,12 +36,11 @@ def _one(job: tuple) -> Episode:
 def _jobs(tree: str, world: str, seeds: int, first_seed: int, category: str,
           out: pathlib.Path, config: Config | None = None, locations: str | None = None,
           mapping: bool = False) -> list[tuple]:
-    cats = ["can", "bottle"] if category == "mixed" else [category]
+    cats = categories.names() if category == "mixed" else [category]
     jobs = []
     for i in range(seeds):
         seed = first_seed + i
-        # mixed: both categories are in every world; alternate which one is asked for,
-        # so the table shows both strategies
+        # mixed: alternate which category is asked for, so the table shows every strategy
         cat = cats[i % len(cats)]
         jobs.append((tree, world, seed, cat, out / f"{cat}_seed{seed}", config, locations, mapping))
     return jobs

@@ -19,6 +19,8 @@ Format (all lengths in metres, angles in radians)::
     objects:
       - {category: can, count: 1, room: kitchen}   # random, seeded
       - {category: box, name: crate, pose: [2, 1, 0]}   # fixed pose [x, y, yaw]
+      - {category: others}          # one of every registered category not listed above
+                                    # (in a random room, or the given one)
 """
 from __future__ import annotations
 
@@ -29,6 +31,7 @@ from pathlib import Path
 import numpy as np
 import yaml
 
+import categories as registry
 from bt_engine.errors import ActorbtError
 from bt_engine.yaml_hints import syntax_mark, syntax_message
 
@@ -37,6 +40,7 @@ from .objects import CATEGORIES
 WORLDS_DIR = Path(__file__).resolve().parent / "worlds"
 ROBOT_RADIUS = 0.26     # circle around base_footprint that covers the Waffle Pi chassis
 DOOR_CLEARANCE = 0.6    # random objects keep this far from wall ends (doorways, corners)
+OTHERS = "others"       # an objects entry for one of every registered category not listed
 
 
 class WorldError(ActorbtError, ValueError):
@@ -294,6 +298,7 @@ def parse_world(text: str, path: str = "<string>", seed: int = 0) -> WorldSpec:
                           f"robot.start ({sx}, {sy}) overlaps '{ob.name}'")
 
     entries = []   # (node, category, name, room, pose or None)
+    others = []    # (node, count, room) of "every category not listed" entries
     counters: dict[str, int] = {}
     for i, on in enumerate(ctx.seq(top["objects"][1], "objects") if "objects" in top else []):
         what = f"objects[{i}]"
@@ -303,8 +308,9 @@ def parse_world(text: str, path: str = "<string>", seed: int = 0) -> WorldSpec:
             raise ctx.err(on, f"{what}: missing 'category' (one of: {', '.join(CATEGORIES)})")
         cnode = om["category"][1]
         cat = ctx.str_(cnode, f"{what}.category")
-        if cat not in CATEGORIES:
-            raise ctx.err(cnode, f"{what}: unknown category '{cat}' (one of: {', '.join(CATEGORIES)})")
+        if cat not in CATEGORIES and cat != OTHERS:
+            raise ctx.err(cnode, f"{what}: unknown category '{cat}' (one of: {', '.join(CATEGORIES)}; "
+                                 f"or {OTHERS}: every category not listed)")
         count = ctx.int_(om["count"][1], f"{what}.count", minimum=1) if "count" in om else 1
         room = None
         if "room" in om:
@@ -314,6 +320,11 @@ def parse_world(text: str, path: str = "<string>", seed: int = 0) -> WorldSpec:
                 raise ctx.err(rnode, f"{what}: unknown room '{room}' (rooms: {', '.join(spec.rooms) or 'none'})")
         pose = ctx.vec(om["pose"][1], 3, f"{what}.pose") if "pose" in om else None
         base = ctx.str_(om["name"][1], f"{what}.name") if "name" in om else None
+        if cat == OTHERS:
+            if pose is not None or base is not None:
+                raise ctx.err(on, f"{what}: '{OTHERS}' stands for several categories: no 'pose' or 'name'")
+            others.append((on, count, room))
+            continue
         if pose is not None and count != 1:
             raise ctx.err(on, f"{what}: 'pose' fixes one object; drop 'count'")
         for _ in range(count):
@@ -324,6 +335,16 @@ def parse_world(text: str, path: str = "<string>", seed: int = 0) -> WorldSpec:
                 counters[stem] = counters.get(stem, 0) + 1
                 oname = f"{stem}_{counters[stem]}"
             entries.append((on, cat, oname, room, pose))
+    listed = {e[1] for e in entries}
+    room_rng = np.random.default_rng([seed, 7])     # apart from the placement stream
+    for on, count, room in others:
+        for cat in registry.names():
+            if cat in listed:
+                continue
+            for _ in range(count):
+                counters[cat] = counters.get(cat, 0) + 1
+                where = room or (str(room_rng.choice(sorted(spec.rooms))) if spec.rooms else None)
+                entries.append((on, cat, f"{cat}_{counters[cat]}", where, None))
     names = [e[2] for e in entries]
     for e in entries:
         if names.count(e[2]) > 1:

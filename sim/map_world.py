@@ -16,7 +16,7 @@ Locations file (the common ROS demo form; metres, radians, map frame)::
 
 Without it (or for what it leaves out) the start is the spot with most clearance near the
 map's origin, the place location a free spot near the start, and the search locations a few
-spread reachable spots. The objects (one can, one bottle, a box distractor) are placed from
+spread reachable spots. The objects (one of every registered category and a box distractor) are placed from
 the seed at reachable spots within :data:`NEAR_LOCATION` of a search location.
 """
 from __future__ import annotations
@@ -25,6 +25,8 @@ import math
 from pathlib import Path
 
 import numpy as np
+
+import categories as registry
 
 from .description import Box, PlacedObject, WorldError, WorldSpec, compose_yaml
 from .gridmap import read_map
@@ -40,8 +42,14 @@ PASSAGE = 0.15              # [m] an object leaves at least twice this of the ro
 NEAR_LOCATION = 1.5         # [m] objects lie at most this far from a search location
 SPECKLE_CELLS = 2           # occupied blobs this small with floor all round are lidar noise
 HOLE_AREA = 0.05            # [m^2] unknown holes in the floor up to this size are floor
-OBJECTS = ("can", "bottle", "box")   # what a map world holds: the two targets, one distractor
+FIRST_OBJECTS = ("can", "bottle", "box")   # placed first, in this order (older seeds keep
+                                           # their layout); then one of every other category
 START_NAMES, PLACE_NAMES = ("start", "home"), ("place", "pallet", "drop")
+
+
+def map_world_objects() -> list[str]:
+    """What a map world holds: one object of every registered category and a distractor."""
+    return list(FIRST_OBJECTS) + [c for c in registry.names() if c not in FIRST_OBJECTS]
 
 
 def build_map_world(path: str | Path, seed: int = 0, locations: str | Path | None = None) -> WorldSpec:
@@ -384,7 +392,7 @@ def _place_box(g: _Grid, reach, start, place) -> Box:
 
 
 def _place_objects(g: _Grid, reach, spec: WorldSpec, rng) -> list[PlacedObject]:
-    """One of each of :data:`OBJECTS` at a random reachable spot within NEAR_LOCATION of a
+    """One of each of :func:`map_world_objects` at a random reachable spot within NEAR_LOCATION of a
     search location (each object at another location when there are enough), in sight of it."""
     rr, cc = np.nonzero(reach)
     xs, ys = g.xy(rr, cc)
@@ -395,7 +403,7 @@ def _place_objects(g: _Grid, reach, spec: WorldSpec, rng) -> list[PlacedObject]:
     locs = list(spec.search_locations) or [spec.robot_start[:2]]
     order = [locs[i] for i in rng.permutation(len(locs))]
     xs_all, ys_all = g.xy(*np.indices(reach.shape))
-    for k, cat in enumerate(OBJECTS):
+    for k, cat in enumerate(map_world_objects()):
         r = CATEGORIES[cat].radius
         ok = (cl >= OBJECT_CLEARANCE + r) & (np.hypot(xs - sx, ys - sy) >= 0.26 + r + OBJECT_CLEARANCE)
         if spec.place is not None:

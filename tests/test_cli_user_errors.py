@@ -51,7 +51,8 @@ def test_an_unknown_category_in_a_world(project, capsys):
     assert run(project, "call", "greet", "--world", str(world)) == 2
     message = one_error_line(capsys)
     assert re.fullmatch(rf"{re.escape(str(world))}:{line}:\d+: objects\[\d\]: unknown category 'juice' "
-                        r"\(one of: can, bottle, box\)", message), message
+                        r"\(one of: bottle, can, carton, box; or others: every category not listed\)",
+                        message), message
 
 
 def test_a_world_with_a_yaml_mistake(project, capsys):

@@ -13,7 +13,8 @@ import pytest
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 ENGINE = ROOT / "bt_engine"
 FORBIDDEN = {
-    "bt_engine": {"actors", "planning", "sim", "navstack"},
+    "bt_engine": {"actors", "categories", "planning", "sim", "navstack"},
+    "categories": {"actors", "planning", "sim", "navstack", "demo"},
     "planning": {"bt_engine", "sim", "actors", "navstack"},
     "actors": {"sim", "navstack"},
     "sim": {"actors", "planning", "navstack"},
@@ -52,6 +53,16 @@ def test_sim_uses_only_the_engines_bus_clock_and_errors():
                 if not any(mod == a or mod.startswith(a + ".") for a in allowed - {"bt_engine"}) \
                         and mod != "bt_engine":
                     bad.append(f"{f.relative_to(ROOT)}: {mod}")
+    assert not bad, bad
+
+
+def test_categories_use_only_the_engines_errors_and_file_imports():
+    bad = []
+    for f in sorted((ROOT / "categories").rglob("*.py")):
+        for node in ast.walk(ast.parse(f.read_text())):
+            if isinstance(node, ast.ImportFrom) and node.module and node.module.startswith("bt_engine") \
+                    and node.module not in ("bt_engine.errors", "bt_engine.modules"):
+                bad.append(f"{f.relative_to(ROOT)}: {node.module}")
     assert not bad, bad
 
 

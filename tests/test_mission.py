@@ -88,3 +88,32 @@ def test_nothing_to_find_ends_the_search_with_failure():
     assert ep.tree_status == "FAILURE"
     assert "visited 2 search locations and saw nothing" in ep.reason
     assert ep.sim_time < 120
+
+
+class PoseAtEnd(TreeObserver):
+    """Where the robot is when the patrol ends (the world is closed after the episode)."""
+
+    def __init__(self) -> None:
+        self.world: SimWorld | None = None
+        self.pose = None
+
+    def hide_everything(self, world: SimWorld) -> None:
+        self.world = world
+        for i, name in enumerate(world.object_names()):
+            world.set_object_pose(name, 50.0 + i, 50.0, 0.0)
+
+    def actor_finished(self, run, leaf, txn) -> None:
+        if leaf.node.actor == "patrol":
+            self.pose = self.world.robot_pose()
+
+
+def test_a_blocked_search_location_is_moved_and_an_impossible_one_skipped():
+    """One location is against a wall (the base does not fit there): the robot looks from
+    the nearest spot where it does. The other is off the map: skipped, not fatal."""
+    end = PoseAtEnd()
+    ep = run_episode("bt_search", "open_floor", seed=0, category="any", world_setup=end.hide_everything,
+                     observers=[end], inputs={"locations": [[-2.97, 0.0], [40.0, 40.0]]})
+    assert ep.tree_status == "FAILURE"
+    assert "visited 2 search locations and saw nothing; 1 not reached: (40.00, 40.00)" in ep.reason
+    x, y, _ = end.pose
+    assert -2.8 < x < -2.4 and abs(y) < 0.2, (x, y)     # it looked from beside the wall

@@ -140,7 +140,7 @@ def test_locations_file(tmp_path):
     assert spec.robot_start == pytest.approx(start)
     assert (spec.place.x, spec.place.y, spec.place.yaw) == pytest.approx(place)
     assert np.allclose(spec.search_locations, list(spots.values()))
-    assert sorted(o.category for o in spec.objects) == ["bottle", "box", "can"]
+    assert sorted(o.category for o in spec.objects) == ["bottle", "box", "can", "carton"]
     grid = build_grid(spec, RES)
     for o in spec.objects:
         near = min(math.hypot(o.x - x, o.y - y) for x, y in spots.values())
@@ -158,7 +158,7 @@ def test_without_locations_picks_its_own(tmp_path):
     grid = build_grid(spec, RES)
     assert grid.value_at(*spec.robot_start[:2]) == 0
     assert len(spec.search_locations) >= 2
-    assert spec.place is not None and len(spec.objects) == 3
+    assert spec.place is not None and len(spec.objects) == 4
     assert max(x for x, _ in spec.search_locations) > cells_xy(0, 50)[0]   # both rooms
 
 
@@ -243,7 +243,7 @@ def test_simworld_on_the_house_map_sees_walls(house_map):
         hits = np.isfinite(ranges) & (ranges > 0)
         assert hits.mean() > 0.5                    # walls within 3.5 m on most sides
         assert ranges[hits].min() < 1.0             # the start is near the house's corner
-        assert sorted(sim.object_names()) == ["bottle_1", "box_1", "can_1"]
+        assert sorted(sim.object_names()) == ["bottle_1", "box_1", "can_1", "carton_1"]
     finally:
         sim.close()
 

@@ -48,6 +48,24 @@ def test_categories_match_the_brief():
     assert len(bottle.parts) >= 2 and bottle.mass <= 0.3     # body + neck, light for the arm
 
 
+def test_others_places_one_of_every_category_not_listed(tmp_path):
+    import categories
+    w = load_world("house", seed=2)
+    assert sorted(o.category for o in w.objects) == ["bottle", "box", "box", "can", "can", "carton"]
+    juice = tmp_path / "juice.py"
+    juice.write_text("from categories import Box, Category, Grasp, register\n"
+                     "register(Category('juice_world_test', Box(0.06, 0.04, 0.1), 0.05, (1, .5, 0, 1),"
+                     " Grasp(height=0.05)))\n")
+    categories.load(juice)
+    try:
+        again = load_world("house", seed=2)
+        assert again.objects[:6] == w.objects            # the layout so far stays
+        (extra,) = again.objects[6:]
+        assert extra.category == "juice_world_test" and again.room_of(extra.x, extra.y)
+    finally:
+        categories.unregister("juice_world_test")
+
+
 def test_same_seed_same_world_other_seed_other_world():
     a, b, c = (load_world("house", seed=s) for s in (5, 5, 6))
     assert a.objects == b.objects

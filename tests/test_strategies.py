@@ -1,18 +1,16 @@
-"""The per-category strategy registry."""
+"""Strategies as the robot reads them from the category files."""
 from __future__ import annotations
 
 import math
 
 import pytest
 
-from actors.strategies import (Approach, Grasp, Strategy, UnknownCategoryError, categories,
-                               register_strategy, strategy_for)
-from bt_engine import ActorbtError
+from actors.strategies import UnknownCategoryError, known_categories, strategy_for
 from planning import ArmKinematics
 
 
-def test_can_and_bottle_are_registered():
-    assert {"can", "bottle"} <= set(categories())
+def test_the_built_in_categories_have_strategies():
+    assert {"can", "bottle", "carton"} <= set(known_categories())
     assert strategy_for("can").grasp.height == pytest.approx(0.061)  # middle of a 122 mm can
     assert strategy_for("bottle").grasp.height < 0.1                 # low on the body
 
@@ -23,7 +21,7 @@ def test_unknown_category_lists_the_known_ones():
     assert "did you mean can" in str(e.value) and "bottle" in str(e.value)
 
 
-@pytest.mark.parametrize("category", ["can", "bottle"])
+@pytest.mark.parametrize("category", ["can", "bottle", "carton"])
 def test_every_grasp_pose_is_reachable_by_the_arm(category):
     s = strategy_for(category)
     kin = ArmKinematics.from_urdf()
@@ -51,12 +49,14 @@ def test_holding_is_judged_by_the_finger_opening():
     assert not s.holding(0.085)   # still open
 
 
-def test_registering_a_category_and_replacing_it(monkeypatch):
-    import actors.strategies as registry
-    monkeypatch.setattr(registry, "_REGISTRY", dict(registry._REGISTRY))  # leave no trace
-    mug = Strategy("mug_test", Approach(), Grasp(height=0.05, open_width=0.088))
-    register_strategy(mug)
-    assert strategy_for("mug_test") is mug
-    with pytest.raises(ActorbtError):
-        register_strategy(mug)
-    register_strategy(mug, replace=True)
+def test_a_box_is_approached_square_to_its_faces_narrow_side_first():
+    s = strategy_for("carton")
+    yaw = math.radians(20)
+    poses = s.standoff_poses((0.0, 0.0), (2.0, 0.0), object_yaw=yaw)
+    assert len(poses) == 4
+    rel = [math.degrees(math.remainder(p[2] - yaw, 2 * math.pi)) for p in poses]
+    assert rel[0] == pytest.approx(0.0, abs=1e-6)       # along x: the fingers close on 45 mm
+    assert abs(rel[1]) == pytest.approx(180.0)          # the far face of the same side next
+    assert sorted(abs(r) for r in rel[2:]) == pytest.approx([90.0, 90.0])
+    # without a measured yaw it is approached like a round object
+    assert len(s.standoff_poses((0.0, 0.0), (2.0, 0.0))) == 12

@@ -15,7 +15,7 @@ from typing import Any, Callable, Iterator
 
 from ..runtime import Runtime
 from .actor_index import ActorEntry, ActorIndex, loaded_sources
-from .config import Config, ConfigError, import_object, load_config
+from .config import Config, ConfigError, import_object, load_config, run_imports
 
 log = logging.getLogger("actorbt.cli")
 
@@ -26,6 +26,7 @@ class App:
     def __init__(self, args: argparse.Namespace, cfg: Config | None = None) -> None:
         self.args = args
         self.cfg: Config = cfg if cfg is not None else load_config(getattr(args, "config", None))
+        run_imports(self.cfg)       # what they register (object categories) must be known first
         self.world: Any = None
         self._warned: set[str] = set()
 

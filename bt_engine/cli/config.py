@@ -8,6 +8,8 @@
     transport: local       # or ros
     clock: virtual         # default clock for run/call/shell/eval (serve uses wall)
     plugins: [sim.cli]     # modules adding `actorbt` sub-commands (register(subparsers, common))
+    imports: [my_robot/juice.py]    # modules or .py files imported before anything starts:
+                                    # what they register (an object category) is then known
 
 Every command imports the plugins (``--help`` lists their commands), so a plugin keeps
 only argparse wiring at module level and imports its implementation when it runs.
@@ -22,6 +24,7 @@ from typing import Any
 import yaml
 
 from ..errors import ActorbtError
+from ..modules import import_file, is_file_reference
 from ..yaml_hints import syntax_mark, syntax_message
 
 
@@ -39,6 +42,7 @@ class Config:
     transport: str = "local"
     clock: str = "virtual"
     plugins: list[str] = field(default_factory=list)
+    imports: list[str] = field(default_factory=list)
 
     @property
     def base(self) -> pathlib.Path:
@@ -48,7 +52,7 @@ class Config:
         return (self.base / self.trees) if self.trees else None
 
 
-_FIELDS = {"subsystems", "trees", "world", "simulator", "transport", "clock", "plugins"}
+_FIELDS = {"subsystems", "trees", "world", "simulator", "transport", "clock", "plugins", "imports"}
 
 
 def find_config(start: pathlib.Path | None = None) -> pathlib.Path | None:
@@ -86,7 +90,28 @@ def load_config(path: "str | pathlib.Path | None" = None) -> Config:
     return Config(path=p, subsystems=dict(data.get("subsystems") or {}),
                   trees=data.get("trees", "trees"), world=world,
                   simulator=data.get("simulator"), transport=data.get("transport", "local"),
-                  clock=data.get("clock", "virtual"), plugins=list(data.get("plugins") or []))
+                  clock=data.get("clock", "virtual"), plugins=list(data.get("plugins") or []),
+                  imports=[str(i) for i in data.get("imports") or []])
+
+
+def run_imports(cfg: Config) -> None:
+    """Import what ``imports`` names: a module (``my_robot.juice``) or a .py file (relative
+    to actorbt.yaml's folder). Each is imported once however often this runs."""
+    for ref in cfg.imports:
+        if is_file_reference(ref):
+            path = pathlib.Path(ref).expanduser()
+            path = path if path.is_absolute() else cfg.base / path
+            if not path.is_file():
+                raise ConfigError(f"{cfg.path}: imports: file {ref!r} not found (looked at {path.resolve()})")
+            try:
+                import_file(path)
+            except Exception as e:
+                raise ConfigError(f"{cfg.path}: imports: {ref!r} failed: {type(e).__name__}: {e}") from e
+        else:
+            try:
+                importlib.import_module(ref)
+            except ImportError as e:
+                raise ConfigError(f"{cfg.path}: imports: cannot import {ref!r}: {e}") from None
 
 
 def import_object(spec: str, what: str) -> Any:

@@ -1,11 +1,11 @@
-"""What a category's strategy supplies: how to approach an object and how to grasp it.
+"""How a category's object is approached and grasped: the numbers a strategy supplies.
 
 The arm of the reference robot reaches the floor only in a narrow band in front of the
-base, so every strategy here grasps the same way: the base stops at a standoff facing the
+base, so every strategy grasps the same way: the base stops at a standoff facing the
 object, the arm extends the open gripper to the grasp pose, and the base drives the
 fingers around the object before they close. What differs per category is the numbers:
-the standoff, which part is held (height, tool pitch), the opening, the lift, and what a
-successful grasp looks like.
+the standoff, which part is held (height, tool pitch), the opening, the lift, what a
+successful grasp looks like, and (for a box) from which sides the hand may come.
 """
 from __future__ import annotations
 
@@ -37,7 +37,7 @@ class Grasp:
     """How the gripper holds an object.
 
     Attributes:
-        height: height of the held part above the floor [m] ("which part to hold").
+        height: height of the held part above the object's base [m] ("which part to hold").
         pitch: tool angle below the horizontal [rad] while grasping.
         open_width: finger opening before closing [m].
         closed_min, closed_max: finger opening that means "holding it" [m]; less is a
@@ -53,29 +53,58 @@ class Grasp:
     lift: float = 0.12
 
 
+#: an object's sides the hand may come from: any (round objects)
+ANY_SIDE: tuple[float, ...] = ()
+
+
 @dataclass(frozen=True)
 class Strategy:
-    """A category's approach and grasp."""
+    """A category's approach and grasp.
+
+    ``sides`` are the headings [rad], relative to the object's yaw, from which the hand may
+    come, best first (a box is held across its narrow side); empty: any heading.
+    """
 
     category: str
     approach: Approach
     grasp: Grasp
     description: str = ""
+    sides: tuple[float, ...] = ANY_SIDE
 
     def standoff_poses(self, robot_xy: tuple[float, float], obj_xy: tuple[float, float],
-                       extra: float = 0.0) -> list[tuple[float, float, float]]:
-        """Where the base may stop, facing the object (x, y, yaw), best first: straight
-        from the robot's side, then turning around the object in 30 degree steps."""
+                       extra: float = 0.0, object_yaw: float | None = None
+                       ) -> list[tuple[float, float, float]]:
+        """Where the base may stop, facing the object (x, y, yaw), best first.
+
+        Round objects: straight from the robot's side, then turning around the object in
+        30 degree steps. Objects with ``sides`` and a known ``object_yaw``: those headings,
+        the best side first and, within it, the one nearest the robot's side.
+        """
         (rx, ry), (ox, oy) = robot_xy, obj_xy
         direct = math.atan2(oy - ry, ox - rx)
         d = self.approach.reach + self.approach.standoff + extra
-        poses = []
-        for k in (0, 1, -1, 2, -2, 3, -3, 4, -4, 5, -5, 6):
-            h = direct + k * math.radians(30)
-            h = math.atan2(math.sin(h), math.cos(h))
-            poses.append((ox - d * math.cos(h), oy - d * math.sin(h), h))
-        return poses
+        if self.sides and object_yaw is not None:
+            headings = []
+            for rel in self.sides:
+                h = object_yaw + rel
+                # the nearer of the two opposite faces first: it is on the robot's side
+                pair = sorted((h, h + math.pi), key=lambda a: abs(_wrap(a - direct)))
+                headings += pair
+        else:
+            headings = [direct + k * math.radians(30) for k in (0, 1, -1, 2, -2, 3, -3, 4, -4, 5, -5, 6)]
+        out, seen = [], set()
+        for h in headings:
+            h = _wrap(h)
+            key = round(h, 6)
+            if key not in seen:
+                seen.add(key)
+                out.append((ox - d * math.cos(h), oy - d * math.sin(h), h))
+        return out
 
     def holding(self, closed_width: float) -> bool:
         """True when the fingers stopped at a width that means the object is held."""
         return self.grasp.closed_min <= closed_width <= self.grasp.closed_max
+
+
+def _wrap(a: float) -> float:
+    return math.atan2(math.sin(a), math.cos(a))

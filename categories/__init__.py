@@ -1,0 +1,23 @@
+"""Object categories: one file per kind of object (its simulated body, its look for
+perception, its approach and grasp). ``can``, ``bottle`` and ``carton`` are built in;
+``load("path/juice.py")`` or the ``imports`` line of actorbt.yaml adds more.
+See docs/categories.md for a worked example.
+
+This package is a plain library: the simulator and the robot's actors both read it.
+"""
+from __future__ import annotations
+
+from .category import Category
+from .registry import (CategoryError, UnknownCategoryError, all_categories, get, load, names,
+                       register, unregister)
+from .shapes import Box, Cylinder, Revolution, Shape
+from .strategy import Approach, Grasp, Strategy
+
+BUILT_IN = ("categories.can", "categories.bottle", "categories.carton")
+
+for _module in BUILT_IN:
+    load(_module)
+
+__all__ = ["Approach", "BUILT_IN", "Box", "Category", "CategoryError", "Cylinder", "Grasp", "Revolution",
+           "Shape", "Strategy", "UnknownCategoryError", "all_categories", "get", "load", "names",
+           "register", "unregister"]

@@ -1,0 +1,81 @@
+"""A category: everything about one kind of object, in one declaration.
+
+The simulator builds its body from ``shape``, ``mass``, ``rgba`` and ``friction``;
+perception recognises it by its colour (the hue of ``rgba``) and its measured shape; the
+robot approaches and grasps it with ``approach`` and ``grasp``. See docs/categories.md.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+from .shapes import Box, Revolution, Shape
+from .strategy import Approach, Grasp, Strategy
+
+#: room the open fingers need around the held part [m]
+FINGER_MARGIN = 0.01
+
+
+@dataclass(frozen=True)
+class Category:
+    """One kind of object.
+
+    Attributes:
+        name: the category's name (``can``, ``carton``); what trees and ``eval`` ask for.
+        shape: :class:`Revolution` (``Cylinder``) or :class:`Box`, standing upright [m].
+        mass: [kg]. The arm lifts about 0.1 kg held at its reach.
+        rgba: its colour (0..1); perception looks for this hue.
+        grasp: how the gripper holds it (``Grasp.height`` above its base).
+        approach: how the base comes to it.
+        friction: the simulated body's lateral friction.
+        description: one line for humans (``actorbt`` lists it).
+        min_confidence: how sure perception must be to call a segment this category.
+    """
+
+    name: str
+    shape: Shape
+    mass: float
+    rgba: tuple[float, float, float, float]
+    grasp: Grasp
+    approach: Approach = field(default_factory=Approach)
+    friction: float = 0.9
+    description: str = ""
+    min_confidence: float = 0.3
+
+    def __post_init__(self) -> None:
+        if not self.name or not self.name.replace("_", "").isalnum():
+            raise ValueError(f"a category name is letters, digits and _, got {self.name!r}")
+        if not isinstance(self.shape, (Revolution, Box)):
+            raise TypeError(f"{self.name}: shape must be a Revolution, Cylinder or Box, got {self.shape!r}")
+        if self.mass <= 0:
+            raise ValueError(f"{self.name}: mass must be positive, got {self.mass}")
+        if len(self.rgba) not in (3, 4) or not all(0 <= c <= 1 for c in self.rgba):
+            raise ValueError(f"{self.name}: rgba must be 3 or 4 numbers in 0..1, got {self.rgba}")
+        if not self.sides():
+            raise ValueError(f"{self.name}: no side of the {self.shape} fits the gripper's opening of "
+                             f"{self.grasp.open_width * 1000:.0f} mm")
+        if not 0 < self.grasp.height < self.shape.height:
+            raise ValueError(f"{self.name}: grasp height {self.grasp.height} m is not on the object "
+                             f"(0..{self.shape.height} m)")
+
+    @property
+    def height(self) -> float:
+        return self.shape.height
+
+    @property
+    def footprint_radius(self) -> float:
+        return self.shape.footprint_radius
+
+    def sides(self) -> tuple[float, ...]:
+        """Headings [rad] relative to the object's yaw from which the open hand fits around
+        it, narrowest grip first. A round object: ``(0.0,)`` (any heading)."""
+        if isinstance(self.shape, Revolution):
+            return (0.0,) if 2 * self.shape.body_radius <= self.grasp.open_width - FINGER_MARGIN else ()
+        fits = [(self.shape.width_across(h), h) for h in (0.0, math.pi / 2)
+                if self.shape.width_across(h) <= self.grasp.open_width - FINGER_MARGIN]
+        return tuple(h for _, h in sorted(fits))
+
+    @property
+    def strategy(self) -> Strategy:
+        sides = () if isinstance(self.shape, Revolution) else self.sides()
+        return Strategy(self.name, self.approach, self.grasp, self.description, sides)

@@ -1,0 +1,85 @@
+"""The registry of categories: built-ins plus what a configuration or a program adds.
+
+A category file declares ``CATEGORY = register(Category(...))``. ``load`` imports such a
+file by path (``my_robot/juice.py``) or module (``my_robot.juice``); importing it registers it.
+"""
+from __future__ import annotations
+
+import difflib
+import importlib
+import pathlib
+import threading
+
+from bt_engine.errors import ActorbtError
+from bt_engine.modules import import_file, is_file_reference
+
+from .category import Category
+
+_REGISTRY: dict[str, Category] = {}
+_LOCK = threading.Lock()
+
+
+class UnknownCategoryError(ActorbtError, LookupError):
+    """No category of that name is registered."""
+
+
+class CategoryError(ActorbtError):
+    """A category could not be registered or loaded."""
+
+
+def register(category: Category, replace: bool = False) -> Category:
+    """Make ``category`` known by its name; returns it. Registering an equal declaration
+    again is harmless; a different one under a taken name needs ``replace=True``."""
+    if not isinstance(category, Category):
+        raise CategoryError(f"register() takes a Category, got {type(category).__name__}")
+    with _LOCK:
+        old = _REGISTRY.get(category.name)
+        if old is not None and old != category and not replace:
+            raise CategoryError(f"a different category {category.name!r} is registered already; "
+                                "pick another name or pass replace=True")
+        _REGISTRY[category.name] = category
+    return category
+
+
+def unregister(name: str) -> None:
+    with _LOCK:
+        _REGISTRY.pop(name, None)
+
+
+def get(name: str) -> Category:
+    """The category ``name``; the error lists close matches and the known ones."""
+    try:
+        return _REGISTRY[name]
+    except (KeyError, TypeError):
+        close = difflib.get_close_matches(str(name), list(_REGISTRY), n=3)
+        hint = f" (did you mean {', '.join(close)}?)" if close else ""
+        raise UnknownCategoryError(
+            f"unknown category {name!r}{hint}; known: {', '.join(names())}") from None
+
+
+def names() -> list[str]:
+    return sorted(_REGISTRY)
+
+
+def all_categories() -> list[Category]:
+    return [_REGISTRY[n] for n in names()]
+
+
+def load(ref: str | pathlib.Path, base: pathlib.Path | None = None) -> list[Category]:
+    """Import a category file (``path/to/juice.py``, relative to ``base``) or module
+    (``my_robot.juice``); returns the categories it registered."""
+    before = dict(_REGISTRY)
+    text = str(ref)
+    if is_file_reference(text):
+        path = pathlib.Path(text).expanduser()
+        if not path.is_absolute() and base is not None:
+            path = base / path
+        if not path.is_file():
+            raise CategoryError(f"category file {text!r} not found (looked at {path.resolve()})")
+        import_file(path)
+    else:
+        try:
+            importlib.import_module(text)
+        except ImportError as e:
+            raise CategoryError(f"cannot import category module {text!r}: {e}") from None
+    return [c for n, c in _REGISTRY.items() if before.get(n) is not c]
