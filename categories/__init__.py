@@ -10,7 +10,7 @@ from __future__ import annotations
 from .category import Category
 from .registry import (CategoryError, UnknownCategoryError, all_categories, get, load, names,
                        register, unregister)
-from .shapes import Box, Cylinder, Revolution, Shape
+from .shapes import Box, Cylinder, Label, Revolution, Shape
 from .strategy import Approach, Grasp, Strategy
 
 BUILT_IN = ("categories.can", "categories.bottle", "categories.carton")
@@ -18,6 +18,6 @@ BUILT_IN = ("categories.can", "categories.bottle", "categories.carton")
 for _module in BUILT_IN:
     load(_module)
 
-__all__ = ["Approach", "BUILT_IN", "Box", "Category", "CategoryError", "Cylinder", "Grasp", "Revolution",
+__all__ = ["Approach", "BUILT_IN", "Box", "Category", "CategoryError", "Cylinder", "Grasp", "Label", "Revolution",
            "Shape", "Strategy", "UnknownCategoryError", "all_categories", "get", "load", "names",
            "register", "unregister"]

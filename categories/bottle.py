@@ -1,6 +1,6 @@
 """A wine bottle, green: held level low on its body, where it is widest and its weight
 sits, so it does not tip in the fingers."""
-from categories import Approach, Category, Grasp, Revolution, register
+from categories import Approach, Category, Grasp, Label, Revolution, register
 
 CATEGORY = register(Category(
     name="bottle",
@@ -13,4 +13,6 @@ CATEGORY = register(Category(
     grasp=Grasp(height=0.055, open_width=0.085, closed_min=0.060, closed_max=0.078, lift=0.10),
     approach=Approach(reach=0.27, standoff=0.12),
     description="wine-bottle shape: body 70 mm x 200 mm, shoulder, neck 27 mm; 0.305 m, 80 g (empty PET)",
+    # a cream paper label around the body: the green shows below it and above it
+    label=Label(bottom=0.070, top=0.150),
 ))

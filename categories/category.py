@@ -9,7 +9,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from .shapes import Box, Revolution, Shape
+from .shapes import Box, Label, Revolution, Shape
 from .strategy import Approach, Grasp, Strategy
 
 #: room the open fingers need around the held part [m]
@@ -30,6 +30,7 @@ class Category:
         friction: the simulated body's lateral friction.
         description: one line for humans (``actorbt`` lists it).
         min_confidence: how sure perception must be to call a segment this category.
+        label: a printed label around the body, or None (drawn in worlds with labels).
     """
 
     name: str
@@ -41,6 +42,7 @@ class Category:
     friction: float = 0.9
     description: str = ""
     min_confidence: float = 0.3
+    label: Label | None = None
 
     def __post_init__(self) -> None:
         if not self.name or not self.name.replace("_", "").isalnum():
@@ -54,6 +56,9 @@ class Category:
         if not self.sides():
             raise ValueError(f"{self.name}: no side of the {self.shape} fits the gripper's opening of "
                              f"{self.grasp.open_width * 1000:.0f} mm")
+        if self.label is not None and self.label.top > self.shape.height:
+            raise ValueError(f"{self.name}: the label ends above the object ({self.label.top} > "
+                             f"{self.shape.height} m)")
         if not 0 < self.grasp.height < self.shape.height:
             raise ValueError(f"{self.name}: grasp height {self.grasp.height} m is not on the object "
                              f"(0..{self.shape.height} m)")

@@ -117,3 +117,22 @@ class Box:
 
 
 Shape = Revolution | Box
+
+
+@dataclass(frozen=True)
+class Label:
+    """A printed label around the body, from ``bottom`` to ``top`` [m] above its base:
+    paper of ``rgba`` with print of ``print_rgba`` covering ``coverage`` of it. Worlds that
+    show labels (``house_hard``) draw it; perception must see past it."""
+
+    bottom: float
+    top: float
+    rgba: tuple[float, float, float, float] = (0.95, 0.94, 0.90, 1.0)
+    print_rgba: tuple[float, float, float, float] = (0.15, 0.15, 0.15, 1.0)
+    coverage: float = 0.3
+
+    def __post_init__(self) -> None:
+        if not 0 <= self.bottom < self.top:
+            raise ValueError(f"a Label needs 0 <= bottom < top, got {self.bottom}..{self.top}")
+        if not 0 <= self.coverage <= 1:
+            raise ValueError(f"a Label's coverage is a fraction, got {self.coverage}")
