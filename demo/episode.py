@@ -27,6 +27,8 @@ from bt_engine.trees import TraceRecorder, TreeObserver, tree_host
 from planning.tf_buffer import TransformBuffer, TransformError, pose2d
 from sim import SimWorld
 
+from .grasp_probe import GraspProbe
+
 #: the reference application's own actorbt.yaml, used when none is found from here
 REPO_CONFIG = pathlib.Path(__file__).resolve().parents[1] / "actorbt.yaml"
 #: [s] between two samples of the localisation error, and of the true path
@@ -77,6 +79,7 @@ class Episode:
     trace: str = ""
     loc_rmse_m: float = float("nan")   # localisation error (position) over the episode
     loc_max_m: float = float("nan")
+    grasp_tilt_deg: float = float("nan")  # largest tilt of the held object in the fingers
     path: list = field(default_factory=list, repr=False)
     detections: list = field(default_factory=list, repr=False)
     loc_errors: list = field(default_factory=list, repr=False)   # (t, error [m])
@@ -236,6 +239,8 @@ def run_episode(tree: str = "bt_pick_place", world: str = "house", seed: int = 0
             host.library[tree]  # a skipped tree raises why, before anything runs
         if progress is not None:
             host.observers.append(DemoProgress(progress, rt))
+        grasp = GraspProbe(sim)
+        host.observers.append(grasp)
         host.observers.extend(observers or ())
         args = dict(inputs or {})
         params = rt.resolve(tree).signature.parameters
@@ -271,6 +276,7 @@ def run_episode(tree: str = "bt_pick_place", world: str = "house", seed: int = 0
             ep.failed_node = getattr(cause, "path", "") or _failed_node(str(ep.reason))
         finally:
             ep.sim_time = rt.now() - sim0
+            ep.grasp_tilt_deg = grasp.worst
             probe.close()
             probe.summarise()
             if recorder is not None:
@@ -334,6 +340,8 @@ def print_outcome(ep: Episode, out: TextIO = sys.stdout) -> None:
         out.write(f"FAILURE at {ep.failed_node or '?'}: {ep.reason}\n")
     out.write(f"sim time {ep.sim_time:.1f} s, wall time {ep.wall_time:.1f} s "
               f"({ep.realtime_factor:.1f}x real time)\n")
+    if ep.grasp_tilt_deg == ep.grasp_tilt_deg:
+        out.write(f"held object's tilt in the hand: {ep.grasp_tilt_deg:.1f} deg at most\n")
     if ep.loc_errors:
         out.write(f"localisation error: {ep.loc_rmse_m * 100:.1f} cm rms, {ep.loc_max_m * 100:.1f} cm max "
                   f"({len(ep.loc_errors)} samples)\n")

@@ -18,7 +18,8 @@ from bt_engine.cli.config import Config
 from .episode import Episode, episode_app, run_episode
 
 CSV_FIELDS = ["tree", "world", "seed", "category", "success", "tree_status", "failed_node",
-              "reason", "placed_object", "sim_time", "wall_time", "loc_rmse_m", "loc_max_m", "trace"]
+              "reason", "placed_object", "sim_time", "wall_time", "loc_rmse_m", "loc_max_m",
+              "grasp_tilt_deg", "trace"]
 
 #: this process's App (one per worker, so each skipped tree is reported once per process)
 _app: App | None = None
@@ -103,6 +104,7 @@ def write_csv(episodes: list[Episode], path: pathlib.Path) -> None:
             row["wall_time"] = f"{e.wall_time:.2f}"
             row["loc_rmse_m"] = f"{e.loc_rmse_m:.4f}"
             row["loc_max_m"] = f"{e.loc_max_m:.4f}"
+            row["grasp_tilt_deg"] = f"{e.grasp_tilt_deg:.1f}"
             w.writerow(row)
 
 
@@ -112,17 +114,19 @@ def print_table(episodes: list[Episode], out: TextIO = sys.stdout) -> None:
         by_cat[e.category].append(e)
     out.write(f"\n{'category':10s} {'episodes':>8s} {'success':>8s} {'rate':>7s} "
               f"{'sim s (median)':>15s} {'wall s (median)':>16s} {'x real time':>12s} "
-              f"{'loc rms cm':>11s} {'loc max cm':>11s}\n")
+              f"{'loc rms cm':>11s} {'loc max cm':>11s} {'tilt deg':>9s}\n")
     for cat, eps in sorted(by_cat.items()) + [("all", episodes)]:
         ok = sum(e.success for e in eps)
         rms = [e.loc_rmse_m for e in eps if e.loc_rmse_m == e.loc_rmse_m]
         worst = [e.loc_max_m for e in eps if e.loc_max_m == e.loc_max_m]
+        tilts = [e.grasp_tilt_deg for e in eps if e.grasp_tilt_deg == e.grasp_tilt_deg]
         out.write(f"{cat:10s} {len(eps):8d} {ok:8d} {100 * ok / len(eps):6.1f}% "
                   f"{statistics.median(e.sim_time for e in eps):15.1f} "
                   f"{statistics.median(e.wall_time for e in eps):16.1f} "
                   f"{statistics.median(e.realtime_factor for e in eps):12.1f} "
                   f"{100 * statistics.median(rms) if rms else float('nan'):11.1f} "
-                  f"{100 * max(worst) if worst else float('nan'):11.1f}\n")
+                  f"{100 * max(worst) if worst else float('nan'):11.1f} "
+                  f"{statistics.median(tilts) if tilts else float('nan'):9.1f}\n")
     failures = collections.Counter(e.failed_node or "?" for e in episodes if not e.success)
     if failures:
         out.write("\nfailures by node:\n")
