@@ -1,4 +1,5 @@
-"""The whole robot: navigation, arm, perception, search, catch and exploration under one SubSystem."""
+"""The whole robot: navigation, arm, perception, search, catch, exploration and tidy-up
+under one SubSystem."""
 from __future__ import annotations
 
 from bt_engine import SubSystem
@@ -9,6 +10,7 @@ from .manipulator import Manipulator
 from .navigation import Navigation
 from .perception import Perception
 from .search import Search
+from .tidy import Tidy
 
 
 class Robot(SubSystem):
@@ -25,3 +27,4 @@ class Robot(SubSystem):
         self.add_subsystem("search", Search)
         self.add_subsystem("catch", Catcher)
         self.add_subsystem("exploration", Exploration)
+        self.add_subsystem("tidy", Tidy)

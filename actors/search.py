@@ -7,6 +7,8 @@ from __future__ import annotations
 
 import logging
 import math
+import statistics
+from typing import Callable
 
 from bt_engine import ActorbtError, ActorError, SubSystem, actor
 
@@ -20,11 +22,42 @@ HAND_RANGE = 0.45              # detections closer than this may be in the gripp
 WAYPOINT_CLEARANCE = 0.25      # room a search location needs for the base [m] (navigation
                                # plans with a 0.20 m robot radius)
 MAX_SHIFT = 1.0                # how far a blocked search location may be moved [m]
+SAME_OBJECT = 0.20             # survey sightings closer than this are one object [m]
+LOOKS_PER_TURN = 2             # frames a survey takes at each of its views
 
 
-def _in_own_hand(detection: dict) -> bool:
+def in_own_hand(detection: dict) -> bool:
     """An object right in front of the camera and off the floor is the one being held."""
     return detection.get("distance", 1.0) < HAND_RANGE and detection.get("z", 0.0) > 0.03
+
+
+def group_sightings(sightings: list[dict], gate: float = SAME_OBJECT) -> list[dict]:
+    """One entry per object from sightings of many: a sighting within ``gate`` of a
+    group's first one joins it; a group's position is the median of its category's
+    sightings, its category the majority (ties: the most confident). Most-seen first."""
+    groups: list[list[dict]] = []
+    for s in sightings:
+        for g in groups:
+            if math.dist((s["x"], s["y"]), (g[0]["x"], g[0]["y"])) <= gate:
+                g.append(s)
+                break
+        else:
+            groups.append([s])
+    out = []
+    for g in groups:
+        cats = [s["category"] for s in g]
+        category = max(set(cats), key=lambda c: (cats.count(c),
+                                                 max(s["confidence"] for s in g if s["category"] == c)))
+        mine = [s for s in g if s["category"] == category]
+        best = max(mine, key=lambda s: s["confidence"])
+        obj = {"category": category, "sightings": len(mine), "confidence": best["confidence"]}
+        for k in ("x", "y", "z"):
+            obj[k] = float(statistics.median(s[k] for s in mine))
+        if best.get("yaw") is not None:
+            obj["yaw"] = best["yaw"]
+        out.append(obj)
+    out.sort(key=lambda o: -o["sightings"])
+    return out
 
 
 class SearchExhausted(ActorbtError):
@@ -46,7 +79,7 @@ class Search(SubSystem):
         cat = None if category in ANY else category
         while True:
             found = self.run_actor("find_object", cat)
-            if found and not _in_own_hand(found):
+            if found and not in_own_hand(found):
                 return found
 
     @actor
@@ -74,20 +107,9 @@ class Search(SubSystem):
                     return px, py
         return None
 
-    @actor
-    def patrol(self, locations: list, turns: int = 4) -> None:
-        """Visit each (x, y) [m] of ``locations`` in turn and look around there. A place
-        where the base does not fit (an object or furniture stands on it) is moved to the
-        nearest spot within 1 m where it does, or skipped. A place the base cannot reach
-        (the way is blocked) is looked around from where the base stopped, if it got
-        anywhere, and the patrol goes on.
-        Fails with SearchExhausted after the last one: a patrol that ends has found nothing.
-
-        Args:
-            locations: the places to visit, each [x, y] in the map frame [m]; empty:
-                places chosen from the map (search_views)
-            turns: look_around steps at each place
-        """
+    def _visit(self, locations: list, at_each: Callable[[], None]) -> tuple[list, list[str]]:
+        """Drive to each location (moved or skipped when blocked; see ``patrol``) and call
+        ``at_each`` there. Returns the locations and the reasons of those not reached."""
         if not locations:
             locations = self.run_actor("search_views")
             if not locations:
@@ -117,6 +139,54 @@ class Search(SubSystem):
                 sx, sy, _ = self.run_actor("get_pose")
                 if math.hypot(sx - rx, sy - ry) < 0.5:
                     continue                    # it did not get anywhere new
-            self.run_actor("look_around", turns)
+            at_each()
+        return places, missed
+
+    @actor
+    def patrol(self, locations: list, turns: int = 4) -> None:
+        """Visit each (x, y) [m] of ``locations`` in turn and look around there. A place
+        where the base does not fit (an object or furniture stands on it) is moved to the
+        nearest spot within 1 m where it does, or skipped. A place the base cannot reach
+        (the way is blocked) is looked around from where the base stopped, if it got
+        anywhere, and the patrol goes on.
+        Fails with SearchExhausted after the last one: a patrol that ends has found nothing.
+
+        Args:
+            locations: the places to visit, each [x, y] in the map frame [m]; empty:
+                places chosen from the map (search_views)
+            turns: look_around steps at each place
+        """
+        places, missed = self._visit(locations, lambda: self.run_actor("look_around", turns))
         raise SearchExhausted(f"visited {len(places)} search locations and saw nothing"
                               + (f"; {len(missed)} not reached: " + "; ".join(missed) if missed else ""))
+
+    @actor
+    def survey(self, locations: list, views: int = 8) -> list:
+        """Visit every search location (moved or skipped when blocked, as ``patrol``
+        does), look all around at each, and return every object of a known category
+        seen: [{category, x, y, z, sightings, confidence (, yaw)}] in the map frame,
+        most-seen first. Unlike ``patrol`` with ``watch``, it does not stop at the first;
+        and it looks only while standing still, so the views overlap (8 views of the
+        camera's ~69 degrees cover the full turn with ~24 degrees to spare).
+
+        Args:
+            locations: the places to visit, each [x, y] in the map frame [m]; empty:
+                places chosen from the map (search_views)
+            views: how many views, evenly spaced over a full turn, at each place
+        """
+        sightings: list[dict] = []
+        step = 2 * math.pi / max(1, views)
+
+        def look() -> None:
+            for k in range(max(1, views)):
+                if k:
+                    self.run_actor("mini_turn", step)
+                self.run_actor("sleep", LOOK_PAUSE)
+                for _ in range(LOOKS_PER_TURN):
+                    sightings.extend(d for d in self.run_actor("object_glance")
+                                     if d["category"] != "unknown" and not in_own_hand(d))
+
+        self._visit(locations, look)
+        found = group_sightings(sightings)
+        log.info("survey: %d objects from %d sightings", len(found), len(sightings))
+        return found

@@ -20,6 +20,7 @@ from typing import Any, TextIO
 from geometry_msgs.msg import PoseWithCovarianceStamped
 from tf2_msgs.msg import TFMessage
 
+import categories
 from bt_engine import ActorError, Runtime
 from bt_engine.cli.app import App
 from bt_engine.cli.config import Config, ConfigError, find_config, load_config
@@ -80,6 +81,8 @@ class Episode:
     loc_rmse_m: float = float("nan")   # localisation error (position) over the episode
     loc_max_m: float = float("nan")
     grasp_tilt_deg: float = float("nan")  # largest tilt of the held object in the fingers
+    objects: int | None = None         # a tidy-up: objects of a known category in the world,
+    placed: int | None = None          # and how many ended where they belong
     path: list = field(default_factory=list, repr=False)
     detections: list = field(default_factory=list, repr=False)
     loc_errors: list = field(default_factory=list, repr=False)   # (t, error [m])
@@ -189,12 +192,48 @@ class DemoProgress(TreeObserver):
             self._say(f"  holding the {r['category']} (fingers at {r['width'] * 1000:.0f} mm)")
         elif actor == "place_on" and isinstance(r, dict):
             self._say(f"  put it down at ({r['x']:.2f}, {r['y']:.2f})")
+        elif actor == "survey" and isinstance(r, list):
+            seen = ", ".join(f"{o['category']} at ({o['x']:.2f}, {o['y']:.2f})" for o in r)
+            self._say(f"  survey found {len(r)} object{'s' * (len(r) != 1)}: {seen or 'none'}")
+        elif actor == "tidy_one" and isinstance(r, dict):
+            how = f"on the {r['place']}" if r["outcome"] == "placed" else f"failed: {r.get('reason', '')}"
+            self._say(f"  the {r['category']} from ({r['x']:.2f}, {r['y']:.2f}): {how}")
 
 
 def _on_surface(pose, place) -> bool:
     x, y, z = pose[:3]
     return (abs(x - place.x) <= place.sx / 2 and abs(y - place.y) <= place.sy / 2
             and z > place.sz)
+
+
+def _surface(box) -> dict:
+    return {"x": box.x, "y": box.y, "size_x": box.sx, "size_y": box.sy, "height": box.sz}
+
+
+def world_places(sim: SimWorld) -> dict:
+    """The world's place surfaces by name: its place location and any other named places."""
+    out = dict(getattr(sim.spec, "places", None) or {})
+    if sim.place_location is not None:
+        out.setdefault(sim.place_location.name, sim.place_location)
+    return out
+
+
+def _tidied(sim: SimWorld, places: dict, belongs: dict) -> tuple[int, int]:
+    """(objects of a registered category in the world, how many of them stand on the place
+    their category belongs to), by the simulator's truth; a category whose place this world
+    lacks belongs to the default place, as the tidy-up mission decides."""
+    total = done = 0
+    for name in sim.object_names():
+        cat = sim.object_category(name)
+        if cat not in categories.names():
+            continue                            # a distractor
+        total += 1
+        where = belongs.get(cat)
+        if where not in places:
+            where = belongs.get("default")
+        if where in places and _on_surface(sim.object_pose(name), places[where]):
+            done += 1
+    return total, done
 
 
 def run_episode(tree: str = "bt_pick_place", world: str = "house", seed: int = 0,
@@ -248,8 +287,9 @@ def run_episode(tree: str = "bt_pick_place", world: str = "house", seed: int = 0
             args.setdefault("category", category)
         pl = sim.place_location
         if "place" in params and pl is not None:  # this world's place location
-            args.setdefault("place", {"x": pl.x, "y": pl.y, "size_x": pl.sx,
-                                      "size_y": pl.sy, "height": pl.sz})
+            args.setdefault("place", _surface(pl))
+        if "places" in params and world_places(sim):
+            args.setdefault("places", {name: _surface(b) for name, b in world_places(sim).items()})
         if "locations" in params and sim.spec.search_locations:   # this world's, if it lists them
             args.setdefault("locations", [list(p) for p in sim.spec.search_locations])
         start = tuple(sim.spec.robot_start)   # the world's known start pose
@@ -293,6 +333,13 @@ def run_episode(tree: str = "bt_pick_place", world: str = "house", seed: int = 0
                 ep.success = False
                 ep.failed_node = "ground truth"
                 ep.reason = "the tree succeeded but no object of the category is on the place location"
+        if "belongs" in params:                 # a tidy-up: every object where it belongs
+            belongs = args.get("belongs", params["belongs"].default)
+            ep.objects, ep.placed = _tidied(sim, world_places(sim), belongs)
+            if ep.success and ep.placed < ep.objects:
+                ep.success = False
+                ep.failed_node = "ground truth"
+                ep.reason = f"{ep.objects - ep.placed} of {ep.objects} objects are not where they belong"
         if ep.found:
             ep.detections.append(ep.found)
         if out is not None:
@@ -340,6 +387,8 @@ def print_outcome(ep: Episode, out: TextIO = sys.stdout) -> None:
         out.write(f"FAILURE at {ep.failed_node or '?'}: {ep.reason}\n")
     out.write(f"sim time {ep.sim_time:.1f} s, wall time {ep.wall_time:.1f} s "
               f"({ep.realtime_factor:.1f}x real time)\n")
+    if ep.objects is not None:
+        out.write(f"objects where they belong: {ep.placed} of {ep.objects}\n")
     if ep.grasp_tilt_deg == ep.grasp_tilt_deg:
         out.write(f"held object's tilt in the hand: {ep.grasp_tilt_deg:.1f} deg at most\n")
     if ep.loc_errors:

@@ -19,7 +19,7 @@ from .episode import Episode, episode_app, run_episode
 
 CSV_FIELDS = ["tree", "world", "seed", "category", "success", "tree_status", "failed_node",
               "reason", "placed_object", "sim_time", "wall_time", "loc_rmse_m", "loc_max_m",
-              "grasp_tilt_deg", "trace"]
+              "grasp_tilt_deg", "objects", "placed", "trace"]
 
 #: this process's App (one per worker, so each skipped tree is reported once per process)
 _app: App | None = None
@@ -127,6 +127,11 @@ def print_table(episodes: list[Episode], out: TextIO = sys.stdout) -> None:
                   f"{100 * statistics.median(rms) if rms else float('nan'):11.1f} "
                   f"{100 * max(worst) if worst else float('nan'):11.1f} "
                   f"{statistics.median(tilts) if tilts else float('nan'):9.1f}\n")
+    tidy = [e for e in episodes if e.objects is not None]
+    if tidy:
+        total, placed = sum(e.objects for e in tidy), sum(e.placed for e in tidy)
+        out.write(f"\nobjects where they belong: {placed} of {total} "
+                  f"({100 * placed / total if total else float('nan'):.1f}%)\n")
     failures = collections.Counter(e.failed_node or "?" for e in episodes if not e.success)
     if failures:
         out.write("\nfailures by node:\n")
