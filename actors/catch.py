@@ -26,6 +26,7 @@ GENTLE_RELEASE = 0.006      # first opening step past the held width when lettin
 DRIVE_IN_TOLERANCE = 0.015  # how close the drive around an object must end [m]: the
 #                             fingers are 70 mm long
 PLACE_INSET = 0.12          # how far inside a surface's edge the object is put down [m]
+NEW_VIEW = math.radians(25) # after a failed grasp, headings this close to it come last
 
 
 class GraspError(ActorbtError):
@@ -51,6 +52,16 @@ def _target_xy(target: Any) -> tuple[float, float]:
         raise ActorbtError(f"a target needs numeric 'x' and 'y' (map frame), got {target!r}") from None
 
 
+def fresh_views_first(poses: list[tuple[float, float, float]], xy: tuple[float, float],
+                      failed_views: list[tuple[float, float, float]]) -> list[tuple[float, float, float]]:
+    """Standoff ``poses`` (x, y, heading) with those within NEW_VIEW of the heading of a
+    failed grasp of the object at ``xy`` (``failed_views``: x, y, heading) moved last, so
+    that a retry comes from a new view."""
+    failed = [h for fx, fy, h in failed_views if math.dist((fx, fy), xy) <= SAME_OBJECT]
+    stale = [any(abs(wrap(p[2] - h)) < NEW_VIEW for h in failed) for p in poses]
+    return [p for p, st in zip(poses, stale) if not st] + [p for p, st in zip(poses, stale) if st]
+
+
 def _holds(strategy: Strategy, grip: dict) -> bool:
     """Does a gripper result (Manipulator.close) mean the object is held? The fingers
     stalled on something, at a width that fits the category."""
@@ -68,6 +79,15 @@ class Catcher(SubSystem):
     def __init__(self) -> None:
         super().__init__()
         self.set_value("holding", None)
+        self.set_value("failed_views", [])   # (x, y, heading) of grasps that failed
+
+    def _fresh_views_first(self, poses: list[tuple[float, float, float]],
+                           xy: tuple[float, float]) -> list[tuple[float, float, float]]:
+        return fresh_views_first(poses, xy, self.get_value("failed_views"))
+
+    def _remember_failed_view(self, xy: tuple[float, float]) -> None:
+        _, _, yaw = self.run_actor("get_pose")
+        self.set_value("failed_views", self.get_value("failed_views")[-9:] + [(xy[0], xy[1], yaw)])
 
     def _strategy(self, target: Any, category: str | None) -> Strategy:
         cat = category or (target.get("category") if isinstance(target, dict) else None)
@@ -178,7 +198,7 @@ class Catcher(SubSystem):
             else:
                 poses = self._free_standoff((rx, ry), xy, strategy, others=others,
                                             object_yaw=target.get("yaw"))
-            self._goto_first(poses, xy)
+            self._goto_first(self._fresh_views_first(poses, xy), xy)
         self._face(xy, strategy)
         return {**target, "category": cat}
 
@@ -221,6 +241,7 @@ class Catcher(SubSystem):
         driven = self.run_actor("mini_walk", distance - a.reach, tolerance=DRIVE_IN_TOLERANCE)
         grip = self.run_actor("close")
         if not _holds(strategy, grip):
+            self._remember_failed_view(xy)
             self._back_off(driven, g.open_width)
             raise GraspError(f"{strategy.category} grasp missed: {_grip_text(grip)}, expected "
                              f"them to stall on it at {g.closed_min * 1000:.0f}.."
@@ -231,6 +252,7 @@ class Catcher(SubSystem):
             self.run_actor("move_to_pose", x, 0.0, z, g.pitch)
             grip = self.run_actor("grip_check")
             if not _holds(strategy, grip):
+                self._remember_failed_view(xy)
                 self._back_off(driven, g.open_width)
                 raise GraspError(f"{strategy.category} slipped out while lifting "
                                  f"({_grip_text(grip)})")
