@@ -83,6 +83,7 @@ class Episode:
     grasp_tilt_deg: float = float("nan")  # largest tilt of the held object in the fingers
     objects: int | None = None         # a tidy-up: objects of a known category in the world,
     placed: int | None = None          # and how many ended where they belong
+    result: Any = field(default=None, repr=False)   # what the tree (or actor) returned
     path: list = field(default_factory=list, repr=False)
     detections: list = field(default_factory=list, repr=False)
     loc_errors: list = field(default_factory=list, repr=False)   # (t, error [m])
@@ -308,6 +309,7 @@ def run_episode(tree: str = "bt_pick_place", world: str = "house", seed: int = 0
         try:
             result = rt.call(tree, **args)
             ep.tree_status = "SUCCESS"
+            ep.result = result
             ep.found = (result or {}).get("found") if isinstance(result, dict) else None
         except ActorError as exc:
             cause = exc.__cause__

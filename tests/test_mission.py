@@ -117,3 +117,19 @@ def test_a_blocked_search_location_is_moved_and_an_impossible_one_skipped():
     assert "visited 2 search locations and saw nothing; 1 not reached: (40.00, 40.00)" in ep.reason
     x, y, _ = end.pose
     assert -2.8 < x < -2.4 and abs(y) < 0.2, (x, y)     # it looked from beside the wall
+
+
+def test_a_survey_finds_every_object_all_round():
+    """From one spot in the middle of the open floor, looking all round: the can and the
+    bottle, each once, where they are; the distractor box is not reported."""
+    truth: dict = {}
+
+    def remember(world: SimWorld) -> None:
+        truth.update({world.object_category(n): world.object_pose(n)[:2] for n in world.object_names()})
+    ep = run_episode("survey", "open_floor", seed=0, world_setup=remember, inputs={"locations": [[0.0, 0.0]]})
+    assert ep.tree_status == "SUCCESS", ep.reason
+    found = ep.result
+    assert sorted(o["category"] for o in found) == ["bottle", "can"]
+    for o in found:
+        x, y = truth[o["category"]]
+        assert abs(o["x"] - x) < 0.05 and abs(o["y"] - y) < 0.05, (o, truth)
