@@ -8,12 +8,13 @@ provides them.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from typing import Any
 
 from bt_engine import ActorbtError, SubSystem, actor
 
 from .ros_conv import wrap
-from .strategies import Strategy, strategy_for
+from .strategies import GraspPlan, Strategy, strategy_for
 
 #: place surface height and the part of the object held decide the release height
 RELEASE_CLEARANCE = 0.008   # [m] above the surface when the fingers open
@@ -62,10 +63,10 @@ def fresh_views_first(poses: list[tuple[float, float, float]], xy: tuple[float, 
     return [p for p, st in zip(poses, stale) if not st] + [p for p, st in zip(poses, stale) if st]
 
 
-def _holds(strategy: Strategy, grip: dict) -> bool:
+def _holds(plan: GraspPlan, grip: dict) -> bool:
     """Does a gripper result (Manipulator.close) mean the object is held? The fingers
-    stalled on something, at a width that fits the category."""
-    return bool(grip["stalled"]) and strategy.holding(grip["width"])
+    stalled on something, at a width that fits the grasp."""
+    return bool(grip["stalled"]) and plan.holding(grip["width"])
 
 
 def _grip_text(grip: dict) -> str:
@@ -79,6 +80,7 @@ class Catcher(SubSystem):
     def __init__(self) -> None:
         super().__init__()
         self.set_value("holding", None)
+        self.set_value("held_plan", None)       # the GraspPlan the held object was picked with
         self.set_value("failed_views", [])   # (x, y, heading) of grasps that failed
 
     def _fresh_views_first(self, poses: list[tuple[float, float, float]],
@@ -107,15 +109,17 @@ class Catcher(SubSystem):
 
     def _free_standoff(self, robot_xy: tuple[float, float], xy: tuple[float, float],
                        strategy: Strategy, extra: float = 0.0, others: list[dict] = (),
-                       corridor: bool = True, object_yaw: float | None = None
-                       ) -> list[tuple[float, float, float]]:
+                       corridor: bool = True, object_yaw: float | None = None,
+                       plan: GraspPlan | None = None) -> list[tuple[float, float, float]]:
         """Standoff poses with room for the base around them and (with ``corridor``) a
         clear straight approach to the object, best first (``others``: perceived objects
-        to keep clear of; ``object_yaw``: a box's measured yaw, for square approaches)."""
+        to keep clear of; ``object_yaw``: the measured yaw of a box or of a lying body's
+        axis, for square approaches; ``plan``: the grasp, default the upright one)."""
+        plan = plan or strategy.upright
         free = []
-        for pose in strategy.standoff_poses(robot_xy, xy, extra, object_yaw):
+        for pose in strategy.standoff_poses(robot_xy, xy, extra, object_yaw, plan):
             if (self.run_actor("clearance", pose[0], pose[1]) >= STANDOFF_CLEARANCE
-                    and (not corridor or self._corridor_clear(pose, xy, strategy, others))):
+                    and (not corridor or self._corridor_clear(pose, xy, plan.reach, others))):
                 free.append(pose)
         if not free:
             raise ApproachError(f"no free standoff around ({xy[0]:.2f}, {xy[1]:.2f}): walls, "
@@ -123,9 +127,9 @@ class Catcher(SubSystem):
         return free
 
     def _corridor_clear(self, pose: tuple[float, float, float], xy: tuple[float, float],
-                        strategy: Strategy, others: list[dict]) -> bool:
-        """Can the base drive straight in from ``pose`` until the hand is at the object?"""
-        reach = strategy.approach.reach
+                        reach: float, others: list[dict]) -> bool:
+        """Can the base drive straight in from ``pose`` until the hand, ``reach`` ahead of
+        the base, is at the object?"""
         sx, sy, yaw = pose
         c, s = math.cos(yaw), math.sin(yaw)
         gx, gy = xy[0] - reach * c, xy[1] - reach * s  # base position when grasping
@@ -139,14 +143,16 @@ class Catcher(SubSystem):
                 return False
         return True
 
-    def _others(self, target: dict) -> list[dict]:
-        """Perceived objects other than the target in view now, as obstacles (x, y, radius)."""
+    def _others(self, target: dict, strategy: Strategy) -> list[dict]:
+        """Perceived objects other than the target in view now, as obstacles (x, y, radius).
+        Around a lying target, anything within its length is taken for a part of it."""
         if not self.check_actor("object_glance"):
             return []
         xy = _target_xy(target)
+        own = strategy.length if target.get("pose") == "lying" else SAME_OBJECT
         return [{"x": d["x"], "y": d["y"], "radius": max(0.04, float(d.get("width", 0.08)) / 2) + 0.02}
                 for d in self.run_actor("object_glance")
-                if math.dist((d["x"], d["y"]), xy) > SAME_OBJECT]
+                if math.dist((d["x"], d["y"]), xy) > max(SAME_OBJECT, own)]
 
     def _refine(self, target: dict, category: str) -> dict:
         """Look again from close by, when a perception actor is available."""
@@ -180,27 +186,39 @@ class Catcher(SubSystem):
         cat = strategy.category
         xy = _target_xy(target)
         look = strategy.approach.look_distance
+        plan = self._plan(strategy, target)
         for step in ("look", "standoff"):
             # face it, look (again), and keep what else is around it out of the way
             self._face(xy, strategy)
             if step == "standoff":
                 target = self._refine(target, cat)
                 xy = _target_xy(target)
-            others = self._others(target)
+            others = self._others(target, strategy)
             self.run_actor("mark_obstacles", others)
             rx, ry, _ = self.run_actor("get_pose")
             if step == "look":
                 if not look or math.dist((rx, ry), xy) <= look + 0.3:
                     continue  # close enough already
-                extra = look - strategy.approach.reach - strategy.approach.standoff
+                extra = look - plan.reach - strategy.approach.standoff
                 poses = self._free_standoff((rx, ry), xy, strategy, extra, others,
-                                            object_yaw=target.get("yaw"))
+                                            object_yaw=target.get("yaw"), plan=plan)
             else:
+                plan = self._plan(strategy, target)    # the close look may see it otherwise
                 poses = self._free_standoff((rx, ry), xy, strategy, others=others,
-                                            object_yaw=target.get("yaw"))
+                                            object_yaw=target.get("yaw"), plan=plan)
             self._goto_first(self._fresh_views_first(poses, xy), xy)
         self._face(xy, strategy)
         return {**target, "category": cat}
+
+    @staticmethod
+    def _plan(strategy: Strategy, target: dict) -> GraspPlan:
+        """The grasp for the target's pose (``pose`` as perception reports it: upright,
+        lying or tilted); GraspError when the category has none for it."""
+        pose = target.get("pose") or "upright"
+        plan = strategy.plan_for(pose)
+        if plan is None:
+            raise GraspError(f"the {strategy.category} strategy has no grasp for an object {pose}")
+        return plan
 
     def _goto_first(self, poses: list[tuple[float, float, float]], xy: tuple[float, float]) -> None:
         """Go to the first of ``poses`` that the base can reach (up to three tries)."""
@@ -231,33 +249,39 @@ class Catcher(SubSystem):
             what is held: category, and width (the finger opening) [m]
         """
         strategy = self._strategy(target, category)
-        g, a = strategy.grasp, strategy.approach
+        g = self._plan(strategy, target)
         xy = _target_xy(target)
         self.run_actor("require_localised")       # never grasp where the map pose is a guess
         height = float(target.get("z", 0.0)) + g.height  # the object may stand on something
         self.run_actor("open", g.open_width)
-        self.run_actor("move_to_pose", a.reach, 0.0, height, g.pitch)
+        # over a lying object the hand comes in high and goes down once in place
+        above = height + (g.lift if g.pitch > math.radians(45) else 0.0)
+        self.run_actor("move_to_pose", g.reach, 0.0, above, g.pitch)
         distance = self._face(xy, strategy)
-        driven = self.run_actor("mini_walk", distance - a.reach, tolerance=DRIVE_IN_TOLERANCE)
+        driven = self.run_actor("mini_walk", distance - g.reach, tolerance=DRIVE_IN_TOLERANCE)
+        if above != height:
+            self.run_actor("move_to_pose", g.reach, 0.0, height, g.pitch)
         grip = self.run_actor("close")
-        if not _holds(strategy, grip):
+        if not _holds(g, grip):
             self._remember_failed_view(xy)
-            self._back_off(driven, g.open_width)
+            self._back_off(driven, g)
             raise GraspError(f"{strategy.category} grasp missed: {_grip_text(grip)}, expected "
                              f"them to stall on it at {g.closed_min * 1000:.0f}.."
                              f"{g.closed_max * 1000:.0f} mm")
         # Test lift: a slip shows when the fingers close again, and the object drops only
         # a little (a can dropped from the full lift height may fall over).
-        for x, z in ((a.reach, height + TEST_LIFT), (a.reach - 0.02, height + g.lift)):
+        for x, z in ((g.reach, height + TEST_LIFT), (g.reach - 0.02, height + g.lift)):
             self.run_actor("move_to_pose", x, 0.0, z, g.pitch)
             grip = self.run_actor("grip_check")
-            if not _holds(strategy, grip):
+            if not _holds(g, grip):
                 self._remember_failed_view(xy)
-                self._back_off(driven, g.open_width)
+                self._back_off(driven, g)
                 raise GraspError(f"{strategy.category} slipped out while lifting "
                                  f"({_grip_text(grip)})")
-        held = {"category": strategy.category, "width": grip["width"]}
+        held = {"category": strategy.category, "width": grip["width"],
+                "pose": target.get("pose") or "upright"}
         self.set_value("holding", held)
+        self.set_value("held_plan", g)
         return held
 
     @actor
@@ -273,10 +297,12 @@ class Catcher(SubSystem):
         held = self.get_value("holding")
         if not held:
             return False
-        return _holds(strategy_for(held["category"]), self.run_actor("grip_check"))
+        return _holds(self.get_value("held_plan"), self.run_actor("grip_check"))
 
-    def _back_off(self, distance: float, open_width: float) -> None:
-        self.run_actor("open", open_width)
+    def _back_off(self, distance: float, plan: GraspPlan) -> None:
+        self.run_actor("open", plan.open_width)
+        if plan.pitch > math.radians(45):       # from above: lift the open hand out first
+            self.run_actor("move_to_pose", plan.reach, 0.0, plan.height + plan.lift, plan.pitch)
         self.run_actor("mini_walk", -max(0.05, distance))
         self.run_actor("home")
 
@@ -304,27 +330,32 @@ class Catcher(SubSystem):
         if not held:
             raise GraspError("place: nothing is held")
         strategy = strategy_for(held["category"])
-        g, a = strategy.grasp, strategy.approach
+        g, a = self.get_value("held_plan"), strategy.approach
         if heading is None:
             rx, ry, _ = self.run_actor("get_pose")
             # the surface under the release point is on the map: no corridor check
-            sx, sy, syaw = self._free_standoff((rx, ry), (x, y), strategy, corridor=False)[0]
+            sx, sy, syaw = self._free_standoff((rx, ry), (x, y), strategy, corridor=False,
+                                               plan=replace(g, sides=()))[0]
         else:
-            d = a.reach + a.standoff
+            d = g.reach + a.standoff
             sx, sy, syaw = x - d * math.cos(heading), y - d * math.sin(heading), heading
         self.run_actor("goto", sx, sy, syaw)
         release_z = surface + g.height + RELEASE_CLEARANCE
-        self.run_actor("move_to_pose", a.reach, 0.0, release_z + 0.03, g.pitch)
+        self.run_actor("move_to_pose", g.reach, 0.0, release_z + 0.03, g.pitch)
         distance = self._face((x, y), strategy)
-        driven = self.run_actor("mini_walk", distance - a.reach, tolerance=DRIVE_IN_TOLERANCE)
-        self.run_actor("move_to_pose", a.reach, 0.0, release_z, g.pitch)
+        driven = self.run_actor("mini_walk", distance - g.reach, tolerance=DRIVE_IN_TOLERANCE)
+        self.run_actor("move_to_pose", g.reach, 0.0, release_z, g.pitch)
         # Let go gently: just past the object first, so the fingers' squeeze is released
         # without kicking it over, then wide enough to back out.
         self.run_actor("open", min(g.open_width, held["width"] + GENTLE_RELEASE))
         self.run_actor("open", g.open_width)
         self.set_value("holding", None)
+        self.set_value("held_plan", None)
         # Back the open hand out the way it came in: lifting or folding first could catch
-        # an object that tilted in the fingers.
+        # an object that tilted in the fingers. A hand pointing down goes up first: the
+        # fingers are around the object.
+        if g.pitch > math.radians(45):
+            self.run_actor("move_to_pose", g.reach, 0.0, release_z + g.lift, g.pitch)
         self.run_actor("mini_walk", -max(0.1, driven))
         self.run_actor("home")
         return {"x": x, "y": y, "z": release_z}
@@ -348,8 +379,7 @@ class Catcher(SubSystem):
         held = self.get_value("holding")
         if not held:
             raise GraspError("place_on: nothing is held")
-        approach = strategy_for(held["category"]).approach
-        standoff = approach.reach + approach.standoff
+        standoff = self.get_value("held_plan").reach + strategy_for(held["category"]).approach.standoff
         rx, ry, _ = self.run_actor("get_pose")
         sides = []
         for nx, ny, half in ((1, 0, size_x / 2), (-1, 0, size_x / 2), (0, 1, size_y / 2), (0, -1, size_y / 2)):

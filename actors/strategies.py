@@ -4,7 +4,7 @@ docs/categories.md."""
 from __future__ import annotations
 
 import categories
-from categories import Approach, Grasp, Strategy, UnknownCategoryError
+from categories import Approach, Grasp, GraspPlan, Strategy, UnknownCategoryError
 
 
 def strategy_for(category: str) -> Strategy:
@@ -16,4 +16,4 @@ def known_categories() -> list[str]:
     return categories.names()
 
 
-__all__ = ["Approach", "Grasp", "Strategy", "UnknownCategoryError", "known_categories", "strategy_for"]
+__all__ = ["Approach", "Grasp", "GraspPlan", "Strategy", "UnknownCategoryError", "known_categories", "strategy_for"]

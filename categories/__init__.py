@@ -11,13 +11,13 @@ from .category import Category
 from .registry import (CategoryError, UnknownCategoryError, all_categories, get, load, names,
                        register, unregister)
 from .shapes import Box, Cylinder, Label, Revolution, Shape
-from .strategy import Approach, Grasp, Strategy
+from .strategy import Approach, Grasp, GraspPlan, Strategy, TopGrasp
 
 BUILT_IN = ("categories.can", "categories.bottle", "categories.carton")
 
 for _module in BUILT_IN:
     load(_module)
 
-__all__ = ["Approach", "BUILT_IN", "Box", "Category", "CategoryError", "Cylinder", "Grasp", "Label", "Revolution",
-           "Shape", "Strategy", "UnknownCategoryError", "all_categories", "get", "load", "names",
+__all__ = ["Approach", "BUILT_IN", "Box", "Category", "CategoryError", "Cylinder", "Grasp", "GraspPlan", "Label", "Revolution",
+           "Shape", "Strategy", "TopGrasp", "UnknownCategoryError", "all_categories", "get", "load", "names",
            "register", "unregister"]

@@ -10,7 +10,7 @@ import math
 from dataclasses import dataclass, field
 
 from .shapes import Box, Label, Revolution, Shape
-from .strategy import Approach, Grasp, Strategy
+from .strategy import Approach, Grasp, GraspPlan, Strategy, TopGrasp
 
 #: room the open fingers need around the held part [m]
 FINGER_MARGIN = 0.01
@@ -31,6 +31,8 @@ class Category:
         description: one line for humans (``actorbt`` lists it).
         min_confidence: how sure perception must be to call a segment this category.
         label: a printed label around the body, or None (drawn in worlds with labels).
+        top_grasp: how it is held from above when lying on its side (bodies of
+            revolution; the defaults fit a can or a bottle).
     """
 
     name: str
@@ -43,6 +45,7 @@ class Category:
     description: str = ""
     min_confidence: float = 0.3
     label: Label | None = None
+    top_grasp: TopGrasp = field(default_factory=TopGrasp)
 
     def __post_init__(self) -> None:
         if not self.name or not self.name.replace("_", "").isalnum():
@@ -80,7 +83,23 @@ class Category:
                 if self.shape.width_across(h) <= self.grasp.open_width - FINGER_MARGIN]
         return tuple(h for _, h in sorted(fits))
 
+    def lying_plan(self) -> GraspPlan | None:
+        """The grasp of the body lying on its side, from above across its body (a body of
+        revolution); None for a box (lying, it is a box on another face)."""
+        if not isinstance(self.shape, Revolution):
+            return None
+        t, r = self.top_grasp, self.shape.body_radius
+        width = 2 * r
+        if width > self.grasp.open_width - FINGER_MARGIN:
+            return None
+        return GraspPlan(reach=t.reach, height=r + t.above_axis, pitch=math.pi / 2,
+                         open_width=self.grasp.open_width, closed_min=width - t.slack[0],
+                         closed_max=width + t.slack[1], lift=t.lift, sides=(0.0,))
+
     @property
     def strategy(self) -> Strategy:
         sides = () if isinstance(self.shape, Revolution) else self.sides()
-        return Strategy(self.name, self.approach, self.grasp, self.description, sides)
+        size = self.shape.height if isinstance(self.shape, Revolution) else \
+            max(self.shape.x, self.shape.y, self.shape.z)
+        return Strategy(self.name, self.approach, self.grasp, self.description, sides,
+                        self.lying_plan(), size)

@@ -53,6 +53,47 @@ class Grasp:
     lift: float = 0.12
 
 
+@dataclass(frozen=True)
+class TopGrasp:
+    """How an object lying on its side is held: from above, the hand pointing down, the
+    fingers closing across the body while the base faces along the object's axis (the
+    arm has no wrist roll, so the fingers always close across the base's heading).
+
+    Attributes:
+        reach: tool position ahead of base_footprint while grasping [m]; pointing down,
+            the arm reaches 0.10..0.22 m.
+        above_axis: tool height above the lying body's axis [m]: the finger pads span the
+            axis and the fingertips stay clear of the floor.
+        lift: how far to lift after closing [m].
+        slack: the fingers stalled between the body's width minus the first and plus
+            the second [m] mean it is held.
+    """
+
+    reach: float = 0.19
+    above_axis: float = 0.015
+    lift: float = 0.12
+    slack: tuple[float, float] = (0.012, 0.008)
+
+
+@dataclass(frozen=True)
+class GraspPlan:
+    """One way of holding an object, in the base's frame while grasping: the tool at
+    (``reach``, 0, object base z + ``height``) with ``pitch``; the base faces the object
+    along one of ``sides`` (headings relative to the object's yaw; empty: any)."""
+
+    reach: float
+    height: float
+    pitch: float
+    open_width: float
+    closed_min: float
+    closed_max: float
+    lift: float
+    sides: tuple[float, ...] = ()
+
+    def holding(self, closed_width: float) -> bool:
+        return self.closed_min <= closed_width <= self.closed_max
+
+
 #: an object's sides the hand may come from: any (round objects)
 ANY_SIDE: tuple[float, ...] = ()
 
@@ -70,22 +111,37 @@ class Strategy:
     grasp: Grasp
     description: str = ""
     sides: tuple[float, ...] = ANY_SIDE
+    lying: GraspPlan | None = None      # how it is held when lying on its side, if at all
+    length: float = 0.0                 # the object's largest extent [m]
+
+    @property
+    def upright(self) -> GraspPlan:
+        g = self.grasp
+        return GraspPlan(self.approach.reach, g.height, g.pitch, g.open_width, g.closed_min,
+                         g.closed_max, g.lift, self.sides)
+
+    def plan_for(self, pose: str | None) -> GraspPlan | None:
+        """The grasp for an object standing ``upright`` (or tilted, or of unknown pose) or
+        ``lying`` on its side; None when the category has none for that pose."""
+        return self.lying if pose == "lying" else self.upright
 
     def standoff_poses(self, robot_xy: tuple[float, float], obj_xy: tuple[float, float],
-                       extra: float = 0.0, object_yaw: float | None = None
-                       ) -> list[tuple[float, float, float]]:
+                       extra: float = 0.0, object_yaw: float | None = None,
+                       plan: GraspPlan | None = None) -> list[tuple[float, float, float]]:
         """Where the base may stop, facing the object (x, y, yaw), best first.
 
         Round objects: straight from the robot's side, then turning around the object in
         30 degree steps. Objects with ``sides`` and a known ``object_yaw``: those headings,
-        the best side first and, within it, the one nearest the robot's side.
+        the best side first and, within it, the one nearest the robot's side. ``plan``:
+        the grasp (default the upright one), whose reach and sides count.
         """
+        plan = plan or self.upright
         (rx, ry), (ox, oy) = robot_xy, obj_xy
         direct = math.atan2(oy - ry, ox - rx)
-        d = self.approach.reach + self.approach.standoff + extra
-        if self.sides and object_yaw is not None:
+        d = plan.reach + self.approach.standoff + extra
+        if plan.sides and object_yaw is not None:
             headings = []
-            for rel in self.sides:
+            for rel in plan.sides:
                 h = object_yaw + rel
                 # the nearer of the two opposite faces first: it is on the robot's side
                 pair = sorted((h, h + math.pi), key=lambda a: abs(_wrap(a - direct)))

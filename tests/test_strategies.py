@@ -60,3 +60,22 @@ def test_a_box_is_approached_square_to_its_faces_narrow_side_first():
     assert sorted(abs(r) for r in rel[2:]) == pytest.approx([90.0, 90.0])
     # without a measured yaw it is approached like a round object
     assert len(s.standoff_poses((0.0, 0.0), (2.0, 0.0))) == 12
+
+
+@pytest.mark.parametrize("category", ["can", "bottle"])
+def test_a_lying_body_is_held_from_above_within_the_arms_reach(category):
+    s = strategy_for(category)
+    plan = s.plan_for("lying")
+    assert plan.pitch == pytest.approx(math.pi / 2)
+    assert plan.closed_min < 2 * 0.034 < plan.closed_max          # across the body
+    kin = ArmKinematics.from_urdf()
+    for z in (plan.height, plan.height + plan.lift):
+        assert kin.ik(plan.reach, 0.0, z, plan.pitch).ok, f"{category}: z={z} unreachable"
+    # the base faces along the axis: the fingers close across the body
+    poses = s.standoff_poses((0.0, 0.0), (2.0, 0.0), object_yaw=math.radians(40), plan=plan)
+    assert sorted(round(math.degrees(p[2])) for p in poses) == [-140, 40]
+
+
+def test_a_box_has_no_lying_grasp_and_says_so():
+    assert strategy_for("carton").plan_for("lying") is None
+    assert strategy_for("carton").plan_for("upright").sides == (0.0, math.pi / 2)
