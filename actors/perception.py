@@ -34,6 +34,7 @@ from typing import Iterator
 import cv2
 import numpy as np
 
+import categories
 from bt_engine import ActorbtError, SubSystem, actor
 
 from .camera import Camera, RGBDFrame
@@ -59,13 +60,19 @@ OCCLUSION_JUMP = 0.03   # [m] (and 4 % of the range) depth step that separates t
 FIT_POINTS = 400        # surface points used to fit an axis (an even subsample)
 MIN_VISIBLE_WIDTH = 0.5 # fraction of its body an object cut by the image border or an
                         # occluder must show to be classified (a sliver fits any cylinder)
+GRAZING = 0.3           # a face seen at less than ~17 degrees (sin) is not measured
 DEPTH_NOISE = 0.001     # [m] RMS a true cylinder's surface may deviate from the fitted one;
                         # the simulator's depth is exact (~0.3 mm); raise it for a real sensor
 
 
+class PerceptionError(ActorbtError):
+    """A perception request could not be served (no camera frames, bad category)."""
+
+
 @dataclass(frozen=True)
 class Appearance:
-    """How a category looks: a colour and a body of revolution standing upright.
+    """How a category looks: a colour, and either a body of revolution standing upright
+    (``sections``) or a box (``box``: its x, y, z sizes [m]).
 
     ``sections`` go bottom-up: ``(top height above the base [m], radius [m])``; the first
     section is the body whose radius is fitted to find the axis. A can is one section; a
@@ -73,21 +80,27 @@ class Appearance:
     """
     name: str
     colour: str
-    sections: tuple[tuple[float, float], ...]
+    sections: tuple[tuple[float, float], ...] = ()
     min_confidence: float = 0.3
     description: str = ""
+    box: tuple[float, float, float] | None = None
+
+    @property
+    def is_box(self) -> bool:
+        return self.box is not None
 
     @property
     def height(self) -> float:
-        return self.sections[-1][0]
+        return self.box[2] if self.box else self.sections[-1][0]
 
     @property
     def body_radius(self) -> float:
-        return self.sections[0][1]
+        """The body's radius; for a box, half its narrower side."""
+        return 0.5 * min(self.box[:2]) if self.box else self.sections[0][1]
 
     @property
     def body_top(self) -> float:
-        return self.sections[0][0]
+        return self.box[2] if self.box else self.sections[0][0]
 
     def radius_at(self, h: float) -> float:
         """Radius at height ``h`` above the base (0 above the top)."""
@@ -97,18 +110,37 @@ class Appearance:
         return 0.0
 
 
-APPEARANCES: dict[str, Appearance] = {
-    "can": Appearance("can", "red", ((0.122, 0.033),),
-                      description="red cylinder, 66 mm x 122 mm"),
-    "bottle": Appearance("bottle", "green", ((0.200, 0.035), (0.230, 0.024), (0.305, 0.0135)),
-                         description="green wine bottle: body 70 mm x 200 mm, shoulder, neck 27 mm"),
-}
+def palette_colour(rgba) -> str:
+    """The :data:`PALETTE` name of a colour given as rgb(a) in 0..1, as the camera would
+    see its hue; PerceptionError for a colour with no clear hue (white, grey, black)."""
+    px = np.uint8([[[round(255 * float(c)) for c in reversed(tuple(rgba)[:3])]]])   # BGR
+    h, sat, val = (int(v) for v in cv2.cvtColor(px, cv2.COLOR_BGR2HSV)[0, 0])
+    if sat < MIN_SATURATION or val < MIN_VALUE:
+        raise PerceptionError(f"colour {tuple(rgba)} has no clear hue (saturation {sat}, value {val}): "
+                              "perception finds objects by a saturated colour")
+    for name, ranges in PALETTE.items():
+        if any(lo <= h < hi for lo, hi in ranges):
+            return name
+    raise PerceptionError(f"colour {tuple(rgba)} (hue {h}) is in no palette range")
+
+
+def appearance_of(category: categories.Category) -> Appearance:
+    """A category's appearance: the palette colour of its rgba and its shape."""
+    shape = category.shape
+    common = dict(name=category.name, colour=palette_colour(category.rgba),
+                  min_confidence=category.min_confidence, description=category.description)
+    if isinstance(shape, categories.Box):
+        return Appearance(box=(shape.x, shape.y, shape.z), **common)
+    return Appearance(sections=tuple(shape.sections), **common)
+
+
+def registered_appearances() -> dict[str, Appearance]:
+    """Every registered category's appearance, read now (a category registered later is
+    seen by the next call)."""
+    return {c.name: appearance_of(c) for c in categories.all_categories()}
+
 
 UNKNOWN = "unknown"
-
-
-class PerceptionError(ActorbtError):
-    """A perception request could not be served (no camera frames, bad category)."""
 
 
 # ----------------------------------------------------------------------------- geometry
@@ -209,6 +241,8 @@ class _Segment:
     m_per_px: float           # metres per pixel at the segment
     range: float              # median horizontal distance camera -> surface [m]
     frame: RGBDFrame | None = None
+    grid: np.ndarray | None = None   # (h, w, 3) map-frame points over the bounding box,
+                                     # NaN outside the segment (image neighbours stay neighbours)
 
     def cut(self, side: str) -> bool:
         """Part of the object is out of view on ``side`` (image border or occluder)."""
@@ -281,7 +315,15 @@ def _measure(colour: str, comp: np.ndarray, x0: int, y0: int, P: np.ndarray, dep
                     bbox=(bx0, by0, x1, y1), truncated=trunc, occluded=occluded, pts=pts,
                     hts=pts[:, 2] - base, base=base, top=float(pts[:, 2].max()), cam_xy=cam_xy,
                     ray=ray, lateral=lateral,
-                    m_per_px=m_per_px, range=rng, frame=frame)
+                    m_per_px=m_per_px, range=rng, frame=frame, grid=_segment_grid(comp, x0, y0, P))
+
+
+def _segment_grid(comp: np.ndarray, x0: int, y0: int, P: np.ndarray) -> np.ndarray:
+    """The segment's points laid out as in the image (NaN off the segment)."""
+    h, w = comp.shape
+    grid = P[y0:y0 + h, x0:x0 + w].copy()
+    grid[~comp.astype(bool)] = np.nan
+    return grid
 
 
 def _occluded_sides(xs: np.ndarray, ys: np.ndarray, depth: np.ndarray, P: np.ndarray,
@@ -351,6 +393,8 @@ def _segments(frame: RGBDFrame, P: np.ndarray) -> list[_Segment]:
 # ----------------------------------------------------------------------------- classify
 def _score(seg: _Segment, app: Appearance) -> tuple[float, dict]:
     """Confidence in [0, 1] that ``seg`` is ``app``, and the evidence."""
+    if app.is_box:
+        return _score_box(seg, app)
     if seg.colour != app.colour:
         return 0.0, {"reason": "colour"}
     px = seg.m_per_px
@@ -440,16 +484,59 @@ def _axis(seg: _Segment) -> tuple[np.ndarray, float]:
     return c, r
 
 
-def _box_centre(xy: np.ndarray, ray: np.ndarray) -> np.ndarray:
-    """Centre of a box-like footprint from its visible faces (top view).
+@dataclass
+class _Rectangle:
+    """A rectangle fitted to top-view points: centre ``c``, unit axes ``e1``, ``e2``,
+    extents ``s1``, ``s2`` along them, and the RMS distance of the points to its sides."""
+    c: np.ndarray
+    e1: np.ndarray
+    e2: np.ndarray
+    s1: float
+    s2: float
+    rms: float
 
-    The orientation is the one whose rectangle's sides the points hug most closely (the
-    "closeness" criterion of L-shape fitting); the rectangle spans the points. When only
-    one face shows (a thin rectangle) it is pushed back by half its width along the
-    viewing direction: a square footprint is assumed.
-    """
+
+def _face_direction(grid: np.ndarray, lo: float, hi: float, stride: int = 3) -> float | None:
+    """The direction [rad, modulo 90 degrees] of a box's vertical faces in the top view,
+    from the surface's horizontal tangents: the difference of points ``stride`` pixels
+    apart along the image rows, between heights ``lo`` and ``hi``. Every face of a box
+    gives the same direction modulo 90 degrees, so the mean is taken of four times the
+    angle. None when too few tangents."""
+    a, b = grid[:, :-stride], grid[:, stride:]
+    ok = np.isfinite(a).all(axis=-1) & np.isfinite(b).all(axis=-1)
+    ok &= (a[..., 2] > lo) & (a[..., 2] < hi) & (b[..., 2] > lo) & (b[..., 2] < hi)
+    t = (b - a)[ok][:, :2]
+    if len(t) < 10:
+        return None
+    length = np.hypot(t[:, 0], t[:, 1])
+    step = float(np.median(length))
+    keep = (length > 0.3 * step) & (length < 3.0 * step)   # no depth jumps across an edge
+    ang = 4 * np.arctan2(t[keep, 1], t[keep, 0])
+    w = length[keep]
+    return float(np.arctan2((w * np.sin(ang)).sum(), (w * np.cos(ang)).sum()) / 4)
+
+
+def _rectangle_fit(xy: np.ndarray, direction: float | None = None) -> _Rectangle:
+    """The rectangle around top-view points with sides along ``direction`` [rad, modulo
+    90 degrees]; without one, the orientation whose sides the points hug most closely
+    (the "closeness" criterion of L-shape fitting, in 1 degree steps). It spans the points."""
     if len(xy) > FIT_POINTS:
         xy = xy[np.linspace(0, len(xy) - 1, FIT_POINTS).astype(int)]
+    if direction is not None:
+        # refined within +-6 degrees: the sides that the points lie on most closely
+        best = None
+        for th in direction + np.radians(np.arange(-6.0, 6.01, 0.5)):
+            e1 = np.array([math.cos(th), math.sin(th)])
+            e2 = np.array([-e1[1], e1[0]])
+            q = xy - xy.mean(axis=0)
+            c1, c2 = q @ e1, q @ e2
+            d = np.minimum(np.minimum(c1.max() - c1, c1 - c1.min()), np.minimum(c2.max() - c2, c2 - c2.min()))
+            rms = float(np.sqrt(np.mean(d * d)))
+            if best is None or rms < best[0]:
+                best = (rms, e1, e2, c1, c2)
+        rms, e1, e2, c1, c2 = best
+        m1, m2 = 0.5 * (c1.max() + c1.min()), 0.5 * (c2.max() + c2.min())
+        return _Rectangle(xy.mean(axis=0) + m1 * e1 + m2 * e2, e1, e2, float(np.ptp(c1)), float(np.ptp(c2)), rms)
     o = xy.mean(axis=0)
     q = xy - o
     th = np.radians(np.arange(0.0, 90.0, 1.0))
@@ -463,13 +550,82 @@ def _box_centre(xy: np.ndarray, ray: np.ndarray) -> np.ndarray:
     e2 = np.array([-e1[1], e1[0]])
     m1 = 0.5 * (c1[:, k].max() + c1[:, k].min())
     m2 = 0.5 * (c2[:, k].max() + c2[:, k].min())
-    s1 = c1[:, k].max() - c1[:, k].min()
-    s2 = c2[:, k].max() - c2[:, k].min()
-    c = o + m1 * e1 + m2 * e2
-    long, short = max(s1, s2), min(s1, s2)
+    rms = float(np.sqrt(np.mean(np.minimum(d1[:, k], d2[:, k]) ** 2)))
+    return _Rectangle(o + m1 * e1 + m2 * e2, e1, e2, float(np.ptp(c1[:, k])), float(np.ptp(c2[:, k])), rms)
+
+
+def _box_centre(xy: np.ndarray, ray: np.ndarray) -> np.ndarray:
+    """Centre of a box-like footprint of unknown size from its visible faces (top view):
+    the fitted rectangle's; when only one face shows (a thin rectangle) it is pushed back
+    by half its width along the viewing direction: a square footprint is assumed."""
+    r = _rectangle_fit(xy)
+    long, short = max(r.s1, r.s2), min(r.s1, r.s2)
     if short < 0.35 * long:
-        c = c + 0.5 * (long - short) * ray
-    return c
+        return r.c + 0.5 * (long - short) * ray
+    return r.c
+
+
+def _score_box(seg: _Segment, app: Appearance) -> tuple[float, dict]:
+    """Confidence that ``seg`` is the box ``app`` from its measured dimensions: its height
+    above the support, and the lengths of the faces seen from above (one face: its length
+    is the box's x or y; two: both). Returns the evidence with the box's centre (``axis``)
+    and ``yaw``, the map-frame direction of its x side in (-pi/2, pi/2]."""
+    if seg.colour != app.colour:
+        return 0.0, {"reason": "colour"}
+    bx, by, bz = app.box
+    px = seg.m_per_px
+    tol_w = max(0.008, 1.6 * px)
+    tol_h = max(0.006, 1.5 * px)
+    tol_r = max(2 * DEPTH_NOISE, 0.25 * px)
+    # the sides, from the points above the bottom rim (the floor's edge pixels blur it)
+    lo, hi = seg.base + 0.15 * bz, seg.base + 0.85 * bz
+    side = seg.pts[(seg.pts[:, 2] > lo) & (seg.pts[:, 2] < hi), :2]
+    if len(side) < 10:
+        return 0.0, {"reason": "body not visible"}
+    rect = _rectangle_fit(side, _face_direction(seg.grid, lo, hi))
+    side_cut = seg.cut("left") or seg.cut("right")
+
+    def err(measured: float, true: float) -> float:
+        return max(0.0, measured - true) if side_cut else measured - true   # cut: only shorter
+
+    # A side's length is measured only on faces seen well: at a grazing angle a face is
+    # a few scattered pixels. The faces along e1 face the camera by |ray . e2|.
+    seen = [abs(float(seg.ray @ rect.e2)) >= GRAZING, abs(float(seg.ray @ rect.e1)) >= GRAZING]
+    ext = [rect.s1 + px, rect.s2 + px]             # the points stop half a pixel short each side
+    axes = [rect.e1, rect.e2]
+    fits = []
+    for x_is in (0, 1):                            # the box's x side along e1, or along e2
+        true = [bx, by] if x_is == 0 else [by, bx]
+        errs = [err(ext[i], true[i]) for i in (0, 1) if seen[i]]
+        fits.append((math.sqrt(float(np.mean(np.square(errs)))), x_is, true))
+    e_face, x_is, true = min(fits)
+    # the centre: along a side measured, the middle of its extent; along one not seen,
+    # half the box behind the face that is seen
+    centre = rect.c.copy()
+    for i in (0, 1):
+        if not seen[i]:                            # the face seen squarely has normal +-axes[i]
+            e = axes[i]
+            away = 1.0 if float(seg.ray @ e) > 0 else -1.0
+            near = float(rect.c @ e) - away * 0.5 * ext[i]          # that face, nearest the camera
+            centre = centre + (near + away * 0.5 * true[i] - float(rect.c @ e)) * e
+    x_axis = axes[x_is]
+    one_face = not all(seen)
+    e_h = seg.height - bz
+    if seg.cut("top") or seg.occluded["top"]:
+        e_h = max(0.0, e_h)                           # part of it may be hidden: a lower bound
+    z = np.array([e_face / tol_w, e_h / tol_h, rect.rms / tol_r])
+    conf = float(math.exp(-0.5 * float(np.mean(z * z))))
+    if np.any(np.abs(z) > 2.5):
+        conf = min(conf, 0.1)
+    if seg.cut("top") or side_cut:
+        conf *= 0.85
+    yaw = math.atan2(x_axis[1], x_axis[0])
+    if yaw <= -math.pi / 2:
+        yaw += math.pi
+    elif yaw > math.pi / 2:
+        yaw -= math.pi
+    return conf, {"face_err": e_face, "height_err": e_h, "rect_rms": rect.rms, "faces": 1 if one_face else 2,
+                  "axis": centre, "yaw": yaw}
 
 
 def detect(frame: RGBDFrame, appearances: dict[str, Appearance] | None = None) -> list[dict]:
@@ -487,8 +643,10 @@ def detect(frame: RGBDFrame, appearances: dict[str, Appearance] | None = None) -
       pixel       [u, v] centroid of the object's pixels
       colour, truncated (sides cut by the image border or hidden behind something
       nearer), stamp [s], frame ("map")
+      yaw         a box only: the map-frame direction of its x side [rad], in
+                  (-pi/2, pi/2]; x, y is then the box's centre
     """
-    apps = APPEARANCES if appearances is None else appearances
+    apps = registered_appearances() if appearances is None else appearances
     P = backproject(frame)
     T_base_map = np.linalg.inv(frame.T_map_base)
     out = []
@@ -526,6 +684,8 @@ def detect(frame: RGBDFrame, appearances: dict[str, Appearance] | None = None) -
             "truncated": [k for k in ("left", "right", "top", "bottom") if seg.cut(k)],
             "stamp": frame.stamp, "frame": "map",
         })
+        if "yaw" in evidence and app is not None:
+            out[-1]["yaw"] = float(evidence["yaw"])
     out.sort(key=lambda d: d["distance"])
     return out
 
@@ -589,17 +749,19 @@ class Perception(SubSystem):
 
     A ``camera`` child subsystem holds the camera's stream actors (``pic``, ``depth``,
     ``camera_info``, ``rgbd``). ``appearances`` maps category names to
-    :class:`Appearance` (default :data:`APPEARANCES`); other keyword arguments go to
+    :class:`Appearance`; by default every registered category's, read at each look (so a
+    category loaded later is recognised). Other keyword arguments go to
     :class:`actors.camera.Camera` (topics, map and base frames).
     """
 
     def __init__(self, appearances: dict[str, Appearance] | None = None, **camera: object) -> None:
         super().__init__()
         self.add_subsystem("camera", Camera, **camera)
-        self.set_value("appearances", dict(APPEARANCES if appearances is None else appearances))
+        self.set_value("appearances", None if appearances is None else dict(appearances))
 
     def _apps(self) -> dict[str, Appearance]:
-        return self.get_value("appearances")
+        fixed = self.get_value("appearances")
+        return registered_appearances() if fixed is None else fixed
 
     def _check_category(self, category: str | None) -> None:
         if category is not None and category != UNKNOWN and category not in self._apps():
