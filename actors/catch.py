@@ -208,6 +208,11 @@ class Catcher(SubSystem):
                                             object_yaw=target.get("yaw"), plan=plan)
             self._goto_first(self._fresh_views_first(poses, xy), xy)
         self._face(xy, strategy)
+        # a last look from the standoff, the nearest and most precise one: the way here
+        # may have moved the localisation's estimate by a few centimetres
+        target = self._refine(target, cat)
+        xy = _target_xy(target)
+        self._face(xy, strategy)
         return {**target, "category": cat}
 
     @staticmethod
@@ -258,7 +263,7 @@ class Catcher(SubSystem):
         above = height + (g.lift if g.pitch > math.radians(45) else 0.0)
         self.run_actor("move_to_pose", g.reach, 0.0, above, g.pitch)
         distance = self._face(xy, strategy)
-        driven = self.run_actor("mini_walk", distance - g.reach, tolerance=DRIVE_IN_TOLERANCE)
+        driven = self._drive_in(distance - g.reach)
         if above != height:
             self.run_actor("move_to_pose", g.reach, 0.0, height, g.pitch)
         grip = self.run_actor("close")
@@ -298,6 +303,13 @@ class Catcher(SubSystem):
         if not held:
             return False
         return _holds(self.get_value("held_plan"), self.run_actor("grip_check"))
+
+    def _drive_in(self, distance: float) -> float:
+        """Drive straight in by ``distance`` [m]; returns how far it drove. The walk stops
+        as soon as it is within DRIVE_IN_TOLERANCE, that is short of the goal: it aims
+        half the tolerance beyond, so that it stops within half of it either side (the
+        pads then cover the middle of a box, not just its near edge)."""
+        return self.run_actor("mini_walk", distance + 0.5 * DRIVE_IN_TOLERANCE, tolerance=DRIVE_IN_TOLERANCE)
 
     def _back_off(self, distance: float, plan: GraspPlan) -> None:
         self.run_actor("open", plan.open_width)
@@ -343,7 +355,7 @@ class Catcher(SubSystem):
         release_z = surface + g.height + RELEASE_CLEARANCE
         self.run_actor("move_to_pose", g.reach, 0.0, release_z + 0.03, g.pitch)
         distance = self._face((x, y), strategy)
-        driven = self.run_actor("mini_walk", distance - g.reach, tolerance=DRIVE_IN_TOLERANCE)
+        driven = self._drive_in(distance - g.reach)
         self.run_actor("move_to_pose", g.reach, 0.0, release_z, g.pitch)
         # Let go gently: just past the object first, so the fingers' squeeze is released
         # without kicking it over, then wide enough to back out.
