@@ -22,6 +22,7 @@ HAND_RANGE = 0.45              # detections closer than this may be in the gripp
 WAYPOINT_CLEARANCE = 0.25      # room a search location needs for the base [m] (navigation
                                # plans with a 0.20 m robot radius)
 MAX_SHIFT = 1.0                # how far a blocked search location may be moved [m]
+SIDESTEP = 0.45                # where to look from when the navigation refuses a location [m]
 SAME_OBJECT = 0.20             # survey sightings closer than this are one object [m]
 LOOKS_PER_TURN = 2             # frames a survey takes at each of its views
 
@@ -107,6 +108,33 @@ class Search(SubSystem):
                     return px, py
         return None
 
+    def _goto_near(self, x: float, y: float, rx: float, ry: float) -> str | None:
+        """Drive to (x, y) from (rx, ry); if the navigation fails (something the lidar
+        sees stands there, the way is blocked), to one of a few spots around it, on the
+        robot's side first (three tries at most). Returns None, or why it was not reached."""
+        heading = math.atan2(y - ry, x - rx)
+        try:
+            self.run_actor("goto", x, y, heading)
+            return None
+        except ActorError as e:
+            first = e.root_cause
+        back = heading + math.pi                # the robot's side of the location first
+        spots = [(x + SIDESTEP * math.cos(back + k * math.pi / 3), y + SIDESTEP * math.sin(back + k * math.pi / 3))
+                 for k in (0, 1, -1, 2, -2, 3)]
+        tries = 0
+        for px, py in spots:
+            if tries == 3 or self.run_actor("clearance", px, py) < WAYPOINT_CLEARANCE:
+                continue
+            tries += 1
+            sx, sy, _ = self.run_actor("get_pose")
+            try:
+                self.run_actor("goto", px, py, math.atan2(py - sy, px - sx))
+                log.info("search location (%.2f, %.2f) refused; looking from (%.2f, %.2f)", x, y, px, py)
+                return None
+            except ActorError:
+                continue
+        return str(first)
+
     def _visit(self, locations: list, at_each: Callable[[], None]) -> tuple[list, list[str]]:
         """Drive to each location (moved or skipped when blocked; see ``patrol``) and call
         ``at_each`` there. Returns the locations and the reasons of those not reached."""
@@ -131,11 +159,10 @@ class Search(SubSystem):
             if (x, y) != (x0, y0):
                 log.info("search location (%.2f, %.2f) is blocked; looking from (%.2f, %.2f)", x0, y0, x, y)
             rx, ry, _ = self.run_actor("get_pose")
-            try:
-                self.run_actor("goto", x, y, math.atan2(y - ry, x - rx))
-            except ActorError as e:
-                missed.append(f"({x:.2f}, {y:.2f}): {e.root_cause}")
-                log.info("search location (%.2f, %.2f) not reached: %s", x, y, e.root_cause)
+            error = self._goto_near(x, y, rx, ry)
+            if error is not None:
+                missed.append(f"({x:.2f}, {y:.2f}): {error}")
+                log.info("search location (%.2f, %.2f) not reached: %s", x, y, error)
                 sx, sy, _ = self.run_actor("get_pose")
                 if math.hypot(sx - rx, sy - ry) < 0.5:
                     continue                    # it did not get anywhere new

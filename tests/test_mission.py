@@ -133,3 +133,17 @@ def test_a_survey_finds_every_object_all_round():
     for o in found:
         x, y = truth[o["category"]]
         assert abs(o["x"] - x) < 0.05 and abs(o["y"] - y) < 0.05, (o, truth)
+
+
+def test_a_search_location_taken_by_an_object_is_looked_around_from_beside_it():
+    """House seed 1: the bottle stands 17 cm from the first search location, (1.8, 2.0);
+    the navigation refuses that goal (the lidar sees the bottle), so the robot looks around
+    from a spot beside it instead of giving the location up."""
+    def hide_the_carton(world: SimWorld) -> None:
+        for name in world.object_names():
+            if world.object_category(name) == "carton":
+                world.set_object_pose(name, 50.0, 50.0, 0.0)
+    ep = run_episode("bt_search", "house", seed=1, category="carton", world_setup=hide_the_carton,
+                     inputs={"locations": [[1.8, 2.0]]})
+    assert ep.tree_status == "FAILURE"
+    assert ep.reason.endswith("visited 1 search locations and saw nothing"), ep.reason
