@@ -81,15 +81,17 @@ class Renderer:
         self.name = "egl"
         self.why_not_egl = ""
 
-    def render(self, width, height, view, projection):
-        """-> (rgb uint8 [h, w, 3], depth buffer float32 [h, w] in 0..1)."""
+    def render(self, width, height, view, projection, light_direction=None):
+        """-> (rgb uint8 [h, w, 3], depth buffer float32 [h, w] in 0..1). ``light_direction``
+        (towards the light, world frame): None leaves pybullet's default light."""
         renderer = p.ER_BULLET_HARDWARE_OPENGL if self.name == "egl" else p.ER_TINY_RENDERER
         first = (width, height) not in self._sizes_seen     # the plugin chats on a new size
         self._sizes_seen.add((width, height))
+        light = {} if light_direction is None else {"lightDirection": list(light_direction)}
         with _quiet_stdout() if first and self.name == "egl" else contextlib.nullcontext():
             _, _, rgba, depth, _ = p.getCameraImage(
                 width, height, view, projection, renderer=renderer,
-                flags=p.ER_NO_SEGMENTATION_MASK, shadow=0, physicsClientId=self.cid)
+                flags=p.ER_NO_SEGMENTATION_MASK, shadow=0, physicsClientId=self.cid, **light)
         rgba = np.asarray(rgba, dtype=np.uint8).reshape(height, width, 4)
         depth = np.asarray(depth, dtype=np.float32).reshape(height, width)
         return np.ascontiguousarray(rgba[:, :, :3]), depth

@@ -11,6 +11,7 @@ import numpy as np
 from ._pybullet import pybullet as p
 
 from .actuators import TrajectoryError, trajectory_from_msg
+from .appearance import noisy_depth
 from .description import PlacedObject, WorldSpec, load_world
 from .gridmap import RESOLUTION, build_grid
 from .objects import CATEGORIES
@@ -142,11 +143,15 @@ class SimWorld:
         self._renderer: Renderer | None = (Renderer(cid, prefer_egl=self.prefer_egl and not self.gui)
                                            if self._camera_enabled else None)
         self.scene = Scene(cid, self.spec)
+        # varied poses: the objects come to rest before the robot is there and time starts
+        self.settle_steps = self.scene.settle(self.spec.settle_steps) if self.spec.settle_steps else 0
         self.robot = Robot(cid, self.spec.robot_start)
         self.odometry = WheelOdometry(self._odom_noise or OdomNoise(), odometry_rng(self.seed))
         self.lidar = Lidar(cid, self.lidar_model, lidar_rng(self.seed),
                            ray_mask=~ROBOT_COLLISION_GROUP, noise=self._lidar_noise)
         self.camera = CameraModel(*self._camera_size)
+        # the depth camera's noise: a stream of its own from the world seed
+        self._depth_rng = np.random.default_rng([self.seed, 43])
         self.grid = build_grid(self.spec, self._map_resolution)
         self.t = 0.0                 # simulated seconds since construction
         self._t_offset = 0.0         # runtime clock - self.t (set by start())
@@ -407,8 +412,14 @@ class SimWorld:
         t0 = time.perf_counter()
         pos, orn = self.robot.link_pose("camera_optical_frame")
         cam = self.camera
-        rgb, buf = self.renderer.render(cam.width, cam.height, cam.view(pos, orn), cam.projection())
+        look = self.spec.lighting
+        rgb, buf = self.renderer.render(cam.width, cam.height, cam.view(pos, orn), cam.projection(),
+                                        light_direction=None if look is None else look.direction)
         depth = cam.linearize(buf)
+        if look is not None:
+            rgb = look.apply(rgb)
+        if self.spec.appearance.depth_noise is not None:
+            depth = noisy_depth(depth, self._depth_rng, self.spec.appearance.depth_noise, cam.fx)
         self.frames_rendered += 1
         self.render_seconds += time.perf_counter() - t0
         return rgb, depth

@@ -27,6 +27,33 @@ def _rot(pts, x, y, yaw):
     return [(x + c * u - s * v, y + s * u + c * v) for u, v in pts]
 
 
+def _matrix(q):
+    """Rotation matrix of a quaternion (x, y, z, w)."""
+    x, y, z, w = q
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                     [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                     [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+
+
+def _hull(pts):
+    """Convex hull (counter-clockwise) of 2-D points."""
+    pts = sorted(set(map(tuple, np.round(pts, 5))))
+    if len(pts) < 3:
+        return pts
+
+    def half(seq):
+        out = []
+        for pt in seq:
+            while len(out) >= 2 and ((out[-1][0] - out[-2][0]) * (pt[1] - out[-2][1])
+                                     - (out[-1][1] - out[-2][1]) * (pt[0] - out[-2][0])) <= 0:
+                out.pop()
+            out.append(pt)
+        return out
+
+    lower, upper = half(pts), half(reversed(pts))
+    return lower[:-1] + upper[:-1]
+
+
 def draw_top_view(sim, out_png, title=None, dpi=110, overlay=None):
     """Draw a SimWorld's current state from above into ``out_png``; ``overlay(ax)``, when
     given, draws more on the axes (map frame, metres) before saving."""
@@ -53,16 +80,23 @@ def draw_top_view(sim, out_png, title=None, dpi=110, overlay=None):
                                      hatch="//", zorder=2))
         ax.annotate(f"{pl.name} (place)", (pl.x, pl.y - pl.sy / 2), xytext=(0, -4), textcoords="offset points",
                     ha="center", va="top", fontsize=8, weight="bold", zorder=5)
+    colours = {o.name: o.rgba for o in spec.objects if o.rgba is not None}
     for name, pose in sim.object_poses().items():
         cat = CATEGORIES[sim.object_category(name)]
+        rgba = colours.get(name, cat.rgba)
         x, y = pose[0], pose[1]
-        if cat.parts[0][0] == "box":
+        R = _matrix(pose[3:])
+        if R[2, 2] < 0.985:         # lying or leaning (more than 10 deg): its outline from above
+            from .varied import part_points
+            pts = part_points(cat, 24) @ R.T + np.asarray(pose[:3])
+            ax.add_patch(patches.Polygon(_hull(pts[:, :2]), closed=True, fc=rgba[:3], ec="k", lw=0.6, zorder=4))
+        elif cat.parts[0][0] == "box":
             yaw = math.atan2(2 * (pose[6] * pose[5] + pose[3] * pose[4]), 1 - 2 * (pose[4] ** 2 + pose[5] ** 2))
             sx, sy = cat.parts[0][1][:2]
             pts = _rot(((-sx / 2, -sy / 2), (sx / 2, -sy / 2), (sx / 2, sy / 2), (-sx / 2, sy / 2)), x, y, yaw)
-            ax.add_patch(patches.Polygon(pts, closed=True, fc=cat.rgba[:3], ec="k", lw=0.6, zorder=4))
+            ax.add_patch(patches.Polygon(pts, closed=True, fc=rgba[:3], ec="k", lw=0.6, zorder=4))
         else:
-            ax.add_patch(patches.Circle((x, y), cat.radius, fc=cat.rgba[:3], ec="k", lw=0.6, zorder=4))
+            ax.add_patch(patches.Circle((x, y), cat.radius, fc=rgba[:3], ec="k", lw=0.6, zorder=4))
         ax.annotate(name, (x, y), xytext=(6, 6), textcoords="offset points", fontsize=7.5, zorder=5)
     # robot
     rx, ry, ryaw = sim.robot_pose()

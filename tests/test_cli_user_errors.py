@@ -65,7 +65,7 @@ def test_a_world_with_a_yaml_mistake(project, capsys):
 
 def test_a_world_that_does_not_exist(project, capsys):
     assert run(project, "call", "greet", "--world", "hosue") == 2
-    assert one_error_line(capsys) == "unknown world 'hosue' (known: house, open_floor)"
+    assert one_error_line(capsys) == "unknown world 'hosue' (known: house, house_hard, open_floor)"
 
 
 def test_sim_commands_report_world_errors_the_same_way(project, capsys):
