@@ -53,6 +53,16 @@ def _target_xy(target: Any) -> tuple[float, float]:
         raise ActorbtError(f"a target needs numeric 'x' and 'y' (map frame), got {target!r}") from None
 
 
+def _grasp_xy(target: dict, plan: GraspPlan) -> tuple[float, float]:
+    """Where the hand closes, seen from above: the target's x, y; for a leaning object, the
+    point of its axis at the grasp's height (perception's ``axis_base`` and ``axis_dir``)."""
+    base, up = target.get("axis_base"), target.get("axis_dir")
+    if target.get("pose") != "tilted" or not base or not up or up[2] < 0.3:
+        return _target_xy(target)
+    t = plan.height / up[2]
+    return base[0] + t * up[0], base[1] + t * up[1]
+
+
 def fresh_views_first(poses: list[tuple[float, float, float]], xy: tuple[float, float],
                       failed_views: list[tuple[float, float, float]]) -> list[tuple[float, float, float]]:
     """Standoff ``poses`` (x, y, heading) with those within NEW_VIEW of the heading of a
@@ -255,7 +265,7 @@ class Catcher(SubSystem):
         """
         strategy = self._strategy(target, category)
         g = self._plan(strategy, target)
-        xy = _target_xy(target)
+        xy = _grasp_xy(target, g)
         self.run_actor("require_localised")       # never grasp where the map pose is a guess
         height = float(target.get("z", 0.0)) + g.height  # the object may stand on something
         self.run_actor("open", g.open_width)

@@ -37,6 +37,7 @@ import numpy as np
 import categories
 from bt_engine import ActorbtError, SubSystem, actor
 
+from . import axis_fit
 from .camera import Camera, RGBDFrame
 
 # ----------------------------------------------------------------------------- appearance
@@ -61,8 +62,11 @@ FIT_POINTS = 400        # surface points used to fit an axis (an even subsample)
 MIN_VISIBLE_WIDTH = 0.5 # fraction of its body an object cut by the image border or an
                         # occluder must show to be classified (a sliver fits any cylinder)
 GRAZING = 0.3           # a face seen at less than ~17 degrees (sin) is not measured
-DEPTH_NOISE = 0.001     # [m] RMS a true cylinder's surface may deviate from the fitted one;
-                        # the simulator's depth is exact (~0.3 mm); raise it for a real sensor
+DEPTH_NOISE = 0.001     # [m] RMS a true cylinder's surface may deviate from the fitted one
+                        # with exact depth (the rendering's own error is ~0.3 mm)
+LABEL_GAP = 0.10        # [m] a printed label this tall may split an object's colour in two
+UPRIGHT_TILT = math.radians(12)   # an axis nearer the vertical than this is standing
+LYING_TILT = math.radians(65)     # ... farther than this, lying; between them, leaning
 
 
 class PerceptionError(ActorbtError):
@@ -84,6 +88,8 @@ class Appearance:
     min_confidence: float = 0.3
     description: str = ""
     box: tuple[float, float, float] | None = None
+    hue: int | None = None      # its OpenCV hue (0..180): pixels within HUE_WINDOW count
+                                # as its colour, across a palette boundary
 
     @property
     def is_box(self) -> bool:
@@ -110,14 +116,21 @@ class Appearance:
         return 0.0
 
 
-def palette_colour(rgba) -> str:
-    """The :data:`PALETTE` name of a colour given as rgb(a) in 0..1, as the camera would
-    see its hue; PerceptionError for a colour with no clear hue (white, grey, black)."""
+def hue_of(rgba) -> int:
+    """The OpenCV hue (0..180) of a colour given as rgb(a) in 0..1; PerceptionError for a
+    colour with no clear hue (white, grey, black)."""
     px = np.uint8([[[round(255 * float(c)) for c in reversed(tuple(rgba)[:3])]]])   # BGR
     h, sat, val = (int(v) for v in cv2.cvtColor(px, cv2.COLOR_BGR2HSV)[0, 0])
     if sat < MIN_SATURATION or val < MIN_VALUE:
         raise PerceptionError(f"colour {tuple(rgba)} has no clear hue (saturation {sat}, value {val}): "
                               "perception finds objects by a saturated colour")
+    return h
+
+
+def palette_colour(rgba) -> str:
+    """The :data:`PALETTE` name of a colour given as rgb(a) in 0..1, as the camera would
+    see its hue; PerceptionError for a colour with no clear hue (white, grey, black)."""
+    h = hue_of(rgba)
     for name, ranges in PALETTE.items():
         if any(lo <= h < hi for lo, hi in ranges):
             return name
@@ -127,7 +140,7 @@ def palette_colour(rgba) -> str:
 def appearance_of(category: categories.Category) -> Appearance:
     """A category's appearance: the palette colour of its rgba and its shape."""
     shape = category.shape
-    common = dict(name=category.name, colour=palette_colour(category.rgba),
+    common = dict(name=category.name, colour=palette_colour(category.rgba), hue=hue_of(category.rgba),
                   min_confidence=category.min_confidence, description=category.description)
     if isinstance(shape, categories.Box):
         return Appearance(box=(shape.x, shape.y, shape.z), **common)
@@ -144,19 +157,29 @@ UNKNOWN = "unknown"
 
 
 # ----------------------------------------------------------------------------- geometry
-def _hue_lut() -> tuple[np.ndarray, list[str]]:
+HUE_WINDOW = 7          # OpenCV hue units (2 degrees each) either side of a category's hue
+
+
+def _hue_lut(appearances=()) -> tuple[np.ndarray, list[str]]:
+    """Hue -> palette index; around each appearance's hue its colour's range is widened to
+    HUE_WINDOW (colour jitter and white balance move a hue across a palette boundary: a
+    yellow carton near orange)."""
     names = list(PALETTE)
     lut = np.zeros(256, np.uint8)
     for i, name in enumerate(names, 1):
         for lo, hi in PALETTE[name]:
             lut[lo:min(hi, 256)] = i
+    for app in appearances:
+        if app.hue is not None and app.colour in names:
+            lut[np.arange(app.hue - HUE_WINDOW, app.hue + HUE_WINDOW + 1) % 180] = names.index(app.colour) + 1
     return lut, names
 
 
-def colour_labels(bgr: np.ndarray) -> tuple[np.ndarray, list[str]]:
-    """Per-pixel palette index (0 = no colour) and the palette's names (index - 1)."""
+def colour_labels(bgr: np.ndarray, appearances=()) -> tuple[np.ndarray, list[str]]:
+    """Per-pixel palette index (0 = no colour) and the palette's names (index - 1);
+    ``appearances`` widen their colours' ranges around their hues (see _hue_lut)."""
     hsv = cv2.cvtColor(bgr, cv2.COLOR_BGR2HSV)
-    lut, names = _hue_lut()
+    lut, names = _hue_lut(appearances)
     lab = lut[hsv[:, :, 0]]
     lab[(hsv[:, :, 1] < MIN_SATURATION) | (hsv[:, :, 2] < MIN_VALUE)] = 0
     return lab, names
@@ -243,6 +266,36 @@ class _Segment:
     frame: RGBDFrame | None = None
     grid: np.ndarray | None = None   # (h, w, 3) map-frame points over the bounding box,
                                      # NaN outside the segment (image neighbours stay neighbours)
+
+    @property
+    def noise(self) -> float:
+        """The depth noise [m] measured on the segment itself: the robust spread of the
+        range's second difference between image neighbours (sigma * sqrt(6) for white
+        noise; ~0 on any smooth surface), along rows or columns, whichever is smaller (one
+        of them usually runs along a cylinder's axis, where the surface is straight)."""
+        if not hasattr(self, "_noise"):
+            r = np.linalg.norm(self.grid - self.frame.T_map_cam[:3, 3], axis=-1)
+            est = []
+            for d2 in (r[:, :-2] - 2 * r[:, 1:-1] + r[:, 2:], r[:-2, :] - 2 * r[1:-1, :] + r[2:, :]):
+                d2 = d2[np.isfinite(d2)]
+                if len(d2) >= 30:
+                    est.append(1.4826 * float(np.median(np.abs(d2 - np.median(d2)))) / math.sqrt(6))
+            self._noise = min(est) if est else 0.0
+        return self._noise
+
+    @property
+    def surface_tolerance(self) -> float:
+        """How far [m] its points may scatter about a fitted surface: DEPTH_NOISE, or the
+        noise measured on it when larger (a real or noisy depth camera)."""
+        return max(DEPTH_NOISE, 1.2 * self.noise)
+
+    def axis_candidates(self) -> list[np.ndarray]:
+        """Directions its surface normals avoid (a body of revolution's axis, see
+        actors/axis_fit.py); computed once."""
+        if not hasattr(self, "_axis_dirs"):
+            pts, normals = axis_fit.surface_normals(self.grid)
+            self._axis_dirs = axis_fit.axis_candidates(pts, normals) if len(pts) >= 20 else []
+        return self._axis_dirs
 
     def cut(self, side: str) -> bool:
         """Part of the object is out of view on ``side`` (image border or occluder)."""
@@ -361,20 +414,74 @@ def _occluded_sides(xs: np.ndarray, ys: np.ndarray, depth: np.ndarray, P: np.nda
     return out
 
 
-def _segments(frame: RGBDFrame, P: np.ndarray) -> list[_Segment]:
-    lab, names = colour_labels(frame.bgr)
+def _components(mask: np.ndarray) -> list[tuple[int, int, np.ndarray]]:
+    """(x0, y0, roi) of each 4-connected region of ``mask`` of MIN_PIXELS or more."""
+    n, cc, stats, _ = cv2.connectedComponentsWithStats(mask.astype(np.uint8), connectivity=4)
+    out = []
+    for j in range(1, n):
+        x0, y0, bw, bh, area = (int(a) for a in stats[j])
+        if area >= MIN_PIXELS:
+            out.append((x0, y0, cc[y0:y0 + bh, x0:x0 + bw] == j))
+    return out
+
+
+def _bridge_labels(mask: np.ndarray, lab: np.ndarray, depth: np.ndarray, P: np.ndarray) -> np.ndarray:
+    """``mask`` (one colour) with the uncoloured bands that split an object joined in: a
+    printed label (a cream band round a bottle) leaves two regions of its colour. Two
+    regions are joined when they are at most LABEL_GAP apart in space, and the pixels
+    between them (inside their joint convex hull) are uncoloured, at their depth and above
+    their lowest point (not the floor behind); only when that makes one region."""
+    comps = _components(mask)
+    if len(comps) < 2:
+        return mask
+    h, w = mask.shape
+    full, samples = [], []
+    for x0, y0, roi in comps:
+        m = np.zeros((h, w), bool)
+        m[y0:y0 + roi.shape[0], x0:x0 + roi.shape[1]] = roi
+        pts = P[m]
+        pts = pts[np.isfinite(pts).all(axis=1)]
+        full.append(m)
+        samples.append(pts[np.linspace(0, len(pts) - 1, min(len(pts), 150)).astype(int)] if len(pts) else pts)
+    out = mask.copy()
+    joined = set()
+    for i in range(len(comps)):
+        for j in range(i + 1, len(comps)):
+            if i in joined or j in joined or not len(samples[i]) or not len(samples[j]):
+                continue
+            a, b = samples[i], samples[j]
+            gap = float(np.min(np.linalg.norm(a[:, None, :] - b[None, :, :], axis=-1)))
+            if gap > LABEL_GAP:
+                continue
+            union = full[i] | full[j]
+            ys, xs = np.nonzero(union)
+            hull = cv2.convexHull(np.stack([xs, ys], axis=1).astype(np.int32))
+            inside = np.zeros((h, w), np.uint8)
+            cv2.fillConvexPoly(inside, hull, 1)
+            d = depth[union]
+            d = d[np.isfinite(d)]
+            lo_z = float(min(a[:, 2].min(), b[:, 2].min()))
+            with np.errstate(invalid="ignore"):
+                fill = ((inside > 0) & ~union & (lab == 0) & (depth > d.min() - 0.05) & (depth < d.max() + 0.05)
+                        & (P[:, :, 2] > lo_z + 0.01))
+            merged = union | fill
+            if len(_components(merged)) == 1 and int(fill.sum()) > 0:
+                out |= merged
+                joined.update((i, j))
+    return out
+
+
+def _segments(frame: RGBDFrame, P: np.ndarray, appearances=()) -> list[_Segment]:
+    lab, names = colour_labels(frame.bgr, appearances)
     cut = _occlusion_cuts(lab, frame.depth)
     out = []
     for i, name in enumerate(names, 1):
-        m = ((lab == i) & ~cut).astype(np.uint8)
+        m = (lab == i) & ~cut
         if int(m.sum()) < MIN_PIXELS:
             continue
-        n, cc, stats, _ = cv2.connectedComponentsWithStats(m, connectivity=4)
-        for j in range(1, n):
-            x0, y0, bw, bh, area = (int(a) for a in stats[j])
-            if area < MIN_PIXELS:
-                continue
-            roi = cc[y0:y0 + bh, x0:x0 + bw] == j
+        m = _bridge_labels(m, lab, frame.depth, P)
+        for x0, y0, roi in _components(m):
+            bh, bw = roi.shape
             # fill holes left by specular highlights, but only where the depth agrees
             contours, _ = cv2.findContours(roi.astype(np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
             filled = np.zeros(roi.shape, np.uint8)
@@ -397,6 +504,18 @@ def _score(seg: _Segment, app: Appearance) -> tuple[float, dict]:
         return _score_box(seg, app)
     if seg.colour != app.colour:
         return 0.0, {"reason": "colour"}
+    conf, ev = _score_upright(seg, app)
+    ev["pose"] = "upright"
+    for direction in seg.axis_candidates():
+        if math.acos(min(1.0, abs(float(direction[2])))) > UPRIGHT_TILT:
+            c, e = _score_posed(seg, app, direction)
+            if e.get("pose") != "upright" and c > conf:
+                conf, ev = c, e
+    return conf, ev
+
+
+def _score_upright(seg: _Segment, app: Appearance) -> tuple[float, dict]:
+    """_score for a body of revolution standing on its base (the axis vertical)."""
     px = seg.m_per_px
     band = max(0.01, 1.6 * px)
     rho = seg.range + app.body_radius
@@ -440,7 +559,7 @@ def _score(seg: _Segment, app: Appearance) -> tuple[float, dict]:
         e_h = max(0.0, seg.height - top)
     else:
         e_h = seg.height - top
-    tol_r = DEPTH_NOISE
+    tol_r = seg.surface_tolerance
     z = np.array([e_prof / tol_w, e_h / tol_h, rms / tol_r])
     conf = float(math.exp(-0.5 * float(np.mean(z * z))))
     if np.any(np.abs(z) > 2.5):
@@ -449,6 +568,72 @@ def _score(seg: _Segment, app: Appearance) -> tuple[float, dict]:
         conf *= 0.85                                 # part of the evidence is out of view
     return conf, {"profile_err": e_prof, "height_err": e_h, "cylinder_rms": rms, "line_rms": flat,
                   "axis": axis}
+
+
+def _score_posed(seg: _Segment, app: Appearance, direction: np.ndarray) -> tuple[float, dict]:
+    """_score for a body of revolution in any pose: its axis is fitted in 3-D (see
+    actors/axis_fit.py; from ``direction``), the points' distance from it is checked against the radius profile
+    (base at either end: the better fit says which end is the base), and the visible
+    length against the height. Evidence: ``pose`` (upright, tilted, lying), ``axis`` (x, y
+    of the body's centre), ``yaw`` (lying: the axis's direction modulo pi; tilted: the
+    direction it leans to), ``axis_base`` and ``axis_dir`` (3-D)."""
+    cam = seg.frame.T_map_cam[:3, 3]
+    fit = axis_fit.fit_axis(seg.grid, app.body_radius, cam, direction)
+    if fit is None:
+        return 0.0, {"reason": "body not visible"}
+    tol_r = seg.surface_tolerance
+    tol_h = max(0.01, 2.0 * seg.m_per_px)
+    cut = seg.cut("left") or seg.cut("right") or seg.cut("top") or seg.cut("bottom")
+    best = None
+    for _ in range(2):                       # fit, then refit on the body alone
+        d = fit.direction
+        s_all = (seg.pts - fit.point) @ d
+        lo, hi = (float(v) for v in np.percentile(s_all, (0.5, 99.5)))
+        s_side = (fit.side - fit.point) @ d
+        radial = np.linalg.norm((fit.side - fit.point) - np.outer(s_side, d), axis=1)
+        best = None
+        for sign in (1.0, -1.0):             # the base at the low end, or at the high end
+            h = s_side - lo if sign > 0 else hi - s_side
+            inner = (h > 0.01) & (h < app.height - 0.01)
+            if inner.sum() < 10:
+                continue
+            e = radial[inner] - np.array([app.radius_at(v) for v in h[inner]])
+            # trimmed: the worst 15 % (a rim, a label's edge, stray pixels) do not count
+            e2 = np.sort(e * e)[:max(1, int(0.85 * len(e)))]
+            rms = float(np.sqrt(np.mean(e2)))
+            if best is None or rms < best[0]:
+                body = fit.side[inner & (h < app.body_top - 0.005)]
+                best = (rms, sign, body)
+        if best is None:
+            return 0.0, {"reason": "too little of its side in view"}
+        if len(best[2]) < 15:
+            break
+        fit = axis_fit.refine_axis(best[2], app.body_radius, fit.point, fit.direction)
+    rms, sign, _ = best
+    d = fit.direction
+    up = d * sign                            # from the base to the top
+    base_pt = fit.point + ((lo if sign > 0 else hi) - 0.0) * d
+    length = hi - lo
+    e_len = length - app.height
+    if cut or seg.occluded["top"]:
+        e_len = max(0.0, e_len)              # part of it out of view: only shorter
+    z = np.array([rms / tol_r, e_len / tol_h])
+    conf = float(math.exp(-0.5 * float(np.mean(z * z))))
+    if np.any(np.abs(z) > 2.5):
+        conf = min(conf, 0.1)
+    if cut:
+        conf *= 0.85
+    tilt = math.acos(min(1.0, abs(float(d[2]))))
+    pose = "upright" if tilt < UPRIGHT_TILT else "lying" if tilt > LYING_TILT else "tilted"
+    centre = base_pt + 0.5 * app.body_top * up
+    if pose == "lying":
+        yaw = math.atan2(d[1], d[0])
+        yaw = yaw - math.pi if yaw > math.pi / 2 else yaw + math.pi if yaw <= -math.pi / 2 else yaw
+    else:
+        yaw = math.atan2(up[1], up[0])
+    return conf, {"pose": pose, "axis": centre[:2].copy(), "yaw": yaw, "tilt": tilt,
+                  "axis_base": base_pt.tolist(), "axis_dir": up.tolist(), "profile_rms": rms,
+                  "length_err": e_len}
 
 
 def _visible_top(seg: _Segment, app: Appearance, axis: np.ndarray) -> float:
@@ -479,7 +664,7 @@ def _axis(seg: _Segment) -> tuple[np.ndarray, float]:
     xy = seg.pts[:, :2]
     c0 = xy.mean(axis=0) + r * seg.ray
     c, rms = fit_circle_fixed(xy, r, c0)
-    if rms > 2 * DEPTH_NOISE or not np.all(np.isfinite(c)) or np.hypot(*(c - c0)) > 2 * r:
+    if rms > 2 * seg.surface_tolerance or not np.all(np.isfinite(c)) or np.hypot(*(c - c0)) > 2 * r:
         c = _box_centre(xy, seg.ray)
     return c, r
 
@@ -576,7 +761,7 @@ def _score_box(seg: _Segment, app: Appearance) -> tuple[float, dict]:
     px = seg.m_per_px
     tol_w = max(0.008, 1.6 * px)
     tol_h = max(0.006, 1.5 * px)
-    tol_r = max(2 * DEPTH_NOISE, 0.25 * px)
+    tol_r = max(2 * seg.surface_tolerance, 0.25 * px)
     # the sides, from the points above the bottom rim (the floor's edge pixels blur it)
     lo, hi = seg.base + 0.15 * bz, seg.base + 0.85 * bz
     side = seg.pts[(seg.pts[:, 2] > lo) & (seg.pts[:, 2] < hi), :2]
@@ -650,7 +835,7 @@ def detect(frame: RGBDFrame, appearances: dict[str, Appearance] | None = None) -
     P = backproject(frame)
     T_base_map = np.linalg.inv(frame.T_map_base)
     out = []
-    for seg in _segments(frame, P):
+    for seg in _segments(frame, P, list(apps.values())):
         best, best_conf, evidence = None, 0.0, {}
         for app in apps.values():
             conf, ev = _score(seg, app)
@@ -668,7 +853,7 @@ def detect(frame: RGBDFrame, appearances: dict[str, Appearance] | None = None) -
         widths = [wd for hm, wd in seg.band_widths(max(0.01, 1.6 * seg.m_per_px))
                   if app is None or hm < app.body_top]
         width = float(np.median(widths)) if widths else 2 * r
-        if app is not None and (seg.cut("left") or seg.cut("right")):
+        if app is not None and (seg.cut("left") or seg.cut("right") or evidence.get("pose", "upright") != "upright"):
             width = 2 * r                              # partly out of view: the model's width
         if app is None and (width > MAX_UNKNOWN_SIZE[0] or seg.height > MAX_UNKNOWN_SIZE[1]):
             continue                                   # a wall, furniture: not an object
@@ -684,8 +869,14 @@ def detect(frame: RGBDFrame, appearances: dict[str, Appearance] | None = None) -
             "truncated": [k for k in ("left", "right", "top", "bottom") if seg.cut(k)],
             "stamp": frame.stamp, "frame": "map",
         })
-        if "yaw" in evidence and app is not None:
-            out[-1]["yaw"] = float(evidence["yaw"])
+        if app is not None:
+            if evidence.get("yaw") is not None:
+                out[-1]["yaw"] = float(evidence["yaw"])
+            out[-1]["pose"] = evidence.get("pose", "upright")
+            if "axis_dir" in evidence:
+                out[-1]["axis_base"] = [float(v) for v in evidence["axis_base"]]
+                out[-1]["axis_dir"] = [float(v) for v in evidence["axis_dir"]]
+                out[-1]["tilt_deg"] = round(math.degrees(evidence["tilt"]), 1)
     out.sort(key=lambda d: d["distance"])
     return out
 

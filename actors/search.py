@@ -54,8 +54,9 @@ def group_sightings(sightings: list[dict], gate: float = SAME_OBJECT) -> list[di
         obj = {"category": category, "sightings": len(mine), "confidence": best["confidence"]}
         for k in ("x", "y", "z"):
             obj[k] = float(statistics.median(s[k] for s in mine))
-        if best.get("yaw") is not None:
-            obj["yaw"] = best["yaw"]
+        for k in ("yaw", "pose", "axis_base", "axis_dir"):
+            if best.get(k) is not None:
+                obj[k] = best[k]
         out.append(obj)
     out.sort(key=lambda o: -o["sightings"])
     return out

@@ -10,7 +10,7 @@ successful grasp looks like, and (for a box) from which sides the hand may come.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 
 @dataclass(frozen=True)
@@ -89,6 +89,7 @@ class GraspPlan:
     closed_max: float
     lift: float
     sides: tuple[float, ...] = ()
+    one_way: bool = False       # only along sides, never from the opposite face
 
     def holding(self, closed_width: float) -> bool:
         return self.closed_min <= closed_width <= self.closed_max
@@ -121,9 +122,16 @@ class Strategy:
                          g.closed_max, g.lift, self.sides)
 
     def plan_for(self, pose: str | None) -> GraspPlan | None:
-        """The grasp for an object standing ``upright`` (or tilted, or of unknown pose) or
-        ``lying`` on its side; None when the category has none for that pose."""
-        return self.lying if pose == "lying" else self.upright
+        """The grasp for an object standing ``upright`` (or of unknown pose), ``lying`` on
+        its side, or ``tilted`` (leaning on something): held as if upright, the hand coming
+        from the side its base is on (heading = the direction it leans to, its ``yaw``), so
+        that the top leans away from the hand and the fingers close across the body;
+        None when the category has none for that pose."""
+        if pose == "lying":
+            return self.lying
+        if pose == "tilted":
+            return replace(self.upright, sides=(0.0,), one_way=True)
+        return self.upright
 
     def standoff_poses(self, robot_xy: tuple[float, float], obj_xy: tuple[float, float],
                        extra: float = 0.0, object_yaw: float | None = None,
@@ -145,7 +153,8 @@ class Strategy:
                 h = object_yaw + rel
                 # the nearer of the two opposite faces first: it is on the robot's side
                 pair = sorted((h, h + math.pi), key=lambda a: abs(_wrap(a - direct)))
-                headings += pair
+                # one way: that heading, or up to 30 degrees off it (a wall may be close)
+                headings += [h + math.radians(a) for a in (0, 15, -15, 30, -30)] if plan.one_way else pair
         else:
             headings = [direct + k * math.radians(30) for k in (0, 1, -1, 2, -2, 3, -3, 4, -4, 5, -5, 6)]
         out, seen = [], set()

@@ -1,0 +1,75 @@
+"""Perception of objects lying on their side, and of labelled ones, in house_hard's look
+(printed labels, light, colour jitter, depth noise): detect() on rendered frames."""
+import math
+
+import numpy as np
+import pytest
+
+from actors.perception import detect, registered_appearances
+from bench.bench_perception_hard import _frame, _teleport
+from sim import SimWorld
+from sim._pybullet import pybullet as p
+
+SPOT = (1.6, 1.6)          # open floor in the living room
+
+
+@pytest.fixture(scope="module")
+def sim():
+    s = SimWorld(None, "house_hard", seed=0)
+    yield s
+    s.close()
+
+
+def _put(sim, name, quat, z):
+    body = sim.scene.objects[name]
+    p.resetBasePositionAndOrientation(body, [SPOT[0], SPOT[1], z], quat, physicsClientId=sim.cid)
+    for _ in range(120):
+        p.stepSimulation(physicsClientId=sim.cid)
+
+
+def _look(sim, bearing, distance=0.6):
+    _teleport(sim, SPOT[0] - distance * math.cos(bearing), SPOT[1] - distance * math.sin(bearing), bearing)
+    return detect(_frame(sim), registered_appearances())
+
+
+def _near(dets, category, xy, tol=0.03):
+    return [d for d in dets if d["category"] == category and math.dist((d["x"], d["y"]), xy) < tol]
+
+
+@pytest.mark.parametrize("category,radius", [("can", 0.033), ("bottle", 0.035)])
+def test_a_lying_body_is_recognised_with_its_axis(sim, category, radius):
+    name = next(n for n in sim.object_names() if sim.object_category(n) == category)
+    axis_yaw = 0.7
+    _put(sim, name, p.getQuaternionFromEuler([math.pi / 2, 0.0, axis_yaw - math.pi / 2]), radius + 0.002)
+    app = registered_appearances()[category]
+    pose = sim.object_pose(name)           # the frame (a body's base pose is its centre of mass)
+    pos, orn = pose[:3], pose[3:]
+    R = np.array(p.getMatrixFromQuaternion(orn)).reshape(3, 3)
+    body_centre = np.array(pos) + R @ [0, 0, 0.5 * app.body_top - 0.5 * app.height]
+    true_yaw = math.atan2(R[1, 2], R[0, 2])
+    seen = 0
+    # from the side and obliquely (seen nearly end-on, the body hides behind the neck
+    # or a cap, and it is often missed: see docs/perception.md)
+    for bearing in (0.0, 2.4, -0.9, 2.2):
+        found = _near(_look(sim, bearing), category, body_centre[:2])
+        if not found:
+            continue
+        seen += 1
+        d = found[0]
+        assert d["pose"] == "lying", d
+        assert math.dist((d["x"], d["y"]), body_centre[:2]) < 0.01, d
+        err = abs(math.remainder(d["yaw"] - true_yaw, math.pi))
+        assert math.degrees(err) < 5.0, (d["yaw"], true_yaw)
+    assert seen >= 3
+    sim.set_object_pose(name, 40.0, 40.0)
+
+
+def test_a_labelled_bottle_standing_is_one_bottle(sim):
+    # the cream label splits the green in two: both parts are one bottle
+    name = next(n for n in sim.object_names() if sim.object_category(n) == "bottle")
+    _put(sim, name, p.getQuaternionFromEuler([0, 0, 0.3]), 0.1526)
+    for bearing in (0.5, -1.0):
+        dets = _look(sim, bearing, 0.7)
+        found = _near(dets, "bottle", SPOT, 0.01)
+        assert found and found[0]["pose"] == "upright", dets
+    sim.set_object_pose(name, 40.0, 40.0)
