@@ -266,6 +266,7 @@ class _Segment:
     frame: RGBDFrame | None = None
     grid: np.ndarray | None = None   # (h, w, 3) map-frame points over the bounding box,
                                      # NaN outside the segment (image neighbours stay neighbours)
+    in_structure: float = 0.0        # share of its pixels in a coloured region of furniture size
 
     @property
     def noise(self) -> float:
@@ -471,9 +472,26 @@ def _bridge_labels(mask: np.ndarray, lab: np.ndarray, depth: np.ndarray, P: np.n
     return out
 
 
+def _structure(lab: np.ndarray, P: np.ndarray) -> np.ndarray:
+    """Pixels of coloured regions (of any colours together, before depth cuts) larger than
+    MAX_UNKNOWN_SIZE: furniture and walls. Light and noise break a brown bench into
+    small patches of two hues; none of them is an object."""
+    big = np.zeros(lab.shape, bool)
+    for x0, y0, roi in _components(lab > 0):
+        pts = P[y0:y0 + roi.shape[0], x0:x0 + roi.shape[1]][roi]
+        pts = pts[np.isfinite(pts).all(axis=1)]
+        if len(pts) < MIN_PIXELS:
+            continue
+        lo, hi = np.percentile(pts, (2, 98), axis=0)
+        if max(hi[0] - lo[0], hi[1] - lo[1]) > MAX_UNKNOWN_SIZE[0] or hi[2] - lo[2] > MAX_UNKNOWN_SIZE[1]:
+            big[y0:y0 + roi.shape[0], x0:x0 + roi.shape[1]] |= roi
+    return big
+
+
 def _segments(frame: RGBDFrame, P: np.ndarray, appearances=()) -> list[_Segment]:
     lab, names = colour_labels(frame.bgr, appearances)
     cut = _occlusion_cuts(lab, frame.depth)
+    structure = _structure(lab, P)
     out = []
     for i, name in enumerate(names, 1):
         m = (lab == i) & ~cut
@@ -493,6 +511,7 @@ def _segments(frame: RGBDFrame, P: np.ndarray, appearances=()) -> list[_Segment]
                 roi = roi | (holes & (np.abs(d - dm) < 0.1))
             seg = _measure(name, roi, x0, y0, P, frame.depth, lab, frame)
             if seg is not None and seg.range <= MAX_RANGE:
+                seg.in_structure = float(structure[y0:y0 + bh, x0:x0 + bw][roi].mean())
                 out.append(seg)
     return out
 
@@ -855,8 +874,9 @@ def detect(frame: RGBDFrame, appearances: dict[str, Appearance] | None = None) -
         width = float(np.median(widths)) if widths else 2 * r
         if app is not None and (seg.cut("left") or seg.cut("right") or evidence.get("pose", "upright") != "upright"):
             width = 2 * r                              # partly out of view: the model's width
-        if app is None and (width > MAX_UNKNOWN_SIZE[0] or seg.height > MAX_UNKNOWN_SIZE[1]):
-            continue                                   # a wall, furniture: not an object
+        if app is None and (width > MAX_UNKNOWN_SIZE[0] or seg.height > MAX_UNKNOWN_SIZE[1]
+                            or seg.in_structure > 0.5):
+            continue                                   # a wall, furniture (or a patch of it)
         b = T_base_map @ np.array([c[0], c[1], seg.base, 1.0])
         out.append({
             "category": category,
