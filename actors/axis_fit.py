@@ -31,11 +31,6 @@ class AxisFit:
     rms: float
     side: np.ndarray          # (N, 3) the points on the cylinder's side
 
-    @property
-    def tilt(self) -> float:
-        """Angle between the axis and the vertical [rad]."""
-        return math.acos(min(1.0, abs(float(self.direction[2]))))
-
 
 def surface_normals(grid: np.ndarray, stride: int = NORMAL_STRIDE) -> tuple[np.ndarray, np.ndarray]:
     """(points, unit normals) from points laid out as in the image (NaN off the object):
@@ -97,13 +92,12 @@ def _basis(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return u, np.cross(a, u)
 
 
-def fit_axis(grid: np.ndarray, radius: float, view_from: np.ndarray,
+def fit_axis(pts: np.ndarray, normals: np.ndarray, radius: float, view_from: np.ndarray,
              direction: np.ndarray | None = None) -> AxisFit | None:
-    """The axis of a cylinder of ``radius`` through the surface in ``grid`` (points as in
-    the image, NaN elsewhere), seen from ``view_from`` (the camera's position: the axis is
-    behind the surface), starting from ``direction`` (default: the best candidate). None
-    when too few normals."""
-    pts, normals = surface_normals(grid)
+    """The axis of a cylinder of ``radius`` through surface points and their normals (as
+    :func:`surface_normals` gives them), seen from ``view_from`` (the camera's position:
+    the axis is behind the surface), starting from ``direction`` (default: the best
+    candidate). None when too few normals."""
     if len(pts) < 20:
         return None
     a = axis_direction(pts, normals) if direction is None else direction

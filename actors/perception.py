@@ -108,6 +108,12 @@ class Appearance:
     def body_top(self) -> float:
         return self.box[2] if self.box else self.sections[0][0]
 
+    def radii_at(self, hs: np.ndarray) -> np.ndarray:
+        """:meth:`radius_at` for an array of heights."""
+        tops = np.array([t for t, _ in self.sections])
+        radii = np.array([r for _, r in self.sections] + [0.0])
+        return radii[np.searchsorted(tops, hs, side="left")]
+
     def radius_at(self, h: float) -> float:
         """Radius at height ``h`` above the base (0 above the top)."""
         for top, r in self.sections:
@@ -294,9 +300,15 @@ class _Segment:
         """Directions its surface normals avoid (a body of revolution's axis, see
         actors/axis_fit.py); computed once."""
         if not hasattr(self, "_axis_dirs"):
-            pts, normals = axis_fit.surface_normals(self.grid)
+            pts, normals = self.normals()
             self._axis_dirs = axis_fit.axis_candidates(pts, normals) if len(pts) >= 20 else []
         return self._axis_dirs
+
+    def normals(self) -> tuple[np.ndarray, np.ndarray]:
+        """(points, unit surface normals) of the segment (axis_fit.surface_normals); once."""
+        if not hasattr(self, "_normals"):
+            self._normals = axis_fit.surface_normals(self.grid)
+        return self._normals
 
     def cut(self, side: str) -> bool:
         """Part of the object is out of view on ``side`` (image border or occluder)."""
@@ -591,47 +603,29 @@ def _score_upright(seg: _Segment, app: Appearance) -> tuple[float, dict]:
 
 def _score_posed(seg: _Segment, app: Appearance, direction: np.ndarray) -> tuple[float, dict]:
     """_score for a body of revolution in any pose: its axis is fitted in 3-D (see
-    actors/axis_fit.py; from ``direction``), the points' distance from it is checked against the radius profile
-    (base at either end: the better fit says which end is the base), and the visible
+    actors/axis_fit.py; from ``direction``), the points' distance from it is checked
+    against the radius profile (base at either end: the better fit says which end is the
+    base, _profile_fit), and the visible
     length against the height. Evidence: ``pose`` (upright, tilted, lying), ``axis`` (x, y
     of the body's centre), ``yaw`` (lying: the axis's direction modulo pi; tilted: the
     direction it leans to), ``axis_base`` and ``axis_dir`` (3-D)."""
     cam = seg.frame.T_map_cam[:3, 3]
-    fit = axis_fit.fit_axis(seg.grid, app.body_radius, cam, direction)
+    fit = axis_fit.fit_axis(*seg.normals(), app.body_radius, cam, direction)
     if fit is None:
         return 0.0, {"reason": "body not visible"}
     tol_r = seg.surface_tolerance
     tol_h = max(0.01, 2.0 * seg.m_per_px)
     cut = seg.cut("left") or seg.cut("right") or seg.cut("top") or seg.cut("bottom")
-    best = None
-    for _ in range(2):                       # fit, then refit on the body alone
-        d = fit.direction
-        s_all = (seg.pts - fit.point) @ d
-        lo, hi = (float(v) for v in np.percentile(s_all, (0.5, 99.5)))
-        s_side = (fit.side - fit.point) @ d
-        radial = np.linalg.norm((fit.side - fit.point) - np.outer(s_side, d), axis=1)
-        best = None
-        for sign in (1.0, -1.0):             # the base at the low end, or at the high end
-            h = s_side - lo if sign > 0 else hi - s_side
-            inner = (h > 0.01) & (h < app.height - 0.01)
-            if inner.sum() < 10:
-                continue
-            e = radial[inner] - np.array([app.radius_at(v) for v in h[inner]])
-            # trimmed: the worst 15 % (a rim, a label's edge, stray pixels) do not count
-            e2 = np.sort(e * e)[:max(1, int(0.85 * len(e)))]
-            rms = float(np.sqrt(np.mean(e2)))
-            if best is None or rms < best[0]:
-                body = fit.side[inner & (h < app.body_top - 0.005)]
-                best = (rms, sign, body)
-        if best is None:
-            return 0.0, {"reason": "too little of its side in view"}
-        if len(best[2]) < 15:
-            break
-        fit = axis_fit.refine_axis(best[2], app.body_radius, fit.point, fit.direction)
-    rms, sign, _ = best
+    best = _profile_fit(seg, app, fit)
+    if best is not None and len(best[4]) >= 15:      # refit on the body alone (not a neck)
+        fit = axis_fit.refine_axis(best[4], app.body_radius, fit.point, fit.direction)
+        best = _profile_fit(seg, app, fit)
+    if best is None:
+        return 0.0, {"reason": "too little of its side in view"}
+    rms, sign, lo, hi, _ = best
     d = fit.direction
     up = d * sign                            # from the base to the top
-    base_pt = fit.point + ((lo if sign > 0 else hi) - 0.0) * d
+    base_pt = fit.point + (lo if sign > 0 else hi) * d
     length = hi - lo
     e_len = length - app.height
     if cut or seg.occluded["top"]:
@@ -653,6 +647,30 @@ def _score_posed(seg: _Segment, app: Appearance, direction: np.ndarray) -> tuple
     return conf, {"pose": pose, "axis": centre[:2].copy(), "yaw": yaw, "tilt": tilt,
                   "axis_base": base_pt.tolist(), "axis_dir": up.tolist(), "profile_rms": rms,
                   "length_err": e_len}
+
+
+def _profile_fit(seg: _Segment, app: Appearance, fit: axis_fit.AxisFit):
+    """How well the side's distances from ``fit``'s axis follow ``app``'s radius profile,
+    with the base at the low end of the points along the axis or at the high end: the
+    better as (trimmed RMS [m], +1 or -1: the base at the low or high end, low and high
+    ends along the axis from fit.point [m], the body's points); None when too few."""
+    d = fit.direction
+    lo, hi = (float(v) for v in np.percentile((seg.pts - fit.point) @ d, (0.5, 99.5)))
+    s_side = (fit.side - fit.point) @ d
+    radial = np.linalg.norm((fit.side - fit.point) - np.outer(s_side, d), axis=1)
+    best = None
+    for sign in (1.0, -1.0):
+        h = s_side - lo if sign > 0 else hi - s_side
+        inner = (h > 0.01) & (h < app.height - 0.01)
+        if inner.sum() < 10:
+            continue
+        e = radial[inner] - app.radii_at(h[inner])
+        # trimmed: the worst 15 % (a rim, a label's edge, stray pixels) do not count
+        e2 = np.sort(e * e)[:max(1, int(0.85 * len(e)))]
+        rms = float(np.sqrt(np.mean(e2)))
+        if best is None or rms < best[0]:
+            best = (rms, sign, lo, hi, fit.side[inner & (h < app.body_top - 0.005)])
+    return best
 
 
 def _visible_top(seg: _Segment, app: Appearance, axis: np.ndarray) -> float:

@@ -10,6 +10,7 @@ from __future__ import annotations
 import colorsys
 import math
 import os
+from dataclasses import replace
 from pathlib import Path
 
 from ._pybullet import pybullet as p
@@ -20,11 +21,6 @@ from .objects import CATEGORIES
 FLOOR_RGBA = (0.93, 0.91, 0.86, 1.0)
 FLOOR_FRICTION = 1.0
 ROLLING_FRICTION = 0.002     # worlds with varied poses (lying bodies stay put)
-
-
-def _replace(obj, **kw):
-    from dataclasses import replace
-    return replace(obj, **kw)
 
 
 def _shift_like(src, dst, colour):
@@ -151,7 +147,7 @@ class Scene:
 
         label = cat.label
         if obj.rgba is not None and label is not None:      # jittered: the label too
-            label = _replace(label, rgba=_shift_like(cat.rgba, obj.rgba, label.rgba),
+            label = replace(label, rgba=_shift_like(cat.rgba, obj.rgba, label.rgba),
                              print_rgba=_shift_like(cat.rgba, obj.rgba, label.print_rgba))
         img = textures.label_texture(rgba, label, cat.height, cat.name)
         path = str(textures.texture_file(img))
