@@ -19,7 +19,11 @@ from .strategies import GraspPlan, Strategy, strategy_for
 #: place surface height and the part of the object held decide the release height
 RELEASE_CLEARANCE = 0.008   # [m] above the surface when the fingers open
 STANDOFF_CLEARANCE = 0.26   # room the base needs around a standoff pose [m]
-BASE_CLEARANCE = 0.22       # room along the straight drive in (the base's half diagonal) [m]
+#: the base's outline in base_footprint, x_min, x_max, |y| max [m]: the Waffle Pi chassis.
+#: Along the straight drive in, only this must stay clear of the map's obstacles: the
+#: arm and the hand are above a table whose edge the base stops at.
+BASE_OUTLINE = (-0.205, 0.076, 0.153)
+BASE_MARGIN = 0.025         # room kept between that outline and an obstacle [m]
 HAND_HALF_WIDTH = 0.07      # half the open hand's width, with margin [m]
 SAME_OBJECT = 0.12          # detections closer than this to the target are the target [m]
 TEST_LIFT = 0.02            # first, short lift that checks the grip [m]
@@ -44,6 +48,25 @@ def _segment_distance(p: tuple[float, float], a: tuple[float, float], b: tuple[f
     dx, dy = bx - ax, by - ay
     t = max(0.0, min(1.0, ((px - ax) * dx + (py - ay) * dy) / ((dx * dx + dy * dy) or 1e-12)))
     return math.hypot(ax + t * dx - px, ay + t * dy - py)
+
+
+def outline_discs(pose: tuple[float, float, float], outline: tuple[float, float, float] = BASE_OUTLINE,
+                  spacing: float = 0.1) -> tuple[list[tuple[float, float]], float]:
+    """Discs that together cover the base's rectangular ``outline`` at ``pose`` (x, y,
+    heading): their centres in the map frame and their common radius [m]. The base is
+    clear of obstacles when each centre is farther than that radius from all of them."""
+    x_min, x_max, half_y = outline
+    nx = max(1, math.ceil((x_max - x_min) / spacing))
+    ny = max(1, math.ceil(2 * half_y / spacing))
+    cell_x, cell_y = (x_max - x_min) / nx, 2 * half_y / ny
+    x, y, yaw = pose
+    c, s = math.cos(yaw), math.sin(yaw)
+    centres = []
+    for i in range(nx):
+        for j in range(ny):
+            bx, by = x_min + (i + 0.5) * cell_x, -half_y + (j + 0.5) * cell_y
+            centres.append((x + c * bx - s * by, y + s * bx + c * by))
+    return centres, 0.5 * math.hypot(cell_x, cell_y)
 
 
 def _target_xy(target: Any) -> tuple[float, float]:
@@ -145,7 +168,8 @@ class Catcher(SubSystem):
         gx, gy = xy[0] - reach * c, xy[1] - reach * s  # base position when grasping
         for k in range(1, 5):  # the base's path: the map (obstacles marked) has room
             f = k / 4
-            if self.run_actor("clearance", sx + f * (gx - sx), sy + f * (gy - sy)) < BASE_CLEARANCE:
+            centres, radius = outline_discs((sx + f * (gx - sx), sy + f * (gy - sy), yaw))
+            if any(self.run_actor("clearance", px, py) < radius + BASE_MARGIN for px, py in centres):
                 return False
         for o in others:  # the open hand's path, from the base's front to the object
             r = float(o.get("radius", 0.05))

@@ -3,7 +3,12 @@ from __future__ import annotations
 
 import math
 
-from actors.catch import fresh_views_first
+import numpy as np
+
+from actors.catch import BASE_OUTLINE, Catcher, fresh_views_first, outline_discs
+from bt_engine import SubSystem, actor
+from planning.grid import OccupancyGrid, inflate
+from tests.conftest import run_in_actor
 
 
 def test_the_side_of_a_failed_grasp_comes_last():
@@ -14,3 +19,48 @@ def test_the_side_of_a_failed_grasp_comes_last():
     assert [round(math.degrees(p[2])) for p in fresh_views_first(poses, obj, failed)] == [-30, 60, 0, 30]
     elsewhere = [(3.0, 2.0, math.radians(10))]                 # another object's failure
     assert fresh_views_first(poses, obj, elsewhere) == poses
+
+
+def test_the_outline_discs_cover_the_base():
+    pose = (1.0, 2.0, math.radians(35))
+    centres, radius = outline_discs(pose)
+    x_min, x_max, half_y = BASE_OUTLINE
+    c, s = math.cos(pose[2]), math.sin(pose[2])
+    for bx in np.linspace(x_min, x_max, 9):
+        for by in np.linspace(-half_y, half_y, 9):
+            p = (pose[0] + c * bx - s * by, pose[1] + s * bx + c * by)
+            assert min(math.dist(p, q) for q in centres) <= radius + 1e-9
+    assert radius < 0.08     # small discs: the outline, not a circle around the base
+
+
+class _Map(SubSystem):
+    """The navigation's ``clearance`` actor, answered from a costmap."""
+
+    def __init__(self, costmap):
+        super().__init__()
+        self.costmap = costmap
+
+    @actor
+    def clearance(self, x: float, y: float) -> float:
+        row, col = self.costmap.grid.cell_of(x, y)
+        return float(self.costmap.clearance[row, col])
+
+
+def _room_with_a_table(edge_x: float):
+    """A 4 x 3 m room (5 cm cells) with a 0.6 m wide table from ``edge_x`` on, y 1.2..1.8."""
+    data = np.zeros((60, 80), dtype=np.int8)
+    data[0, :] = data[-1, :] = data[:, 0] = data[:, -1] = 100
+    data[24:36, int(round(edge_x / 0.05)):int(round(edge_x / 0.05)) + 12] = 100
+    return inflate(OccupancyGrid(data, 0.05), robot_radius=0.2)
+
+
+def test_the_base_drives_up_to_a_table_edge_to_reach_an_object_on_it(rt):
+    rt.add_subsystem("map", _Map, _room_with_a_table(2.0))
+    table = rt.add_subsystem("catch", Catcher)
+    reach = 0.27
+    for inset in (0.05, 0.075):              # the object, this far inside the table's edge
+        obj = (2.0 + inset, 1.5)
+        standoff = (obj[0] - reach - 0.12, obj[1], 0.0)
+        assert run_in_actor(rt, lambda: table._corridor_clear(standoff, obj, reach, []))
+    # a hand that reaches only 0.12 m would drive the base into the table
+    assert not run_in_actor(rt, lambda: table._corridor_clear((1.6, 1.5, 0.0), (2.05, 1.5), 0.12, []))
