@@ -277,16 +277,16 @@ class RetryNode(_ParamDecorator):
 
     def initialise(self) -> None:
         self.attempts = 0
-        self.limit, self.error = _number(self.times, self.ctx, "retry times", integer=True)
+        self.limit, self.error = _number(self.times, self.ctx, "retry times", integer=True, allow_none=True)
 
     def update(self) -> Status:
         status = self.decorated.status
         if status is Status.FAILURE:
             self.attempts += 1
-            if self.attempts >= self.limit:
+            if self.limit is not None and self.attempts >= self.limit:
                 self.feedback_message = f"failed {self.attempts} of {self.limit} attempts"
                 return Status.FAILURE
-            self.feedback_message = f"attempt {self.attempts + 1} of {self.limit}"
+            self.feedback_message = f"attempt {self.attempts + 1} of {self.limit or 'unlimited'}"
             self.ctx.wake()  # the child restarts on the next tick
             return Status.RUNNING
         return status

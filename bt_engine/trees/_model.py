@@ -26,6 +26,7 @@ __all__ = [
     "Do",
     "ForceFailure",
     "ForceSuccess",
+    "IfThenElse",
     "InputSpec",
     "Invert",
     "Mission",
@@ -33,11 +34,17 @@ __all__ = [
     "OutputSpec",
     "Parallel",
     "ParallelPolicy",
+    "PipelineSequence",
+    "RateController",
     "ReactiveSelector",
     "ReactiveSequence",
+    "Recovery",
     "Ref",
     "Repeat",
+    "ResumeSequence",
     "Retry",
+    "RunOnce",
+    "RunOnceThen",
     "Selector",
     "Sequence",
     "SetValues",
@@ -45,6 +52,7 @@ __all__ = [
     "UseBehaviour",
     "ValueType",
     "Wait",
+    "WhileDoElse",
     "children_of",
     "refs_in",
     "resolve_value",
@@ -283,6 +291,63 @@ class Parallel(Composite):
     kind: ClassVar[str] = "parallel"
     policy: ParallelPolicy = ParallelPolicy.SUCCESS_ON_ALL
     selected: tuple[str, ...] = ()
+    success_count: int | None = None
+    failure_count: int | None = None
+
+    @property
+    def counted(self) -> bool:
+        """Whether it counts successes and failures (``success_count``/``failure_count``)
+        instead of following a policy."""
+        return self.success_count is not None or self.failure_count is not None
+
+
+@dataclass(frozen=True, eq=False, kw_only=True)
+class ResumeSequence(Composite):
+    """A sequence that, after a failure, resumes at the child that failed instead of
+    starting over (BehaviorTree.CPP's SequenceWithMemory); it starts over after a
+    success."""
+
+    kind: ClassVar[str] = "resume_sequence"
+
+
+@dataclass(frozen=True, eq=False, kw_only=True)
+class PipelineSequence(Composite):
+    """Every tick, ticks the children from the first up to the furthest one reached: a
+    child that succeeded is ticked (so restarted) again while a later one runs (Nav2's
+    PipelineSequence). Fails as soon as one fails; succeeds when all succeed in one
+    tick."""
+
+    kind: ClassVar[str] = "pipeline_sequence"
+
+
+@dataclass(frozen=True, eq=False, kw_only=True)
+class IfThenElse(Composite):
+    """Two or three children: the first decides, once, which of the others runs (the
+    second on success, the third on failure; without a third, failure). The condition
+    is not ticked again while the chosen branch runs."""
+
+    kind: ClassVar[str] = "if_then_else"
+
+
+@dataclass(frozen=True, eq=False, kw_only=True)
+class WhileDoElse(Composite):
+    """Like ``if_then_else``, but the condition is ticked again on every tick: when its
+    outcome changes, the running branch is halted and the other one starts."""
+
+    kind: ClassVar[str] = "while_do_else"
+
+
+@dataclass(frozen=True, eq=False, kw_only=True)
+class Recovery(Composite):
+    """Two children: the action and its recovery (Nav2's RecoveryNode). When the action
+    fails, the recovery runs; if it succeeds the action is tried again, at most
+    ``retries`` times. Fails when the recovery fails or the retries are used up."""
+
+    kind: ClassVar[str] = "recovery"
+    retries: int | Ref = 1
+
+    def default_label(self) -> str:
+        return f"recovery x{self.retries}"
 
 
 @dataclass(frozen=True, eq=False, kw_only=True)
@@ -294,13 +359,14 @@ class Decorator(Node):
 
 @dataclass(frozen=True, eq=False, kw_only=True)
 class Retry(Decorator):
-    """Run the child up to ``times`` attempts in all, until it succeeds."""
+    """Run the child up to ``times`` attempts in all (``None``: no limit), until it
+    succeeds."""
 
     kind: ClassVar[str] = "retry"
-    times: int | Ref
+    times: int | Ref | None
 
     def default_label(self) -> str:
-        return f"retry x{self.times}"
+        return "retry forever" if self.times is None else f"retry x{self.times}"
 
 
 @dataclass(frozen=True, eq=False, kw_only=True)
@@ -325,6 +391,39 @@ class Timeout(Decorator):
 
     def default_label(self) -> str:
         return f"timeout {self.seconds}s"
+
+
+@dataclass(frozen=True, eq=False, kw_only=True)
+class RateController(Decorator):
+    """Tick the child at most ``hz`` times a second (Nav2's RateController): after the
+    child succeeds, the node is RUNNING until the period has passed, then ticks the
+    child again. A running child is ticked on every tick."""
+
+    kind: ClassVar[str] = "rate_controller"
+    hz: float | Ref
+
+    def default_label(self) -> str:
+        return f"rate {self.hz} Hz"
+
+
+class RunOnceThen(enum.Enum):
+    """What a ``run_once`` node returns after its child has finished once."""
+
+    SAME = "same"
+    """The status the child finished with."""
+    SUCCESS = "success"
+    """Success."""
+    FAILURE = "failure"
+    """Failure."""
+
+
+@dataclass(frozen=True, eq=False, kw_only=True)
+class RunOnce(Decorator):
+    """Tick the child until it finishes, once per run; afterwards return ``then``
+    without ticking it."""
+
+    kind: ClassVar[str] = "run_once"
+    then: RunOnceThen = RunOnceThen.SAME
 
 
 @dataclass(frozen=True, eq=False, kw_only=True)

@@ -34,17 +34,24 @@ from ._model import (
     ForceFailure,
     ForceSuccess,
     InputSpec,
+    IfThenElse,
     Invert,
     Mission,
     Node,
     OutputSpec,
     Parallel,
     ParallelPolicy,
+    PipelineSequence,
+    RateController,
     ReactiveSelector,
     ReactiveSequence,
+    Recovery,
     Ref,
     Repeat,
+    ResumeSequence,
     Retry,
+    RunOnce,
+    RunOnceThen,
     Selector,
     Sequence,
     SetValues,
@@ -52,6 +59,7 @@ from ._model import (
     UseBehaviour,
     ValueType,
     Wait,
+    WhileDoElse,
 )
 from ._yaml import YMap, YNode, YScalar, YSeq, parse_yaml, plain
 
@@ -72,9 +80,24 @@ _COMPOSITES: dict[str, type[Composite]] = {
     "reactive_selector": ReactiveSelector,
     "reactive_fallback": ReactiveSelector,
     "parallel": Parallel,
+    "resume_sequence": ResumeSequence,
+    "pipeline_sequence": PipelineSequence,
+    "if_then_else": IfThenElse,
+    "while_do_else": WhileDoElse,
+    "recovery": Recovery,
 }
 _SIMPLE_DECORATORS = {"invert": Invert, "force_success": ForceSuccess, "force_failure": ForceFailure}
-_DECORATOR_FIELDS = {"retry": ("times", "child"), "repeat": ("times", "child"), "timeout": ("seconds", "child")}
+_DECORATOR_FIELDS = {"retry": ("times", "child"), "repeat": ("times", "child"), "timeout": ("seconds", "child"),
+                     "rate_controller": ("hz", "child"), "run_once": ("then", "child")}
+_DECORATOR_EXAMPLES = {
+    "retry": "{times: 3, child: {do: pick}}",
+    "repeat": "{times: 2, child: {do: scan}}",
+    "timeout": "{seconds: 20, child: {do: arm_home}}",
+    "rate_controller": "{hz: 1.0, child: {do: plan_path}}",
+    "run_once": "{then: success, child: {do: calibrate}}",
+}
+# composites whose children are a condition and one or two branches
+_BRANCHING = ("if_then_else", "while_do_else")
 _LEAVES = ("do", "set", "check", "wait", "behaviour")
 
 #: Every node type keyword, in the order the docs list them.
@@ -156,7 +179,7 @@ class _Parser:
             ref = self.ref(node)
             if ref is not None:
                 return ref
-        expected = "an integer" if integer else "a number"
+        expected = base = "an integer" if integer else "a number"
         if words:
             expected += " or " + " or ".join(repr(w) for w in words)
         value = node.value if isinstance(node, YScalar) else None
@@ -164,7 +187,7 @@ class _Parser:
         if not isinstance(node, YScalar) or isinstance(value, bool) or not isinstance(value, ok_types):
             raise InvalidValueError(node.pos, f"{what} must be {expected} or a \"{{key}}\" reference, got {_kind(node)}")
         if value < minimum or value != value:  # NaN
-            raise InvalidValueError(node.pos, f"{what} is {value!r}, expected {expected} >= {minimum:g}")
+            raise InvalidValueError(node.pos, f"{what} is {value!r}, expected {base} >= {minimum:g}")
         return value
 
     # ------------------------------------------------------------ values and references
@@ -379,15 +402,26 @@ class _Parser:
         return children
 
     def composite(self, kind: str, value: YNode, common: dict[str, Any]) -> Node:
+        if kind == "recovery":
+            return self.recovery(value, common)
+        if kind in _BRANCHING:
+            children = self.children(kind, value)
+            if len(children) not in (2, 3):
+                raise InvalidValueError(
+                    value.pos, f"{kind} has {len(children)} children, expected 2 or 3: the condition, what runs when it "
+                    "succeeds and, optionally, what runs when it fails")
+            return _COMPOSITES[kind](children=children, **common)
         if kind != "parallel":
             return _COMPOSITES[kind](children=self.children(kind, value), **common)
         if isinstance(value, YSeq):
             return Parallel(children=self.children(kind, value), **common)
         m = self.mapping(value, "parallel", "{policy: success_on_one, children: [...]}")
-        self.check_fields(m, ("policy", "children", "selected"), "parallel")
+        self.check_fields(m, ("policy", "children", "selected", "success_count", "failure_count"), "parallel")
         if "children" not in m:
             raise InvalidValueError(m.pos, "parallel has no 'children', expected a list of child nodes")
         children = self.children(kind, m.get("children"))
+        if "success_count" in m or "failure_count" in m:
+            return self.counted_parallel(m, children, common)
         policy = ParallelPolicy.SUCCESS_ON_ALL
         policy_node = m.get("policy")
         if policy_node is not None:
@@ -426,10 +460,47 @@ class _Parser:
             )
         return Parallel(children=children, policy=policy, selected=tuple(selected), **common)
 
+    def counted_parallel(self, m: YMap, children: tuple[Node, ...], common: dict[str, Any]) -> Node:
+        for other in ("policy", "selected"):
+            if other in m:
+                raise InvalidValueError(
+                    m.get(other).pos, f"parallel takes either {other!r} or success_count/failure_count, not both")
+        n = len(children)
+        counts: dict[str, int] = {}
+        for field_name in ("success_count", "failure_count"):
+            node = m.get(field_name)
+            if node is None:
+                continue
+            value = node.value if isinstance(node, YScalar) else None
+            if isinstance(value, bool) or not isinstance(value, int) or value == 0 or not -n <= value <= n:
+                raise InvalidValueError(
+                    node.pos, f"parallel {field_name} is {_kind(node)}, expected an integer from 1 to {n} (the number "
+                    f"of children), or from -1 to -{n} to count from all of them (-1: all)")
+            counts[field_name] = value
+        return Parallel(children=children, success_count=counts.get("success_count", -1),
+                        failure_count=counts.get("failure_count", 1), **common)
+
+    def recovery(self, value: YNode, common: dict[str, Any]) -> Node:
+        example = "{retries: 2, children: [{do: follow_path}, {do: clear_costmap}]}"
+        m = self.mapping(value, "recovery", example)
+        self.check_fields(m, ("retries", "children"), "recovery")
+        if "children" not in m:
+            raise InvalidValueError(m.pos, f"recovery has no 'children', expected e.g. recovery: {example}")
+        children = self.children("recovery", m.get("children"))
+        if len(children) != 2:
+            raise InvalidValueError(
+                m.get("children").pos, f"recovery has {len(children)} children, expected 2: the action and its recovery")
+        common["field_pos"] = dict(common["field_pos"]) | {k.raw: v.pos for k, v in m.items}
+        retries_node = m.get("retries")
+        retries = 1 if retries_node is None else self.number(
+            retries_node, "recovery retries", integer=True, minimum=0)
+        return Recovery(children=children, retries=retries, **common)
+
     def decorator(self, kind: str, value: YNode, common: dict[str, Any]) -> Node:
         param = _DECORATOR_FIELDS[kind][0]
-        example = {"retry": "{times: 3, child: {do: pick}}", "repeat": "{times: 2, child: {do: scan}}",
-                   "timeout": "{seconds: 20, child: {do: arm_home}}"}[kind]
+        example = _DECORATOR_EXAMPLES[kind]
+        if kind == "run_once" and not (isinstance(value, YMap) and "child" in value):
+            return RunOnce(child=self.node(value), **common)
         m = self.mapping(value, kind, example)
         self.check_fields(m, _DECORATOR_FIELDS[kind], kind)
         if "child" not in m:
@@ -442,10 +513,27 @@ class _Parser:
                 param_node, "repeat times", integer=True, minimum=1, words={"forever": None}
             )
             return Repeat(child=child, times=times, **common)
+        if kind == "run_once":
+            then = RunOnceThen.SAME
+            if param_node is not None:
+                text = self.string(param_node, "run_once then")
+                names = [t.value for t in RunOnceThen]
+                if text not in names:
+                    raise InvalidValueError(
+                        param_node.pos, f"run_once then is {shorten(text)}{suggest(text, names)}, expected one of: "
+                        f"{', '.join(names)}")
+                then = RunOnceThen(text)
+            return RunOnce(child=child, then=then, **common)
         if param_node is None:
             raise InvalidValueError(m.pos, f"{kind} has no {param!r}, expected e.g. {kind}: {example}")
         if kind == "retry":
-            return Retry(child=child, times=self.number(param_node, "retry times", integer=True, minimum=1), **common)
+            times = self.number(param_node, "retry times", integer=True, minimum=1, words={"forever": None})
+            return Retry(child=child, times=times, **common)
+        if kind == "rate_controller":
+            hz = self.number(param_node, "rate_controller hz", integer=False, minimum=0)
+            if hz == 0:
+                raise InvalidValueError(param_node.pos, "rate_controller hz is 0, expected a number > 0")
+            return RateController(child=child, hz=hz, **common)
         seconds = self.number(param_node, "timeout seconds", integer=False, minimum=0)
         if seconds == 0:
             raise InvalidValueError(param_node.pos, "timeout seconds is 0, expected a number > 0")

@@ -18,27 +18,36 @@ from py_trees.common import Status
 from ..signal import Signal
 from ._behaviours import ActorLeaf, CheckLeaf, RepeatNode, RetryNode, SetLeaf, TimeoutNode, WaitLeaf
 from ._blackboard import RunBlackboard
+from ._controls import (CountingParallel, IfThenElseNode, PipelineSequenceNode, RateControllerNode, RecoveryNode,
+                        ResumeSequenceNode, RunOnceNode, WhileDoElseNode)
 from ._errors import TreeFailure
 from ._model import (
     Check,
     Do,
     ForceFailure,
     ForceSuccess,
+    IfThenElse,
     Invert,
     Mission,
     Node,
     Parallel,
     ParallelPolicy,
+    PipelineSequence,
+    RateController,
     ReactiveSelector,
     ReactiveSequence,
+    Recovery,
     Repeat,
+    ResumeSequence,
     Retry,
+    RunOnce,
     Selector,
     Sequence,
     SetValues,
     Timeout,
     UseBehaviour,
     Wait,
+    WhileDoElse,
     children_of,
     resolve_value,
     walk,
@@ -221,8 +230,24 @@ class TreeRun:
             b = py_trees.composites.Selector(label, memory=False, children=kids)
         elif isinstance(node, Selector):
             b = py_trees.composites.Selector(label, memory=True, children=kids)
+        elif isinstance(node, Parallel) and node.counted:
+            b = CountingParallel(label, kids, node.success_count or -1, node.failure_count or 1)
         elif isinstance(node, Parallel):
             b = py_trees.composites.Parallel(label, policy=self._policy(node, kids), children=kids)
+        elif isinstance(node, ResumeSequence):
+            b = ResumeSequenceNode(label, kids)
+        elif isinstance(node, PipelineSequence):
+            b = PipelineSequenceNode(label, kids)
+        elif isinstance(node, IfThenElse):
+            b = IfThenElseNode(label, kids)
+        elif isinstance(node, WhileDoElse):
+            b = WhileDoElseNode(label, kids)
+        elif isinstance(node, Recovery):
+            b = RecoveryNode(label, self, kids, node.retries)
+        elif isinstance(node, RateController):
+            b = RateControllerNode(label, self, kids[0], node.hz)
+        elif isinstance(node, RunOnce):
+            b = RunOnceNode(label, kids[0], node.then)
         elif isinstance(node, Retry):
             b = RetryNode(label, self, kids[0], node.times)
         elif isinstance(node, Repeat):

@@ -21,14 +21,19 @@ from ._model import (
     Do,
     Mission,
     Node,
+    IfThenElse,
     Parallel,
+    PipelineSequence,
     ReactiveSelector,
     ReactiveSequence,
+    Recovery,
+    ResumeSequence,
     Selector,
     Sequence,
     SetValues,
     UseBehaviour,
     Wait,
+    WhileDoElse,
     children_of,
 )
 
@@ -61,6 +66,8 @@ def describe(node: Node) -> str:
         return f"wait {node.seconds}s"
     if isinstance(node, UseBehaviour):
         return f"behaviour {node.behaviour}"
+    if isinstance(node, Parallel) and node.counted:
+        return f"parallel success_count={node.success_count} failure_count={node.failure_count}"
     if isinstance(node, Parallel):
         selected = f" {list(node.selected)}" if node.selected else ""
         return f"parallel {node.policy.value}{selected}"
@@ -91,11 +98,15 @@ def ascii_tree(mission: Mission) -> str:
 
 
 #: node attributes by node class, first match wins; ``label`` is a format for the text
-_STYLES: list[tuple[type, dict[str, str]]] = [
+_STYLES: list[tuple[type | tuple[type, ...], dict[str, str]]] = [
     (ReactiveSequence, {"shape": "box", "style": "rounded,filled", "fillcolor": "#fde9c8", "label": "⟳→ {}"}),
     (Sequence, {"shape": "box", "style": "filled", "fillcolor": "#fde9c8", "label": "→ {}"}),
     (ReactiveSelector, {"shape": "octagon", "style": "filled", "fillcolor": "#d4e8fc", "label": "⟳? {}"}),
     (Selector, {"shape": "octagon", "style": "filled", "fillcolor": "#d4e8fc", "label": "? {}"}),
+    (ResumeSequence, {"shape": "box", "style": "filled", "fillcolor": "#fde9c8", "label": "→| {}"}),
+    (PipelineSequence, {"shape": "box", "style": "filled", "fillcolor": "#fde9c8", "label": "⇶ {}"}),
+    ((IfThenElse, WhileDoElse), {"shape": "diamond", "style": "filled", "fillcolor": "#d4e8fc", "label": "{}"}),
+    (Recovery, {"shape": "octagon", "style": "filled", "fillcolor": "#fbd5d5", "label": "↺ {}"}),
     (Parallel, {"shape": "parallelogram", "style": "filled", "fillcolor": "#e3d7f5", "label": "⇉ {}"}),
     (Decorator, {"shape": "ellipse", "style": "filled", "fillcolor": "#eeeeee", "label": "{}"}),
     (Do, {"shape": "box", "style": "rounded,filled", "fillcolor": "#d8f3d8", "label": "{}"}),

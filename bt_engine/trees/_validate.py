@@ -29,6 +29,8 @@ from ._model import (
     Check,
     Do,
     Mission,
+    RateController,
+    Recovery,
     Ref,
     Repeat,
     Retry,
@@ -167,6 +169,10 @@ class _Validator:
                 self.check_number(node.seconds, ValueType.FLOAT, "timeout seconds")
             elif isinstance(node, (Retry, Repeat)):
                 self.check_number(node.times, ValueType.INT, f"{node.kind} times")
+            elif isinstance(node, Recovery):
+                self.check_number(node.retries, ValueType.INT, "recovery retries")
+            elif isinstance(node, RateController):
+                self.check_number(node.hz, ValueType.FLOAT, "rate_controller hz")
             elif isinstance(node, UseBehaviour):
                 self.check_behaviour(node)
         for spec in self.mission.outputs:
