@@ -30,8 +30,16 @@ TEST_LIFT = 0.02            # first, short lift that checks the grip [m]
 GENTLE_RELEASE = 0.006      # first opening step past the held width when letting go [m]
 DRIVE_IN_TOLERANCE = 0.015  # how close the drive around an object must end [m]: the
 #                             fingers are 70 mm long
-PLACE_INSET = 0.12          # how far inside a surface's edge the object is put down [m]
+PLACE_INSET = 0.12          # how far inside a surface's edge the object is put down [m],
+#                             at most: a hand of short reach (from above) puts it nearer
+PLACE_STANDOFF = 0.39       # the base stops at least this far from where it puts an
+#                             object down before driving in [m]: room to turn (the
+#                             upright grasp's standoff; a grasp from above reaches less)
 NEW_VIEW = math.radians(25) # after a failed grasp, headings this close to it come last
+PUSHED = 0.45               # a failed grasp may push the object this far [m]
+LOOK_AROUND = math.radians(35)  # after a failed grasp, also look this far to either side
+ASIDE = (math.radians(45), math.radians(-45))  # headings, relative to a lying body's axis,
+#                             of the closer look at it
 
 
 class GraspError(ActorbtError):
@@ -86,6 +94,24 @@ def _grasp_xy(target: dict, plan: GraspPlan) -> tuple[float, float]:
     return base[0] + t * up[0], base[1] + t * up[1]
 
 
+def _ends_swapped(a: dict, b: dict) -> bool:
+    """Do two sightings of a lying body take its base and top for each other?"""
+    ua, ub = a.get("axis_dir"), b.get("axis_dir")
+    if a.get("pose") != "lying" or b.get("pose") != "lying" or not ua or not ub:
+        return False
+    return ua[0] * ub[0] + ua[1] * ub[1] + ua[2] * ub[2] < 0
+
+
+def _object_yaw(target: dict, plan: GraspPlan) -> float | None:
+    """The direction the plan's ``sides`` are relative to: the target's ``yaw``; for a plan
+    that comes from one side only, the direction from the object's base to its top (a
+    lying body's ``yaw`` is its axis's, either way)."""
+    up = target.get("axis_dir")
+    if plan.one_way and up and math.hypot(up[0], up[1]) > 0.3:
+        return math.atan2(up[1], up[0])
+    return target.get("yaw")
+
+
 def fresh_views_first(poses: list[tuple[float, float, float]], xy: tuple[float, float],
                       failed_views: list[tuple[float, float, float]]) -> list[tuple[float, float, float]]:
     """Standoff ``poses`` (x, y, heading) with those within NEW_VIEW of the heading of a
@@ -115,6 +141,8 @@ class Catcher(SubSystem):
         self.set_value("holding", None)
         self.set_value("held_plan", None)       # the GraspPlan the held object was picked with
         self.set_value("failed_views", [])   # (x, y, heading) of grasps that failed
+        self.set_value("moved_to", None)     # (was x, y; the detection seen after): where
+        #                                      a failed grasp left the object
 
     def _fresh_views_first(self, poses: list[tuple[float, float, float]],
                            xy: tuple[float, float]) -> list[tuple[float, float, float]]:
@@ -123,6 +151,36 @@ class Catcher(SubSystem):
     def _remember_failed_view(self, xy: tuple[float, float]) -> None:
         _, _, yaw = self.run_actor("get_pose")
         self.set_value("failed_views", self.get_value("failed_views")[-9:] + [(xy[0], xy[1], yaw)])
+
+    def _look_for_it(self, xy: tuple[float, float], category: str) -> None:
+        """After a failed grasp of the object at ``xy`` (the base backed off, facing it):
+        find where the grasp left it, looking ahead and to either side, and remember it
+        for the next approach, which then starts from there (``moved_to``)."""
+        if not self.check_actor("object_glance"):
+            return
+        turned = 0.0
+        for turn in (0.0, LOOK_AROUND, -2 * LOOK_AROUND):
+            if turn:
+                self.run_actor("mini_turn", turn)
+                turned += turn
+            near = [d for d in self.run_actor("object_glance")
+                    if d["category"] == category and math.dist((d["x"], d["y"]), xy) <= PUSHED]
+            if near:
+                seen = min(near, key=lambda d: math.dist((d["x"], d["y"]), xy))
+                self.set_value("moved_to", (xy, seen))
+                break
+        if turned:
+            self.run_actor("mini_turn", -turned)
+
+    def _where_now(self, target: dict) -> dict:
+        """``target``, or where a failed grasp of it left it (see ``_look_for_it``)."""
+        moved = self.get_value("moved_to")
+        if moved is None:
+            return target
+        was, seen = moved
+        if math.dist(was, _target_xy(target)) > PUSHED:   # another object
+            return target
+        return {**target, **seen}
 
     def _strategy(self, target: Any, category: str | None) -> Strategy:
         cat = category or (target.get("category") if isinstance(target, dict) else None)
@@ -197,6 +255,8 @@ class Catcher(SubSystem):
             return target
         if math.dist(_target_xy(seen), _target_xy(target)) > 0.3:
             return target  # a different object came into view: keep ours
+        if _ends_swapped(seen, target) and seen.get("confidence", 0.0) < target.get("confidence", 0.0):
+            return target  # seen nearly end on, its base and top taken for each other
         return {**target, **seen}
 
     @actor
@@ -218,6 +278,7 @@ class Catcher(SubSystem):
         """
         strategy = self._strategy(target, category)
         cat = strategy.category
+        target = self._where_now(target)
         xy = _target_xy(target)
         look = strategy.approach.look_distance
         plan = self._plan(strategy, target)
@@ -234,12 +295,15 @@ class Catcher(SubSystem):
                 if not look or math.dist((rx, ry), xy) <= look + 0.3:
                     continue  # close enough already
                 extra = look - plan.reach - strategy.approach.standoff
+                look_plan = plan
+                if target.get("pose") == "lying":   # seen end on, it is often missed or
+                    look_plan = replace(plan, sides=ASIDE, one_way=False)   # its ends mistaken
                 poses = self._free_standoff((rx, ry), xy, strategy, extra, others,
-                                            object_yaw=target.get("yaw"), plan=plan)
+                                            object_yaw=target.get("yaw"), plan=look_plan)
             else:
                 plan = self._plan(strategy, target)    # the close look may see it otherwise
                 poses = self._free_standoff((rx, ry), xy, strategy, others=others,
-                                            object_yaw=target.get("yaw"), plan=plan)
+                                            object_yaw=_object_yaw(target, plan), plan=plan)
             self._goto_first(self._fresh_views_first(poses, xy), xy)
         self._face(xy, strategy)
         # a last look from the standoff, the nearest and most precise one: the way here
@@ -254,7 +318,8 @@ class Catcher(SubSystem):
         """The grasp for the target's pose (``pose`` as perception reports it: upright,
         lying or tilted); GraspError when the category has none for it."""
         pose = target.get("pose") or "upright"
-        plan = strategy.plan_for(pose)
+        width = target.get("width")
+        plan = strategy.plan_for(pose, float(width) if isinstance(width, (int, float)) else None)
         if plan is None:
             raise GraspError(f"the {strategy.category} strategy has no grasp for an object {pose}")
         return plan
@@ -304,6 +369,7 @@ class Catcher(SubSystem):
         if not _holds(g, grip):
             self._remember_failed_view(xy)
             self._back_off(driven, g)
+            self._look_for_it(xy, strategy.category)
             raise GraspError(f"{strategy.category} grasp missed: {_grip_text(grip)}, expected "
                              f"them to stall on it at {g.closed_min * 1000:.0f}.."
                              f"{g.closed_max * 1000:.0f} mm")
@@ -315,12 +381,14 @@ class Catcher(SubSystem):
             if not _holds(g, grip):
                 self._remember_failed_view(xy)
                 self._back_off(driven, g)
+                self._look_for_it(xy, strategy.category)
                 raise GraspError(f"{strategy.category} slipped out while lifting "
                                  f"({_grip_text(grip)})")
         held = {"category": strategy.category, "width": grip["width"],
                 "pose": target.get("pose") or "upright"}
         self.set_value("holding", held)
         self.set_value("held_plan", g)
+        self.set_value("moved_to", None)
         return held
 
     @actor
@@ -383,7 +451,7 @@ class Catcher(SubSystem):
             sx, sy, syaw = self._free_standoff((rx, ry), (x, y), strategy, corridor=False,
                                                plan=replace(g, sides=()))[0]
         else:
-            d = g.reach + a.standoff
+            d = max(g.reach + a.standoff, PLACE_STANDOFF)
             sx, sy, syaw = x - d * math.cos(heading), y - d * math.sin(heading), heading
         self.run_actor("goto", sx, sy, syaw)
         release_z = surface + g.height + RELEASE_CLEARANCE
@@ -425,11 +493,14 @@ class Catcher(SubSystem):
         held = self.get_value("holding")
         if not held:
             raise GraspError("place_on: nothing is held")
-        standoff = self.get_value("held_plan").reach + strategy_for(held["category"]).approach.standoff
+        plan = self.get_value("held_plan")
+        standoff = max(plan.reach + strategy_for(held["category"]).approach.standoff, PLACE_STANDOFF)
+        # the base's front stops short of the surface's edge
+        inset = min(PLACE_INSET, plan.reach - BASE_OUTLINE[1] - BASE_MARGIN)
         rx, ry, _ = self.run_actor("get_pose")
         sides = []
         for nx, ny, half in ((1, 0, size_x / 2), (-1, 0, size_x / 2), (0, 1, size_y / 2), (0, -1, size_y / 2)):
-            px, py = x + nx * (half - PLACE_INSET), y + ny * (half - PLACE_INSET)
+            px, py = x + nx * (half - inset), y + ny * (half - inset)
             heading = math.atan2(-ny, -nx)  # facing the surface across this edge
             sx, sy = px - standoff * math.cos(heading), py - standoff * math.sin(heading)
             sides.append((math.hypot(sx - rx, sy - ry), px, py, heading, sx, sy))

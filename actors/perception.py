@@ -788,13 +788,25 @@ def _box_centre(xy: np.ndarray, ray: np.ndarray) -> np.ndarray:
 
 
 def _score_box(seg: _Segment, app: Appearance) -> tuple[float, dict]:
-    """Confidence that ``seg`` is the box ``app`` from its measured dimensions: its height
-    above the support, and the lengths of the faces seen from above (one face: its length
-    is the box's x or y; two: both). Returns the evidence with the box's centre (``axis``)
-    and ``yaw``, the map-frame direction of its x side in (-pi/2, pi/2]."""
+    """Confidence that ``seg`` is the box ``app`` resting on any face (``Box.rests``),
+    and the evidence of the face that fits best, with its ``pose``."""
     if seg.colour != app.colour:
         return 0.0, {"reason": "colour"}
-    bx, by, bz = app.box
+    best = (0.0, {"reason": "body not visible"})
+    for pose, sides, height in categories.Box(*app.box).rests():
+        conf, ev = _score_box_resting(seg, sides, height)
+        if conf > best[0] or "reason" in best[1]:
+            best = (conf, {**ev, "pose": pose, "width": min(sides)} if "reason" not in ev else ev)
+    return best
+
+
+def _score_box_resting(seg: _Segment, sides: tuple[float, float], bz: float) -> tuple[float, dict]:
+    """Confidence that ``seg`` is a box whose top-view sides are ``sides`` and whose height
+    is ``bz``, from its measured dimensions: its height above the support, and the lengths
+    of the faces seen from above (one face: its length is either side; two: both). Returns
+    the evidence with the box's centre (``axis``) and ``yaw``, the map-frame direction of
+    its first side in (-pi/2, pi/2]."""
+    bx, by = sides
     px = seg.m_per_px
     tol_w = max(0.008, 1.6 * px)
     tol_h = max(0.006, 1.5 * px)
@@ -891,7 +903,7 @@ def detect(frame: RGBDFrame, appearances: dict[str, Appearance] | None = None) -
                   if app is None or hm < app.body_top]
         width = float(np.median(widths)) if widths else 2 * r
         if app is not None and (seg.cut("left") or seg.cut("right") or evidence.get("pose", "upright") != "upright"):
-            width = 2 * r                              # partly out of view: the model's width
+            width = evidence.get("width", 2 * r)       # partly out of view: the model's width
         if app is None and (width > MAX_UNKNOWN_SIZE[0] or seg.height > MAX_UNKNOWN_SIZE[1]
                             or seg.in_structure > 0.5):
             continue                                   # a wall, furniture (or a patch of it)

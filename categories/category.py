@@ -31,8 +31,8 @@ class Category:
         description: one line for humans (``actorbt`` lists it).
         min_confidence: how sure perception must be to call a segment this category.
         label: a printed label around the body, or None (drawn in worlds with labels).
-        top_grasp: how it is held from above when lying on its side (bodies of
-            revolution; the defaults fit a can or a bottle).
+        top_grasp: how it is held from above when lying on its side (the defaults fit
+            a can, a bottle or a carton).
     """
 
     name: str
@@ -83,18 +83,23 @@ class Category:
                 if self.shape.width_across(h) <= self.grasp.open_width - FINGER_MARGIN]
         return tuple(h for _, h in sorted(fits))
 
-    def lying_plan(self) -> GraspPlan | None:
-        """The grasp of the body lying on its side, from above across its body (a body of
-        revolution); None for a box (lying, it is a box on another face)."""
-        if not isinstance(self.shape, Revolution):
-            return None
-        t, r = self.top_grasp, self.shape.body_radius
-        width = 2 * r
-        if width > self.grasp.open_width - FINGER_MARGIN:
-            return None
-        return GraspPlan(reach=t.reach, height=r + t.above_axis, pitch=math.pi / 2,
-                         open_width=self.grasp.open_width, closed_min=width - t.slack[0],
-                         closed_max=width + t.slack[1], lift=t.lift, sides=(0.0,))
+    def lying_plans(self) -> tuple[GraspPlan, ...]:
+        """How it is held lying on its side, from above, the fingers closing across it: a
+        body of revolution across its body; a box across the face it shows from above,
+        one plan per face it may lie on (``Box.rests``) that fits the hand."""
+        t = self.top_grasp
+        if isinstance(self.shape, Revolution):
+            r = self.shape.body_radius
+            # held at the middle of its body; a body with a neck is approached from its
+            # base end, or the base, driving in, would push the longer end ahead of it
+            faces = [(2 * r, r, len(self.shape.sections) > 1)]  # (width across, axis height, one way)
+        else:
+            faces = [(across, height / 2, False) for pose, (_, across), height in self.shape.rests()
+                     if pose == "lying"]
+        return tuple(GraspPlan(reach=t.reach, height=mid + t.above_axis, pitch=math.pi / 2,
+                               open_width=self.grasp.open_width, closed_min=width - t.slack[0],
+                               closed_max=width + t.slack[1], lift=t.lift, sides=(0.0,), one_way=one_way)
+                     for width, mid, one_way in faces if width <= self.grasp.open_width - FINGER_MARGIN)
 
     @property
     def strategy(self) -> Strategy:
@@ -102,4 +107,4 @@ class Category:
         size = self.shape.height if isinstance(self.shape, Revolution) else \
             max(self.shape.x, self.shape.y, self.shape.z)
         return Strategy(self.name, self.approach, self.grasp, self.description, sides,
-                        self.lying_plan(), size)
+                        self.lying_plans(), size)

@@ -109,6 +109,17 @@ class Box:
         c, s = abs(math.cos(heading)), abs(math.sin(heading))
         return self.y * c + self.x * s
 
+    def rests(self) -> list[tuple[str, tuple[float, float], float]]:
+        """The ways the box rests on a flat support: (pose, its top-view sides, height).
+        ``upright`` stands on its x-y face, sides (x, y). ``lying`` lies on a face along z,
+        its z side horizontal and named first (as a lying body's axis), then the side the
+        fingers close across from above."""
+        out = [("upright", (self.x, self.y), self.z)]
+        for across, height in ((self.x, self.y), (self.y, self.x)):
+            if not any(math.isclose(height, h) and math.isclose(across, min(f)) for _, f, h in out):
+                out.append(("lying", (self.z, across), height))
+        return out
+
     def parts(self) -> tuple:
         return (("box", (self.x, self.y, self.z), 0.0),)
 

@@ -56,14 +56,15 @@ class Grasp:
 @dataclass(frozen=True)
 class TopGrasp:
     """How an object lying on its side is held: from above, the hand pointing down, the
-    fingers closing across the body while the base faces along the object's axis (the
-    arm has no wrist roll, so the fingers always close across the base's heading).
+    fingers closing across the body while the base faces along the object's axis (a
+    box's long side; the arm has no wrist roll, so the fingers always close across the
+    base's heading).
 
     Attributes:
         reach: tool position ahead of base_footprint while grasping [m]; pointing down,
             the arm reaches 0.10..0.22 m.
-        above_axis: tool height above the lying body's axis [m]: the finger pads span the
-            axis and the fingertips stay clear of the floor.
+        above_axis: tool height above the lying body's axis (a box: the middle of its
+            height) [m]: the finger pads span it and the fingertips stay clear of the floor.
         lift: how far to lift after closing [m].
         slack: the fingers stalled between the body's width minus the first and plus
             the second [m] mean it is held.
@@ -94,6 +95,11 @@ class GraspPlan:
     def holding(self, closed_width: float) -> bool:
         return self.closed_min <= closed_width <= self.closed_max
 
+    @property
+    def across(self) -> float:
+        """The width the fingers close on [m], from the range that means holding it."""
+        return 0.5 * (self.closed_min + self.closed_max)
+
 
 #: an object's sides the hand may come from: any (round objects)
 ANY_SIDE: tuple[float, ...] = ()
@@ -112,7 +118,8 @@ class Strategy:
     grasp: Grasp
     description: str = ""
     sides: tuple[float, ...] = ANY_SIDE
-    lying: GraspPlan | None = None      # how it is held when lying on its side, if at all
+    lying: tuple[GraspPlan, ...] = ()   # how it is held lying on its side: one per face
+    #                                     it may lie on (a box's differ in width), or none
     length: float = 0.0                 # the object's largest extent [m]
 
     @property
@@ -121,14 +128,21 @@ class Strategy:
         return GraspPlan(self.approach.reach, g.height, g.pitch, g.open_width, g.closed_min,
                          g.closed_max, g.lift, self.sides)
 
-    def plan_for(self, pose: str | None) -> GraspPlan | None:
+    def plan_for(self, pose: str | None, width: float | None = None) -> GraspPlan | None:
         """The grasp for an object standing ``upright`` (or of unknown pose), ``lying`` on
         its side, or ``tilted`` (leaning on something): held as if upright, the hand coming
         from the side its base is on (heading = the direction it leans to, its ``yaw``), so
         that the top leans away from the hand and the fingers close across the body;
-        None when the category has none for that pose."""
+        None when the category has none for that pose. Lying, the face whose width across
+        fits ``width`` (as perception measured it) is held, None if none does; without a
+        width, the first."""
         if pose == "lying":
-            return self.lying
+            if not self.lying:
+                return None
+            if width is None:
+                return self.lying[0]
+            fits = [p for p in self.lying if p.holding(width)]
+            return min(fits, key=lambda p: abs(p.across - width)) if fits else None
         if pose == "tilted":
             return replace(self.upright, sides=(0.0,), one_way=True)
         return self.upright

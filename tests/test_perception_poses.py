@@ -73,3 +73,27 @@ def test_a_labelled_bottle_standing_is_one_bottle(sim):
         found = _near(dets, "bottle", SPOT, 0.01)
         assert found and found[0]["pose"] == "upright", dets
     sim.set_object_pose(name, 40.0, 40.0)
+
+
+@pytest.mark.parametrize("roll_axis,height,across", [("x", 0.045, 0.070), ("y", 0.070, 0.045)])
+def test_a_lying_carton_is_recognised_with_the_face_it_lies_on(sim, roll_axis, height, across):
+    # 70 x 45 x 120 mm: lying on its 70 mm face it is 45 mm high, and the other way round
+    name = next(n for n in sim.object_names() if sim.object_category(n) == "carton")
+    axis_yaw = 0.4                                 # where its long (z) side points
+    euler = [math.pi / 2, 0.0, axis_yaw + math.pi / 2] if roll_axis == "x" else [0.0, math.pi / 2, axis_yaw]
+    _put(sim, name, p.getQuaternionFromEuler(euler), height / 2 + 0.002)
+    pose = sim.object_pose(name)
+    R = np.array(p.getMatrixFromQuaternion(pose[3:])).reshape(3, 3)
+    assert abs(R[2, 2]) < 0.05                     # its long side is level
+    true_yaw = math.atan2(R[1, 2], R[0, 2])
+    seen = 0
+    for bearing in (0.0, 1.2, -1.4):
+        found = _near(_look(sim, bearing, 0.7), "carton", pose[:2], 0.02)
+        if not found:
+            continue
+        seen += 1
+        d = found[0]
+        assert d["pose"] == "lying" and d["width"] == pytest.approx(across), d
+        assert math.degrees(abs(math.remainder(d["yaw"] - true_yaw, math.pi))) < 6.0, (d["yaw"], true_yaw)
+    assert seen >= 2
+    sim.set_object_pose(name, 40.0, 40.0)

@@ -6,6 +6,7 @@ import math
 import pytest
 
 from actors.strategies import UnknownCategoryError, known_categories, strategy_for
+from categories import Box, Category, Grasp
 from planning import ArmKinematics
 
 
@@ -71,11 +72,34 @@ def test_a_lying_body_is_held_from_above_within_the_arms_reach(category):
     kin = ArmKinematics.from_urdf()
     for z in (plan.height, plan.height + plan.lift):
         assert kin.ik(plan.reach, 0.0, z, plan.pitch).ok, f"{category}: z={z} unreachable"
-    # the base faces along the axis: the fingers close across the body
+    # the base faces along the axis: the fingers close across the body; a bottle only
+    # from its base end (object_yaw: base to top), up to 30 degrees off
     poses = s.standoff_poses((0.0, 0.0), (2.0, 0.0), object_yaw=math.radians(40), plan=plan)
-    assert sorted(round(math.degrees(p[2])) for p in poses) == [-140, 40]
+    headings = sorted(round(math.degrees(p[2])) for p in poses)
+    assert headings == ([10, 25, 40, 55, 70] if category == "bottle" else [-140, 40])
 
 
-def test_a_box_has_no_lying_grasp_and_says_so():
-    assert strategy_for("carton").plan_for("lying") is None
-    assert strategy_for("carton").plan_for("upright").sides == (0.0, math.pi / 2)
+def test_a_lying_box_is_held_from_above_across_the_face_it_shows():
+    s = strategy_for("carton")                     # 70 x 45 x 120 mm
+    assert s.plan_for("upright").sides == (0.0, math.pi / 2)
+    kin = ArmKinematics.from_urdf()
+    for width, height in ((0.070, 0.045), (0.045, 0.070)):     # lying on either long face
+        plan = s.plan_for("lying", width)
+        assert plan.closed_min < width < plan.closed_max
+        assert plan.pitch == pytest.approx(math.pi / 2) and plan.sides == (0.0,)
+        assert height / 2 < plan.height < height   # the pads span its upper half
+        for z in (plan.height, plan.height + plan.lift):
+            assert kin.ik(plan.reach, 0.0, z, plan.pitch).ok
+
+
+def test_a_box_lying_on_a_face_too_wide_for_the_hand_has_no_grasp():
+    box = Category(name="crate", shape=Box(0.090, 0.050, 0.12), mass=0.05, rgba=(0.2, 0.3, 0.9, 1),
+                   grasp=Grasp(height=0.06, open_width=0.085, closed_min=0.04, closed_max=0.06))
+    assert box.strategy.plan_for("lying", 0.090) is None        # 90 mm across: too wide
+    assert box.strategy.plan_for("lying", 0.050).closed_min < 0.050
+
+
+
+def test_a_lying_bottle_is_approached_from_its_base_end_and_a_can_from_either():
+    assert strategy_for("bottle").plan_for("lying").one_way      # the neck end is long
+    assert not strategy_for("can").plan_for("lying").one_way
