@@ -38,6 +38,7 @@ PLACE_STANDOFF = 0.39       # the base stops at least this far from where it put
 NEW_VIEW = math.radians(25) # after a failed grasp, headings this close to it come last
 PUSHED = 0.45               # a failed grasp may push the object this far [m]
 LOOK_AROUND = math.radians(35)  # after a failed grasp, also look this far to either side
+MIN_LOOK = 0.3              # [m] nearer than this, the camera sees too little of an object
 ASIDE = (math.radians(45), math.radians(-45))  # headings, relative to a lying body's axis,
 #                             of the closer look at it
 
@@ -164,7 +165,8 @@ class Catcher(SubSystem):
                 self.run_actor("mini_turn", turn)
                 turned += turn
             near = [d for d in self.run_actor("object_glance")
-                    if d["category"] == category and math.dist((d["x"], d["y"]), xy) <= PUSHED]
+                    if d["category"] == category and math.dist((d["x"], d["y"]), xy) <= PUSHED
+                    and d["distance"] >= MIN_LOOK]
             if near:
                 seen = min(near, key=lambda d: math.dist((d["x"], d["y"]), xy))
                 self.set_value("moved_to", (xy, seen))

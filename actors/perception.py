@@ -638,6 +638,8 @@ def _score_posed(seg: _Segment, app: Appearance, direction: np.ndarray) -> tuple
         conf *= 0.85
     tilt = math.acos(min(1.0, abs(float(d[2]))))
     pose = "upright" if tilt < UPRIGHT_TILT else "lying" if tilt > LYING_TILT else "tilted"
+    if pose == "tilted" and up[2] < 0:
+        return 0.0, {"reason": "its base above its top"}   # a leaning body stands on its base
     centre = base_pt + 0.5 * app.body_top * up
     if pose == "lying":
         yaw = math.atan2(d[1], d[0])

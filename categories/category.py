@@ -10,7 +10,7 @@ import math
 from dataclasses import dataclass, field
 
 from .shapes import Box, Label, Revolution, Shape
-from .strategy import Approach, Grasp, GraspPlan, Strategy, TopGrasp
+from .strategy import LYING_OFFSETS, Approach, Grasp, GraspPlan, Strategy, TopGrasp
 
 #: room the open fingers need around the held part [m]
 FINGER_MARGIN = 0.01
@@ -98,7 +98,8 @@ class Category:
                      if pose == "lying"]
         return tuple(GraspPlan(reach=t.reach, height=mid + t.above_axis, pitch=math.pi / 2,
                                open_width=self.grasp.open_width, closed_min=width - t.slack[0],
-                               closed_max=width + t.slack[1], lift=t.lift, sides=(0.0,), one_way=one_way)
+                               closed_max=width + t.slack[1], lift=t.lift, sides=(0.0,), one_way=one_way,
+                               offsets=LYING_OFFSETS if one_way else (0.0,))
                      for width, mid, one_way in faces if width <= self.grasp.open_width - FINGER_MARGIN)
 
     @property

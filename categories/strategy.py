@@ -91,6 +91,8 @@ class GraspPlan:
     lift: float
     sides: tuple[float, ...] = ()
     one_way: bool = False       # only along sides, never from the opposite face
+    offsets: tuple[float, ...] = (0.0,)   # one way: headings off each side [rad] the hand
+    #                                       may also come from (a wall may be close)
 
     def holding(self, closed_width: float) -> bool:
         return self.closed_min <= closed_width <= self.closed_max
@@ -103,6 +105,12 @@ class GraspPlan:
 
 #: an object's sides the hand may come from: any (round objects)
 ANY_SIDE: tuple[float, ...] = ()
+#: a leaning object is held as if upright, the hand coming along its lean or up to 30
+#: degrees off it: the fingers close around its body all the same
+TILTED_OFFSETS = tuple(math.radians(a) for a in (0, 15, -15, 30, -30))
+#: from above, the pads (30 mm wide) close across a lying body only when the hand is
+#: nearly square to it: 8 degrees off, a 70 mm body spans 75 mm of an 85 mm opening
+LYING_OFFSETS = tuple(math.radians(a) for a in (0, 8, -8))
 
 
 @dataclass(frozen=True)
@@ -144,7 +152,7 @@ class Strategy:
             fits = [p for p in self.lying if p.holding(width)]
             return min(fits, key=lambda p: abs(p.across - width)) if fits else None
         if pose == "tilted":
-            return replace(self.upright, sides=(0.0,), one_way=True)
+            return replace(self.upright, sides=(0.0,), one_way=True, offsets=TILTED_OFFSETS)
         return self.upright
 
     def standoff_poses(self, robot_xy: tuple[float, float], obj_xy: tuple[float, float],
@@ -167,8 +175,7 @@ class Strategy:
                 h = object_yaw + rel
                 # the nearer of the two opposite faces first: it is on the robot's side
                 pair = sorted((h, h + math.pi), key=lambda a: abs(_wrap(a - direct)))
-                # one way: that heading, or up to 30 degrees off it (a wall may be close)
-                headings += [h + math.radians(a) for a in (0, 15, -15, 30, -30)] if plan.one_way else pair
+                headings += [h + a for a in plan.offsets] if plan.one_way else pair
         else:
             headings = [direct + k * math.radians(30) for k in (0, 1, -1, 2, -2, 3, -3, 4, -4, 5, -5, 6)]
         out, seen = [], set()

@@ -73,10 +73,10 @@ def test_a_lying_body_is_held_from_above_within_the_arms_reach(category):
     for z in (plan.height, plan.height + plan.lift):
         assert kin.ik(plan.reach, 0.0, z, plan.pitch).ok, f"{category}: z={z} unreachable"
     # the base faces along the axis: the fingers close across the body; a bottle only
-    # from its base end (object_yaw: base to top), up to 30 degrees off
+    # from its base end (object_yaw: base to top), nearly square to it
     poses = s.standoff_poses((0.0, 0.0), (2.0, 0.0), object_yaw=math.radians(40), plan=plan)
     headings = sorted(round(math.degrees(p[2])) for p in poses)
-    assert headings == ([10, 25, 40, 55, 70] if category == "bottle" else [-140, 40])
+    assert headings == ([32, 40, 48] if category == "bottle" else [-140, 40])
 
 
 def test_a_lying_box_is_held_from_above_across_the_face_it_shows():
