@@ -230,7 +230,29 @@ def _tree_commands(sub: argparse._SubParsersAction) -> None:
                  "arguments, references and expressions. Exit status 1 when any file is broken.")
     p.add_argument("files", nargs="*", metavar="FILE",
                    help="Mission YAML files to check (default: every file of the trees folder).")
+    p.add_argument("--nodes", action="append", default=[], metavar="MODEL.xml",
+                   help="A BehaviorTree.CPP node model (<TreeNodesModel>, a Groot palette) whose Action and "
+                        "Condition nodes count as actors with the signatures their ports give: check a Nav2 "
+                        "tree without Nav2. Repeat it for several models.")
     p.set_defaults(func=tree_command("check"))
+
+    p = _command(sub, "xml", "BehaviorTree.CPP XML: import trees as missions",
+                 "Exchange trees with BehaviorTree.CPP v4 (and Groot2, Nav2, pytwb) as XML.")
+    xml = p.add_subparsers(dest="xml_command", metavar="ACTION")
+    xml.required = True
+    p = xml.add_parser("import", help="convert XML trees to mission files, one per tree",
+                       description="Convert BehaviorTree.CPP v4 XML files (with their <include>s) into mission "
+                                   "YAML files, one per <BehaviorTree>, then check them. Errors point at "
+                                   "file.xml:line:column. See docs/btxml.md for what is supported.")
+    p.add_argument("files", nargs="+", metavar="FILE.xml", help="The XML files to convert.")
+    p.add_argument("--nodes", action="append", default=[], metavar="MODEL.xml",
+                   help="A node model (<TreeNodesModel>, a Groot palette) declaring the nodes the trees use: "
+                        "their kind and typed ports. Repeat it for several models.")
+    p.add_argument("--dialect", choices=["btcpp", "pytwb"], default="btcpp",
+                   help="btcpp: BehaviorTree.CPP v4 (default); pytwb: py_trees workbench XML "
+                        "(py_trees class names, [Python literal] arguments).")
+    p.add_argument("--out", required=True, metavar="DIR", help="Where to write the mission files (created).")
+    p.set_defaults(func=_lazy("bt_engine.btxml.cli", "cmd_xml_import"))
 
     p = _command(sub, "show", "draw a tree: ASCII here, --out x.png|svg|pdf|dot for a picture",
                  "Draw a mission: as text here, or as a picture with --out.")

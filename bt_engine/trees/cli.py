@@ -108,7 +108,13 @@ def cmd_check(args: argparse.Namespace, app: Any) -> int:
     folder_files = sorted(folder.glob("*.y*ml")) if folder is not None and folder.is_dir() else []
     if not files:
         files = folder_files
-    library = TreeLibrary(app.actor_index().resolve, STANDARD_BEHAVIOURS)
+    resolver = app.actor_index().resolve
+    if getattr(args, "nodes", None):
+        # nodes declared in a BehaviorTree.CPP node model count as actors (their ports
+        # give the signatures), before the ones implemented here
+        from ..btxml import read_node_model
+        resolver = read_node_model(args.nodes).resolver(resolver)
+    library = TreeLibrary(resolver, STANDARD_BEHAVIOURS)
     given = {f.resolve() for f in files}
     for path in folder_files:  # trees the checked files may call
         if path.resolve() not in given:

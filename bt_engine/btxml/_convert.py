@@ -1,0 +1,846 @@
+"""BehaviorTree.CPP v4 XML to actorbt missions: one mission (a plain dict, as its YAML
+would read) per ``<BehaviorTree>``.
+
+How the two models meet (docs/btxml.md says it for users):
+
+- Built-in controls and decorators map to mission nodes; Nav2's PipelineSequence,
+  RecoveryNode, RateController and SingleTrigger too, when the XML's long form or the
+  node model says they are controls or decorators.
+- Any other node is a leaf: ``do:`` the actor of that name. Its input ports are the
+  arguments; its output ports are its result (the value itself for one output port, a
+  mapping ``{port: value}`` for several), written to the keys the ports name.
+- ``{key}`` ports are blackboard references. Keys a tree reads and does not write
+  become its inputs; keys it writes become its outputs. A SubTree call passes the
+  remapped ports as arguments and writes the remapped outputs back from its result.
+- Scripts and pre/post conditions are translated to ``set:`` and ``check:``
+  (:mod:`._script`); what has no equivalent is refused with a located error.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable, Iterable
+
+from ..trees._expr import keys_of, parse_expression
+from ..trees._model import Ref
+from ..trees._parse import suggest
+from ._errors import BtXmlError, Pos, UnknownXmlNodeError, UnsupportedXmlError
+from ._nodes import NodeKind, NodeModel, NodeSpec, PortSpec, convert_literal, guess_literal, python_type
+from ._script import Assignment, condition, statements
+from ._source import XElement, read_xml
+
+__all__ = ["Importer", "TreeDef", "TreeInterface", "import_files"]
+
+_IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
+_REF = re.compile(r"\{([^{}]*)\}\Z")
+_LONG_FORMS = ("Action", "Condition", "Control", "Decorator", "SubTree")
+#: attributes that are not ports
+_META = ("name", "ID", "_uid", "_fullpath", "_description")
+_PRE = ("_failureIf", "_successIf", "_skipIf", "_while")
+_POST = ("_onSuccess", "_onFailure", "_post", "_onHalted")
+_SELECTORS = ("selector", "reactive_selector")
+
+
+@dataclass(frozen=True)
+class TreeDef:
+    """One ``<BehaviorTree>``: its ID, element and file."""
+
+    id: str
+    element: XElement
+    file: str
+
+
+@dataclass
+class TreeInterface:
+    """What a converted tree reads and writes: its inputs (required when it never writes
+    them) and outputs, by key."""
+
+    inputs: dict[str, bool] = field(default_factory=dict)  # key -> required
+    outputs: list[str] = field(default_factory=list)
+    types: dict[str, str] = field(default_factory=dict)     # key -> mission type name
+    defaults: dict[str, Any] = field(default_factory=dict)
+
+
+class _Tree:
+    """The blackboard keys one tree reads (first position) and writes, while converting."""
+
+    def __init__(self, tree: TreeDef) -> None:
+        self.tree = tree
+        self.reads: dict[str, Pos] = {}
+        self.writes: dict[str, Pos] = {}
+        self.temps = 0
+
+    def read(self, key: str, pos: Pos) -> None:
+        self.reads.setdefault(key, pos)
+
+    def write(self, key: str, pos: Pos) -> None:
+        self.writes.setdefault(key, pos)
+
+    def temp(self, what: str) -> str:
+        self.temps += 1
+        return f"_{what}_out{self.temps}"
+
+
+Handler = Callable[["Importer", XElement, str, dict[str, str], _Tree, str], dict]
+
+
+class Importer:
+    """Converts the trees of a set of XML files (``<include>`` followed).
+
+    Args:
+        model: nodes declared elsewhere (``--nodes``); ``<TreeNodesModel>`` elements in
+            the imported files are added to it.
+    """
+
+    dialect = "btcpp"
+
+    def __init__(self, model: NodeModel | None = None) -> None:
+        self.model = model if model is not None else NodeModel()
+        self.has_model = model is not None and len(model) > 0
+        self.trees: dict[str, TreeDef] = {}
+        self.order: list[str] = []
+        self.main: dict[str, str] = {}  # file -> main_tree_to_execute
+        self.missions: dict[str, dict] = {}
+        self.interfaces: dict[str, TreeInterface] = {}
+        self._active: list[tuple[str, Pos]] = []
+        self._files: set[Path] = set()
+
+    # ------------------------------------------------------------ files
+
+    def load(self, path: str | Path, included_at: Pos | None = None) -> None:
+        """Read one file's trees, node models and includes.
+
+        Raises:
+            BtXmlError: the file does not parse, or is not a BehaviorTree.CPP v4 file.
+        """
+        resolved = Path(path).resolve()
+        if resolved in self._files:
+            return
+        self._files.add(resolved)
+        if included_at is not None and not Path(path).is_file():
+            raise BtXmlError(included_at, f"included file {str(path)!r} does not exist, expected a path relative "
+                                          "to the including file")
+        top = read_xml(path)
+        self.check_root(top)
+        file = str(path)
+        for element in top.children:
+            if element.tag == "BehaviorTree":
+                self.add_tree(element, file)
+            elif element.tag == "include":
+                target = element.attrs.get("path")
+                if not target:
+                    raise BtXmlError(element.pos, "<include> has no path, expected <include path=\"other.xml\"/>")
+                if "ros_pkg" in element.attrs:
+                    raise UnsupportedXmlError(element.at("ros_pkg"), "<include ros_pkg=...> needs a ROS package index, "
+                                                                     "expected a path relative to this file")
+                self.load(Path(path).parent / target, element.at("path"))
+            elif element.tag == "TreeNodesModel":
+                self.model.add_element(element)
+                self.has_model = True
+            else:
+                raise UnknownXmlNodeError(
+                    element.pos, f"unexpected <{element.tag}> in <root>"
+                                 f"{suggest(element.tag, ('BehaviorTree', 'include', 'TreeNodesModel'))}, "
+                                 "expected <BehaviorTree>, <include> or <TreeNodesModel>")
+        main = top.attrs.get("main_tree_to_execute")
+        if main:
+            self.main[file] = main
+
+    def check_root(self, top: XElement) -> None:
+        if top.tag != "root":
+            raise BtXmlError(top.pos, f"the document element is <{top.tag}>, expected <root BTCPP_format=\"4\">")
+        fmt = top.attrs.get("BTCPP_format")
+        if fmt is not None and fmt != "4":
+            raise UnsupportedXmlError(top.at("BTCPP_format"), f"BTCPP_format is {fmt!r}: only BehaviorTree.CPP v4 "
+                                                              "XML is imported, expected BTCPP_format=\"4\"")
+
+    def add_tree(self, element: XElement, file: str) -> None:
+        tree_id = element.attrs.get("ID") or element.attrs.get("id")
+        if not tree_id:
+            raise BtXmlError(element.pos, "<BehaviorTree> has no ID, expected <BehaviorTree ID=\"MainTree\">")
+        if not _IDENT.match(tree_id):
+            raise BtXmlError(element.at("ID"), f"tree ID {tree_id!r} is not a valid mission name, expected letters, "
+                                               "digits and '_'")
+        if tree_id in self.trees:
+            first = self.trees[tree_id].element.pos
+            raise BtXmlError(element.pos, f"tree {tree_id!r} is defined twice (first at {first}), expected one "
+                                          "<BehaviorTree> per ID")
+        nodes = element.children
+        if len(nodes) != 1:
+            raise BtXmlError(element.pos, f"<BehaviorTree ID=\"{tree_id}\"> has {len(nodes)} root nodes, expected "
+                                          "exactly one")
+        self.trees[tree_id] = TreeDef(tree_id, element, file)
+        self.order.append(tree_id)
+
+    # ------------------------------------------------------------ trees
+
+    def convert_all(self) -> dict[str, dict]:
+        """Every tree as a mission dict, by name, in file order."""
+        for tree_id in self.order:
+            self.convert(tree_id, self.trees[tree_id].element.pos)
+        return {tree_id: self.missions[tree_id] for tree_id in self.order}
+
+    def convert(self, tree_id: str, at: Pos) -> TreeInterface:
+        """Convert one tree (once) and return its interface; subtrees are converted first."""
+        if tree_id in self.interfaces:
+            return self.interfaces[tree_id]
+        if any(t == tree_id for t, _ in self._active):
+            chain = [t for t, _ in self._active]
+            chain = chain[chain.index(tree_id):] + [tree_id]
+            raise BtXmlError(at, f"subtree cycle {' -> '.join(chain)}, expected trees that do not call themselves")
+        tree = self.trees[tree_id]
+        self._active.append((tree_id, at))
+        try:
+            ctx = _Tree(tree)
+            root = self.node(tree.element.children[0], ctx, "sequence")
+        finally:
+            self._active.pop()
+        iface = TreeInterface()
+        spec = self.model.get(tree_id)
+        declared = {p.name: p for p in spec.ports} if spec is not None and spec.kind is NodeKind.SUBTREE else {}
+        # A key is an input when the tree reads it before (in document order) it writes it,
+        # or when the model declares it as an input port of this subtree.
+        read_first = [k for k, pos in ctx.reads.items() if k not in ctx.writes or _order(pos) < _order(ctx.writes[k])]
+        for key in [*read_first, *(p.name for p in declared.values() if p.reads and p.name not in read_first)]:
+            port = declared.get(key)
+            iface.inputs[key] = key not in ctx.writes
+            if port is not None:
+                iface.types[key] = _mission_type(port.type)
+                if port.default is not None and not _REF.match(port.default):
+                    iface.inputs[key] = False
+                    iface.defaults[key] = _convert(port.default, port, port.pos)
+        iface.outputs = [k for k in ctx.writes if not k.startswith("_")]
+        for port in declared.values():
+            if port.writes and port.name not in iface.outputs:
+                raise BtXmlError(port.pos, f"subtree {tree_id!r} declares output port {port.name!r}, but nothing in "
+                                           "it writes that key")
+        self.interfaces[tree_id] = iface
+        self.missions[tree_id] = self.mission(tree, iface, root)
+        return iface
+
+    def mission(self, tree: TreeDef, iface: TreeInterface, root: dict) -> dict:
+        inputs: dict[str, Any] = {}
+        for key, required in iface.inputs.items():
+            vtype = iface.types.get(key, "any")
+            if required:
+                inputs[key] = vtype
+            else:
+                inputs[key] = {"type": vtype, "default": iface.defaults.get(key)}
+        mission: dict[str, Any] = {
+            "name": tree.id,
+            "doc": f"Imported from {Path(tree.file).name}:{tree.element.pos.line} (BehaviorTree.CPP "
+                   f"<BehaviorTree ID=\"{tree.id}\">)." if self.dialect == "btcpp" else
+                   f"Imported from {Path(tree.file).name}:{tree.element.pos.line} (pytwb).",
+        }
+        if inputs:
+            mission["inputs"] = inputs
+        if iface.outputs:
+            mission["outputs"] = list(iface.outputs)
+        mission["root"] = root
+        return mission
+
+    # ------------------------------------------------------------ nodes
+
+    def node(self, el: XElement, ctx: _Tree, parent: str) -> dict:
+        """One XML node (with its pre/post conditions) as a mission node."""
+        node_id, long_kind = self.identify(el)
+        attrs = {k: v for k, v in el.attrs.items() if k not in _META}
+        special = {k: v for k, v in attrs.items() if k.startswith("_") and k != "_autoremap"}
+        for key in special:
+            if key not in (*_PRE, *_POST):
+                raise BtXmlError(el.at(key), f"unknown attribute {key!r}{suggest(key, (*_PRE, *_POST, '_autoremap'))}, "
+                                             f"expected one of: {', '.join((*_PRE, *_POST, '_autoremap'))}")
+        ports = {k: v for k, v in attrs.items() if k not in special}
+        result = self.dispatch(el, node_id, long_kind, ports, ctx, parent)
+        name = el.attrs.get("name")
+        if name and name != node_id:
+            result = _named(result, name)
+        return self.wrap(el, result, special, ctx, parent)
+
+    def identify(self, el: XElement) -> tuple[str, str | None]:
+        if el.tag in _LONG_FORMS:
+            node_id = el.attrs.get("ID")
+            if not node_id:
+                raise BtXmlError(el.pos, f"<{el.tag}> has no ID, expected e.g. <{el.tag} ID=\"Name\">")
+            return node_id, el.tag
+        return el.tag, None
+
+    def dispatch(self, el: XElement, node_id: str, long_kind: str | None, ports: dict[str, str], ctx: _Tree,
+                 parent: str) -> dict:
+        if long_kind == "SubTree":
+            return self.subtree(el, node_id, ports, ctx)
+        handler = BUILTINS.get(node_id)
+        if handler is not None:
+            return handler(self, el, node_id, ports, ctx, parent)
+        spec = self.model.get(node_id)
+        declared = long_kind or (spec.kind.value if spec is not None else None)
+        if node_id in NAV2 and declared in ("Control", "Decorator"):
+            return NAV2[node_id](self, el, node_id, ports, ctx, parent)
+        if node_id in UNSUPPORTED:
+            raise UnsupportedXmlError(el.pos, f"<{el.tag}> is not supported: {UNSUPPORTED[node_id]}")
+        if declared in ("Control", "Decorator"):
+            raise UnsupportedXmlError(
+                el.pos, f"{declared.lower()} node {node_id!r} has no equivalent in actorbt missions, expected one of "
+                        f"the nodes listed in docs/btxml.md")
+        if spec is not None and spec.kind is NodeKind.SUBTREE or node_id in self.trees and self.dialect == "pytwb":
+            return self.subtree(el, node_id, ports, ctx)
+        if el.children:
+            choices = [*BUILTINS, *NAV2, *(n for n, s in self.model.nodes.items()
+                                           if s.kind in (NodeKind.CONTROL, NodeKind.DECORATOR))]
+            raise UnknownXmlNodeError(
+                el.pos, f"unknown control node {node_id!r}{suggest(node_id, choices)}: it has child nodes, expected a "
+                        "built-in control or decorator, or one that a node model (--nodes) declares as <Control> "
+                        "or <Decorator>")
+        if self.has_model and spec is None and long_kind is None:
+            choices = [*BUILTINS, *self.model.nodes, *self.trees]
+            raise UnknownXmlNodeError(
+                el.pos, f"unknown node {node_id!r}{suggest(node_id, choices)}, expected a built-in node, a tree or a "
+                        f"node declared in the node model ({', '.join(self.model.files) or 'the XML'})")
+        return self.leaf(el, node_id, ports, ctx, spec)
+
+    # ------------------------------------------------------------ values
+
+    def key(self, el: XElement, attr: str, text: str) -> str | None:
+        """The blackboard key of a ``{key}`` / ``{=}`` value, or None for a literal."""
+        m = _REF.match(text.strip())
+        if m is None:
+            return None
+        key = m.group(1).strip()
+        if key == "=":
+            key = attr
+        if key.startswith("@"):
+            raise UnsupportedXmlError(el.at(attr), f"{text}: the root blackboard ('@' keys) is not supported, "
+                                                   "expected a key of this tree (pass values through SubTree ports)")
+        if not _IDENT.match(key):
+            raise BtXmlError(el.at(attr), f"blackboard key {key!r} is not a valid key, expected letters, digits and '_'")
+        return key
+
+    def literal(self, el: XElement, attr: str, text: str, port: PortSpec | None) -> Any:
+        if port is not None and port.type:
+            return _convert(text, port, el.at(attr))
+        return self.guess(text)
+
+    def guess(self, text: str) -> Any:
+        value = guess_literal(text)
+        return value.replace("{", "{{").replace("}", "}}") if isinstance(value, str) else value
+
+    def input_value(self, el: XElement, attr: str, text: str, ctx: _Tree, port: PortSpec | None = None) -> Any:
+        key = self.key(el, attr, text)
+        if key is None:
+            return self.literal(el, attr, text, port)
+        ctx.read(key, el.at(attr))
+        return "{" + key + "}"
+
+    def number(self, el: XElement, attr: str, text: str, ctx: _Tree, *, integer: bool, scale: float = 1.0,
+               ref_ok: bool = True) -> Any:
+        key = self.key(el, attr, text)
+        if key is not None:
+            if not ref_ok:
+                raise UnsupportedXmlError(el.at(attr), f"{attr}={text!r}: a blackboard reference is not supported "
+                                                       "here (the unit differs), expected a number")
+            ctx.read(key, el.at(attr))
+            return "{" + key + "}"
+        try:
+            value = convert_literal(text, "int" if integer else "double")
+        except ValueError:
+            raise BtXmlError(el.at(attr), f"{attr} is {text!r}, expected {'an integer' if integer else 'a number'} "
+                                          "or a {key} reference") from None
+        return value * scale if scale != 1.0 else value
+
+    def params(self, el: XElement, ports: dict[str, str], allowed: Iterable[str], required: Iterable[str] = ()) -> None:
+        allowed = tuple(allowed)
+        for attr in ports:
+            if attr not in allowed and attr != "_autoremap":
+                raise BtXmlError(el.at(attr), f"<{el.tag}> has no attribute {attr!r}{suggest(attr, allowed)}, "
+                                              f"expected {', '.join(allowed) or 'none besides name'}")
+        for attr in required:
+            if attr not in ports:
+                raise BtXmlError(el.pos, f"<{el.tag}> has no {attr!r}, expected {attr}=\"...\"")
+
+    def children(self, el: XElement, ctx: _Tree, kind: str, count: tuple[int, int] | None = None) -> list[dict]:
+        lo, hi = count or (1, 1_000_000)
+        n = len(el.children)
+        if not lo <= n <= hi:
+            expected = f"{lo}" if lo == hi else (f"{lo} or {hi}" if hi == lo + 1 else f"at least {lo}")
+            raise BtXmlError(el.pos, f"<{el.tag}> has {n} child node{'s' if n != 1 else ''}, expected {expected}")
+        kids = [self.node(child, ctx, kind) for child in el.children]
+        return _distinct_names(kids)
+
+    def child(self, el: XElement, ctx: _Tree, kind: str) -> dict:
+        return self.children(el, ctx, kind, (1, 1))[0]
+
+    def check(self, el: XElement, attr: str, text: str, ctx: _Tree) -> dict:
+        expr = condition(text, lambda i: el.value_pos(attr, i))
+        for key in keys_of(parse_expression(expr)):
+            ctx.read(key.name, el.at(attr))
+        return {"check": expr}
+
+    def script(self, el: XElement, attr: str, text: str, ctx: _Tree, conditions: bool = False) -> list[dict]:
+        """A script's assignments as ``set:`` nodes (a new one whenever a value reads a key
+        this script set); with ``conditions``, its conditions as ``check:`` nodes."""
+        nodes: list[dict] = []
+        current: dict[str, Any] | None = None
+        for statement in statements(text, lambda i: el.value_pos(attr, i)):
+            if isinstance(statement, Assignment):
+                value = statement.value
+                if isinstance(value, Ref):
+                    ctx.read(value.key, el.at(attr))
+                    if current is not None and value.key in current:
+                        current = None
+                    value = "{" + value.key + "}"
+                elif isinstance(value, str):
+                    value = value.replace("{", "{{").replace("}", "}}")
+                if current is None:
+                    current = {}
+                    nodes.append({"set": current})
+                current[statement.key] = value
+                ctx.write(statement.key, el.at(attr))
+            elif conditions:
+                for key in keys_of(parse_expression(statement)):
+                    ctx.read(key.name, el.at(attr))
+                nodes.append({"check": statement})
+                current = None
+        return nodes
+
+    # ------------------------------------------------------------ leaves and subtrees
+
+    def leaf(self, el: XElement, node_id: str, ports: dict[str, str], ctx: _Tree, spec: NodeSpec | None) -> dict:
+        if not _IDENT.match(node_id):
+            raise BtXmlError(el.pos, f"node {node_id!r} is not a valid actor name, expected letters, digits and '_'")
+        args: dict[str, Any] = {}
+        outs: list[tuple[str, str]] = []
+        names = [p.name for p in spec.ports] if spec is not None else []
+        for attr, text in ports.items():
+            if attr == "_autoremap":
+                raise BtXmlError(el.at(attr), "_autoremap applies to SubTree nodes only")
+            port = spec.port(attr) if spec is not None else None
+            if spec is not None and port is None:
+                raise BtXmlError(el.at(attr), f"node {node_id!r} has no port {attr!r}{suggest(attr, names)}, expected "
+                                              f"one of: {', '.join(names) or '(no ports)'}")
+            if not _IDENT.match(attr):
+                raise BtXmlError(el.at(attr), f"port {attr!r} is not a valid argument name")
+            if port is None or port.reads:
+                args[attr] = self.input_value(el, attr, text, ctx, port)
+            if port is not None and port.writes:
+                key = self.key(el, attr, text) or (text.strip() if _IDENT.match(text.strip()) else None)
+                if key is None:
+                    raise BtXmlError(el.at(attr), f"output port {attr!r} is {text!r}, expected a blackboard key such "
+                                                  "as \"{path}\"")
+                outs.append((attr, key))
+                ctx.write(key, el.at(attr))
+        for port in spec.ports if spec is not None else ():
+            if port.name in ports or port.default is None:
+                continue
+            key = self.key(el, port.name, port.default)
+            if key is None:
+                continue  # a literal default: the actor's own
+            if port.reads:
+                args[port.name] = "{" + key + "}"
+                ctx.read(key, el.pos)
+            if port.writes:
+                outs.append((port.name, key))
+                ctx.write(key, el.pos)
+        return self.call(node_id, args, outs, ctx)
+
+    def call(self, actor: str, args: dict[str, Any], outs: list[tuple[str, str]], ctx: _Tree) -> dict:
+        node: dict[str, Any] = {"do": actor}
+        if args:
+            node["with"] = args
+        if len(outs) == 1:
+            node["out"] = outs[0][1]
+            return node
+        if not outs:
+            return node
+        temp = ctx.temp(actor)
+        node["out"] = temp
+        return {"sequence": [node, {"set": {key: "{" + f"{temp}.{port}" + "}" for port, key in outs}}]}
+
+    def subtree(self, el: XElement, tree_id: str, ports: dict[str, str], ctx: _Tree) -> dict:
+        if tree_id not in self.trees:
+            raise UnknownXmlNodeError(el.at("ID") if "ID" in el.attrs else el.pos,
+                                      f"unknown tree {tree_id!r}{suggest(tree_id, self.trees)}, expected one of the "
+                                      f"imported trees: {', '.join(self.trees)}")
+        iface = self.convert(tree_id, el.pos)
+        autoremap = ports.pop("_autoremap", "false").strip().lower() in ("true", "1")
+        if ports.pop("__shared_blackboard", "false").strip().lower() in ("true", "1"):
+            autoremap = True
+        args: dict[str, Any] = {}
+        outs: list[tuple[str, str]] = []
+        known = [*iface.inputs, *(o for o in iface.outputs if o not in iface.inputs)]
+        for port, text in ports.items():
+            if port not in iface.inputs and port not in iface.outputs:
+                raise BtXmlError(el.at(port), f"tree {tree_id!r} has no port {port!r}{suggest(port, known)}: it neither "
+                                              f"reads nor writes that key, expected one of: {', '.join(known) or '(none)'}")
+            key = self.key(el, port, text)
+            if port in iface.inputs:
+                if key is None:
+                    args[port] = self.guess(text)
+                else:
+                    args[port] = "{" + key + "}"
+                    ctx.read(key, el.at(port))
+            if port in iface.outputs:
+                if key is None:
+                    if port not in iface.inputs:
+                        raise BtXmlError(el.at(port), f"port {port!r} of tree {tree_id!r} is an output, expected a "
+                                                      "blackboard key such as \"{" + port + "}\"")
+                    continue
+                outs.append((port, key))
+                ctx.write(key, el.at(port))
+        if autoremap:
+            for port in iface.inputs:
+                if port not in ports:
+                    args[port] = "{" + port + "}"
+                    ctx.read(port, el.pos)
+            for port in iface.outputs:
+                if port not in ports:
+                    outs.append((port, port))
+                    ctx.write(port, el.pos)
+        for port, required in iface.inputs.items():
+            if required and port not in args:
+                raise BtXmlError(el.pos, f"SubTree {tree_id!r} reads {port!r}, which nothing in it writes, but this "
+                                         f"call does not pass it, expected {port}=\"{{key}}\" or _autoremap=\"true\"")
+        if not outs:
+            return self.call(tree_id, args, [], ctx)
+        temp = ctx.temp(tree_id)
+        node: dict[str, Any] = {"do": tree_id, "out": temp}
+        if args:
+            node = {"do": tree_id, "with": args, "out": temp}
+        return {"sequence": [node, {"set": {key: "{" + f"{temp}.{port}" + "}" for port, key in outs}}]}
+
+    # ------------------------------------------------------------ pre and post conditions
+
+    def skipped(self, parent: str) -> dict:
+        """What BehaviorTree.CPP's SKIPPED means to the parent: a selector moves on as on
+        a failure, everything else as on a success."""
+        return {"name": "skipped", "check": "false" if parent in _SELECTORS else "true"}
+
+    def wrap(self, el: XElement, node: dict, special: dict[str, str], ctx: _Tree, parent: str) -> dict:
+        if "_onHalted" in special:
+            raise UnsupportedXmlError(el.at("_onHalted"), "_onHalted is not supported: a mission runs nothing when "
+                                                          "a node is halted (cancelled actors clean up themselves)")
+        for attr in ("_onSuccess", "_onFailure", "_post"):
+            if attr in special:
+                sets = self.script(el, attr, special[attr], ctx)
+                if not sets:
+                    continue
+                action = sets[0] if len(sets) == 1 else {"sequence": sets}
+                if attr == "_onSuccess":
+                    node = {"sequence": [node, action]}
+                elif attr == "_onFailure":
+                    node = {"selector": [node, {"force_failure": action}]}
+                else:
+                    node = {"selector": [{"sequence": [node, action]}, {"force_failure": action}]}
+        if "_while" in special:
+            node = {"while_do_else": [self.check(el, "_while", special["_while"], ctx), node, self.skipped(parent)]}
+        outcomes = {"_skipIf": self.skipped(parent), "_successIf": {"name": "success", "check": "true"},
+                    "_failureIf": {"name": "failure", "check": "false"}}
+        for attr in ("_skipIf", "_successIf", "_failureIf"):  # the last wrapped is checked first
+            if attr in special:
+                node = {"if_then_else": [self.check(el, attr, special[attr], ctx), outcomes[attr], node]}
+        return node
+
+
+# ---------------------------------------------------------------- helpers
+
+
+def _order(pos: Pos) -> tuple[str, int, int]:
+    return (pos.file, pos.line, pos.column)
+
+
+def _mission_type(type_name: str) -> str:
+    annotation = python_type(type_name)
+    return {int: "int", float: "float", bool: "bool", str: "str"}.get(annotation, "any")
+
+
+def _convert(text: str, port: PortSpec, pos: Pos) -> Any:
+    try:
+        value = convert_literal(text, port.type)
+    except ValueError as exc:
+        raise BtXmlError(pos, f"port {port.name!r} is declared {port.type}, but {exc}") from None
+    return value.replace("{", "{{").replace("}", "}}") if isinstance(value, str) else value
+
+
+def _named(node: dict, name: str) -> dict:
+    name = name.replace("/", "|").strip()
+    if not name:
+        return node
+    return {"name": name, **{k: v for k, v in node.items() if k != "name"}}
+
+
+def _distinct_names(kids: list[dict]) -> list[dict]:
+    seen: dict[str, int] = {}
+    out = []
+    for kid in kids:
+        name = kid.get("name")
+        if name is not None:
+            seen[name] = seen.get(name, 0) + 1
+            if seen[name] > 1:
+                kid = _named(kid, f"{name} ({seen[name]})")
+        out.append(kid)
+    return out
+
+
+def _status_node(imp: Importer, el: XElement, attr: str, text: str, parent: str) -> dict:
+    status = text.strip().upper()
+    if status == "SUCCESS":
+        return {"name": "success", "check": "true"}
+    if status == "FAILURE":
+        return {"name": "failure", "check": "false"}
+    if status == "SKIPPED":
+        return imp.skipped(parent)
+    if status == "RUNNING":
+        return {"name": "running", "behaviour": "Running"}
+    raise BtXmlError(el.at(attr), f"{attr} is {text!r}, expected SUCCESS, FAILURE, SKIPPED or RUNNING")
+
+
+def _composite(kind: str) -> Handler:
+    def handler(imp: Importer, el: XElement, node_id: str, ports: dict[str, str], ctx: _Tree, parent: str) -> dict:
+        imp.params(el, ports, ())
+        return {kind: imp.children(el, ctx, kind)}
+    return handler
+
+
+def _decorator(kind: str) -> Handler:
+    def handler(imp: Importer, el: XElement, node_id: str, ports: dict[str, str], ctx: _Tree, parent: str) -> dict:
+        imp.params(el, ports, ())
+        return {kind: imp.child(el, ctx, kind)}
+    return handler
+
+
+def _parallel(imp: Importer, el: XElement, node_id: str, ports: dict[str, str], ctx: _Tree, parent: str) -> dict:
+    imp.params(el, ports, ("success_count", "failure_count", "success_threshold", "failure_threshold"))
+    kids = imp.children(el, ctx, "parallel")
+    counts = {}
+    for attr, alias, default in (("success_count", "success_threshold", -1), ("failure_count", "failure_threshold", 1)):
+        name = attr if attr in ports else alias
+        value = imp.number(el, name, ports[name], ctx, integer=True, ref_ok=False) if name in ports else default
+        if value == 0 or abs(value) > len(kids):
+            raise BtXmlError(el.at(name), f"{name} is {value}, expected 1 to {len(kids)} or -1 to -{len(kids)}")
+        counts[attr] = value
+    if counts == {"success_count": -1, "failure_count": 1} or counts == {"success_count": len(kids), "failure_count": 1}:
+        return {"parallel": kids}
+    if counts["success_count"] == 1 and counts["failure_count"] == 1:
+        return {"parallel": {"policy": "success_on_one", "children": kids}}
+    return {"parallel": {**counts, "children": kids}}
+
+
+def _branching(kind: str) -> Handler:
+    def handler(imp: Importer, el: XElement, node_id: str, ports: dict[str, str], ctx: _Tree, parent: str) -> dict:
+        imp.params(el, ports, ())
+        return {kind: imp.children(el, ctx, kind, (2, 3))}
+    return handler
+
+
+def _retry(imp: Importer, el: XElement, node_id: str, ports: dict[str, str], ctx: _Tree, parent: str) -> dict:
+    imp.params(el, ports, ("num_attempts",), ("num_attempts",))
+    times = imp.number(el, "num_attempts", ports["num_attempts"], ctx, integer=True)
+    if times == -1:
+        times = "forever"
+    elif isinstance(times, int) and times < 1:
+        raise BtXmlError(el.at("num_attempts"), f"num_attempts is {times}, expected -1 (no limit) or >= 1")
+    return {"retry": {"times": times, "child": imp.child(el, ctx, "retry")}}
+
+
+def _repeat(imp: Importer, el: XElement, node_id: str, ports: dict[str, str], ctx: _Tree, parent: str) -> dict:
+    imp.params(el, ports, ("num_cycles",), ("num_cycles",))
+    times = imp.number(el, "num_cycles", ports["num_cycles"], ctx, integer=True)
+    if isinstance(times, int) and times != -1 and times < 1:
+        raise BtXmlError(el.at("num_cycles"), f"num_cycles is {times}, expected -1 (forever) or >= 1")
+    child = imp.child(el, ctx, "repeat")
+    return {"repeat": {"child": child} if times == -1 else {"times": times, "child": child}}
+
+
+def _timeout(imp: Importer, el: XElement, node_id: str, ports: dict[str, str], ctx: _Tree, parent: str) -> dict:
+    imp.params(el, ports, ("msec",), ("msec",))
+    seconds = imp.number(el, "msec", ports["msec"], ctx, integer=False, scale=0.001, ref_ok=False)
+    if seconds <= 0:
+        raise BtXmlError(el.at("msec"), "msec is not positive, expected a timeout > 0")
+    return {"timeout": {"seconds": seconds, "child": imp.child(el, ctx, "timeout")}}
+
+
+def _delay(imp: Importer, el: XElement, node_id: str, ports: dict[str, str], ctx: _Tree, parent: str) -> dict:
+    imp.params(el, ports, ("delay_msec",), ("delay_msec",))
+    seconds = imp.number(el, "delay_msec", ports["delay_msec"], ctx, integer=False, scale=0.001, ref_ok=False)
+    return {"sequence": [{"wait": seconds}, imp.child(el, ctx, "sequence")]}
+
+
+def _keep_running(imp: Importer, el: XElement, node_id: str, ports: dict[str, str], ctx: _Tree, parent: str) -> dict:
+    imp.params(el, ports, ())
+    return {"repeat": {"child": imp.child(el, ctx, "repeat")}}
+
+
+def _run_once(imp: Importer, el: XElement, node_id: str, ports: dict[str, str], ctx: _Tree, parent: str) -> dict:
+    imp.params(el, ports, ("then_skip",))
+    skip = ports.get("then_skip", "true").strip().lower()
+    if skip not in ("true", "false"):
+        raise BtXmlError(el.at("then_skip"), f"then_skip is {ports['then_skip']!r}, expected true or false")
+    then = ("failure" if parent in _SELECTORS else "success") if skip == "true" else "same"
+    return {"run_once": {"then": then, "child": imp.child(el, ctx, "run_once")}}
+
+
+def _precondition(imp: Importer, el: XElement, node_id: str, ports: dict[str, str], ctx: _Tree, parent: str) -> dict:
+    imp.params(el, ports, ("if", "else"), ("if",))
+    test = imp.check(el, "if", ports["if"], ctx)
+    otherwise = _status_node(imp, el, "else", ports.get("else", "FAILURE"), parent)
+    return {"if_then_else": [test, imp.child(el, ctx, "if_then_else"), otherwise]}
+
+
+def _always(value: str) -> Handler:
+    def handler(imp: Importer, el: XElement, node_id: str, ports: dict[str, str], ctx: _Tree, parent: str) -> dict:
+        imp.params(el, ports, ())
+        imp.children(el, ctx, "leaf", (0, 0))
+        return {"name": node_id, "check": value}
+    return handler
+
+
+def _sleep(imp: Importer, el: XElement, node_id: str, ports: dict[str, str], ctx: _Tree, parent: str) -> dict:
+    imp.params(el, ports, ("msec",), ("msec",))
+    imp.children(el, ctx, "leaf", (0, 0))
+    return {"wait": imp.number(el, "msec", ports["msec"], ctx, integer=False, scale=0.001, ref_ok=False)}
+
+
+def _set_blackboard(imp: Importer, el: XElement, node_id: str, ports: dict[str, str], ctx: _Tree,
+                    parent: str) -> dict:
+    imp.params(el, ports, ("value", "output_key"), ("value", "output_key"))
+    imp.children(el, ctx, "leaf", (0, 0))
+    text = ports["output_key"].strip()
+    key = imp.key(el, "output_key", text) or (text if _IDENT.match(text) else None)
+    if key is None:
+        raise BtXmlError(el.at("output_key"), f"output_key is {text!r}, expected a blackboard key")
+    ctx.write(key, el.at("output_key"))
+    return {"set": {key: imp.input_value(el, "value", ports["value"], ctx)}}
+
+
+def _script(imp: Importer, el: XElement, node_id: str, ports: dict[str, str], ctx: _Tree, parent: str) -> dict:
+    imp.params(el, ports, ("code",), ("code",))
+    imp.children(el, ctx, "leaf", (0, 0))
+    nodes = imp.script(el, "code", ports["code"], ctx)
+    if not nodes:
+        return {"check": "true"}
+    return nodes[0] if len(nodes) == 1 else {"sequence": nodes}
+
+
+def _script_condition(imp: Importer, el: XElement, node_id: str, ports: dict[str, str], ctx: _Tree,
+                      parent: str) -> dict:
+    imp.params(el, ports, ("code",), ("code",))
+    imp.children(el, ctx, "leaf", (0, 0))
+    return imp.check(el, "code", ports["code"], ctx)
+
+
+def _switch(n: int) -> Handler:
+    def handler(imp: Importer, el: XElement, node_id: str, ports: dict[str, str], ctx: _Tree, parent: str) -> dict:
+        cases = [f"case_{i}" for i in range(1, n + 1)]
+        imp.params(el, ports, ("variable", *cases), ("variable", *cases))
+        key = imp.key(el, "variable", ports["variable"])
+        if key is None:
+            raise BtXmlError(el.at("variable"), "variable must be a blackboard key such as \"{state}\"")
+        ctx.read(key, el.at("variable"))
+        kids = imp.children(el, ctx, "while_do_else", (n + 1, n + 1))
+        node = kids[-1]
+        for case, kid in reversed(list(zip(cases, kids))):
+            value = guess_literal(ports[case])
+            shown = f'"{value}"' if isinstance(value, str) else ("true" if value is True else "false" if value is False
+                                                                 else repr(value))
+            if isinstance(value, str) and ('"' in value or "\\" in value):
+                raise UnsupportedXmlError(el.at(case), f"{case} {value!r}: quotes and backslashes are not supported")
+            node = {"while_do_else": [{"check": f"{key} == {shown}"}, kid, node]}
+        return node
+    return handler
+
+
+def _pipeline(imp: Importer, el: XElement, node_id: str, ports: dict[str, str], ctx: _Tree, parent: str) -> dict:
+    imp.params(el, ports, ())
+    return {"pipeline_sequence": imp.children(el, ctx, "pipeline_sequence")}
+
+
+def _recovery(imp: Importer, el: XElement, node_id: str, ports: dict[str, str], ctx: _Tree, parent: str) -> dict:
+    imp.params(el, ports, ("number_of_retries",))
+    retries = imp.number(el, "number_of_retries", ports.get("number_of_retries", "1"), ctx, integer=True)
+    return {"recovery": {"retries": retries, "children": imp.children(el, ctx, "recovery", (2, 2))}}
+
+
+def _rate(imp: Importer, el: XElement, node_id: str, ports: dict[str, str], ctx: _Tree, parent: str) -> dict:
+    imp.params(el, ports, ("hz",))
+    hz = imp.number(el, "hz", ports.get("hz", "10"), ctx, integer=False)
+    return {"rate_controller": {"hz": hz, "child": imp.child(el, ctx, "rate_controller")}}
+
+
+def _single_trigger(imp: Importer, el: XElement, node_id: str, ports: dict[str, str], ctx: _Tree,
+                    parent: str) -> dict:
+    imp.params(el, ports, ())
+    return {"run_once": {"then": "failure", "child": imp.child(el, ctx, "run_once")}}
+
+
+#: BehaviorTree.CPP's built-in nodes
+BUILTINS: dict[str, Handler] = {
+    "Sequence": _composite("sequence"),
+    "ReactiveSequence": _composite("reactive_sequence"),
+    "SequenceWithMemory": _composite("resume_sequence"),
+    "Fallback": _composite("selector"),
+    "ReactiveFallback": _composite("reactive_selector"),
+    "Parallel": _parallel,
+    "IfThenElse": _branching("if_then_else"),
+    "WhileDoElse": _branching("while_do_else"),
+    **{f"Switch{n}": _switch(n) for n in range(2, 7)},
+    "Inverter": _decorator("invert"),
+    "ForceSuccess": _decorator("force_success"),
+    "ForceFailure": _decorator("force_failure"),
+    "RetryUntilSuccessful": _retry,
+    "Repeat": _repeat,
+    "Timeout": _timeout,
+    "Delay": _delay,
+    "KeepRunningUntilFailure": _keep_running,
+    "RunOnce": _run_once,
+    "Precondition": _precondition,
+    "AlwaysSuccess": _always("true"),
+    "AlwaysFailure": _always("false"),
+    "Sleep": _sleep,
+    "SetBlackboard": _set_blackboard,
+    "Script": _script,
+    "ScriptCondition": _script_condition,
+}
+
+#: Nav2's control nodes, mapped when the XML or the node model says they are controls
+NAV2: dict[str, Handler] = {
+    "PipelineSequence": _pipeline,
+    "RecoveryNode": _recovery,
+    "RateController": _rate,
+    "SingleTrigger": _single_trigger,
+}
+
+#: BehaviorTree.CPP nodes with no mission equivalent, and why
+UNSUPPORTED: dict[str, str] = {
+    "UnsetBlackboard": "missions never remove a blackboard key (a key holds a value once written)",
+    "WasEntryUpdated": "missions do not track when a key was last written",
+    "SkipUnlessUpdated": "missions do not track when a key was last written",
+    "WaitValueUpdate": "missions do not track when a key was last written",
+    "LoopInt": "queues on the blackboard are not supported; loop in an actor",
+    "LoopDouble": "queues on the blackboard are not supported; loop in an actor",
+    "LoopString": "queues on the blackboard are not supported; loop in an actor",
+    "LoopBool": "queues on the blackboard are not supported; loop in an actor",
+    "ParallelAll": "use Parallel with success_count and failure_count",
+    "ManualSelector": "it asks a human at a terminal, which a mission does not do",
+    "SubTreePlus": "it is BehaviorTree.CPP v3; use <SubTree ... _autoremap=\"true\">",
+    "RoundRobin": "Nav2's RoundRobin has no equivalent (use a selector)",
+}
+
+
+def import_files(paths: Iterable[str | Path], model: NodeModel | None = None, dialect: str = "btcpp") -> dict[str, dict]:
+    """Convert every tree of these XML files; returns mission dicts by name.
+
+    Raises:
+        BtXmlError: the first problem found, located in its XML file.
+    """
+    importer: Importer
+    if dialect == "pytwb":
+        from ._pytwb import PytwbImporter
+        importer = PytwbImporter(model)
+    elif dialect == "btcpp":
+        importer = Importer(model)
+    else:
+        raise BtXmlError(Pos("<command line>", 1, 1), f"unknown dialect {dialect!r}, expected btcpp or pytwb")
+    for path in paths:
+        importer.load(path)
+    return importer.convert_all()
