@@ -32,6 +32,8 @@ DRIVE_IN_TOLERANCE = 0.015  # how close the drive around an object must end [m]:
 #                             fingers are 70 mm long
 PLACE_INSET = 0.12          # how far inside a surface's edge the object is put down [m],
 #                             at most: a hand of short reach (from above) puts it nearer
+PLACE_ABOVE = 0.03          # the hand comes this far above where it lets go [m]
+MIN_PLACE_REACH = 0.10      # [m] nearer the base, the object would be on it
 PLACE_STANDOFF = 0.39       # the base stops at least this far from where it puts an
 #                             object down before driving in [m]: room to turn (the
 #                             upright grasp's standoff; a grasp from above reaches less)
@@ -447,6 +449,9 @@ class Catcher(SubSystem):
             raise GraspError("place: nothing is held")
         strategy = strategy_for(held["category"])
         g, a = self.get_value("held_plan"), strategy.approach
+        release_z = surface + g.height + RELEASE_CLEARANCE
+        reach = self._place_reach(g, release_z)
+        g = replace(g, reach=reach)
         if heading is None:
             rx, ry, _ = self.run_actor("get_pose")
             # the surface under the release point is on the map: no corridor check
@@ -456,8 +461,7 @@ class Catcher(SubSystem):
             d = max(g.reach + a.standoff, PLACE_STANDOFF)
             sx, sy, syaw = x - d * math.cos(heading), y - d * math.sin(heading), heading
         self.run_actor("goto", sx, sy, syaw)
-        release_z = surface + g.height + RELEASE_CLEARANCE
-        self.run_actor("move_to_pose", g.reach, 0.0, release_z + 0.03, g.pitch)
+        self.run_actor("move_to_pose", g.reach, 0.0, release_z + PLACE_ABOVE, g.pitch)
         distance = self._face((x, y), strategy)
         driven = self._drive_in(distance - g.reach)
         self.run_actor("move_to_pose", g.reach, 0.0, release_z, g.pitch)
@@ -470,11 +474,27 @@ class Catcher(SubSystem):
         # Back the open hand out the way it came in: lifting or folding first could catch
         # an object that tilted in the fingers. A hand pointing down goes up first: the
         # fingers are around the object.
+        # (as high as the arm reaches there: open fingers slide off along a lying body)
         if g.pitch > math.radians(45):
-            self.run_actor("move_to_pose", g.reach, 0.0, release_z + g.lift, g.pitch)
+            up = release_z + g.lift
+            while up > release_z + 0.01 and not self.run_actor("reachable", g.reach, 0.0, up, g.pitch):
+                up -= 0.01
+            self.run_actor("move_to_pose", g.reach, 0.0, up, g.pitch)
         self.run_actor("mini_walk", -max(0.1, driven))
         self.run_actor("home")
         return {"x": x, "y": y, "z": release_z}
+
+    def _place_reach(self, plan: GraspPlan, release_z: float) -> float:
+        """How far ahead of the base the hand puts the object down [m]: the plan's reach,
+        or nearer where the arm cannot hold it there above ``release_z`` (pointing down,
+        it reaches less high the farther out)."""
+        reach = plan.reach
+        while not self.run_actor("reachable", reach, 0.0, release_z + PLACE_ABOVE, plan.pitch):
+            reach -= 0.01
+            if reach < MIN_PLACE_REACH:
+                raise ApproachError(f"the arm cannot put the object down {release_z:.2f} m high "
+                                    f"holding it as it does (tool pitch {math.degrees(plan.pitch):.0f} deg)")
+        return reach
 
     @actor
     def place_on(self, x: float, y: float, size_x: float, size_y: float, height: float) -> dict:
@@ -498,7 +518,8 @@ class Catcher(SubSystem):
         plan = self.get_value("held_plan")
         standoff = max(plan.reach + strategy_for(held["category"]).approach.standoff, PLACE_STANDOFF)
         # the base's front stops short of the surface's edge
-        inset = min(PLACE_INSET, plan.reach - BASE_OUTLINE[1] - BASE_MARGIN)
+        reach = self._place_reach(plan, height + plan.height + RELEASE_CLEARANCE)
+        inset = min(PLACE_INSET, reach - BASE_OUTLINE[1] - BASE_MARGIN)
         rx, ry, _ = self.run_actor("get_pose")
         sides = []
         for nx, ny, half in ((1, 0, size_x / 2), (-1, 0, size_x / 2), (0, 1, size_y / 2), (0, -1, size_y / 2)):

@@ -168,6 +168,19 @@ class Manipulator(SubSystem):
         return self._run_plan(plan_pose_motion(start, (x, y, z, pitch), self.scene))
 
     @actor
+    def reachable(self, x: float, y: float, z: float, pitch: float) -> bool:
+        """Can the tool be at (x, y, z) [m] in base_footprint with ``pitch`` [rad]? (Its
+        inverse kinematics only: nothing moves.)
+
+        Args:
+            x: tool position forward of the base, base_footprint frame [m]
+            y: tool position to the left of the base, base_footprint frame [m]
+            z: tool height above the floor [m]
+            pitch: tool angle below the horizontal; pi/2 points straight down [rad]
+        """
+        return bool(self.kinematics.ik(x, y, z, pitch).ok)
+
+    @actor
     def open(self, width: float = GRIPPER_OPEN) -> dict:
         """Open the gripper to ``width`` [m]; returns the gripper's state as ``close`` does.
 

@@ -517,8 +517,8 @@ def _segments(frame: RGBDFrame, P: np.ndarray, appearances=()) -> list[_Segment]
             filled = np.zeros(roi.shape, np.uint8)
             cv2.drawContours(filled, contours, -1, 1, thickness=cv2.FILLED)
             holes = (filled > 0) & ~roi
-            if holes.any():
-                d = frame.depth[y0:y0 + bh, x0:x0 + bw]
+            d = frame.depth[y0:y0 + bh, x0:x0 + bw]
+            if holes.any() and np.isfinite(d[roi]).any():   # (no depth at all: nothing to fill)
                 dm = float(np.nanmedian(d[roi]))
                 roi = roi | (holes & (np.abs(d - dm) < 0.1))
             seg = _measure(name, roi, x0, y0, P, frame.depth, lab, frame)
