@@ -300,12 +300,15 @@ class RateControllerNode(py_trees.decorators.Decorator):
         if self.fresh or self.decorated.status is Status.RUNNING or now - self.since >= self.period:
             self.fresh = False
             status = yield from _tick(self.decorated)
-            if status is Status.SUCCESS:
-                self.since = now
             if status is Status.RUNNING:
                 self.status = status
             else:
                 self.stop(status)
+            if status is Status.SUCCESS:
+                # A parent that ticks it again (a pipeline) should find the period over
+                # even if nothing else happens meanwhile.
+                self.since = now
+                self.timer = self.ctx.rt.call_later(self.period, self.ctx.wake)
             yield self
             return
         wait = self.period - (now - self.since)
