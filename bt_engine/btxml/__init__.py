@@ -9,11 +9,13 @@ imports nothing robot-specific. Inside the package::
     _script   BehaviorTree.CPP scripts -> set: values and check: expressions
     _convert  BehaviorTree.CPP XML -> mission dicts
     _pytwb    the pytwb dialect (py_trees class names, Python literals)
+    _api      import_files: dialect, files, conversion
     _emit     mission dicts -> YAML files
     cli       actorbt xml import
 """
 
-from ._convert import Importer, TreeInterface, import_files
+from ._api import DIALECTS, import_files
+from ._convert import Importer, TreeInterface
 from ._emit import dump_mission, write_missions
 from ._errors import BtXmlError, UnknownXmlNodeError, UnsupportedXmlError, XmlSyntaxError
 from ._nodes import ModelResolver, NodeKind, NodeModel, NodeSpec, PortDirection, PortSpec, read_node_model
@@ -21,6 +23,7 @@ from ._pytwb import PytwbImporter
 from ._source import XElement, parse_xml, read_xml
 
 __all__ = [
+    "DIALECTS",
     "BtXmlError",
     "Importer",
     "ModelResolver",

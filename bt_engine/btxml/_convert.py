@@ -31,7 +31,7 @@ from ._nodes import NodeKind, NodeModel, NodeSpec, PortSpec, convert_literal, gu
 from ._script import Assignment, condition, statements
 from ._source import XElement, read_xml
 
-__all__ = ["Importer", "TreeDef", "TreeInterface", "import_files"]
+__all__ = ["BUILTINS", "NAV2", "UNSUPPORTED", "Importer", "TreeDef", "TreeInterface"]
 
 _IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
 _REF = re.compile(r"\{([^{}]*)\}\Z")
@@ -825,22 +825,3 @@ UNSUPPORTED: dict[str, str] = {
     "SubTreePlus": "it is BehaviorTree.CPP v3; use <SubTree ... _autoremap=\"true\">",
     "RoundRobin": "Nav2's RoundRobin has no equivalent (use a selector)",
 }
-
-
-def import_files(paths: Iterable[str | Path], model: NodeModel | None = None, dialect: str = "btcpp") -> dict[str, dict]:
-    """Convert every tree of these XML files; returns mission dicts by name.
-
-    Raises:
-        BtXmlError: the first problem found, located in its XML file.
-    """
-    importer: Importer
-    if dialect == "pytwb":
-        from ._pytwb import PytwbImporter
-        importer = PytwbImporter(model)
-    elif dialect == "btcpp":
-        importer = Importer(model)
-    else:
-        raise BtXmlError(Pos("<command line>", 1, 1), f"unknown dialect {dialect!r}, expected btcpp or pytwb")
-    for path in paths:
-        importer.load(path)
-    return importer.convert_all()

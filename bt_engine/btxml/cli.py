@@ -13,7 +13,7 @@ from typing import Any
 
 from ..trees._host import STANDARD_BEHAVIOURS
 from ..trees._library import TreeLibrary, check_files
-from ._convert import import_files
+from ._api import import_files
 from ._emit import write_missions
 from ._nodes import NodeModel, read_node_model
 

@@ -249,8 +249,8 @@ def _tree_commands(sub: argparse._SubParsersAction) -> None:
                    help="A node model (<TreeNodesModel>, a Groot palette) declaring the nodes the trees use: "
                         "their kind and typed ports. Repeat it for several models.")
     p.add_argument("--dialect", choices=["btcpp", "pytwb"], default="btcpp",
-                   help="btcpp: BehaviorTree.CPP v4 (default); pytwb: py_trees workbench XML "
-                        "(py_trees class names, [Python literal] arguments).")
+                   help="The XML dialect: btcpp for BehaviorTree.CPP v4 (the default), pytwb for py_trees "
+                        "workbench XML (py_trees class names, [Python literal] arguments).")
     p.add_argument("--out", required=True, metavar="DIR", help="Where to write the mission files (created).")
     p.set_defaults(func=_lazy("bt_engine.btxml.cli", "cmd_xml_import"))
 
