@@ -157,8 +157,9 @@ class CheckLeaf(py_trees.behaviour.Behaviour):
 
 
 def _number(value: Any, ctx: RunContext, what: str, integer: bool,
-            allow_none: bool = False) -> tuple[Any, str | None]:
-    """Resolve a literal-or-reference parameter; (value, None) or (None, error)."""
+            allow_none: bool = False, minimum: float | None = None) -> tuple[Any, str | None]:
+    """Resolve a literal-or-reference parameter; (value, None) or (None, error). It must
+    be at least ``minimum`` (default: 1 for an integer, 0 for a number)."""
     if isinstance(value, Ref):
         try:
             value = value.read(ctx.bb.get)
@@ -167,8 +168,9 @@ def _number(value: Any, ctx: RunContext, what: str, integer: bool,
     ok = (int,) if integer else (int, float)
     if value is None and allow_none:
         return None, None
-    if isinstance(value, bool) or not isinstance(value, ok) or value < (1 if integer else 0):
-        return None, f"{what} is {value!r}, expected {'an integer >= 1' if integer else 'a number >= 0'}"
+    low = (1 if integer else 0) if minimum is None else minimum
+    if isinstance(value, bool) or not isinstance(value, ok) or value < low:
+        return None, f"{what} is {value!r}, expected {'an integer' if integer else 'a number'} >= {low:g}"
     return value, None
 
 

@@ -17,8 +17,8 @@ import py_trees
 from py_trees.behaviour import Behaviour
 from py_trees.common import Status
 
-from ._behaviours import RunContext
-from ._model import Ref, RunOnceThen
+from ._behaviours import RunContext, _number
+from ._model import RunOnceThen
 
 __all__ = [
     "CountingParallel", "IfThenElseNode", "PipelineSequenceNode", "RateControllerNode", "RecoveryNode",
@@ -39,16 +39,7 @@ def _halt(child: Behaviour) -> None:
 
 def _param(value: Any, ctx: RunContext, what: str, *, integer: bool, minimum: float) -> tuple[Any, str | None]:
     """A literal-or-reference parameter, read now; (value, None) or (None, error)."""
-    if isinstance(value, Ref):
-        try:
-            value = value.read(ctx.bb.get)
-        except KeyError as exc:
-            return None, f"{what}: {exc.args[0]}"
-    ok = (int,) if integer else (int, float)
-    if isinstance(value, bool) or not isinstance(value, ok) or value < minimum:
-        kind = "an integer" if integer else "a number"
-        return None, f"{what} is {value!r}, expected {kind} >= {minimum:g}"
-    return value, None
+    return _number(value, ctx, what, integer, minimum=minimum)
 
 
 class _Control(py_trees.composites.Composite):
