@@ -56,8 +56,10 @@ class App:
                 subsystems see it when ``world_first``, else once it runs.
         """
         args = self.args
-        # a window is watched by a person: --gui runs in real time unless told otherwise
-        gui_clock = "wall" if getattr(args, "gui", False) else None
+        # a window (or a live Foxglove view) is watched by a person: it runs in real time
+        # unless told otherwise
+        watched = getattr(args, "gui", False) or getattr(args, "foxglove", None) is not None
+        gui_clock = "wall" if watched else None
         clock = clock or getattr(args, "clock", None) or gui_clock or self.cfg.clock
         rt = Runtime(clock=clock, bus=self._transport(), watchdog=watchdog)
         try:

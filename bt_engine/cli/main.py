@@ -20,6 +20,7 @@ import sys
 from typing import Callable
 
 from ..errors import ActorbtError
+from ..ros.live_options import LiveOptions, add_live_options
 from . import topic
 from .app import App
 from .config import Config, load_config
@@ -120,6 +121,18 @@ def cmd_call(args: argparse.Namespace, app: App) -> int:
     return 0
 
 
+def cmd_run(args: argparse.Namespace, app: App) -> int:
+    """``run``, with what --bag and --foxglove add around the run (checked before the
+    world is built)."""
+    from ..trees.cli import cmd_run as run_tree
+    options = LiveOptions.of(args)
+    if not options:
+        return run_tree(args, app)
+    options.check()
+    from ..ros.live import around_run
+    return run_tree(args, app, around=around_run(options, seed=getattr(args, "seed", None)))
+
+
 def cmd_shell(args: argparse.Namespace, app: App) -> int:
     from .shell import ActorShell
     rt = app.runtime()
@@ -207,6 +220,8 @@ def _tree_commands(sub: argparse._SubParsersAction) -> None:
 
     tree_help = "The tree's name (as `actorbt list` shows it) or the path of a mission YAML file."
     trace_help = "A trace (.jsonl) written by `run --record`, `demo`, `eval` or `serve`."
+    replay_help = ("A trace (.jsonl) written by `run --record`, `demo`, `eval` or `serve`, or a bag "
+                   "folder written by `run --bag` or `demo --bag`.")
 
     p = _command(sub, "run", "run a tree with live progress: TREE [--arg k=v ...]",
                  "Run a mission, printing the active node as it goes, then its outcome, outputs, "
@@ -222,8 +237,9 @@ def _tree_commands(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--quiet", action="store_true", help="Print no progress, only the outcome.")
     p.add_argument("--ticks", action="store_true", help="Also print a line for every tick.")
     p.add_argument("--json", action="store_true", help="Print the outputs as JSON.")
+    add_live_options(p)
     _common(p)
-    p.set_defaults(func=tree_command("run"))
+    p.set_defaults(func=cmd_run)
 
     p = _command(sub, "check", "validate mission files without running them",
                  "Validate mission files without running them: YAML, structure, actor names and "
@@ -264,10 +280,10 @@ def _tree_commands(sub: argparse._SubParsersAction) -> None:
     p = _command(sub, "replay", "re-run a recorded tree against its recording; exit 1 on a divergence",
                  "Run a recorded tree again with every actor call answered from the recording (no robot, "
                  "no simulator) and compare what happens; exit status 1 at the first divergence.")
-    p.add_argument("trace", help=trace_help)
+    p.add_argument("trace", help=replay_help)
     p.add_argument("--trees", metavar="DIR",
                    help="Find the tree files in DIR (default: the paths the recording names).")
-    p.set_defaults(func=tree_command("replay"))
+    p.set_defaults(func=_lazy("bt_engine.ros.bag_replay", "cmd_replay"))
 
     p = _command(sub, "plot", "draw the timeline of a recorded run",
                  "Draw the timeline of a recorded run: each node's running time and each actor call.")

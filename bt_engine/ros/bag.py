@@ -209,10 +209,10 @@ class BagRecorder:
     def write(self, topic: str, msg: Any) -> None:
         """Write ``msg`` on bag topic ``topic`` at the runtime clock's now."""
         data = serialize(msg)
-        stamp = int(round(self.rt.now() * 1e9))
-        with self._lock:
+        with self._lock:  # stamped under the lock: the file's order is the order in time
             if self._closed:
                 return
+            stamp = int(round(self.rt.now() * 1e9))
             self._writer.write(self._connections[topic], stamp, data)
             self.counts[topic] += 1
 

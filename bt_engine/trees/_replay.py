@@ -162,16 +162,19 @@ def _same(expected: dict[str, Any], got: dict[str, Any], previous: tuple[dict, d
     return all(expected.get(k) == got.get(k) for k in _KEYS.get(kind, ()))
 
 
-def read_trace(path: str | Path) -> tuple[dict[str, Any], list[dict[str, Any]]]:
+def read_trace(path: str | Path, lines: list[str] | None = None) -> tuple[dict[str, Any], list[dict[str, Any]]]:
     """The header and the events of a trace file, event times relative to its start.
+    ``lines``: the trace's lines when they were read from elsewhere (a rosbag2 folder's
+    /actorbt/trace topic); ``path`` then names them in errors.
 
     Raises:
         ReplayError: unreadable file, bad JSON, or not an actorbt trace of this version.
     """
-    try:
-        lines = Path(path).read_text(encoding="utf-8").splitlines()
-    except OSError as exc:
-        raise ReplayError(f"{path}: cannot read trace: {exc.strerror or exc}") from None
+    if lines is None:
+        try:
+            lines = Path(path).read_text(encoding="utf-8").splitlines()
+        except OSError as exc:
+            raise ReplayError(f"{path}: cannot read trace: {exc.strerror or exc}") from None
     records = []
     for number, line in enumerate(lines, 1):
         if not line.strip():
@@ -402,11 +405,14 @@ def _locate(header: dict[str, Any], trace: Path, trees: str | Path | None) -> tu
     return files, notes
 
 
-def replay(trace: str | Path, *, trees: str | Path | None = None, wall_timeout: float = 120.0) -> ReplayReport:
+def replay(trace: str | Path, *, trees: str | Path | None = None, wall_timeout: float = 120.0,
+           lines: list[str] | None = None) -> ReplayReport:
     """Re-execute a recorded tree run and compare it with the recording.
 
     Args:
-        trace: the ``.jsonl`` file.
+        trace: the ``.jsonl`` file (or where ``lines`` came from: the trees are looked
+            for beside it).
+        lines: the trace's lines, when not read from ``trace`` (a bag's /actorbt/trace).
         trees: a folder to find the tree files in by name; by default the paths the
             header recorded (relative to the current directory, or the trace's folder).
         wall_timeout: give up after this many real seconds.
@@ -416,7 +422,7 @@ def replay(trace: str | Path, *, trees: str | Path | None = None, wall_timeout: 
         MissionError: a tree file no longer loads.
     """
     trace = Path(trace)
-    header, events = read_trace(trace)
+    header, events = read_trace(trace, lines)
     expected = [e for e in events if e.get("type") in COMPARED]
     if expected:  # times relative to the recorded run's start (the module docstring)
         t0 = float(expected[0].get("t", 0.0))

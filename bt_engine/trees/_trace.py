@@ -213,7 +213,9 @@ class _LogHandler(logging.Handler):
 
 
 class _RuntimeHooks:
-    """What the runtime calls as ``rt.recorder`` (Transaction start and end)."""
+    """What the runtime calls as ``rt.recorder`` (Transaction start and end). The hooks
+    that were ``rt.recorder`` before are told too (another recorder, a live view), also
+    once this recorder is closed: recorders opened and closed in any order keep the chain."""
 
     def __init__(self, recorder: TraceRecorder) -> None:
         self.recorder = recorder
@@ -223,11 +225,17 @@ class _RuntimeHooks:
             parent = txn.parent.id if txn.parent is not None else None
             self.recorder.emit({"type": "txn", "phase": "start", "txn": txn.id, "parent": parent,
                                 "actor": txn.path, "mode": txn.mode.value})
+        previous = self.recorder._previous_recorder
+        if previous is not None:
+            previous.call_started(txn)
 
     def call_finished(self, txn: Any) -> None:
         if self.recorder.transactions and self.recorder.followed(txn):
             self.recorder.emit({"type": "txn", "phase": "end", "txn": txn.id, "actor": txn.path,
                                 "state": txn.state.value})
+        previous = self.recorder._previous_recorder
+        if previous is not None:
+            previous.call_finished(txn)
 
     def emit(self, event: dict[str, Any]) -> None:
         self.recorder.emit(event)

@@ -13,7 +13,7 @@ import pprint
 import sys
 import time
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable
 
 from ..errors import ActorbtError, ActorError
 from ._errors import MissionError, TreeFailure
@@ -43,13 +43,19 @@ def _mission(host: TreeHost, spec: str) -> Mission:
     )
 
 
-def cmd_run(args: argparse.Namespace, app: Any) -> int:
+def cmd_run(args: argparse.Namespace, app: Any, *,
+            around: Callable[[Any, TreeHost, Mission, dict], Any] | None = None) -> int:
     """Run a tree; unless ``--quiet``, with live progress and an ending like ``actorbt
     demo``'s: the outcome (outputs once, or where it failed), sim and wall time of the
-    run, and the trace file given by ``--record``."""
+    run, and the trace file given by ``--record``.
+
+    ``around(rt, host, mission, inputs)``, when given, is called before the run starts
+    and returns what watches it (``--bag``, ``--foxglove``): its ``close()`` is called
+    once the run ended, and the line its ``summary()`` returns ends the report."""
     rt = app.runtime()
     failure: TreeFailure | None = None
     result: Any = None
+    watcher: Any = None
     try:
         host = tree_host(rt, create=True)
         assert host is not None
@@ -60,6 +66,8 @@ def cmd_run(args: argparse.Namespace, app: Any) -> int:
         if not args.quiet:
             host.observers.append(ProgressPrinter(sys.stdout, ticks=args.ticks, outcomes=False))
         recorder = None
+        if around is not None:
+            watcher = around(rt, host, mission, inputs)
         if args.record:
             from ._trace import TraceRecorder
             recorder = TraceRecorder(args.record, host, tree=mission.name, inputs=inputs,
@@ -76,7 +84,11 @@ def cmd_run(args: argparse.Namespace, app: Any) -> int:
             if recorder is not None:
                 recorder.close()
     finally:
-        app.close(rt)
+        try:
+            if watcher is not None:
+                watcher.close()
+        finally:
+            app.close(rt)
     shown = json.dumps(result, default=str) if args.json else pprint.pformat(result)
     if args.quiet:  # only the result; a failure on stderr
         if failure is not None:
@@ -91,6 +103,8 @@ def cmd_run(args: argparse.Namespace, app: Any) -> int:
     print(time_line(sim_time, wall_time))
     if args.record:
         print(f"trace:     {args.record}")
+    if watcher is not None and watcher.summary():
+        print(watcher.summary())
     return 0 if failure is None else 1
 
 
