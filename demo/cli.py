@@ -4,6 +4,8 @@ from __future__ import annotations
 import pathlib
 import sys
 
+from bt_engine.ros.live_options import LiveOptions, add_live_options
+
 
 def _world_options(p) -> None:
     """--world, --locations and --no-map, as demo and eval take them."""
@@ -32,6 +34,7 @@ def register(sub, common) -> None:
                    help="The mission to run (default: bt_pick_place).")
     p.add_argument("--out", default="out/demo", metavar="DIR",
                    help="The folder for the trace and pictures (default: out/demo).")
+    add_live_options(p)
     p.set_defaults(func=cmd_demo)
 
     e = sub.add_parser("eval", help="success rate of a mission over many seeds",
@@ -76,14 +79,18 @@ def cmd_demo(args, app) -> int:
     out = pathlib.Path(args.out)
     _check_category(args.category, "any")
     _check_world(args.world, args.seed, args.locations)
+    live = LiveOptions.of(args)
+    live.check()
     print(f"actorbt demo: {args.tree} in {args.world} (seed {args.seed}), category {args.category}",
           flush=True)
     # the runtime is built from actorbt.yaml, as for every command (subsystems, trees, simulator)
     ep = run_episode(args.tree, args.world, args.seed, args.category, out_dir=out, progress=sys.stdout,
-                     app=app, locations=args.locations, mapping=args.no_map)
+                     app=app, locations=args.locations, mapping=args.no_map, live=live)
     print_outcome(ep)
     timeline = plot_trace(ep.trace, out / "timeline.png", title=f"{args.tree} (seed {args.seed})")
     print(f"trace:     {ep.trace}\ntop view:  {out / 'top_view.png'}\ntimeline:  {timeline}")
+    if live.bag:
+        print(f"bag:       {live.bag}")
     return 0 if ep.success else 1
 
 

@@ -242,7 +242,7 @@ def run_episode(tree: str = "bt_pick_place", world: str = "house", seed: int = 0
                 progress: TextIO | None = None, world_setup: Any = None,
                 inputs: dict | None = None, observers: list | None = None,
                 app: App | None = None, config: Config | None = None,
-                locations: str | None = None, mapping: bool = False) -> Episode:
+                locations: str | None = None, mapping: bool = False, live: Any = None) -> Episode:
     """Run ``tree`` once in a fresh ``world`` built from ``seed``.
 
     The runtime is built as every ``actorbt`` command builds it (see :func:`episode_app`):
@@ -255,7 +255,8 @@ def run_episode(tree: str = "bt_pick_place", world: str = "house", seed: int = 0
     inputs. With ``out_dir``, the trace and the top view are written there. ``locations``
     names places (a YAML file) for a world built from a map_server map. With ``mapping``
     the world has no map server: for trees that map it first (bt_map_then_fetch calls
-    navstack's ``start_mapping``).
+    navstack's ``start_mapping``). ``live`` (a :class:`bt_engine.ros.live_options.LiveOptions`)
+    records a bag of the episode and serves a Foxglove view (``demo --bag --foxglove``).
 
     Raises:
         ConfigError: actorbt.yaml names no world to run in (or ``world`` is ``none``).
@@ -304,6 +305,10 @@ def run_episode(tree: str = "bt_pick_place", world: str = "house", seed: int = 0
             out.mkdir(parents=True, exist_ok=True)
             ep.trace = str(out / "trace.jsonl")
             recorder = TraceRecorder(ep.trace, host, tree=tree, inputs=args, seed=seed)
+        session = None
+        if live:
+            from bt_engine.ros.live import LiveSession
+            session = LiveSession(rt, host, live, tree=tree, inputs=args, seed=seed)
         before = {n: sim.object_pose(n) for n in sim.object_names()}
         sim0 = rt.now()
         try:
@@ -323,6 +328,8 @@ def run_episode(tree: str = "bt_pick_place", world: str = "house", seed: int = 0
             probe.summarise()
             if recorder is not None:
                 recorder.close()
+            if session is not None:
+                session.close()
         ep.success = ep.tree_status == "SUCCESS"
         if ep.success and sim.place_location is not None and tree in ("bt_pick_place", "bt_carry"):
             placed = [n for n in sim.object_names()

@@ -28,6 +28,8 @@ import threading
 import time
 from typing import Any, Callable
 
+from .live_options import LiveOptions, add_live_options
+
 #: this module's import time: the start of the process where /proc cannot tell
 _IMPORTED = time.monotonic()
 
@@ -47,6 +49,7 @@ def register(sub: Any, common: Callable[[argparse.ArgumentParser], None]) -> Non
                         "(default: .actorbt/goals beside actorbt.yaml).")
     p.add_argument("--no-record", action="store_true",
                    help="Do not write a trace of each tree goal.")
+    add_live_options(p, trace=False)
     p.set_defaults(func=cmd_serve)
 
     p = sub.add_parser(
@@ -122,7 +125,9 @@ def cmd_serve(args: argparse.Namespace, app: Any) -> int:
 
     def on_term(signum: int, frame: Any) -> None:
         raise KeyboardInterrupt
-    rt = server = None
+    rt = server = session = None
+    live = LiveOptions.of(args)
+    live.check()
     try:
         if threading.current_thread() is threading.main_thread():
             signal.signal(signal.SIGTERM, on_term)
@@ -155,6 +160,12 @@ def cmd_serve(args: argparse.Namespace, app: Any) -> int:
             print(f"  {action}", flush=True)
         if record_dir:
             print(f"actorbt serve: recording tree goals in {record_dir}", flush=True)
+        if live:
+            from ..trees import tree_host
+            from .live import LiveSession
+            session = LiveSession(rt, tree_host(rt, create=True), live, out=sys.stdout)
+            if live.bag:
+                print(f"actorbt serve: recording a bag in {live.bag}", flush=True)
         print(f"actorbt serve: ready in {uptime():.1f} s (Ctrl-C stops)", flush=True)
         stop = threading.Event()
         while not stop.wait(3600):
@@ -163,8 +174,12 @@ def cmd_serve(args: argparse.Namespace, app: Any) -> int:
         pass
     finally:
         try:
-            if server is not None:
-                server.close()
+            try:
+                if session is not None:
+                    session.close()
+            finally:
+                if server is not None:
+                    server.close()
         finally:
             if rt is not None:
                 app.close(rt)
