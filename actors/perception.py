@@ -64,6 +64,8 @@ MIN_VISIBLE_WIDTH = 0.5 # fraction of its body an object cut by the image border
 GRAZING = 0.3           # a face seen at less than ~17 degrees (sin) is not measured
 DEPTH_NOISE = 0.001     # [m] RMS a true cylinder's surface may deviate from the fitted one
                         # with exact depth (the rendering's own error is ~0.3 mm)
+PATCH_SHARE = 0.4       # a segment whose surroundings continue it in colour this much
+#                         (or more) is a patch of something larger
 LABEL_GAP = 0.10        # [m] a printed label this tall may split an object's colour in two
 UPRIGHT_TILT = math.radians(12)   # an axis nearer the vertical than this is standing
 LYING_TILT = math.radians(65)     # ... farther than this, lying; between them, leaning
@@ -273,6 +275,8 @@ class _Segment:
     grid: np.ndarray | None = None   # (h, w, 3) map-frame points over the bounding box,
                                      # NaN outside the segment (image neighbours stay neighbours)
     in_structure: float = 0.0        # share of its pixels in a coloured region of furniture size
+    continued: float = 0.0           # share of its surroundings that continue its surface
+    #                                  in colour (measured when in_structure: a patch of it)
 
     @property
     def noise(self) -> float:
@@ -500,6 +504,31 @@ def _structure(lab: np.ndarray, P: np.ndarray) -> np.ndarray:
     return big
 
 
+def _continued_share(roi: np.ndarray, x0: int, y0: int, lab: np.ndarray, depth: np.ndarray,
+                     pad: int = 2) -> float:
+    """Share of the pixels just around a segment that are coloured and continue its
+    surface without a depth step: high for a patch of something larger (light breaks a
+    table into patches of two hues, one of them a category's), low for an object, which
+    stands out against the floor or in front of what is behind it."""
+    h, w = lab.shape
+    bh, bw = roi.shape
+    Y0, X0, Y1, X1 = max(0, y0 - pad), max(0, x0 - pad), min(h, y0 + bh + pad), min(w, x0 + bw + pad)
+    inside = np.zeros((Y1 - Y0, X1 - X0), np.uint8)
+    inside[y0 - Y0:y0 - Y0 + bh, x0 - X0:x0 - X0 + bw] = roi
+    kernel = np.ones((2 * pad + 1, 2 * pad + 1), np.uint8)
+    ring = (cv2.dilate(inside, kernel) > 0) & (inside == 0)
+    if not ring.any():
+        return 0.0
+    d = depth[Y0:Y1, X0:X1]
+    own = np.where((inside > 0) & np.isfinite(d), d, np.nan).astype(np.float32)
+    near_max = cv2.dilate(np.nan_to_num(own, nan=0.0), kernel)         # its depths nearby
+    near_min = cv2.erode(np.nan_to_num(own, nan=np.inf), kernel)
+    tol = np.maximum(0.02, 0.03 * d)
+    with np.errstate(invalid="ignore"):
+        same = (d >= near_min - tol) & (d <= near_max + tol)
+    return float(((lab[Y0:Y1, X0:X1] > 0) & same)[ring].mean())
+
+
 def _segments(frame: RGBDFrame, P: np.ndarray, appearances=()) -> list[_Segment]:
     lab, names = colour_labels(frame.bgr, appearances)
     cut = _occlusion_cuts(lab, frame.depth)
@@ -524,6 +553,8 @@ def _segments(frame: RGBDFrame, P: np.ndarray, appearances=()) -> list[_Segment]
             seg = _measure(name, roi, x0, y0, P, frame.depth, lab, frame)
             if seg is not None and seg.range <= MAX_RANGE:
                 seg.in_structure = float(structure[y0:y0 + bh, x0:x0 + bw][roi].mean())
+                if seg.in_structure > 0.5:
+                    seg.continued = _continued_share(roi, x0, y0, lab, frame.depth)
                 out.append(seg)
     return out
 
@@ -620,6 +651,13 @@ def _score_posed(seg: _Segment, app: Appearance, direction: np.ndarray) -> tuple
     if best is not None and len(best[4]) >= 15:      # refit on the body alone (not a neck)
         fit = axis_fit.refine_axis(best[4], app.body_radius, fit.point, fit.direction)
         best = _profile_fit(seg, app, fit)
+    if best is not None:
+        d = fit.direction
+        tilt = math.acos(min(1.0, abs(float(d[2]))))
+        if LYING_TILT >= tilt and d[2] * best[1] < 0:
+            # standing or leaning, a body stands on its base: the lower end (the profile
+            # of a can fits either way; a bottle upside down is not one leaning)
+            best = _profile_fit(seg, app, fit, signs=(-best[1],))
     if best is None:
         return 0.0, {"reason": "too little of its side in view"}
     rms, sign, lo, hi, _ = best
@@ -638,8 +676,6 @@ def _score_posed(seg: _Segment, app: Appearance, direction: np.ndarray) -> tuple
         conf *= 0.85
     tilt = math.acos(min(1.0, abs(float(d[2]))))
     pose = "upright" if tilt < UPRIGHT_TILT else "lying" if tilt > LYING_TILT else "tilted"
-    if pose == "tilted" and up[2] < 0:
-        return 0.0, {"reason": "its base above its top"}   # a leaning body stands on its base
     centre = base_pt + 0.5 * app.body_top * up
     if pose == "lying":
         yaw = math.atan2(d[1], d[0])
@@ -651,17 +687,18 @@ def _score_posed(seg: _Segment, app: Appearance, direction: np.ndarray) -> tuple
                   "length_err": e_len}
 
 
-def _profile_fit(seg: _Segment, app: Appearance, fit: axis_fit.AxisFit):
+def _profile_fit(seg: _Segment, app: Appearance, fit: axis_fit.AxisFit, signs=(1.0, -1.0)):
     """How well the side's distances from ``fit``'s axis follow ``app``'s radius profile,
     with the base at the low end of the points along the axis or at the high end: the
     better as (trimmed RMS [m], +1 or -1: the base at the low or high end, low and high
-    ends along the axis from fit.point [m], the body's points); None when too few."""
+    ends along the axis from fit.point [m], the body's points); None when too few.
+    ``signs``: the ends tried (+1: the low end the base, -1: the high end)."""
     d = fit.direction
     lo, hi = (float(v) for v in np.percentile((seg.pts - fit.point) @ d, (0.5, 99.5)))
     s_side = (fit.side - fit.point) @ d
     radial = np.linalg.norm((fit.side - fit.point) - np.outer(s_side, d), axis=1)
     best = None
-    for sign in (1.0, -1.0):
+    for sign in signs:
         h = s_side - lo if sign > 0 else hi - s_side
         inner = (h > 0.01) & (h < app.height - 0.01)
         if inner.sum() < 10:
@@ -887,6 +924,8 @@ def detect(frame: RGBDFrame, appearances: dict[str, Appearance] | None = None) -
     T_base_map = np.linalg.inv(frame.T_map_base)
     out = []
     for seg in _segments(frame, P, list(apps.values())):
+        if seg.continued > PATCH_SHARE:
+            continue                                   # a patch of furniture, of any shape
         best, best_conf, evidence = None, 0.0, {}
         for app in apps.values():
             conf, ev = _score(seg, app)
