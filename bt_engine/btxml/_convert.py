@@ -27,13 +27,16 @@ from ..trees._expr import keys_of, parse_expression
 from ..trees._model import Ref
 from ..trees._parse import suggest
 from ._errors import BtXmlError, Pos, UnknownXmlNodeError, UnsupportedXmlError
-from ._nodes import NodeKind, NodeModel, NodeSpec, PortSpec, convert_literal, guess_literal, python_type
+from ._extensions import HANDLERS as EXTENSION_HANDLERS
+from ._nodes import JSON_PREFIX, NodeKind, NodeModel, NodeSpec, PortSpec, convert_literal, decode_json, guess_literal
 from ._script import Assignment, condition, statements
 from ._source import XElement, read_xml
+from ._values import REF_TEXT, RESULT_TYPE, ref_keys, value_type_of_port
 
 __all__ = ["BUILTINS", "NAV2", "UNSUPPORTED", "Importer", "TreeDef", "TreeInterface"]
 
 _IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
+_ACTOR = re.compile(r"[A-Za-z_][A-Za-z0-9_]*(\.[A-Za-z_][A-Za-z0-9_]*)*\Z")
 _REF = re.compile(r"\{([^{}]*)\}\Z")
 _LONG_FORMS = ("Action", "Condition", "Control", "Decorator", "SubTree")
 #: attributes that are not ports
@@ -55,12 +58,21 @@ class TreeDef:
 @dataclass
 class TreeInterface:
     """What a converted tree reads and writes: its inputs (required when it never writes
-    them) and outputs, by key."""
+    them) and outputs, by key. When the node model declares the tree (``<SubTree ID>``),
+    its ports are the interface: typed, documented, in their order, with the tree's
+    description as its doc, and ``result_port`` the output port (of type
+    :data:`~._values.RESULT_TYPE`) that receives the whole result mapping."""
 
     inputs: dict[str, bool] = field(default_factory=dict)  # key -> required
     outputs: list[str] = field(default_factory=list)
     types: dict[str, str] = field(default_factory=dict)     # key -> mission type name
     defaults: dict[str, Any] = field(default_factory=dict)
+    docs: dict[str, str] = field(default_factory=dict)      # input key -> its doc
+    output_types: dict[str, str] = field(default_factory=dict)
+    output_docs: dict[str, str] = field(default_factory=dict)
+    declared: bool = False
+    doc: str | None = None
+    result_port: str | None = None
 
 
 class _Tree:
@@ -197,46 +209,75 @@ class Importer:
             root = self.node(tree.element.children[0], ctx, "sequence")
         finally:
             self._active.pop()
-        iface = TreeInterface()
         spec = self.model.get(tree_id)
-        declared = {p.name: p for p in spec.ports} if spec is not None and spec.kind is NodeKind.SUBTREE else {}
-        # A key is an input when the tree reads it before (in document order) it writes it,
-        # or when the model declares it as an input port of this subtree.
-        read_first = [k for k, pos in ctx.reads.items() if k not in ctx.writes or _order(pos) < _order(ctx.writes[k])]
-        for key in [*read_first, *(p.name for p in declared.values() if p.reads and p.name not in read_first)]:
-            port = declared.get(key)
-            iface.inputs[key] = key not in ctx.writes
-            if port is not None:
-                iface.types[key] = _mission_type(port.type)
-                if port.default is not None and not _REF.match(port.default):
-                    iface.inputs[key] = False
-                    iface.defaults[key] = _convert(port.default, port, port.pos)
-        iface.outputs = [k for k in ctx.writes if not k.startswith("_")]
-        for port in declared.values():
-            if port.writes and port.name not in iface.outputs:
-                raise BtXmlError(port.pos, f"subtree {tree_id!r} declares output port {port.name!r}, but nothing in "
-                                           "it writes that key")
+        iface = self.interface(tree_id, ctx, spec if spec is not None and spec.kind is NodeKind.SUBTREE else None)
         self.interfaces[tree_id] = iface
         self.missions[tree_id] = self.mission(tree, iface, root)
+        return iface
+
+    def interface(self, tree_id: str, ctx: _Tree, spec: NodeSpec | None) -> TreeInterface:
+        iface = TreeInterface(declared=spec is not None)
+        declared = {p.name: p for p in spec.ports if p.type.strip() != RESULT_TYPE} if spec is not None else {}
+        if spec is not None:
+            iface.doc = spec.description or None
+            iface.result_port = next((p.name for p in spec.ports if p.writes and p.type.strip() == RESULT_TYPE), None)
+        # A key is an input when the tree reads it before (in document order) it writes it,
+        # or when the model declares it as an input port of this subtree (then in the
+        # model's order, required when the port has no default, as BehaviorTree.CPP has it).
+        read_first = [k for k, pos in ctx.reads.items() if k not in ctx.writes or _order(pos) < _order(ctx.writes[k])]
+        inputs = [p.name for p in declared.values() if p.reads]
+        for key in [*inputs, *(k for k in read_first if k not in inputs)]:
+            port = declared.get(key)
+            iface.inputs[key] = key not in ctx.writes
+            if port is not None and port.reads:
+                iface.inputs[key] = port.default is None
+                iface.types[key] = value_type_of_port(port.type).value
+                if port.description:
+                    iface.docs[key] = port.description
+                if port.default is not None and not _REF.match(port.default):
+                    iface.defaults[key] = _default(port.default, port, port.pos)
+        if spec is None:
+            iface.outputs = [k for k in ctx.writes if not k.startswith("_")]
+        else:
+            iface.outputs = [p.name for p in declared.values() if p.writes]
+            for port in declared.values():
+                if port.writes:
+                    iface.output_types[port.name] = value_type_of_port(port.type).value
+                    if port.description:
+                        iface.output_docs[port.name] = port.description
+        written = [k for k in ctx.writes if not k.startswith("_")]
+        for port in declared.values():
+            if port.writes and port.name not in written:
+                raise BtXmlError(port.pos, f"subtree {tree_id!r} declares output port {port.name!r}, but nothing in "
+                                           "it writes that key")
         return iface
 
     def mission(self, tree: TreeDef, iface: TreeInterface, root: dict) -> dict:
         inputs: dict[str, Any] = {}
         for key, required in iface.inputs.items():
             vtype = iface.types.get(key, "any")
-            if required:
-                inputs[key] = vtype
-            else:
-                inputs[key] = {"type": vtype, "default": iface.defaults.get(key)}
-        mission: dict[str, Any] = {
-            "name": tree.id,
-            "doc": f"Imported from {Path(tree.file).name}:{tree.element.pos.line} (BehaviorTree.CPP "
-                   f"<BehaviorTree ID=\"{tree.id}\">)." if self.dialect == "btcpp" else
-                   f"Imported from {Path(tree.file).name}:{tree.element.pos.line} (pytwb).",
-        }
+            spec: dict[str, Any] = {"type": vtype}
+            if not required:
+                spec["default"] = iface.defaults.get(key)
+            if key in iface.docs:
+                spec["doc"] = iface.docs[key]
+            inputs[key] = vtype if list(spec) == ["type"] else spec
+        mission: dict[str, Any] = {"name": tree.id}
+        if iface.declared:
+            if iface.doc is not None:
+                mission["doc"] = iface.doc
+        else:
+            mission["doc"] = (f"Imported from {Path(tree.file).name}:{tree.element.pos.line} (BehaviorTree.CPP "
+                              f"<BehaviorTree ID=\"{tree.id}\">)." if self.dialect == "btcpp" else
+                              f"Imported from {Path(tree.file).name}:{tree.element.pos.line} (pytwb).")
         if inputs:
             mission["inputs"] = inputs
-        if iface.outputs:
+        if iface.output_types and any(t != "any" for t in iface.output_types.values()) or iface.output_docs:
+            mission["outputs"] = {
+                key: {"type": iface.output_types.get(key, "any"),
+                      **({"doc": iface.output_docs[key]} if key in iface.output_docs else {})}
+                for key in iface.outputs}
+        elif iface.outputs:
             mission["outputs"] = list(iface.outputs)
         mission["root"] = root
         return mission
@@ -278,6 +319,8 @@ class Importer:
         declared = long_kind or (spec.kind.value if spec is not None else None)
         if node_id in NAV2 and declared in ("Control", "Decorator"):
             return NAV2[node_id](self, el, node_id, ports, ctx, parent)
+        if node_id in EXTENSION_HANDLERS and declared is not None:
+            return EXTENSION_HANDLERS[node_id](self, el, node_id, ports, ctx, parent)
         if node_id in UNSUPPORTED:
             raise UnsupportedXmlError(el.pos, f"<{el.tag}> is not supported: {UNSUPPORTED[node_id]}")
         if declared in ("Control", "Decorator"):
@@ -327,14 +370,38 @@ class Importer:
         return value.replace("{", "{{").replace("}", "}}") if isinstance(value, str) else value
 
     def input_value(self, el: XElement, attr: str, text: str, ctx: _Tree, port: PortSpec | None = None) -> Any:
+        """An input port's value as a mission value: a reference (``{key}``, ``{=}``,
+        ``{key.field}``), ``json:`` text (whose references are read) or a literal."""
+        stripped = text.strip()
+        if stripped.startswith(JSON_PREFIX):
+            return self.json_value(el, attr, text, ctx)
+        dotted = REF_TEXT.match(stripped)
+        if dotted is not None and dotted.group(2):
+            ctx.read(dotted.group(1), el.at(attr))
+            return stripped
         key = self.key(el, attr, text)
         if key is None:
             return self.literal(el, attr, text, port)
         ctx.read(key, el.at(attr))
         return "{" + key + "}"
 
+    def json_value(self, el: XElement, attr: str, text: str, ctx: _Tree) -> Any:
+        """``json:`` text as a mission value: its strings are mission strings (references
+        and doubled braces); the keys it references are read."""
+        try:
+            value = decode_json(text)
+        except ValueError as exc:
+            raise BtXmlError(el.at(attr), f"{attr}: {exc}, expected json: and a JSON value") from None
+        for key in ref_keys(value):
+            ctx.read(key, el.at(attr))
+        return value
+
     def number(self, el: XElement, attr: str, text: str, ctx: _Tree, *, integer: bool, scale: float = 1.0,
                ref_ok: bool = True) -> Any:
+        dotted = REF_TEXT.match(text.strip())
+        if dotted is not None and dotted.group(2) and ref_ok:
+            ctx.read(dotted.group(1), el.at(attr))
+            return text.strip()
         key = self.key(el, attr, text)
         if key is not None:
             if not ref_ok:
@@ -407,7 +474,7 @@ class Importer:
     # ------------------------------------------------------------ leaves and subtrees
 
     def leaf(self, el: XElement, node_id: str, ports: dict[str, str], ctx: _Tree, spec: NodeSpec | None) -> dict:
-        if not _IDENT.match(node_id):
+        if not _ACTOR.match(node_id):
             raise BtXmlError(el.pos, f"node {node_id!r} is not a valid actor name, expected letters, digits and '_'")
         args: dict[str, Any] = {}
         outs: list[tuple[str, str]] = []
@@ -468,19 +535,25 @@ class Importer:
             autoremap = True
         args: dict[str, Any] = {}
         outs: list[tuple[str, str]] = []
+        result_key = None
+        if iface.result_port is not None and iface.result_port in ports:
+            text = ports.pop(iface.result_port)
+            result_key = self.key(el, iface.result_port, text)
+            if result_key is None:
+                raise BtXmlError(el.at(iface.result_port), f"port {iface.result_port!r} receives the result of tree "
+                                                           f"{tree_id!r}, expected a blackboard key such as \"{{result}}\"")
+            ctx.write(result_key, el.at(iface.result_port))
+        spec = self.model.get(tree_id)
         known = [*iface.inputs, *(o for o in iface.outputs if o not in iface.inputs)]
         for port, text in ports.items():
             if port not in iface.inputs and port not in iface.outputs:
                 raise BtXmlError(el.at(port), f"tree {tree_id!r} has no port {port!r}{suggest(port, known)}: it neither "
                                               f"reads nor writes that key, expected one of: {', '.join(known) or '(none)'}")
-            key = self.key(el, port, text)
             if port in iface.inputs:
-                if key is None:
-                    args[port] = self.guess(text)
-                else:
-                    args[port] = "{" + key + "}"
-                    ctx.read(key, el.at(port))
+                declared = spec.port(port) if spec is not None and spec.kind is NodeKind.SUBTREE else None
+                args[port] = self.input_value(el, port, text, ctx, declared)
             if port in iface.outputs:
+                key = self.key(el, port, text) if not text.strip().startswith(JSON_PREFIX) else None
                 if key is None:
                     if port not in iface.inputs:
                         raise BtXmlError(el.at(port), f"port {port!r} of tree {tree_id!r} is an output, expected a "
@@ -501,6 +574,11 @@ class Importer:
             if required and port not in args:
                 raise BtXmlError(el.pos, f"SubTree {tree_id!r} reads {port!r}, which nothing in it writes, but this "
                                          f"call does not pass it, expected {port}=\"{{key}}\" or _autoremap=\"true\"")
+        if result_key is not None:
+            node = {"do": tree_id, **({"with": args} if args else {}), "out": result_key}
+            if not outs:
+                return node
+            return {"sequence": [node, {"set": {key: "{" + f"{result_key}.{port}" + "}" for port, key in outs}}]}
         if not outs:
             return self.call(tree_id, args, [], ctx)
         temp = ctx.temp(tree_id)
@@ -549,9 +627,13 @@ def _order(pos: Pos) -> tuple[str, int, int]:
     return (pos.file, pos.line, pos.column)
 
 
-def _mission_type(type_name: str) -> str:
-    annotation = python_type(type_name)
-    return {int: "int", float: "float", bool: "bool", str: "str"}.get(annotation, "any")
+def _default(text: str, port: PortSpec, pos: Pos) -> Any:
+    """A declared input default as a plain value (not a mission string: no references)."""
+    try:
+        return convert_literal(text, port.type)
+    except ValueError as exc:
+        raise BtXmlError(pos, f"the default of port {port.name!r} is declared {port.type or 'untyped'}, but "
+                              f"{exc}") from None
 
 
 def _convert(text: str, port: PortSpec, pos: Pos) -> Any:

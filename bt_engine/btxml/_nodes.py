@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import enum
 import inspect
+import json
 import re
 from dataclasses import dataclass
 from pathlib import Path
@@ -20,8 +21,11 @@ from ..errors import ActorbtError, UnknownActorError
 from ._errors import BtXmlError, Pos, UnknownXmlNodeError
 from ._source import XElement, read_xml
 
-__all__ = ["ModelResolver", "NodeKind", "NodeModel", "NodeSpec", "PortDirection", "PortSpec", "convert_literal",
-           "guess_literal", "python_type", "read_node_model"]
+__all__ = ["JSON_PREFIX", "ModelResolver", "NodeKind", "NodeModel", "NodeSpec", "PortDirection", "PortSpec",
+           "convert_literal", "decode_json", "guess_literal", "python_type", "read_node_model"]
+
+#: port text that holds a JSON value (BehaviorTree.CPP v4's prefix; see ``_values``)
+JSON_PREFIX = "json:"
 
 
 class NodeKind(enum.Enum):
@@ -154,13 +158,28 @@ def guess_literal(text: str) -> Any:
     return text
 
 
+def decode_json(text: str) -> Any:
+    """The value of ``json:`` text.
+
+    Raises:
+        ValueError: the text after ``json:`` is not JSON.
+    """
+    try:
+        return json.loads(text.strip()[len(JSON_PREFIX):])
+    except json.JSONDecodeError as exc:
+        raise ValueError(f"the text after 'json:' is not JSON ({exc.msg} at character {exc.pos + 1})") from None
+
+
 def convert_literal(text: str, type_name: str) -> Any:
     """An attribute's text converted by its port's declared type (unknown types: guessed
-    for numbers and booleans only when the type says nothing; strings stay strings).
+    for numbers and booleans only when the type says nothing; strings stay strings);
+    ``json:`` text is decoded whatever the type.
 
     Raises:
         ValueError: the text is not a value of that type.
     """
+    if text.strip().startswith(JSON_PREFIX):
+        return decode_json(text)
     annotation = python_type(type_name)
     if annotation is int:
         if not _INT.match(text.strip()):
