@@ -449,7 +449,10 @@ def export_tree(name: str, library: TreeLibrary, resolve: Resolver | None = None
         KeyError: no tree of that name in the library.
         ExportError: something in a mission has no XML form (located in its file).
     """
-    root = Exporter(library, resolve).document(name)
+    return _xml_text(Exporter(library, resolve).document(name))
+
+
+def _xml_text(root: ET.Element) -> str:
     ET.indent(root, space="  ")
     return '<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(root, encoding="unicode") + "\n"
 

@@ -252,7 +252,7 @@ def _tree_commands(sub: argparse._SubParsersAction) -> None:
                         "tree without Nav2. Repeat it for several models.")
     p.set_defaults(func=tree_command("check"))
 
-    p = _command(sub, "xml", "BehaviorTree.CPP XML: import trees as missions",
+    p = _command(sub, "xml", "BehaviorTree.CPP XML: import and export trees, Groot2 logs",
                  "Exchange trees with BehaviorTree.CPP v4 (and Groot2, Nav2, pytwb) as XML.")
     xml = p.add_subparsers(dest="xml_command", metavar="ACTION")
     xml.required = True
@@ -269,6 +269,24 @@ def _tree_commands(sub: argparse._SubParsersAction) -> None:
                         "workbench XML (py_trees class names, [Python literal] arguments).")
     p.add_argument("--out", required=True, metavar="DIR", help="Where to write the mission files (created).")
     p.set_defaults(func=_lazy("bt_engine.btxml.cli", "cmd_xml_import"))
+    p = xml.add_parser("export", help="write a tree and the trees it calls as BehaviorTree.CPP XML",
+                       description="Write a tree and every tree it calls as BehaviorTree.CPP v4 XML that Groot2 "
+                                   "opens and edits, with a <TreeNodesModel> built from the actor catalog; "
+                                   "`actorbt xml import` reads it back as the same trees. See docs/btxml.md.")
+    p.add_argument("tree", metavar="TREE", help="The tree to export: a tree name of the trees folder, or a "
+                                                "mission file.")
+    p.add_argument("--out", required=True, metavar="F.xml", help="The XML file to write.")
+    p.set_defaults(func=_lazy("bt_engine.btxml.cli", "cmd_xml_export"))
+    p = xml.add_parser("btlog", help="convert a trace to a Groot2 log (.btlog)",
+                       description="Convert a recorded run (a JSONL trace, as run --record writes it) to the log "
+                                   "file BehaviorTree.CPP's FileLogger2 writes, which Groot2 replays. See "
+                                   "docs/btxml.md.")
+    p.add_argument("trace", metavar="TRACE.jsonl", help="The trace to convert.")
+    p.add_argument("--out", required=True, metavar="F.btlog", help="The Groot2 log file to write.")
+    p.add_argument("--trees", metavar="DIR",
+                   help="A folder to find the trace's tree files in by name (default: the paths the trace "
+                        "recorded).")
+    p.set_defaults(func=_lazy("bt_engine.btxml.cli", "cmd_xml_btlog"))
 
     p = _command(sub, "show", "draw a tree: ASCII here, --out x.png|svg|pdf|dot for a picture",
                  "Draw a mission: as text here, or as a picture with --out.")
