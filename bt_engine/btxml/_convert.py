@@ -221,12 +221,12 @@ class Importer:
         if spec is not None:
             iface.doc = spec.description or None
             iface.result_port = next((p.name for p in spec.ports if p.writes and p.type.strip() == RESULT_TYPE), None)
-        # A key is an input when the tree reads it before (in document order) it writes it,
-        # or when the model declares it as an input port of this subtree (then in the
-        # model's order, required when the port has no default, as BehaviorTree.CPP has it).
+        # A key is an input when the tree reads it before (in document order) it writes it;
+        # when the model declares the subtree, its input ports are (in the model's order,
+        # required when the port has no default, as BehaviorTree.CPP has it).
         read_first = [k for k, pos in ctx.reads.items() if k not in ctx.writes or _order(pos) < _order(ctx.writes[k])]
         inputs = [p.name for p in declared.values() if p.reads]
-        for key in [*inputs, *(k for k in read_first if k not in inputs)]:
+        for key in inputs if spec is not None else read_first:
             port = declared.get(key)
             iface.inputs[key] = key not in ctx.writes
             if port is not None and port.reads:

@@ -124,6 +124,8 @@ class Exporter:
             element.set("ID", attrs.pop("ID"))
         if node.name is not None:
             element.set("name", node.name)
+        elif not _label_kept(node, tag, attrs):
+            element.set("name", node.label)  # the label (and trace paths) of the node read back
         for key, value in attrs.items():
             element.set(key, value)
         return element
@@ -312,6 +314,18 @@ def _walk(node: Node) -> list[Node]:
     for child in children_of(node):
         out.extend(_walk(child))
     return out
+
+
+def _label_kept(node: Node, tag: str, attrs: dict[str, str]) -> bool:
+    """Whether the importer gives an unnamed node the same label: a time or rate is read
+    back as a float (from milliseconds for Sleep and Timeout), so ``wait 1s`` would
+    become ``wait 1.0s``."""
+    value = getattr(node, "seconds", None) if isinstance(node, (Wait, Timeout)) else \
+        getattr(node, "hz", None) if isinstance(node, RateController) else None
+    if value is None or isinstance(value, Ref):
+        return True
+    back = int(attrs["msec"]) * 0.001 if "msec" in attrs else float(next(iter(attrs.values())))
+    return type(back) is type(value) and repr(back) == repr(value)
 
 
 def _msec(seconds: float | Ref) -> str | None:
