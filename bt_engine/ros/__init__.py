@@ -15,6 +15,19 @@
     shell        RemoteShell: ``actorbt rshell``, one warm client for many calls
     cli          ``actorbt serve``, ``actorbt goal``, ``actorbt rcall``, ``actorbt rshell``
 
+Recording and viewing (``--bag``, ``--foxglove``; docs/recording.md):
+
+    live_options     the options and their early checks (imported when the parser is built)
+    cdr              messages as CDR bytes (rclpy), their definitions and hashes (rosbags)
+    tree_status      the tree's status on /actorbt/status (diagnostic_msgs/DiagnosticArray)
+    compressed       sensor_msgs/Image -> CompressedImage, as image_transport does
+    bag              BagRecorder: the robot's topics, the status and the trace to rosbag2
+    bag_replay       ``actorbt replay`` of a bag (its /actorbt/trace)
+    foxglove_scene   the robot's body, detections, goals and path as Foxglove messages
+    foxglove_view    FoxgloveView: the Foxglove SDK server and its channels
+    foxglove_layout  docs/foxglove_layout.json
+    live             LiveSession: all of it around one run, demo episode or serve
+
 Layering: ``ros`` sits above ``bus`` (it implements the bus interface) and the trees
 layer (it serves trees); nothing below imports ``ros``, and only ``bt_engine.cli``,
 the top layer, imports ``ros.cli``.
