@@ -36,8 +36,9 @@ def add_live_options(p: argparse.ArgumentParser, *, trace: bool = True) -> None:
     holds = ("the robot's topics, the tree's status and the run's trace" if trace
              else "the robot's topics and the trees' status")
     p.add_argument("--bag", metavar="DIR",
-                   help=f"Record a rosbag2 folder (MCAP, CDR) in the new folder DIR: {holds}, "
-                        "for `ros2 bag play`, Foxglove" + (" and `actorbt replay DIR`." if trace else "."))
+                   help=f"Record a rosbag2 folder (MCAP, CDR) in the new folder DIR: {holds}, for "
+                        + ("`ros2 bag play`, Foxglove and `actorbt replay DIR`." if trace
+                           else "`ros2 bag play` and Foxglove."))
     p.add_argument("--foxglove", nargs="?", const=FOXGLOVE_PORT, type=_port, metavar="PORT",
                    help="Serve a live view for the Foxglove app on ws://127.0.0.1:PORT (default "
                         f"{FOXGLOVE_PORT}): the map, the robot and its path, the scan, the camera, "
