@@ -107,8 +107,9 @@ class _Expander:
             raise BtlogError(f"the tree has more than {_MAX_UID} nodes, more than a Groot2 log numbers")
         self.next_uid += 1
         inst.uids[path] = uid
-        element.set("name", node.label)
-        element.set("_uid", str(uid))
+        first = {"ID": element.attrib.pop("ID")} if "ID" in element.attrib else {}
+        element.attrib = {**first, "name": node.label, **{k: v for k, v in element.attrib.items() if k != "name"},
+                          "_uid": str(uid)}
         if isinstance(node, Do) and node.actor in self.library:
             sub_path = (inst.fullpath + "/" if inst.fullpath else "") + node.label
             element.set("_fullpath", sub_path)

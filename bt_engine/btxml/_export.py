@@ -25,12 +25,12 @@ import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
+from ..errors import ActorbtError
 from ..trees._library import TreeLibrary
 from ..trees._model import (Check, Do, ForceFailure, ForceSuccess, IfThenElse, Invert, Mission, Node, Parallel,
                             ParallelPolicy, PipelineSequence, RateController, ReactiveSelector, ReactiveSequence,
                             Recovery, Ref, Repeat, ResumeSequence, Retry, RunOnce, RunOnceThen, Selector, Sequence,
-                            SetValues, Timeout, UseBehaviour, ValueType, Wait, WhileDoElse, children_of)
-from ..trees._validate import annotation_type
+                            SetValues, Timeout, UseBehaviour, Wait, WhileDoElse, children_of)
 from ._convert import BUILTINS, NAV2, UNSUPPORTED
 from ._errors import BtXmlError
 from ._extensions import EXTENSIONS, LIST_SEPARATOR, NAV2_MODELS, NodeDecl, PortDecl
@@ -268,12 +268,8 @@ class Exporter:
             return None
         try:
             return self.resolve(actor)
-        except LookupError:
+        except (LookupError, ActorbtError):  # unknown or ambiguous: the check reports it
             return None
-        except Exception as exc:  # an ActorbtError (unknown or ambiguous): the check reports it
-            if type(exc).__name__.endswith("Error"):
-                return None
-            raise
 
     def model_of(self, node: Do) -> LeafModel:
         model = self.models.get(node.actor)
@@ -448,12 +444,7 @@ def _cpp_type(annotation: Any) -> str:
     """A parameter's port type: C++ names for the plain types BehaviorTree.CPP converts
     (``Optional`` dropped), the Python annotation's text otherwise, "" without one."""
     text = _type_text(annotation)
-    if text in _SCALARS:
-        return _SCALARS[text]
-    vtype = annotation_type(text) if text else None
-    if vtype in (ValueType.LIST, ValueType.DICT) and text in ("list", "dict"):
-        return text
-    return text
+    return _SCALARS.get(text, text)
 
 
 def export_tree(name: str, library: TreeLibrary, resolve: Resolver | None = None) -> str:
