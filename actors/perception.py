@@ -64,6 +64,9 @@ MIN_VISIBLE_WIDTH = 0.5 # fraction of its body an object cut by the image border
 GRAZING = 0.3           # a face seen at less than ~17 degrees (sin) is not measured
 DEPTH_NOISE = 0.001     # [m] RMS a true cylinder's surface may deviate from the fitted one
                         # with exact depth (the rendering's own error is ~0.3 mm)
+SATURATION_SHARE = 0.55 # a category's segments keep this share of its saturation or more
+#                         (light and shade change the value more; brown furniture whose
+#                         hue drifts into a category's keeps about 0.45 of its saturation)
 PATCH_SHARE = 0.4       # a segment whose surroundings continue it in colour this much
 #                         (or more) is a patch of something larger
 LABEL_GAP = 0.10        # [m] a printed label this tall may split an object's colour in two
@@ -92,6 +95,8 @@ class Appearance:
     box: tuple[float, float, float] | None = None
     hue: int | None = None      # its OpenCV hue (0..180): pixels within HUE_WINDOW count
                                 # as its colour, across a palette boundary
+    saturation: int | None = None   # its saturation (0..255): a segment far less saturated
+                                    # (SATURATION_SHARE) is something else of its hue
 
     @property
     def is_box(self) -> bool:
@@ -124,15 +129,21 @@ class Appearance:
         return 0.0
 
 
-def hue_of(rgba) -> int:
-    """The OpenCV hue (0..180) of a colour given as rgb(a) in 0..1; PerceptionError for a
-    colour with no clear hue (white, grey, black)."""
+def _hsv_of(rgba) -> tuple[int, int, int]:
+    """OpenCV's hue (0..180), saturation and value (0..255) of a colour given as rgb(a)
+    in 0..1; PerceptionError for a colour with no clear hue (white, grey, black)."""
     px = np.uint8([[[round(255 * float(c)) for c in reversed(tuple(rgba)[:3])]]])   # BGR
     h, sat, val = (int(v) for v in cv2.cvtColor(px, cv2.COLOR_BGR2HSV)[0, 0])
     if sat < MIN_SATURATION or val < MIN_VALUE:
         raise PerceptionError(f"colour {tuple(rgba)} has no clear hue (saturation {sat}, value {val}): "
                               "perception finds objects by a saturated colour")
-    return h
+    return h, sat, val
+
+
+def hue_of(rgba) -> int:
+    """The OpenCV hue (0..180) of a colour given as rgb(a) in 0..1; PerceptionError for a
+    colour with no clear hue (white, grey, black)."""
+    return _hsv_of(rgba)[0]
 
 
 def palette_colour(rgba) -> str:
@@ -148,7 +159,8 @@ def palette_colour(rgba) -> str:
 def appearance_of(category: categories.Category) -> Appearance:
     """A category's appearance: the palette colour of its rgba and its shape."""
     shape = category.shape
-    common = dict(name=category.name, colour=palette_colour(category.rgba), hue=hue_of(category.rgba),
+    hue, sat, _ = _hsv_of(category.rgba)
+    common = dict(name=category.name, colour=palette_colour(category.rgba), hue=hue, saturation=sat,
                   min_confidence=category.min_confidence, description=category.description)
     if isinstance(shape, categories.Box):
         return Appearance(box=(shape.x, shape.y, shape.z), **common)
@@ -275,6 +287,7 @@ class _Segment:
     grid: np.ndarray | None = None   # (h, w, 3) map-frame points over the bounding box,
                                      # NaN outside the segment (image neighbours stay neighbours)
     in_structure: float = 0.0        # share of its pixels in a coloured region of furniture size
+    saturation: float = 255.0        # median saturation of its pixels (0..255)
     continued: float = 0.0           # share of its surroundings that continue its surface
     #                                  in colour (measured when in_structure: a patch of it)
 
@@ -533,6 +546,7 @@ def _segments(frame: RGBDFrame, P: np.ndarray, appearances=()) -> list[_Segment]
     lab, names = colour_labels(frame.bgr, appearances)
     cut = _occlusion_cuts(lab, frame.depth)
     structure = _structure(lab, P)
+    saturation = cv2.cvtColor(frame.bgr, cv2.COLOR_BGR2HSV)[:, :, 1]
     out = []
     for i, name in enumerate(names, 1):
         m = (lab == i) & ~cut
@@ -553,6 +567,8 @@ def _segments(frame: RGBDFrame, P: np.ndarray, appearances=()) -> list[_Segment]
             seg = _measure(name, roi, x0, y0, P, frame.depth, lab, frame)
             if seg is not None and seg.range <= MAX_RANGE:
                 seg.in_structure = float(structure[y0:y0 + bh, x0:x0 + bw][roi].mean())
+                own = roi & (lab[y0:y0 + bh, x0:x0 + bw] == i)    # not a label it was bridged over
+                seg.saturation = float(np.median(saturation[y0:y0 + bh, x0:x0 + bw][own])) if own.any() else 0.0
                 if seg.in_structure > 0.5:
                     seg.continued = _continued_share(roi, x0, y0, lab, frame.depth)
                 out.append(seg)
@@ -562,6 +578,8 @@ def _segments(frame: RGBDFrame, P: np.ndarray, appearances=()) -> list[_Segment]
 # ----------------------------------------------------------------------------- classify
 def _score(seg: _Segment, app: Appearance) -> tuple[float, dict]:
     """Confidence in [0, 1] that ``seg`` is ``app``, and the evidence."""
+    if app.saturation is not None and seg.saturation < SATURATION_SHARE * app.saturation:
+        return 0.0, {"reason": "colour too dull"}
     if app.is_box:
         return _score_box(seg, app)
     if seg.colour != app.colour:
