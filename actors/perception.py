@@ -934,8 +934,13 @@ def detect(frame: RGBDFrame, appearances: dict[str, Appearance] | None = None) -
       pixel       [u, v] centroid of the object's pixels
       colour, truncated (sides cut by the image border or hidden behind something
       nearer), stamp [s], frame ("map")
-      yaw         a box only: the map-frame direction of its x side [rad], in
-                  (-pi/2, pi/2]; x, y is then the box's centre
+      pose        a known category: ``upright``, ``lying`` or ``tilted``
+      yaw         a box: the map-frame direction of its x side (lying: its long side)
+                  [rad], in (-pi/2, pi/2], x, y its centre; a lying body of revolution:
+                  its axis's direction; a leaning one: the direction it leans to
+      axis_base, axis_dir, tilt_deg   a body of revolution fitted in 3-D: the axis
+                  point at its base, the unit axis from base to top, its tilt [deg]
+      width       (lying box) the side the hand closes across from above [m]
     """
     apps = registered_appearances() if appearances is None else appearances
     P = backproject(frame)
