@@ -62,7 +62,7 @@ def _segment_distance(p: tuple[float, float], a: tuple[float, float], b: tuple[f
 
 
 def outline_discs(pose: tuple[float, float, float], outline: tuple[float, float, float] = BASE_OUTLINE,
-                  spacing: float = 0.1) -> tuple[list[tuple[float, float]], float]:
+                  spacing: float = 0.07) -> tuple[list[tuple[float, float]], float]:
     """Discs that together cover the base's rectangular ``outline`` at ``pose`` (x, y,
     heading): their centres in the map frame and their common radius [m]. The base is
     clear of obstacles when each centre is farther than that radius from all of them."""
@@ -299,11 +299,16 @@ class Catcher(SubSystem):
                 if not look or math.dist((rx, ry), xy) <= look + 0.3:
                     continue  # close enough already
                 extra = look - plan.reach - strategy.approach.standoff
-                look_plan = plan
-                if target.get("pose") == "lying":   # seen end on, it is often missed or
-                    look_plan = replace(plan, sides=ASIDE, one_way=False)   # its ends mistaken
-                poses = self._free_standoff((rx, ry), xy, strategy, extra, others,
-                                            object_yaw=target.get("yaw"), plan=look_plan)
+                # a look needs no particular side (a box's grasp does): from the robot's
+                # side, or around it; a lying body, though, from aside: seen end on it is
+                # often missed, or its ends mistaken
+                aside = target.get("pose") == "lying"
+                look_plan = replace(plan, sides=ASIDE if aside else (), one_way=False)
+                try:
+                    poses = self._free_standoff((rx, ry), xy, strategy, extra, others,
+                                                object_yaw=target.get("yaw"), plan=look_plan)
+                except ApproachError:
+                    continue  # no room to look from there (a cramped corner): go closer
             else:
                 plan = self._plan(strategy, target)    # the close look may see it otherwise
                 poses = self._free_standoff((rx, ry), xy, strategy, others=others,
