@@ -36,6 +36,7 @@ from ..errors import ActorbtError
 from ..trees._library import TreeLibrary
 from ..trees._model import Do, Mission, Node, children_of
 from ..trees._replay import _locate, read_trace
+from ..trees._run import node_path
 from ._export import Exporter
 
 __all__ = ["BTLOG_HEADER", "BtlogError", "STATUS_CODES", "Transition", "trace_to_btlog", "write_btlog"]
@@ -72,17 +73,6 @@ class _Instance:
     calls: dict[str, "_Instance"] = field(default_factory=dict)
 
 
-def _path(parent: str, label: str, taken: set[str]) -> str:
-    """A node's path as the trace writes it (``TreeRun._path``): labels joined by '/',
-    a '/' in a label written '|', a repeated label among siblings numbered '#2', '#3'..."""
-    label = label.replace("/", "|")
-    name, n = label, 2
-    while name in taken:
-        name, n = f"{label}#{n}", n + 1
-    taken.add(name)
-    return f"{parent}/{name}" if parent else name
-
-
 class _Expander:
     """Builds the instantiated tree's XML, numbering nodes as BehaviorTree.CPP does."""
 
@@ -97,7 +87,7 @@ class _Expander:
         inst = _Instance(mission, fullpath)
         tree = ET.Element("BehaviorTree", {"ID": mission.name, "_fullpath": fullpath})
         self.trees.append(tree)
-        tree.append(self.node(mission.root, None, inst, _path("", mission.root.label, set())))
+        tree.append(self.node(mission.root, None, inst, node_path("", mission.root.label, set())))
         return inst
 
     def node(self, node: Node, parent: Node | None, inst: _Instance, path: str) -> ET.Element:
@@ -116,7 +106,7 @@ class _Expander:
             inst.calls[path] = self.instance(self.library[node.actor], sub_path)
         taken: set[str] = set()
         for child in children_of(node):
-            element.append(self.node(child, node, inst, _path(path, child.label, taken)))
+            element.append(self.node(child, node, inst, node_path(path, child.label, taken)))
         return element
 
     def xml(self) -> str:

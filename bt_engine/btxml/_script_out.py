@@ -14,7 +14,7 @@ from ..trees._model import Check, Ref, SetValues
 from ._compare import expr_shape
 from ._errors import Pos
 from ._script import Assignment, ScriptError, condition, statements
-from ._values import same_value
+from ._values import _plain_text, same_value
 
 __all__ = ["check_script", "set_script"]
 
@@ -36,15 +36,10 @@ def _string(text: str) -> str | None:
 
 
 def _literal(value: object) -> str | None:
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    if isinstance(value, int):
-        return str(value)
-    if isinstance(value, float):
-        return repr(value) if math.isfinite(value) else None
+    """A value as a script literal: a string quoted, anything else as in an attribute."""
     if isinstance(value, str):
         return _string(value)
-    return None
+    return _plain_text(value)
 
 
 def _print(expr: Expr, need: int) -> str | None:

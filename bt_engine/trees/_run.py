@@ -127,6 +127,17 @@ def written_keys(mission: Mission) -> set[str]:
     return keys
 
 
+def node_path(parent: str, label: str, taken: set[str]) -> str:
+    """A node's path, as traces and observers name it: labels joined by '/', a '/' in a
+    label written '|', a label repeated among siblings (``taken``) numbered '#2', '#3'..."""
+    label = label.replace("/", "|")
+    name, n = label, 2
+    while name in taken:
+        name, n = f"{label}#{n}", n + 1
+    taken.add(name)
+    return f"{parent}/{name}" if parent else name
+
+
 class TreeRun:
     """One execution of a mission: its py_trees tree, blackboard and tick loop.
 
@@ -197,12 +208,7 @@ class TreeRun:
     # ------------------------------------------------------------ building
 
     def _path(self, parent: str, label: str, taken: set[str]) -> str:
-        label = label.replace("/", "|")
-        name, n = label, 2
-        while name in taken:
-            name, n = f"{label}#{n}", n + 1
-        taken.add(name)
-        return f"{parent}/{name}" if parent else name
+        return node_path(parent, label, taken)
 
     def _build(self, node: Node, path: str) -> py_trees.behaviour.Behaviour:
         return self._make(node, path or self._path("", node.label, set()))
