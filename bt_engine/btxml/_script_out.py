@@ -6,7 +6,6 @@ the exporter uses actorbt's own nodes (:mod:`._extensions`)."""
 
 from __future__ import annotations
 
-import math
 import re
 
 from ..trees._expr import And, Compare, Expr, ExprSyntaxError, Key, Literal, Neg, Not, Or, parse_expression
