@@ -31,6 +31,7 @@ from ..trees._model import (Check, Do, ForceFailure, ForceSuccess, IfThenElse, I
                             ParallelPolicy, PipelineSequence, RateController, ReactiveSelector, ReactiveSequence,
                             Recovery, Ref, Repeat, ResumeSequence, Retry, RunOnce, RunOnceThen, Selector, Sequence,
                             SetValues, Timeout, UseBehaviour, Wait, WhileDoElse, children_of)
+from ..trees._validate import annotation_text
 from ._convert import BUILTINS, NAV2, UNSUPPORTED
 from ._errors import BtXmlError
 from ._extensions import EXTENSIONS, LIST_SEPARATOR, NAV2_MODELS, NodeDecl, PortDecl
@@ -428,12 +429,7 @@ _SCALARS = {"int": "int", "float": "double", "bool": "bool", "str": "std::string
 def _type_text(annotation: Any) -> str:
     if annotation is inspect.Parameter.empty or annotation is None:
         return ""
-    if isinstance(annotation, str):
-        text = annotation
-    elif isinstance(annotation, type):
-        text = annotation.__name__
-    else:
-        text = repr(annotation).replace("typing.", "")
+    text = annotation_text(annotation)
     m = _OPTIONAL.match(text.strip())
     if m is not None:
         text = next(g for g in m.groups() if g is not None)

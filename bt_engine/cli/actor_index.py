@@ -91,15 +91,9 @@ def _annotation_out(annotation: Any) -> dict[str, Any] | None:
     """An annotation as text plus the tree value type it demands (what the validator checks)."""
     if annotation is inspect.Parameter.empty:
         return None
-    from ..trees._validate import annotation_type
+    from ..trees._validate import annotation_text, annotation_type
     vtype = annotation_type(annotation)
-    if isinstance(annotation, str):
-        text = annotation
-    elif isinstance(annotation, type):
-        text = annotation.__name__
-    else:
-        text = repr(annotation).replace("typing.", "")
-    return {"text": text, "type": vtype.value if vtype else None}
+    return {"text": annotation_text(annotation), "type": vtype.value if vtype else None}
 
 
 def _annotation_in(d: dict[str, Any] | None) -> Any:

@@ -83,7 +83,8 @@ def annotation_type(annotation: Any) -> ValueType | None:
     return None
 
 
-def _annotation_text(annotation: Any) -> str:
+def annotation_text(annotation: Any) -> str:
+    """A type annotation as a reader writes it (``int``, ``list[str]``, ``dict | None``)."""
     if isinstance(annotation, str):
         return annotation
     if isinstance(annotation, type):
@@ -104,7 +105,7 @@ def format_signature(name: str, sig: inspect.Signature) -> str:
         star_done = star_done or p.kind in (p.VAR_POSITIONAL, p.KEYWORD_ONLY)
         text = {p.VAR_POSITIONAL: "*", p.VAR_KEYWORD: "**"}.get(p.kind, "") + p.name
         if p.annotation is not p.empty:
-            text += f": {_annotation_text(p.annotation)}"
+            text += f": {annotation_text(p.annotation)}"
             if p.default is not p.empty:
                 text += f" = {p.default!r}"
         elif p.default is not p.empty:
@@ -114,7 +115,7 @@ def format_signature(name: str, sig: inspect.Signature) -> str:
             parts.append("/")
     result = f"{name}({', '.join(parts)})"
     if sig.return_annotation is not sig.empty:
-        result += f" -> {_annotation_text(sig.return_annotation)}"
+        result += f" -> {annotation_text(sig.return_annotation)}"
     return result
 
 
