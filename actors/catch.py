@@ -24,6 +24,7 @@ STANDOFF_CLEARANCE = 0.26   # room the base needs around a standoff pose [m]
 #: arm and the hand are above a table whose edge the base stops at.
 BASE_OUTLINE = (-0.205, 0.076, 0.153)
 BASE_MARGIN = 0.025         # room kept between that outline and an obstacle [m]
+OUTLINE_REACH = math.hypot(-BASE_OUTLINE[0], BASE_OUTLINE[2])   # its farthest corner [m]
 HAND_HALF_WIDTH = 0.07      # half the open hand's width, with margin [m]
 SAME_OBJECT = 0.12          # detections closer than this to the target are the target [m]
 TEST_LIFT = 0.02            # first, short lift that checks the grip [m]
@@ -230,7 +231,10 @@ class Catcher(SubSystem):
         gx, gy = xy[0] - reach * c, xy[1] - reach * s  # base position when grasping
         for k in range(1, 5):  # the base's path: the map (obstacles marked) has room
             f = k / 4
-            centres, radius = outline_discs((sx + f * (gx - sx), sy + f * (gy - sy), yaw))
+            bx, by = sx + f * (gx - sx), sy + f * (gy - sy)
+            if self.run_actor("clearance", bx, by) >= OUTLINE_REACH + BASE_MARGIN:
+                continue   # nothing near the whole outline: no need to look closer
+            centres, radius = outline_discs((bx, by, yaw))
             if any(self.run_actor("clearance", px, py) < radius + BASE_MARGIN for px, py in centres):
                 return False
         for o in others:  # the open hand's path, from the base's front to the object

@@ -195,10 +195,12 @@ def _hue_lut(appearances=()) -> tuple[np.ndarray, list[str]]:
     return lut, names
 
 
-def colour_labels(bgr: np.ndarray, appearances=()) -> tuple[np.ndarray, list[str]]:
+def colour_labels(bgr: np.ndarray, appearances=(), hsv: np.ndarray | None = None) -> tuple[np.ndarray, list[str]]:
     """Per-pixel palette index (0 = no colour) and the palette's names (index - 1);
-    ``appearances`` widen their colours' ranges around their hues (see _hue_lut)."""
-    hsv = cv2.cvtColor(bgr, cv2.COLOR_BGR2HSV)
+    ``appearances`` widen their colours' ranges around their hues (see _hue_lut).
+    ``hsv``: the image in HSV, when the caller has it already."""
+    if hsv is None:
+        hsv = cv2.cvtColor(bgr, cv2.COLOR_BGR2HSV)
     lut, names = _hue_lut(appearances)
     lab = lut[hsv[:, :, 0]]
     lab[(hsv[:, :, 1] < MIN_SATURATION) | (hsv[:, :, 2] < MIN_VALUE)] = 0
@@ -543,10 +545,11 @@ def _continued_share(roi: np.ndarray, x0: int, y0: int, lab: np.ndarray, depth: 
 
 
 def _segments(frame: RGBDFrame, P: np.ndarray, appearances=()) -> list[_Segment]:
-    lab, names = colour_labels(frame.bgr, appearances)
+    hsv = cv2.cvtColor(frame.bgr, cv2.COLOR_BGR2HSV)
+    lab, names = colour_labels(frame.bgr, appearances, hsv)
     cut = _occlusion_cuts(lab, frame.depth)
     structure = _structure(lab, P)
-    saturation = cv2.cvtColor(frame.bgr, cv2.COLOR_BGR2HSV)[:, :, 1]
+    saturation = hsv[:, :, 1]
     out = []
     for i, name in enumerate(names, 1):
         m = (lab == i) & ~cut

@@ -20,8 +20,8 @@ import inspect
 from typing import Any, Callable
 
 from ..trees._expr import Expr
-from ..trees._model import (Check, Composite, Decorator, Do, Mission, Node, Parallel, ParallelPolicy, RateController,
-                            Recovery, Repeat, Retry, RunOnce, SetValues, Timeout, UseBehaviour, Wait)
+from ..trees._model import (Check, Do, Mission, Node, Parallel, ParallelPolicy, RateController, Recovery, Repeat,
+                            Retry, RunOnce, SetValues, Timeout, UseBehaviour, Wait, children_of)
 from ._values import same_value
 
 __all__ = ["expr_shape", "mission_differences"]
@@ -71,20 +71,12 @@ def _nodes(a: Node, b: Node, path: str, out: list[str], signature: Signature | N
     if pa[0] != pb[0] or not same_value(list(pa[1:]), list(pb[1:])):
         out.append(f"{here}: {pa} != {pb}")
         return
-    kids_a, kids_b = _children(a), _children(b)
+    kids_a, kids_b = children_of(a), children_of(b)
     if len(kids_a) != len(kids_b):
         out.append(f"{here}: {len(kids_a)} children != {len(kids_b)}")
         return
     for x, y in zip(kids_a, kids_b):
         _nodes(x, y, here, out, signature)
-
-
-def _children(node: Node) -> tuple[Node, ...]:
-    if isinstance(node, Composite):
-        return node.children
-    if isinstance(node, Decorator):
-        return (node.child,)
-    return ()
 
 
 def _params(node: Node, signature: Signature | None) -> tuple[Any, ...]:
