@@ -153,26 +153,26 @@ class Camera(SubSystem):
                     return None
             self.run_actor("sleep", TF_POLL)
 
-    @actor
+    @actor(read_only=True)
     def pic(self) -> Iterator[np.ndarray]:
         """Colour images as BGR uint8 arrays (H, W, 3), as OpenCV expects them."""
         with self.run_actor_mode("color_raw", "iterator") as msgs:
             for msg in msgs:
                 yield image_to_array(msg)
 
-    @actor
+    @actor(read_only=True)
     def depth(self) -> Iterator[np.ndarray]:
         """Depth images as float32 arrays (H, W) in metres; NaN where there is no return."""
         with self.run_actor_mode("depth_raw", "iterator") as msgs:
             for msg in msgs:
                 yield image_to_array(msg)
 
-    @actor
+    @actor(read_only=True)
     def intrinsics(self) -> dict:
         """The camera's pinhole intrinsics: fx, fy, cx, cy [px], width, height, frame_id."""
         return Intrinsics.from_msg(self.run_actor_mode("camera_info", "timed", 5.0)).as_dict()
 
-    @actor
+    @actor(read_only=True)
     def rgbd(self) -> Iterator[RGBDFrame]:
         """Synchronised RGB-D frames: colour and depth with the same header stamp, the
         intrinsics, and the camera pose in the map frame at that stamp (from tf)."""

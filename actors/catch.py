@@ -267,7 +267,7 @@ class Catcher(SubSystem):
             return target  # seen nearly end on, its base and top taken for each other
         return {**target, **seen}
 
-    @actor
+    @actor(moves=True)
     def approach_object(self, target: dict, category: str | None = None) -> dict:
         """Drive to the category's standoff in front of ``target`` and face it.
 
@@ -349,7 +349,7 @@ class Catcher(SubSystem):
         raise ApproachError(f"could not reach a standoff near ({xy[0]:.2f}, {xy[1]:.2f}): "
                             + "; ".join(errors))
 
-    @actor
+    @actor(moves=True)
     def pick(self, target: dict, category: str | None = None) -> dict:
         """Grasp ``target`` with the category's strategy and lift it.
 
@@ -404,13 +404,13 @@ class Catcher(SubSystem):
         self.set_value("moved_to", None)
         return held
 
-    @actor
+    @actor(moves=True)
     def grip_check(self) -> dict:
         """Close the gripper again and return the controller's result (see ``close``):
         it stalls on what the fingers hold, and reaches the closed end when they are empty."""
         return self.run_actor("close")
 
-    @actor
+    @actor(moves=True)
     def verify_grasp(self) -> bool:
         """True while the gripper holds what the last pick took: closing the gripper
         again, the fingers stall at a width that fits the object."""
@@ -433,12 +433,12 @@ class Catcher(SubSystem):
         self.run_actor("mini_walk", -max(0.05, distance))
         self.run_actor("home")
 
-    @actor
+    @actor(moves=True)
     def carry_pose(self) -> None:
         """Fold the arm with the object held, for driving."""
         self.run_actor("home")
 
-    @actor
+    @actor(moves=True)
     def place(self, x: float, y: float, surface: float = 0.0, heading: float | None = None) -> dict:
         """Put the held object down with its axis at (x, y) [m] on a surface ``surface`` [m]
         high, the base facing ``heading`` [rad] (default: from where it is).
@@ -505,7 +505,7 @@ class Catcher(SubSystem):
                                     f"holding it as it does (tool pitch {math.degrees(plan.pitch):.0f} deg)")
         return reach
 
-    @actor
+    @actor(moves=True)
     def place_on(self, x: float, y: float, size_x: float, size_y: float, height: float) -> dict:
         """Place the held object on a box-shaped surface (a pallet) centred at (x, y) [m],
         ``size_x`` by ``size_y`` [m], ``height`` [m] high: near the edge the robot can reach

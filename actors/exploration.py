@@ -35,7 +35,7 @@ class Exploration(SubSystem):
         except ActorbtError as e:
             raise ExplorationError(f"no map on /map to explore ({e}); is a mapper running?") from None
 
-    @actor
+    @actor(moves=True, limits={"max_time": (0.0, None), "max_goals": (1, None)})
     def explore(self, max_time: float = 900.0, min_frontier: float = 0.3, max_goals: int = 200) -> dict:
         """Drive to the nearest worthwhile frontier of the map, again and again, until the
         map has none the base can reach. A goal is not tried twice: one the base could not

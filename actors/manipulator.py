@@ -92,8 +92,8 @@ class Manipulator(SubSystem):
         self.limits = JointLimits.from_kinematics(
             self.kinematics, acceleration=acceleration, jerk=jerk, velocity_scale=velocity_scale)
         self.joints = tuple(self.kinematics.joint_names)
-        self.register_action("follow_joint_trajectory", FollowJointTrajectory, ARM_ACTION)
-        self.register_action("gripper_cmd", GripperCommand, GRIPPER_ACTION)
+        self.register_action("follow_joint_trajectory", FollowJointTrajectory, ARM_ACTION, moves=True)
+        self.register_action("gripper_cmd", GripperCommand, GRIPPER_ACTION, moves=True)
         self.register_subscriber("joint_states", JointState, "/joint_states", 1)
         self.set_value("last_plan", None)
         self.set_value("gripper", None)
@@ -105,7 +105,7 @@ class Manipulator(SubSystem):
         qd = named(msg.name, msg.velocity, self.joints)
         return q, qd
 
-    @actor
+    @actor(read_only=True)
     def get_status(self) -> dict:
         """Current arm joints [rad], joint speeds [rad/s], tool pose, and the gripper as its
         last command left it (see ``close``; None before the first)."""
@@ -115,12 +115,12 @@ class Manipulator(SubSystem):
                 "pose": {"x": pose.x, "y": pose.y, "z": pose.z, "pitch": pose.pitch}}
 
     # -- motions -----------------------------------------------------------------------
-    @actor
+    @actor(moves=True)
     def home(self) -> list[float]:
         """Fold the arm into its home pose."""
         return self.run_actor("move_joint", *HOME)
 
-    @actor
+    @actor(moves=True, limits={"q": (-math.pi, math.pi)})
     def move_joint(self, *q: float) -> list[float]:
         """Plan and move to joint positions ``q`` (joint1..joint4) [rad]; returns where it ended.
 
@@ -132,7 +132,7 @@ class Manipulator(SubSystem):
         start, _ = self._state()
         return self._run_plan(plan_joint_motion(start, q, self.scene))
 
-    @actor
+    @actor(moves=True, limits={"deg": (-180.0, 180.0)})
     def move_joint_degree(self, *deg: float) -> list[float]:
         """As move_joint, in degrees; returns where it ended [rad].
 
@@ -141,7 +141,7 @@ class Manipulator(SubSystem):
         """
         return self.run_actor("move_joint", *(math.radians(d) for d in deg))
 
-    @actor
+    @actor(moves=True, limits={"delta_deg": (-90.0, 90.0)})
     def adjust_joint(self, *delta_deg: float) -> list[float]:
         """Move every joint by ``delta_deg`` [deg] from where it is; returns where it ended [rad].
 
@@ -153,7 +153,7 @@ class Manipulator(SubSystem):
             raise MotionError(f"adjust_joint needs {len(q)} deltas, got {len(delta_deg)}")
         return self.run_actor("move_joint", *(a + math.radians(d) for a, d in zip(q, delta_deg)))
 
-    @actor
+    @actor(moves=True, limits={"x": (-0.6, 0.6), "y": (-0.6, 0.6), "z": (-0.1, 0.8), "pitch": (-math.pi, math.pi)})
     def move_to_pose(self, x: float, y: float, z: float, pitch: float) -> list[float]:
         """Plan and move the tool to (x, y, z) [m] in base_footprint with ``pitch`` [rad];
         returns the joint positions reached [rad].
@@ -167,7 +167,7 @@ class Manipulator(SubSystem):
         start, _ = self._state()
         return self._run_plan(plan_pose_motion(start, (x, y, z, pitch), self.scene))
 
-    @actor
+    @actor(read_only=True)
     def reachable(self, x: float, y: float, z: float, pitch: float) -> bool:
         """Can the tool be at (x, y, z) [m] in base_footprint with ``pitch`` [rad]? (Its
         inverse kinematics only: nothing moves.)
@@ -180,7 +180,7 @@ class Manipulator(SubSystem):
         """
         return bool(self.kinematics.ik(x, y, z, pitch).ok)
 
-    @actor
+    @actor(moves=True, limits={"width": (0.0, GRIPPER_OPENINGS[1])})
     def open(self, width: float = GRIPPER_OPEN) -> dict:
         """Open the gripper to ``width`` [m]; returns the gripper's state as ``close`` does.
 
@@ -189,7 +189,7 @@ class Manipulator(SubSystem):
         """
         return self._gripper(width)
 
-    @actor
+    @actor(moves=True, limits={"width": (0.0, GRIPPER_OPENINGS[1])})
     def close(self, width: float = GRIPPER_CLOSED) -> dict:
         """Close the gripper; on an object the fingers stall at its width. Returns the
         controller's result: ``width`` (the finger opening) [m], ``position`` (on the

@@ -41,6 +41,7 @@ from .ros_conv import pose2d, wrap
 from .tf_listener import BASE, MAP, TransformError, tf_listener
 
 MAX_TURN = 1.2          # [rad/s] (TurtleBot3 Waffle: 1.82)
+MAX_SPEED = 0.26        # [m/s] the TurtleBot3 Waffle Pi's top speed: mini_walk's limit
 ROBOT_RADIUS = 0.20     # footprint radius used to inflate the map [m] (the navigation's)
 INFLATION = 0.45        # distance over which the map cost decays [m]
 YAW_TOLERANCE = math.radians(0.5)   # mini_turn's
@@ -106,10 +107,10 @@ class Navigation(SubSystem):
 
     def __init__(self) -> None:
         super().__init__()
-        self.register_publisher("cmd_vel", Twist, "/cmd_vel")
+        self.register_publisher("cmd_vel", Twist, "/cmd_vel", moves=True)
         self.register_subscriber("odom", Odometry, "/odom", 1)
         self.register_subscriber("map", OccupancyGridMsg, "/map", "latched")   # map_server latches it
-        self.register_action("navigate_to_pose", NavigateToPose, ACTION)
+        self.register_action("navigate_to_pose", NavigateToPose, ACTION, moves=True)
         # the localiser's estimate and its covariance (AMCL latches it)
         self.register_subscriber("amcl_pose", PoseWithCovarianceStamped, "/amcl_pose", "latched")
         self._perceived = self.runtime.bus.publisher(PERCEIVED, PointCloud2, "latched")
@@ -120,7 +121,7 @@ class Navigation(SubSystem):
         self.set_value("last_path", None)
 
     # -- queries -----------------------------------------------------------------------
-    @actor
+    @actor(read_only=True)
     def get_pose(self) -> tuple[float, float, float]:
         """The base pose (x [m], y [m], yaw [rad]) in the map frame, as the robot's
         localisation has it (tf: map -> base_footprint)."""
@@ -134,7 +135,7 @@ class Navigation(SubSystem):
                                           f"on /tf after {POSE_WAIT:g} s (give /initialpose): {e}") from None
             self.run_actor("sleep", 0.05)
 
-    @actor
+    @actor(read_only=True)
     def require_localised(self, max_std_xy: float = LOCALISED_STD_XY,
                           max_std_yaw: float = LOCALISED_STD_YAW, wait: float = 10.0) -> dict:
         """Wait until the localiser is sure of the pose (the covariance of its latest
@@ -204,7 +205,7 @@ class Navigation(SubSystem):
             self._perceived.publish(cloud_msg(disc_points(marked.values())))
         return len(marked)
 
-    @actor
+    @actor(read_only=True)
     def clearance(self, x: float, y: float) -> float:
         """Distance from (x, y) [m] to the nearest obstacle on the map [m] (0 outside it).
 
@@ -218,7 +219,7 @@ class Navigation(SubSystem):
             return 0.0
         return float(costmap.clearance[row, col])
 
-    @actor
+    @actor(read_only=True)
     def search_views(self, view_range: float = 2.5) -> list[list[float]]:
         """Places [x, y] [m] from which the camera sees all the floor the base can reach
         from where it is, in a visiting order from here (for a search given no
@@ -237,7 +238,7 @@ class Navigation(SubSystem):
         self.set_value("last_path", path)
         return path
 
-    @actor
+    @actor(read_only=True)
     def plan_path(self, x: float, y: float) -> list[tuple[float, float]]:
         """A collision-free path from the robot to (x, y) [m] on the inflated map.
 
@@ -254,7 +255,7 @@ class Navigation(SubSystem):
         return [tuple(p) for p in path.waypoints]
 
     # -- motions -----------------------------------------------------------------------
-    @actor
+    @actor(moves=True, limits={"timeout": (0.0, None)})
     def goto(self, x: float, y: float, theta: float, timeout: float | None = None) -> tuple[float, float, float]:
         """Drive to (x, y) [m] in the map frame and turn to ``theta`` [rad].
 
@@ -286,7 +287,7 @@ class Navigation(SubSystem):
             raise
         return self.get_pose()
 
-    @actor
+    @actor(moves=True, limits={"dx": (-1.0, 1.0), "dy": (-1.0, 1.0), "dtheta": (-math.pi, math.pi)})
     def migrate(self, dx: float, dy: float, dtheta: float) -> tuple[float, float, float]:
         """Move by (dx, dy) [m] in the robot's frame and turn by ``dtheta`` [rad], on the
         odometry and without planning (a short move: nothing may be in the way).
@@ -313,7 +314,7 @@ class Navigation(SubSystem):
             self.run_actor("mini_turn", wrap(dtheta))
         return self.get_pose()
 
-    @actor
+    @actor(moves=True, limits={"distance": (-1.0, 1.0), "speed": (0.01, MAX_SPEED), "tolerance": (0.001, 0.1)})
     def mini_walk(self, distance: float, speed: float = 0.1, tolerance: float = 0.005) -> float:
         """Drive straight by ``distance`` [m] (negative: backwards) on the odometry,
         without planning, to within ``tolerance`` [m]; returns the distance driven [m].
@@ -343,7 +344,7 @@ class Navigation(SubSystem):
                     self.run_actor("cmd_vel", _twist(v, 2.0 * wrap(yaw0 - yaw)))
         return along
 
-    @actor
+    @actor(moves=True, limits={"angle": (-2 * math.pi, 2 * math.pi)})
     def mini_turn(self, angle: float) -> float:
         """Turn in place by ``angle`` [rad] on the odometry; returns the yaw reached in
         the map frame [rad].

@@ -1079,13 +1079,13 @@ class Perception(SubSystem):
     def _frame(self) -> RGBDFrame:
         return self.run_actor_mode("rgbd", "timed", GLANCE_TIMEOUT)
 
-    @actor
+    @actor(read_only=True)
     def object_glance(self) -> list[dict]:
         """One quick look: every object in the next RGB-D frame (targets and ``unknown``
         distractors), nearest first. See ``detect`` for the fields of a detection."""
         return detect(self._frame(), self._apps())
 
-    @actor
+    @actor(read_only=True)
     def find_object(self, category: str | None = None) -> dict | None:
         """The nearest object of ``category`` (any known category when None) in the next
         RGB-D frame, or None: {category, x, y, z, height, width, distance, bearing,
@@ -1099,7 +1099,7 @@ class Perception(SubSystem):
         found = _targets(detect(self._frame(), self._apps()), category, self._apps())
         return found[0] if found else None
 
-    @actor
+    @actor(read_only=True)
     def pic_find(self, category: str | None = None, seconds: float = 10.0) -> dict | None:
         """Watch the camera for up to ``seconds`` until an object of ``category`` (any known
         category when None) is seen; the nearest such detection, or None on timeout.
@@ -1119,7 +1119,7 @@ class Perception(SubSystem):
                     break
         return ret
 
-    @actor
+    @actor(read_only=True)
     def get_found(self, category: str | None = None, looks: int = 5) -> dict | None:
         """A reliable estimate from ``looks`` consecutive frames: sightings are grouped by
         position, outliers dropped, and the median kept. Adds ``sightings``, ``looks`` and
@@ -1144,7 +1144,7 @@ class Perception(SubSystem):
             raise PerceptionError("no camera frames")
         return combine_sightings(sightings, n)
 
-    @actor
+    @actor(read_only=True)
     def measure_distance(self, category: str | None = None) -> Iterator[dict | None]:
         """Per frame, the range and bearing to the nearest target (for visual servoing):
         {distance [m], bearing [rad, + left], x, y, category, stamp}, or None when no
@@ -1165,7 +1165,7 @@ class Perception(SubSystem):
                 yield {"distance": d["distance"], "bearing": d["bearing"], "x": d["x"], "y": d["y"],
                        "category": d["category"], "stamp": d["stamp"]}
 
-    @actor
+    @actor(read_only=True)
     def measure_center(self, category: str | None = None) -> Iterator[dict | None]:
         """Per frame, where the nearest target is in the image: {dx, dy} its pixel offset
         from the principal point normalised by half the image size (-1 left/top .. +1

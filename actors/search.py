@@ -69,7 +69,7 @@ class SearchExhausted(ActorbtError):
 class Search(SubSystem):
     """Search behaviour built from navigation and perception actors."""
 
-    @actor
+    @actor(read_only=True)
     def watch(self, category: str = "any") -> dict:
         """Watch the camera until an object of ``category`` ("any": any known category) is
         seen, and return its detection (map frame). Runs until found or cancelled.
@@ -84,7 +84,7 @@ class Search(SubSystem):
             if found and not in_own_hand(found):
                 return found
 
-    @actor
+    @actor(moves=True, limits={"turns": (1, 8)})
     def look_around(self, turns: int = 4) -> None:
         """Turn on the spot in steps, pausing so the camera gets still frames.
 
@@ -170,7 +170,7 @@ class Search(SubSystem):
             at_each()
         return places, missed
 
-    @actor
+    @actor(moves=True, limits={"turns": (0, 8)})
     def patrol(self, locations: list, turns: int = 4) -> None:
         """Visit each (x, y) [m] of ``locations`` in turn and look around there. A place
         where the base does not fit (an object or furniture stands on it) is moved to the
@@ -188,7 +188,7 @@ class Search(SubSystem):
         raise SearchExhausted(f"visited {len(places)} search locations and saw nothing"
                               + (f"; {len(missed)} not reached: " + "; ".join(missed) if missed else ""))
 
-    @actor
+    @actor(moves=True, limits={"views": (1, 16)})
     def survey(self, locations: list, views: int = 8) -> list:
         """Visit every search location (moved or skipped when blocked, as ``patrol``
         does), look all around at each, and return every object of a known category

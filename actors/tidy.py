@@ -46,7 +46,7 @@ class Tidy(SubSystem):
         self.set_value("todo", todo[1:])
         return todo[0]
 
-    @actor
+    @actor(moves=True)
     def tidy_one(self, target: dict, places: dict, belongs: dict) -> dict:
         """Catch ``target`` and carry it to the place its category belongs to; never
         fails: the outcome goes into the report (``placed`` or ``failed`` with the
@@ -91,7 +91,7 @@ class Tidy(SubSystem):
             except ActorError as e:
                 log.warning("tidy: %s after a failure failed: %s", name, e)
 
-    @actor
+    @actor(read_only=True)
     def tidy_report(self) -> list:
         """What happened to each object of the tidy-up so far, in the order tidied."""
         return list(self.get_value("report"))

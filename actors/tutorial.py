@@ -13,7 +13,7 @@ class Tutorial(SubSystem):
         super().__init__()
         self.set_value("greeting", "hello")
 
-    @actor
+    @actor(read_only=True)
     def sample_actor(self, mes: str) -> str:
         """Print ``mes`` and return it (the simplest actor there is).
 
@@ -23,7 +23,7 @@ class Tutorial(SubSystem):
         print(mes)
         return mes
 
-    @actor
+    @actor(read_only=True)
     def greet(self, name: str = "world") -> str:
         """Return a greeting, using the subsystem's persistent ``greeting`` value.
 
@@ -32,7 +32,7 @@ class Tutorial(SubSystem):
         """
         return f"{self.get_value('greeting')}, {name}"
 
-    @actor("countdown", "multi", hub_only=True)
+    @actor("countdown", "multi", hub_only=True, read_only=True)
     def countdown(self, emit, start: int = 3, period: float = 1.0):
         """Emit start, start-1, ..., 1 every ``period`` [s], then end (an emit-style stream).
 
@@ -54,7 +54,7 @@ class Tutorial(SubSystem):
         timer = self.runtime.call_every(period, tick)
         return timer.cancel
 
-    @actor
+    @actor(read_only=True)
     def count(self, n: int = 3, period: float = 1.0) -> Iterator[int]:
         """Yield 0..n-1, sleeping ``period`` [s] on the runtime clock between values
         (a generator stream).

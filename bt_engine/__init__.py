@@ -10,7 +10,7 @@ The core, bottom to top::
 
 The public surface is re-exported here; everything else is internal.
 """
-from .actor import ActorRef, actor
+from .actor import ActorRef, Safety, actor
 from .clock import Clock, VirtualClock, WallClock
 from .default import (check_actor, close_default_runtime, default_runtime, get_value,
                       register_subsystem, run_actor, run_actor_async, run_actor_mode,
@@ -26,7 +26,7 @@ from .subsystem import SubNet, SubSystem
 from .transaction import Transaction, TxnState
 
 __all__ = [
-    "ActorRef", "ActorbtError", "ActorCancelled", "ActorError", "ActorTimeout",
+    "ActorRef", "Safety", "ActorbtError", "ActorCancelled", "ActorError", "ActorTimeout",
     "AmbiguousActorError", "BadArgumentsError", "BadModeError", "Cancelled", "Clock",
     "Failure", "HubBlockingError", "Kind", "Mode", "Runtime", "RuntimeClosedError", "Signal",
     "SubNet", "SubSystem", "Transaction", "TxnState", "UnknownActorError", "VirtualClock",

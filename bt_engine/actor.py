@@ -2,8 +2,8 @@
 from __future__ import annotations
 
 import inspect
-from dataclasses import dataclass
-from typing import Any, Callable
+from dataclasses import dataclass, field
+from typing import Any, Callable, Mapping
 
 from .errors import BadArgumentsError
 from .modes import Kind
@@ -22,10 +22,43 @@ class ActorSpec:
     fn: Callable
     buffer: int = DEFAULT_STREAM_BUFFER
     hub_only: bool = False
+    safety: "Safety | None" = None
+
+
+#: ``{parameter: (lowest, highest)}``; ``None`` for no bound on that side
+Limits = Mapping[str, "tuple[float | None, float | None]"]
+
+
+@dataclass(frozen=True)
+class Safety:
+    """What an actor declares about its effect on the world, for callers that must be
+    careful (a language model through ``actorbt mcp``).
+
+    Attributes:
+        moves: it commands motion of the robot (base, arm or gripper), itself or
+            through the actors it calls.
+        read_only: it changes nothing: no motion, no state, no files (a query).
+        limits: the allowed range of numeric parameters, ``{name: (low, high)}``
+            (inclusive; ``None`` leaves a side open). The catalog gives them as
+            JSON-Schema ``minimum`` / ``maximum``; for ``*args`` each value is bound.
+    """
+
+    moves: bool = False
+    read_only: bool = False
+    limits: Mapping[str, tuple[float | None, float | None]] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        if self.moves and self.read_only:
+            raise TypeError("an actor that moves the robot is not read-only")
+
+
+#: an actor that declares nothing
+NO_SAFETY = Safety()
 
 
 def actor(*args: Any, kind: "str | Kind | None" = None, buffer: int = DEFAULT_STREAM_BUFFER,
-          hub_only: bool = False):
+          hub_only: bool = False, moves: bool = False, read_only: bool = False,
+          limits: Limits | None = None):
     """Declare a method of a SubSystem or SubNet as an actor.
 
     Forms, as in ros_actor::
@@ -42,9 +75,15 @@ def actor(*args: Any, kind: "str | Kind | None" = None, buffer: int = DEFAULT_ST
     ``emit`` only from hub code (runtime timers, local-bus callbacks), never from
     another thread. The virtual clock may then jump while it runs; otherwise it paces
     itself to wall time until the work completes (see :class:`~bt_engine.VirtualClock`).
+
+    Safety (see :class:`Safety`), read by the catalog and by ``actorbt mcp``::
+
+        @actor(moves=True, limits={"speed": (0.0, 0.26)})   # drives the base, at most 0.26 m/s
+        @actor(read_only=True)                               # a query: changes nothing
     """
+    safety = Safety(moves, read_only, dict(limits or {}))
     if len(args) == 1 and callable(args[0]) and kind is None:
-        return _mark(args[0], None, None, buffer, hub_only)
+        return _mark(args[0], None, None, buffer, hub_only, safety)
     if len(args) > 2:
         raise TypeError("@actor takes at most a name and a kind")
     name = args[0] if args else None
@@ -53,18 +92,34 @@ def actor(*args: Any, kind: "str | Kind | None" = None, buffer: int = DEFAULT_ST
         raise TypeError(f"@actor name must be a string, not {type(name).__name__}")
 
     def deco(fn: Callable) -> Callable:
-        return _mark(fn, name, k, buffer, hub_only)
+        return _mark(fn, name, k, buffer, hub_only, safety)
     return deco
 
 
 def _mark(fn: Callable, name: str | None, kind: "str | Kind | None", buffer: int,
-          hub_only: bool) -> Callable:
+          hub_only: bool, safety: Safety) -> Callable:
     if inspect.isgeneratorfunction(fn):
         k = Kind.STREAM
     else:
         k = Kind.parse(kind) if kind is not None else Kind.SYNC
-    fn._actor_spec = ActorSpec(name or fn.__name__, k, fn, buffer, hub_only)  # type: ignore[attr-defined]
+    _check_limits(fn, safety.limits)
+    fn._actor_spec = ActorSpec(name or fn.__name__, k, fn, buffer, hub_only, safety)  # type: ignore[attr-defined]
     return fn
+
+
+def _check_limits(fn: Callable, limits: Mapping[str, tuple[float | None, float | None]]) -> None:
+    """A limit names a parameter and is (low, high) with low <= high: a typo would
+    otherwise leave the parameter unbounded without a word."""
+    try:
+        names = set(inspect.signature(fn).parameters)
+    except (TypeError, ValueError):
+        names = set(limits)
+    for pname, bounds in limits.items():
+        if pname not in names:
+            raise TypeError(f"@actor limits: {fn.__qualname__} has no parameter {pname!r}")
+        low, high = bounds
+        if low is not None and high is not None and low > high:
+            raise TypeError(f"@actor limits: {pname!r} has low {low} above high {high}")
 
 
 @dataclass
@@ -86,19 +141,28 @@ class ActorRef:
     is_generator: bool = False
     buffer: int = DEFAULT_STREAM_BUFFER
     hub_only: bool = False
+    safety: Safety = NO_SAFETY
+
+    @property
+    def moves(self) -> bool:
+        return self.safety.moves
+
+    @property
+    def read_only(self) -> bool:
+        return self.safety.read_only
 
     @classmethod
     def build(cls, path: str, name: str, fn: Callable, kind: Kind, owner: Any = None,
               doc: str | None = None, signature: inspect.Signature | None = None,
               is_tree: bool = False, buffer: int = DEFAULT_STREAM_BUFFER,
-              hub_only: bool = False) -> "ActorRef":
+              hub_only: bool = False, safety: Safety | None = None) -> "ActorRef":
         is_gen = inspect.isgeneratorfunction(fn)
         if signature is None:
             signature = _caller_signature(fn, kind, is_gen)
         return cls(path=path, name=name, fn=fn, kind=kind, signature=signature,
                    doc=inspect.cleandoc(doc if doc is not None else (fn.__doc__ or "")),
                    owner=owner, is_tree=is_tree, is_generator=is_gen, buffer=buffer,
-                   hub_only=hub_only)
+                   hub_only=hub_only, safety=safety or NO_SAFETY)
 
     def check_args(self, args: tuple, kwargs: dict) -> None:
         """Raise BadArgumentsError when the arguments do not fit the signature."""

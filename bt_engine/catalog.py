@@ -12,6 +12,7 @@ import sys
 import typing
 from typing import TYPE_CHECKING, Any, Mapping
 
+from .actor import NO_SAFETY
 from .docstrings import Docstring, unit_of
 from .docstrings import explicit as explicit_docs
 from .docstrings import parse as parse_docstring
@@ -112,9 +113,13 @@ def tool_schema(ref: "ActorRef") -> dict[str, Any]:
     ``description`` is the docstring's summary and ``details`` the rest of it (without
     the ``Args:`` and ``Returns:`` sections). Each parameter has its JSON type (from the
     type hint, else from the default), ``description`` (its ``Args:`` entry), ``unit``
-    (the ``[unit]`` in that text) and ``default``. ``returns`` describes the result (of
-    a stream: each value; of a tree: its outputs).
+    (the ``[unit]`` in that text) and ``default``; a declared limit is its ``minimum``
+    / ``maximum`` (of each value, for ``*args``). ``returns`` describes the result (of
+    a stream: each value; of a tree: its outputs). ``moves`` (it commands motion of the
+    robot) and ``read_only`` (it changes nothing) are what the actor declares (a tree:
+    what the actors it calls declare), see :class:`~bt_engine.actor.Safety`.
     """
+    safety = getattr(ref, "safety", None) or NO_SAFETY
     hints = _resolved_hints(ref)
     docs = docs_of(ref)
     props: dict[str, Any] = {}
@@ -130,7 +135,8 @@ def tool_schema(ref: "ActorRef") -> dict[str, Any]:
             text = text + _VARIADIC.format(name=p.name) if text else "positional values (*args)"
         else:
             schema = dict(json_type(ann)) or _type_of_default(p.default)
-        props[p.name] = _described(schema, text)
+        props[p.name] = _bounded(_described(schema, text), safety.limits.get(p.name),
+                                 p.kind is p.VAR_POSITIONAL)
         if p.kind is p.VAR_POSITIONAL:
             continue
         if p.default is p.empty:
@@ -142,11 +148,24 @@ def tool_schema(ref: "ActorRef") -> dict[str, Any]:
     if docs.details:
         tool["details"] = docs.details
     tool.update({"kind": ref.kind.value, "is_tree": ref.is_tree,
+                 "moves": safety.moves, "read_only": safety.read_only,
                  "parameters": {"type": "object", "properties": props, "required": required}})
     returns = _returns(ref, hints, docs)
     if returns:
         tool["returns"] = returns
     return tool
+
+
+def _bounded(schema: dict[str, Any], limit: "tuple[float | None, float | None] | None",
+             each: bool) -> dict[str, Any]:
+    """``schema`` with a declared limit as ``minimum`` / ``maximum`` (of its items when
+    ``each``: a ``*args`` parameter)."""
+    if limit is None:
+        return schema
+    bounds = {k: v for k, v in zip(("minimum", "maximum"), limit) if v is not None}
+    if each:
+        return {**schema, "items": {**schema.get("items", {}), **bounds}}
+    return {**schema, **bounds}
 
 
 #: what a variadic parameter's description ends with
@@ -204,6 +223,8 @@ def text_lines(doc: str | None, tool: Mapping[str, Any]) -> list[str]:
     (a tree's outputs, one per line)."""
     tree = bool(tool.get("is_tree"))
     lines = (parse_docstring(doc).text or "(no docstring)").splitlines()
+    if tool.get("moves"):  # what a careful caller must know first
+        lines.append("Moves the robot.")
     params = tool.get("parameters", {})
     props: Mapping[str, Any] = params.get("properties", {})
     if props:
@@ -223,6 +244,9 @@ def text_lines(doc: str | None, tool: Mapping[str, Any]) -> list[str]:
 
 def _param_line(name: str, schema: Mapping[str, Any], required: bool | None) -> str:
     notes = [type_text(schema)]
+    bounds = schema.get("items", schema) if schema.get("type") == "array" else schema
+    if "minimum" in bounds or "maximum" in bounds:
+        notes.append(f"{bounds.get('minimum', '-inf')} to {bounds.get('maximum', 'inf')}")
     if required:
         notes.append("required")
     elif "default" in schema:

@@ -33,7 +33,7 @@ log = logging.getLogger("actorbt")
 class RootSystem(SubSystem):
     """The root scope. It holds the built-in actors."""
 
-    @actor
+    @actor(read_only=True)
     def sleep(self, seconds: float) -> None:
         """Wait ``seconds`` [s] on the runtime clock (virtual time jumps).
 

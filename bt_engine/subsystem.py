@@ -14,7 +14,7 @@ from __future__ import annotations
 import inspect
 from typing import Any, Callable
 
-from .actor import ActorRef, ActorSpec
+from .actor import ActorRef, ActorSpec, Safety
 from .api import CallApi
 from .bus.qos import qos_depth
 from .errors import ActorbtError, AmbiguousActorError, UnknownActorError
@@ -121,15 +121,16 @@ class SubSystem(CallApi):
     def add_actor(self, name: str, fn: Callable, kind: "str | Kind" = Kind.SYNC, *,
                   doc: str | None = None, signature: inspect.Signature | None = None,
                   is_tree: bool = False, buffer: int | None = None, replace: bool = False,
-                  hub_only: bool = False) -> ActorRef:
-        """Register a plain callable as an actor of this subsystem (trees, bus edges)."""
+                  hub_only: bool = False, safety: Safety | None = None) -> ActorRef:
+        """Register a plain callable as an actor of this subsystem (trees, bus edges);
+        ``safety``: whether it moves the robot, is read-only, its limits (see @actor)."""
         k = Kind.parse(kind)
         if inspect.isgeneratorfunction(fn):
             k = Kind.STREAM
         if name in self._actors and not replace:
             raise ActorbtError(f"{self._actor_path(name)} is already defined")
         ref = ActorRef.build(self._actor_path(name), name, fn, k, owner=self, doc=doc,
-                             signature=signature, is_tree=is_tree, hub_only=hub_only,
+                             signature=signature, is_tree=is_tree, hub_only=hub_only, safety=safety,
                              **({"buffer": buffer} if buffer else {}))
         self._actors[name] = ref
         self._rt._topology_changed()
@@ -145,7 +146,7 @@ class SubSystem(CallApi):
                 seen.add(attr)
                 bound = getattr(holder, attr)
                 self.add_actor(spec.name or attr, bound, spec.kind, buffer=spec.buffer,
-                               hub_only=spec.hub_only)
+                               hub_only=spec.hub_only, safety=spec.safety)
 
     @property
     def children(self) -> dict[str, "SubSystem"]:
@@ -231,9 +232,11 @@ class SubSystem(CallApi):
         raise KeyError(f"no value {key!r} in {self!r} or its parents")
 
     # -- edges to the outside world (bus) --------------------------------------------
-    def register_publisher(self, name: str, msg_type: type, topic: str, qos: Any = 10) -> ActorRef:
+    def register_publisher(self, name: str, msg_type: type, topic: str, qos: Any = 10, *,
+                           moves: bool = False) -> ActorRef:
         """Make actor ``name(msg)`` that publishes ``msg`` on ``topic``. ``qos``: a depth,
-        a name ("sensor", "latched", "reliable") or an rclpy QoSProfile."""
+        a name ("sensor", "latched", "reliable") or an rclpy QoSProfile. ``moves``: what
+        it publishes commands motion (``/cmd_vel``), see :class:`~bt_engine.actor.Safety`."""
         pub = self._rt.bus.publisher(_topic(topic), msg_type, qos)
         self._edges.append(pub)
 
@@ -245,7 +248,8 @@ class SubSystem(CallApi):
         publish.__doc__ = (f"Publish a {type_name} on {_topic(topic)}.\n\n"
                            f"Args:\n    msg: the {type_name} message to publish\n")
         return self.add_actor(name, publish, Kind.SYNC, signature=inspect.Signature(
-            [inspect.Parameter("msg", inspect.Parameter.POSITIONAL_OR_KEYWORD, annotation=msg_type)]))
+            [inspect.Parameter("msg", inspect.Parameter.POSITIONAL_OR_KEYWORD, annotation=msg_type)]),
+            safety=Safety(moves=moves))
 
     def register_subscriber(self, name: str, msg_type: type, topic: str, qos: Any = 10) -> ActorRef:
         """Make stream actor ``name`` that emits each message arriving on ``topic``;
@@ -259,15 +263,27 @@ class SubSystem(CallApi):
         subscribe.__doc__ = f"Messages ({msg_type.__module__}.{msg_type.__name__}) arriving on {t}."
         return self.add_actor(name, subscribe, Kind.STREAM, buffer=qos_depth(qos),
                               signature=inspect.Signature([]),
-                              hub_only=bus.delivers_on_hub)
+                              hub_only=bus.delivers_on_hub,
+                              safety=Safety(read_only=True))  # listening changes nothing
 
-    def register_action(self, name: str, action_type: type, server: str) -> ActorRef:
-        """Make async actor ``name(goal)`` that sends a goal to action ``server``."""
-        return self._rt.bus.register_action(self, name, action_type, server)
+    def register_action(self, name: str, action_type: type, server: str, *,
+                        moves: bool = False) -> ActorRef:
+        """Make async actor ``name(goal)`` that sends a goal to action ``server``;
+        ``moves``: the goal commands motion (see :class:`~bt_engine.actor.Safety`)."""
+        return _declared(self._rt.bus.register_action(self, name, action_type, server), moves)
 
-    def register_service(self, name: str, srv_type: type, server: str) -> ActorRef:
+    def register_service(self, name: str, srv_type: type, server: str, *,
+                         moves: bool = False) -> ActorRef:
         """Make async actor ``name(request)`` that calls service ``server``."""
-        return self._rt.bus.register_service(self, name, srv_type, server)
+        return _declared(self._rt.bus.register_service(self, name, srv_type, server), moves)
+
+
+def _declared(ref: ActorRef, moves: bool) -> ActorRef:
+    """``ref`` marked as moving the robot when ``moves`` (the transports build the
+    action and service actors, this is where their safety is declared)."""
+    if moves:
+        ref.safety = Safety(moves=True, limits=ref.safety.limits)
+    return ref
 
 
 def _wants_args(init: Callable, n: int) -> bool:

@@ -373,7 +373,7 @@ class Localiser(SubSystem):
                         break
         return self.localisation_status()
 
-    @actor
+    @actor(read_only=True)
     def localisation_status(self) -> dict:
         """How the localisation is doing.
 

@@ -270,7 +270,7 @@ class Navigator(SubSystem):
         self._subs = []
         self.tf.close()
 
-    @actor
+    @actor(read_only=True)
     def navigator_status(self) -> dict:
         """What the navigation server has done: goals received, succeeded, aborted and
         canceled, recoveries (replans around obstacles, back-ups), stops for obstacles

@@ -94,7 +94,7 @@ class NavStack(SubSystem):
         """
         return self._mapping().save(path)
 
-    @actor
+    @actor(read_only=True)
     def mapping_status(self) -> dict:
         """How the mapping is doing: scans taken, keyframes, loop closures, the pose
         [x m, y m, yaw rad] in the map frame, and whether it has stopped (frozen)."""

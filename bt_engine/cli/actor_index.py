@@ -17,7 +17,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Iterable
 
-from ..actor import ActorRef
+from ..actor import ActorRef, Safety
 from ..catalog import text_lines, tool_schema
 from ..errors import AmbiguousActorError, UnknownActorError
 
@@ -25,8 +25,8 @@ log = logging.getLogger("actorbt.cli")
 
 
 #: bump when the layout of actors.json changes (2: tools carry parameter descriptions,
-#: units, details and returns)
-INDEX_VERSION = 2
+#: units, details and returns; 3: moves, read_only and limits)
+INDEX_VERSION = 3
 
 
 class _Shown:
@@ -61,6 +61,11 @@ class ActorEntry:
     def of(cls, ref: ActorRef) -> "ActorEntry":
         return cls(ref.path, ref.name, ref.kind.value, ref.is_tree, ref.doc, ref.signature,
                    str(ref.signature), tool_schema(ref))
+
+    @property
+    def safety(self) -> Safety:
+        """What the actor declared about motion (limits are in the tool's parameters)."""
+        return Safety(moves=bool(self.tool.get("moves")), read_only=bool(self.tool.get("read_only")))
 
     def text_lines(self) -> list[str]:
         """What ``actorbt catalog`` prints below the signature: the docstring without

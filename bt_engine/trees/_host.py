@@ -27,6 +27,7 @@ from ._errors import DuplicateTreeError, MissionError
 from ._library import SkippedTreeError, TreeLibrary
 from ._model import Mission, UseBehaviour, walk
 from ._run import TreeObserver, TreeRun
+from ._safety import mission_safety
 
 if TYPE_CHECKING:
     from ..runtime import Runtime
@@ -178,7 +179,7 @@ class TreeHost:
         self.rt.run_on_hub(
             self.rt.root.add_actor, name, run_tree, "sync",
             doc=mission.doc or f"Tree {name} ({mission.file}).", signature=mission.signature(),
-            is_tree=True, replace=True,
+            is_tree=True, replace=True, safety=mission_safety(mission, self.library.resolve),
         )
         self._stubs.discard(name)
 
