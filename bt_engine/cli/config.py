@@ -10,6 +10,7 @@
     plugins: [sim.cli]     # modules adding `actorbt` sub-commands (register(subparsers, common))
     imports: [my_robot/juice.py]    # modules or .py files imported before anything starts:
                                     # what they register (an object category) is then known
+    mcp: {allow_motion: false}      # `actorbt mcp`: may a client run actors that move the robot
 
 Every command imports the plugins (``--help`` lists their commands), so a plugin keeps
 only argparse wiring at module level and imports its implementation when it runs.
@@ -43,6 +44,8 @@ class Config:
     clock: str = "virtual"
     plugins: list[str] = field(default_factory=list)
     imports: list[str] = field(default_factory=list)
+    #: the ``mcp:`` section (read by :mod:`bt_engine.mcp.settings`)
+    mcp: dict[str, Any] = field(default_factory=dict)
 
     @property
     def base(self) -> pathlib.Path:
@@ -52,7 +55,7 @@ class Config:
         return (self.base / self.trees) if self.trees else None
 
 
-_FIELDS = {"subsystems", "trees", "world", "simulator", "transport", "clock", "plugins", "imports"}
+_FIELDS = {"subsystems", "trees", "world", "simulator", "transport", "clock", "plugins", "imports", "mcp"}
 
 
 def find_config(start: pathlib.Path | None = None) -> pathlib.Path | None:
@@ -84,6 +87,9 @@ def load_config(path: "str | pathlib.Path | None" = None) -> Config:
     unknown = set(data) - _FIELDS
     if unknown:
         raise ConfigError(f"{p}: unknown settings {sorted(unknown)}; expected {sorted(_FIELDS)}")
+    mcp = data.get("mcp") or {}
+    if not isinstance(mcp, dict):
+        raise ConfigError(f"{p}: mcp: expected a mapping of settings, e.g. {{allow_motion: false}}")
     world = data.get("world")
     if isinstance(world, str):
         world = {"name": world}
@@ -91,7 +97,7 @@ def load_config(path: "str | pathlib.Path | None" = None) -> Config:
                   trees=data.get("trees", "trees"), world=world,
                   simulator=data.get("simulator"), transport=data.get("transport", "local"),
                   clock=data.get("clock", "virtual"), plugins=list(data.get("plugins") or []),
-                  imports=[str(i) for i in data.get("imports") or []])
+                  imports=[str(i) for i in data.get("imports") or []], mcp=dict(mcp))
 
 
 def run_imports(cfg: Config) -> None:

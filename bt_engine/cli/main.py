@@ -26,7 +26,7 @@ from .app import App
 from .config import Config, load_config
 
 #: command modules inside the engine that add sub-commands when importable
-BUILTIN_EXTENSIONS = ["bt_engine.ros.cli"]
+BUILTIN_EXTENSIONS = ["bt_engine.ros.cli", "bt_engine.mcp.cli"]
 
 Command = Callable[[argparse.Namespace, App], int]
 

@@ -146,6 +146,41 @@ class TreeHost:
             )
             self._stubs.add(name)
 
+    def reload_folder(self, folder: str | Path) -> list[Mission]:
+        """Load ``folder`` again as it is now, tolerantly (as ``load_folder(strict=False)``).
+
+        The folder's trees are forgotten first, so an edited file is read again, the tree
+        of a removed file is unregistered, and a file that no longer loads is skipped
+        (``library.broken`` says why). Trees from elsewhere stay. Runs under way keep
+        the mission they started with. Call it on the hub (``rt.run_on_hub``): the
+        library is swapped in one step, so no goal sees it half loaded.
+
+        Returns:
+            the missions registered now.
+        """
+        where = Path(folder).resolve()
+
+        def outside(file: str) -> bool:
+            return Path(file).resolve().parent != where
+
+        old = self.library
+        fresh = TreeLibrary(resolver=self._resolve, behaviours=self.behaviours)
+        for mission in old:
+            if outside(mission.file):
+                fresh.add(mission)
+        fresh.broken.update({k: e for k, e in old.broken.items() if outside(e.pos.file)})
+        before = set(old.names) | self._stubs
+        self.library = fresh
+        registered = self.load_folder(folder, strict=False)
+        for name in before - set(fresh.names):
+            if name in self._stubs and fresh.is_skipped(name):
+                continue  # still skipped: its stub says why
+            ref = self.rt.root.actors().get(name)
+            if ref is not None and (ref.is_tree or name in self._stubs):
+                self.rt.root.remove_actor(name)
+            self._stubs.discard(name)
+        return registered
+
     def load_file(self, path: str | Path) -> Mission:
         """Parse, validate and register one mission file.
 
@@ -208,7 +243,7 @@ class TreeHost:
         this to answer from a recording."""
         return self.rt.start(leaf.actor_path, *args, on_done=on_done, **kwargs)
 
-    def prepare(self, name: str, *args: Any, **kwargs: Any) -> TreeRun:
+    def prepare(self, name: str, /, *args: Any, **kwargs: Any) -> TreeRun:
         """Build a run of tree ``name`` without ticking it (for ticking by hand on the hub).
 
         Raises:
@@ -237,8 +272,9 @@ class TreeHost:
         if run.txn_id is not None:
             self._runs_by_txn.pop(run.txn_id, None)
 
-    def run(self, name: str, *args: Any, **kwargs: Any) -> dict[str, Any]:
+    def run(self, name: str, /, *args: Any, **kwargs: Any) -> dict[str, Any]:
         """Run tree ``name`` to the end in the calling actor (the tree actor's body).
+        (``name`` is positional-only: a tree may have an input called ``name``.)
 
         Returns:
             the outputs, ``{name: value}``.
@@ -250,6 +286,16 @@ class TreeHost:
         mission = self.library[name]
         inputs = mission.bind_inputs(*args, **kwargs)
         return self._new_run(mission, inputs).run()
+
+    def run_mission(self, mission: Mission, /, *args: Any, **kwargs: Any) -> dict[str, Any]:
+        """Run a validated mission that need not be in the library (a draft an MCP client
+        sent) to the end in the calling actor, as :meth:`run` runs a library tree.
+
+        Raises:
+            InputError: the arguments do not fit the mission's inputs.
+            TreeFailure: the tree failed.
+        """
+        return self._new_run(mission, mission.bind_inputs(*args, **kwargs)).run()
 
     def live_runs(self) -> list[TreeRun]:
         """Runs built and not closed yet (leak checks)."""
