@@ -39,7 +39,7 @@ $(MSGS_STAMP): $(MSGS_SRC)
 
 # Order-only on the message packages: they are built first, but rebuilding them does not
 # reinstall actorbt.
-$(STAMP): pyproject.toml interfaces/CMakeLists.txt interfaces/package.xml $(wildcard interfaces/action/*.action) | $(MSGS_STAMP)
+$(STAMP): pyproject.toml interfaces/CMakeLists.txt interfaces/package.xml $(wildcard interfaces/action/*.action interfaces/srv/*.srv) | $(MSGS_STAMP)
 	$(venv_ready)
 	$(PY) -m pip install -q -e ".[test]"
 	@touch $(STAMP)

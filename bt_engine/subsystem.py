@@ -136,6 +136,14 @@ class SubSystem(CallApi):
         self._rt._topology_changed()
         return ref
 
+    def remove_actor(self, name: str) -> bool:
+        """Unregister actor ``name`` of this subsystem (a tree whose file was removed);
+        False when there is none. Calls under way keep running."""
+        if self._actors.pop(name, None) is None:
+            return False
+        self._rt._topology_changed()
+        return True
+
     def _collect_actors(self, holder: Any) -> None:
         seen: set[str] = set()
         for klass in type(holder).__mro__:

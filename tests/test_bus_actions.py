@@ -24,7 +24,7 @@ class Echo(SubSystem):
     def on_goal(self, goal) -> None:
         self.started += 1
         if goal.request.actor == "fail":
-            goal.abort(CallActor.Result(success=False, error="told to fail"))
+            goal.abort(CallActor.Result(success=False, error_msg="told to fail"))
             return
         timer = self._rt.call_later(1.0, lambda: goal.succeed(
             CallActor.Result(success=True, result_yaml=goal.request.actor)))
@@ -55,7 +55,7 @@ def test_an_aborted_goal_fails_with_its_result(rt):
         rt.call("echo", {"actor": "fail"})
     error = failed.value.__cause__
     assert isinstance(error, ActionGoalError)
-    assert error.status == 6 and error.result.error == "told to fail"
+    assert error.status == 6 and error.result.error_msg == "told to fail"
     assert "ended aborted: told to fail" in str(failed.value)
 
 

@@ -50,7 +50,7 @@ def test_an_abort_over_ros_carries_the_result(pair):
         client.call("echo", actor="fail", timeout=20.0)
     error = failed.value.__cause__
     assert isinstance(error, ActionGoalError) and error.status == 6
-    assert error.result.error == "told to fail"
+    assert error.result.error_msg == "told to fail"
 
 
 def test_cancelling_the_client_call_reaches_the_server(pair):

@@ -152,7 +152,7 @@ def test_the_server_tells_each_goal_in_one_line(served):
         rf"goal ({GID}) steps_tree \{{steps: 2, period: 0\.01\}}: accepted",
         rf"goal ({GID}) steps_tree: succeeded in \d+\.\d+ s \(trace .*steps_tree-{GID}\.jsonl\)",
         rf"call {GID} work\.echo\(1, k='v'\): succeeded in \d+\.\d+ s",
-        r"goal steps_tree \{steps: x\}: rejected: .*",
+        rf"goal {GID} steps_tree \{{steps: x\}}: refused \(INVALID_GOAL\): .*",
         rf"goal ({GID}) steps_tree \{{steps: 1000, period: 0\.01\}}: accepted",
         rf"goal ({GID}) steps_tree: canceled in \d+\.\d+ s( \(trace .*\.jsonl\))?",
         rf"call {GID} work\.boom\(\): failed: .*kaput in \d+\.\d+ s",
@@ -185,7 +185,7 @@ def test_the_warm_shell_calls_completes_and_describes(served):
     assert "work.echo(*args, **kwargs) -> dict  [sync]\nEcho the arguments." in text
     assert "error: unknown actor 'work.ech'; did you mean: work.echo" in text
     assert "  work.slow(steps: int = 3, period: float = 0.02) -> int  [sync]" in text
-    assert "error: rejected:" in text                              # too many arguments
+    assert "error: refused (INVALID_GOAL):" in text                # too many arguments
     assert "  steps_tree\n" in text
     assert "{'args': [3]" not in text                             # after quit
     assert shell.completenames("work.e") == ["work.echo"]

@@ -100,9 +100,10 @@ def test_action_client_actors_reach_a_server_in_another_process(server, client):
     res = rt.call("steps", inputs_yaml="{steps: 2, period: 0.01}")
     assert res.success and res.status == "succeeded"
     assert yaml.safe_load(res.outputs_yaml) == {"count": 2}
-    with pytest.raises(ActorError) as e:
+    with pytest.raises(ActorError) as e:  # accepted, aborted at once with the reason
         rt.call("steps", inputs_yaml="{steps: lots}")
-    assert "rejected" in str(e.value)
+    assert "ended aborted" in str(e.value) and "expected int" in str(e.value)
+    assert f"(error_code {RunTree.Result.INVALID_GOAL})" in str(e.value)
 
 
 def test_goal_with_feedback_and_cancel_mid_run(server, client):
@@ -157,7 +158,7 @@ def test_goal_and_rcall_commands(server):
     assert rcall.returncode == 0, out
     assert "{'args': [1], 'kwargs': {'k': 'v'}}" in out
     out, _ = bad.communicate(timeout=30)
-    assert bad.returncode == 2 and "rejected the goal" in out and "expected int" in out
+    assert bad.returncode == 2 and "refused the goal (INVALID_GOAL)" in out and "expected int" in out
 
 
 def test_serve_tells_how_its_start_up_goes(server):
@@ -182,7 +183,7 @@ def test_rcall_of_an_unknown_actor_lists_close_matches(server):
     proc = actorbt("--config", str(server.cfg), "rcall", "work.ech", "1")
     out, _ = proc.communicate(timeout=30)
     assert proc.returncode == 2, out
-    assert "rejected the call: unknown actor 'work.ech'; did you mean: work.echo" in out
+    assert "refused the call (INVALID_GOAL): unknown actor 'work.ech'; did you mean: work.echo" in out
 
 
 def test_rshell_runs_calls_from_piped_lines(server):
@@ -197,7 +198,7 @@ def test_rshell_runs_calls_from_piped_lines(server):
     assert "error: actor work.boom aborted" in out or "error: actor work.boom failed" in out, out
     assert "kaput" in out
     assert "work.echo(*args, **kwargs) -> dict  [sync]" in out  # help, from the actor index
-    assert "error: rejected: unknown actor 'no_such_actor'" in out
+    assert "error: refused (INVALID_GOAL): unknown actor 'no_such_actor'" in out
     assert "  steps_tree" in out                                 # trees
     assert "{'args': [[2, 3]], 'kwargs': {}}" in out
     assert "connected in" in proc.stderr
@@ -212,10 +213,11 @@ def test_serve_prints_one_line_per_goal(server):
                                   r"\(trace .*steps_tree.*\.jsonl\)"), 5.0), server.output()
     assert has(rf"goal {gid} steps_tree \{{steps: 3, period: 0\.01\}}: accepted")
     assert has(rf"goal {gid} steps_tree: canceled in \d+\.\d+ s \(trace .*\.jsonl\)")
-    assert has(r"goal steps_tree \{steps: x\}: rejected: .*expected int.*")
+    assert has(rf"goal {gid} steps_tree \{{steps: x\}}: refused \(INVALID_GOAL\): .*expected int.*")
     assert has(rf"call {gid} work\.echo\(1, k='v'\): succeeded in \d+\.\d+ s")
     assert has(rf"call {gid} work\.boom\(\): failed: .*kaput in \d+\.\d+ s")
-    assert has(r"call work\.ech\(1\): rejected: unknown actor 'work\.ech'; did you mean: work\.echo.*")
+    assert has(rf"call {gid} work\.ech\(1\): refused \(INVALID_GOAL\): unknown actor 'work\.ech'; "
+               r"did you mean: work\.echo.*")
     # one line each: no goal is told twice
     end = re.compile(rf"(goal|call) {gid} .*: (succeeded|failed|canceled|aborted)")
     ends = [line for line in server.lines if end.match(line)]

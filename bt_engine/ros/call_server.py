@@ -2,9 +2,11 @@
 
 ``actor`` names it (resolved as from the root); ``args_yaml`` holds its arguments (see
 :func:`bt_engine.ros.goals.parse_call_args`). The result carries ``result_yaml``, the
-returned value as YAML, or ``error``, the failure. Goals run concurrently; the only
-feedback is ``running`` when the call starts. ``actorbt serve`` prints one line per call
-when it ends (or is rejected): the actor and its arguments, the outcome, the time.
+returned value as YAML, or ``error_code`` and ``error_msg``, the failure (an unknown
+actor or bad arguments: ``INVALID_GOAL``, the goal aborted at once). Goals run
+concurrently; the feedback is ``running`` when the call starts and ``success`` or
+``failure`` before the result, each with ``elapsed``. ``actorbt serve`` prints one line
+per call when it ends (or is refused): the actor and its arguments, the outcome, the time.
 """
 from __future__ import annotations
 
@@ -38,11 +40,12 @@ class CallServer(GoalServer):
     def admit(self, goal: Any) -> Invocation:
         return decode_call_goal(self.owner.rt, goal.actor, goal.args_yaml)
 
-    def result(self, success: bool, status: str, value: Any, error: str) -> Any:
+    def result(self, success: bool, status: str, value: Any, error: str, code: int) -> Any:
         res = self.action_type.Result()
         res.success = success
         res.result_yaml = dump(value) if success else ""
-        res.error = error
+        res.error_code = code
+        res.error_msg = error
         return res
 
 

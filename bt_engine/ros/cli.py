@@ -1,18 +1,20 @@
 """``actorbt serve``, ``actorbt goal``, ``actorbt rcall`` and ``actorbt rshell``.
 
-    actorbt serve [--bus ros] [--preempt]  # serve trees and actors until Ctrl-C
+    actorbt serve [--bus ros] [--preempt] [--namespace NS] [--ros-args -r FROM:=TO ...]
     actorbt goal TREE --args '{k: v}'      # run a served tree: live feedback, Ctrl-C cancels
     actorbt rcall ACTOR ARG... [k=v]       # call an actor of a running `actorbt serve`
     actorbt rshell                         # the same, interactively, on one warm node
 
 ``goal``, ``rcall`` and ``rshell`` are ROS clients of a running ``actorbt serve`` (there
-is no ``ros2`` command from pip). Exit status: 0 succeeded; 1 failed, aborted or
-canceled; 2 rejected, unknown tree or no server (the reason is printed); 130
-interrupted with Ctrl-C (the goal was cancelled).
+is no ``ros2`` command from pip); ``--namespace NS`` names the serve's namespace. Exit
+status: 0 succeeded; 1 failed, aborted or canceled; 2 refused (an invalid goal, a busy
+tree), unknown tree or no server (the reason is printed); 130 interrupted with Ctrl-C
+(the goal was cancelled).
 
 ``serve`` prints how its start-up goes (on stderr), then one line per goal on stdout:
 a tree goal when it is accepted and when it ends (outcome, time, trace), a call of
-``/actorbt/call`` when it ends, and every rejection with its reason.
+``/actorbt/call`` when it ends, every refused goal with its reason, and each tree the
+watched trees folder adds or withdraws.
 
 Nothing here imports rclpy until a command runs.
 """
@@ -49,6 +51,15 @@ def register(sub: Any, common: Callable[[argparse.ArgumentParser], None]) -> Non
                         "(default: .actorbt/goals beside actorbt.yaml).")
     p.add_argument("--no-record", action="store_true",
                    help="Do not write a trace of each tree goal.")
+    p.add_argument("--namespace", metavar="NS",
+                   help="Serve in this ROS namespace (robot1: /robot1/actorbt/call ...), so "
+                        "several robots share a ROS domain.")
+    p.add_argument("--no-watch", action="store_true",
+                   help="Serve the trees loaded at start-up only (default: watch the trees "
+                        "folder; trees added get an action, removed ones are withdrawn).")
+    p.add_argument("--ros-args", dest="ros_args", nargs=argparse.REMAINDER, metavar="ARG",
+                   help="rclpy arguments for the serve's node, last on the line: e.g. "
+                        "--ros-args -r __ns:=/robot1 -r /actorbt/tree/x:=/foo")
     add_live_options(p, trace=False)
     p.set_defaults(func=cmd_serve)
 
@@ -66,6 +77,8 @@ def register(sub: Any, common: Callable[[argparse.ArgumentParser], None]) -> Non
                         "(default 10).")
     p.add_argument("--timeout", type=float, metavar="S",
                    help="Cancel the goal after this many seconds (default: wait for its end).")
+    p.add_argument("--namespace", metavar="NS",
+                   help="The namespace of the `actorbt serve` (as its --namespace).")
     p.add_argument("-q", "--quiet", action="store_true",
                    help="Print only the outcome, not each feedback line.")
     p.set_defaults(func=cmd_goal)
@@ -84,6 +97,8 @@ def register(sub: Any, common: Callable[[argparse.ArgumentParser], None]) -> Non
                         "(default 10).")
     p.add_argument("--timeout", type=float, metavar="S",
                    help="Cancel the call after this many seconds (default: wait for its end).")
+    p.add_argument("--namespace", metavar="NS",
+                   help="The namespace of the `actorbt serve` (as its --namespace).")
     p.add_argument("--json", action="store_true",
                    help="Print the result as JSON (default: as Python would print it).")
     p.set_defaults(func=cmd_rcall)
@@ -98,6 +113,8 @@ def register(sub: Any, common: Callable[[argparse.ArgumentParser], None]) -> Non
                         "(default 10).")
     p.add_argument("--timeout", type=float, metavar="S",
                    help="Cancel each call after this many seconds (default: wait for its end).")
+    p.add_argument("--namespace", metavar="NS",
+                   help="The namespace of the `actorbt serve` (as its --namespace).")
     p.set_defaults(func=cmd_rshell)
 
 
@@ -150,14 +167,25 @@ def cmd_serve(args: argparse.Namespace, app: Any) -> int:
         record_dir = None
         if not getattr(args, "no_record", False):
             record_dir = getattr(args, "record_dir", None) or str(app.cfg.base / ".actorbt" / "goals")
-        server = serve(rt, preempt=bool(getattr(args, "preempt", False)), record_dir=record_dir,
-                       on_event=lambda line: print(line, flush=True))
+        watch = folder if folder and folder.is_dir() and not getattr(args, "no_watch", False) else None
+        try:
+            server = serve(rt, preempt=bool(getattr(args, "preempt", False)), record_dir=record_dir,
+                           on_event=lambda line: print(line, flush=True),
+                           namespace=getattr(args, "namespace", None),
+                           ros_args=getattr(args, "ros_args", None), trees_folder=watch)
+        except ValueError as e:  # a bad namespace or --ros-args
+            print(f"actorbt serve: error: {e}", file=sys.stderr, flush=True)
+            return 2
         transport = "ros" if rt.bus.name == "ros" else "local"
-        print(f"actorbt serve: node /actorbt ({transport} bus, "
-              f"{'preempting' if server.preempt else 'rejecting'} a second goal per tree)",
+        node = server.node.get_fully_qualified_name()
+        print(f"actorbt serve: node {node} ({transport} bus, "
+              f"{'preempting' if server.preempt else 'refusing'} a second goal per tree)",
               flush=True)
-        for action in server.actions:
-            print(f"  {action}", flush=True)
+        for name in server.actions + server.services:
+            print(f"  {name}", flush=True)
+        if watch is not None:
+            print(f"actorbt serve: watching {os.path.relpath(watch)} for trees added or removed",
+                  flush=True)
         if record_dir:
             print(f"actorbt serve: recording tree goals in {record_dir}", flush=True)
         if live:
@@ -218,10 +246,12 @@ def _not_sent(err: BaseException | None, what: str = "goal") -> int | None:
     """Exit status 2, with the reason printed, for a goal that never ran (rejected, no
     server); None otherwise."""
     from .client import ActionGoalError, GoalRejectedError, ServerUnavailableError
-    from .remote import NoServeError
+    from .remote import GoalRefusedError, NoServeError
     if err is None or isinstance(err, ActionGoalError):
         return None
-    if isinstance(err, GoalRejectedError):
+    if isinstance(err, GoalRefusedError):
+        print(f"actorbt: {err.server} refused the {what} ({err.code}): {err.reason}", file=sys.stderr)
+    elif isinstance(err, GoalRejectedError):
         print(f"actorbt: {err.server} rejected the {what}" + (f": {err.reason}" if err.reason else ""),
               file=sys.stderr)
     elif isinstance(err, ServerUnavailableError):
@@ -233,7 +263,7 @@ def _not_sent(err: BaseException | None, what: str = "goal") -> int | None:
 
 def cmd_goal(args: argparse.Namespace, app: Any) -> int:
     from .remote import NoServeError, Remote, UnknownTreeError
-    with Remote(wait=args.wait) as remote:
+    with Remote(wait=args.wait, namespace=args.namespace) as remote:
         try:
             remote.check_tree(args.tree)
         except (NoServeError, UnknownTreeError) as e:
@@ -266,7 +296,7 @@ def cmd_rcall(args: argparse.Namespace, app: Any) -> int:
     from ..literals import parse_args
     from .remote import Remote
     pos, kw = parse_args(list(args.args))
-    with Remote(wait=args.wait) as remote:
+    with Remote(wait=args.wait, namespace=args.namespace) as remote:
         goal = remote.call_goal(args.actor, *pos, **kw)
         rc = _follow(goal, args.timeout)
         if rc is not None:
@@ -276,7 +306,7 @@ def cmd_rcall(args: argparse.Namespace, app: Any) -> int:
             return rc
         res = goal.result
         if res is None or not res.success:
-            detail = (res.error if res is not None else "") or goal.status
+            detail = (res.error_msg if res is not None else "") or goal.status
             print(f"actorbt: {args.actor} {goal.status}: {detail}", file=sys.stderr)
             return 1
         value = yaml.safe_load(res.result_yaml) if res.result_yaml else None
@@ -289,9 +319,9 @@ def cmd_rshell(args: argparse.Namespace, app: Any) -> int:
     from .remote import NoServeError, Remote
     from .shell import RemoteShell
     print("actorbt rshell: looking for a running `actorbt serve`...", file=sys.stderr, flush=True)
-    with Remote(wait=args.wait) as remote:
+    with Remote(wait=args.wait, namespace=args.namespace) as remote:
         try:
-            trees = [a for a in remote.wait_for_serve() if a.startswith("/actorbt/tree/")]
+            trees = [a for a in remote.wait_for_serve() if a.startswith(remote.prefix + "tree/")]
         except NoServeError as e:
             print(f"actorbt: {e}", file=sys.stderr)
             return 2

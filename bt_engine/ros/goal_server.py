@@ -3,14 +3,19 @@
 A goal's way through (thread in brackets):
 
 1. ``goal_callback`` [executor]: :meth:`GoalServer.admit` decodes and validates the goal
-   once (:mod:`bt_engine.ros.goals`); a :class:`~bt_engine.ros.goals.GoalError` rejects
-   it, with the reason published by the owner.
+   once (:mod:`bt_engine.ros.goals`). Every goal is accepted: one that cannot run (a
+   :class:`~bt_engine.ros.goals.GoalError`) is aborted at once in step 3, with the reason
+   in the result's ``error_msg`` and its ``error_code`` (``INVALID_GOAL``, ``BUSY``,
+   ``SHUTDOWN``), because the action protocol carries no reason with a rejection.
 2. ``handle_accepted_callback`` [executor]: rclpy calls it right after (same thread, same
-   request message), so the decoded call is handed over there and becomes a
-   :class:`ServedGoal`, known by its goal id from then on (cancel requests find it).
+   request message), so the decoded call (or the refusal) is handed over there and
+   becomes a :class:`ServedGoal`, known by its goal id from then on (cancel requests
+   find it).
 3. ``execute_callback`` [executor, a coroutine]: the work is started on the hub with
    ``rt.start``; its outcome comes back to the coroutine through an rclpy Future, and
-   becomes the result: succeeded, canceled (the client asked) or aborted.
+   becomes the result: succeeded, canceled (the client asked) or aborted, with the
+   :class:`~bt_engine.ros.error_codes.Ending` as ``error_code``. The last feedback goes
+   out before the result.
 
 Subclasses say what a goal means (:meth:`GoalServer.admit`), how feedback and results
 look, and may wait their turn before the work starts (a tree runs one goal at a time).
@@ -20,9 +25,7 @@ Each goal is told to the owner's :meth:`Owner.announce` in one line per event, e
     goal 3f2a1b9c bt_pick_place {category: can}: accepted
     goal 3f2a1b9c bt_pick_place: succeeded in 12.3 s (trace .actorbt/goals/...jsonl)
     call 5e6f7a8b robot.navigation.goto(1.0, 2.0, 0.0): succeeded in 8.21 s
-    goal bt_pick {category: 3}: rejected: input 'category' expects str, got int
-
-(a rejected goal has no id: the action protocol gives none to the goal callback).
+    goal 9a8b7c6d bt_pick {category: 3}: refused (INVALID_GOAL): input 'category' expects str, got int
 """
 from __future__ import annotations
 
@@ -31,6 +34,7 @@ import time
 from typing import TYPE_CHECKING, Any, Protocol
 
 from ..errors import Cancelled, Failure
+from .error_codes import Ending, error_code
 from .goals import GoalError, Invocation
 from .host import RosClosedError, RosHost
 
@@ -52,28 +56,32 @@ class Owner(Protocol):
     #: where tree goals are recorded (None: not recorded)
     record_dir: "str | pathlib.Path | None"
 
-    def reject(self, action: str, goal: Any, reason: str) -> None: ...
-
     def announce(self, line: str) -> None:
-        """Tell about a goal: one line (accepted, rejected, how it ended)."""
+        """Tell about a goal: one line (accepted, refused, how it ended)."""
 
 
 class ServedGoal:
-    """One accepted goal. Each method says the thread it runs on."""
+    """One accepted goal. Each method says the thread it runs on.
 
-    def __init__(self, server: "GoalServer", handle: Any, call: Invocation) -> None:
+    ``call`` is what it runs; None for a goal that cannot run (``refusal`` says why)."""
+
+    def __init__(self, server: "GoalServer", handle: Any, call: Invocation | None,
+                 refusal: GoalError | None = None) -> None:
         from rclpy.task import Future
         self.server = server
         self.rt = server.owner.rt
         self.handle = handle
         self.key = bytes(handle.goal_id.uuid)
         self.call = call
+        self.refusal = refusal
         self.txn: Any = None
         self.cancel_reason: str | None = None
+        self.cancel_ending = Ending.UNKNOWN  # why the server cancelled it (not the client)
         self.resolved = False
         self.outcome = Future()   # the work's result or Failure; set on the executor thread
         self.finished = Future()  # set when the execute coroutine has ended
         self.accepted_at = time.monotonic()
+        self.started_at: float | None = None  # when the work started (monotonic)
         self.end_status = "aborted"  # the Result's status, once it is known
 
     @property
@@ -81,13 +89,25 @@ class ServedGoal:
         """The goal id's first 8 hex digits (as in the trace file's name)."""
         return self.key.hex()[:8]
 
+    @property
+    def subject(self) -> str:
+        """What the goal runs, for announce lines: the actor path (or the action)."""
+        return self.call.path if self.call is not None else self.server.action
+
+    def elapsed(self) -> float:
+        """Seconds since the work started (0 before); any thread."""
+        return 0.0 if self.started_at is None else time.monotonic() - self.started_at
+
     # -- any thread ------------------------------------------------------------------------
     def start(self) -> None:
         """Start the work on the hub."""
         self._to_hub(self._start_on_hub)
 
-    def cancel(self, reason: str) -> None:
-        """Cancel the work (before or after it started) with ``reason``."""
+    def cancel(self, reason: str, ending: Ending = Ending.UNKNOWN) -> None:
+        """Cancel the work (before or after it started) with ``reason``; ``ending`` is
+        the error code when it was not the client who asked."""
+        if self.cancel_ending is Ending.UNKNOWN:
+            self.cancel_ending = ending
         self._to_hub(self._cancel_on_hub, reason)
 
     def resolve(self, outcome: Any) -> None:
@@ -115,6 +135,7 @@ class ServedGoal:
         try:
             self.rt.call_soon_threadsafe(fn, *args)
         except Exception:  # the runtime is gone: the work cannot run any more
+            self.cancel_ending = Ending.SHUTDOWN
             self.resolve(Failure(Cancelled(None, "the runtime is closed")))
 
     # -- hub -------------------------------------------------------------------------------
@@ -122,8 +143,10 @@ class ServedGoal:
         if self.cancel_reason is not None:
             self.resolve(Failure(Cancelled(None, self.cancel_reason)))
             return
+        self.started_at = time.monotonic()
         self.starting()
         call = self.call
+        assert call is not None  # a refused goal never starts
         try:
             txn = self.rt.start(call.path, *call.args, on_done=self._on_done, **call.kwargs)
         except BaseException as e:  # the runtime is closing, or a late surprise
@@ -164,7 +187,7 @@ class GoalServer:
     """One rclpy ActionServer whose goals run actors of the owner's runtime.
 
     Args:
-        owner: the server this action belongs to (runtime, host, rejections, closing).
+        owner: the server this action belongs to (runtime, host, closing).
         action: the action name.
         action_type: the action type (RunTree, CallActor).
     """
@@ -179,23 +202,32 @@ class GoalServer:
         self.action = action
         self.action_type = action_type
         self.goals: dict[bytes, ServedGoal] = {}  # accepted, not ended; executor thread
-        self._admitted: tuple[Any, Invocation] | None = None  # goal callback -> accepted callback
+        # goal callback -> accepted callback: the request and its call, or why it cannot run
+        self._admitted: tuple[Any, Invocation | None, GoalError | None] | None = None
         self._server: Any = None
+        #: no new goals: the action is being withdrawn (its tree left the folder)
+        self.withdrawn: GoalError | None = None
 
     # -- what a goal means (subclasses) ----------------------------------------------------
     def admit(self, goal: Any) -> Invocation:
-        """The call ``goal`` asks for, or GoalError with the reason to reject it."""
+        """The call ``goal`` asks for, or GoalError with the reason it cannot run."""
         raise NotImplementedError
 
-    def new_goal(self, handle: Any, call: Invocation) -> ServedGoal:
-        return ServedGoal(self, handle, call)
+    def new_goal(self, handle: Any, call: Invocation | None,
+                 refusal: GoalError | None = None) -> ServedGoal:
+        return ServedGoal(self, handle, call, refusal)
 
-    def feedback(self, status: str) -> Any:
-        return self.action_type.Feedback(status=status)
+    def feedback(self, g: ServedGoal, status: str) -> Any:
+        return self.action_type.Feedback(status=status, elapsed=g.elapsed())
 
-    def result(self, success: bool, status: str, value: Any, error: str) -> Any:
+    def first_feedback(self, g: ServedGoal) -> None:
+        """Publish the feedback that tells the work has started (executor thread)."""
+        g.send_feedback(self.feedback(g, "running"))
+
+    def result(self, success: bool, status: str, value: Any, error: str, code: int) -> Any:
         """The Result message: ``status`` as in ``succeeded``, ``canceled``, ``failed: …``;
-        ``value`` what the work returned (success only); ``error`` the reason otherwise."""
+        ``value`` what the work returned (success only); ``error`` the reason otherwise;
+        ``code`` the ``error_code``."""
         raise NotImplementedError
 
     async def take_turn(self, g: ServedGoal) -> None:
@@ -205,7 +237,10 @@ class GoalServer:
         """``g`` has ended (executor thread)."""
 
     def concluding(self, g: ServedGoal, outcome: Any) -> None:
-        """The work of ``g`` ended with ``outcome``; the result goes out next."""
+        """The work of ``g`` ended with ``outcome``; the result goes out next: the last
+        feedback goes out now."""
+        g.handle.publish_feedback(self.feedback(
+            g, "failure" if isinstance(outcome, Failure) else "success"))
 
     def describe(self, call: Invocation) -> str:
         """What an accepted goal runs, short, for announce lines."""
@@ -226,8 +261,13 @@ class GoalServer:
             pass
 
     def _announce_end(self, g: ServedGoal) -> None:
+        if g.refusal is not None:
+            self._announce(f"{self.label} {g.short_id} {self.describe_request(g.handle.request)}: "
+                           f"refused ({g.refusal.ending.value}): {one_line(str(g.refusal))}")
+            return
         took = time.monotonic() - g.accepted_at
         # the arguments are in the accepted line, when there is one
+        assert g.call is not None
         subject = g.call.path if self.announce_accepted else self.describe(g.call)
         self._announce(f"{self.label} {g.short_id} {subject}: {one_line(g.end_status)} "
                        f"in {seconds(took)}{self.end_note(g)}")
@@ -247,15 +287,17 @@ class GoalServer:
 
     def _on_goal(self, goal: Any) -> Any:
         from rclpy.action import GoalResponse
+        call: Invocation | None = None
+        refusal: GoalError | None = None
         try:
             if self.owner.closing:
-                raise GoalError("the server is shutting down")
+                raise GoalError("the server is shutting down", Ending.SHUTDOWN)
+            if self.withdrawn is not None:
+                raise self.withdrawn
             call = self.admit(goal)
-        except GoalError as e:
-            self.owner.reject(self.action, goal, str(e))
-            self._announce(f"{self.label} {self.describe_request(goal)}: rejected: {one_line(str(e))}")
-            return GoalResponse.REJECT
-        self._admitted = (goal, call)
+        except GoalError as e:  # accepted all the same, and aborted with the reason
+            refusal = e
+        self._admitted = (goal, call, refusal)
         return GoalResponse.ACCEPT
 
     def _on_accepted(self, handle: Any) -> None:
@@ -264,9 +306,9 @@ class GoalServer:
         # the same thread (ActionServer._execute_goal_request).
         if admitted is None or admitted[0] is not handle.request:
             raise RuntimeError(f"{self.action}: accepted a goal that was not admitted")
-        g = self.new_goal(handle, admitted[1])
+        g = self.new_goal(handle, admitted[1], admitted[2])
         self.goals[g.key] = g
-        if self.announce_accepted:
+        if self.announce_accepted and g.call is not None:
             self._announce(f"{self.label} {g.short_id} {self.describe(g.call)}: accepted")
         handle.execute()
 
@@ -280,15 +322,19 @@ class GoalServer:
     async def _execute(self, handle: Any) -> Any:
         g = self.goals[bytes(handle.goal_id.uuid)]
         try:
+            if g.refusal is not None:
+                handle.abort()
+                return self._result(g, g.refusal.ending, f"aborted: {g.refusal}", None,
+                                    str(g.refusal))
             await self.take_turn(g)
             if handle.is_cancel_requested:
                 handle.canceled()
-                return self._result(g, False, "canceled", None, "goal canceled")
-            if self.owner.closing:
+                return self._result(g, Ending.CANCELED, "canceled", None, "goal canceled")
+            if self.owner.closing or self.withdrawn is not None:
+                why = self.withdrawn or GoalError("the server is shutting down", Ending.SHUTDOWN)
                 handle.abort()
-                return self._result(g, False, "aborted: the server is shutting down", None,
-                                    "the server is shutting down")
-            g.send_feedback(self.feedback("running"))
+                return self._result(g, why.ending, f"aborted: {why}", None, str(why))
+            self.first_feedback(g)
             g.start()
             outcome = await g.outcome
             return self._conclude(g, outcome)
@@ -298,26 +344,28 @@ class GoalServer:
             g.finished.set_result(True)
             self._announce_end(g)
 
-    def _result(self, g: ServedGoal, success: bool, status: str, value: Any, error: str) -> Any:
+    def _result(self, g: ServedGoal, ending: Ending, status: str, value: Any, error: str) -> Any:
         g.end_status = status
-        return self.result(success, status, value, error)
+        return self.result(ending is Ending.SUCCEEDED, status, value, error,
+                           error_code(self.action_type.Result, ending))
 
     def _conclude(self, g: ServedGoal, outcome: Any) -> Any:
         handle = g.handle
         self.concluding(g, outcome)
         if not isinstance(outcome, Failure):
             handle.succeed()
-            return self._result(g, True, "succeeded", outcome, "")
+            return self._result(g, Ending.SUCCEEDED, "succeeded", outcome, "")
         exc = outcome.exception
         if outcome.cancelled or isinstance(exc, Cancelled):
             reason = getattr(exc, "reason", "") or str(exc)
             if handle.is_cancel_requested:
                 handle.canceled()
-                return self._result(g, False, "canceled", None, reason)
+                return self._result(g, Ending.CANCELED, "canceled", None, reason)
             handle.abort()
-            return self._result(g, False, f"aborted: {reason}", None, reason)
+            return self._result(g, g.cancel_ending, f"aborted: {reason}", None, reason)
         handle.abort()
-        return self._result(g, False, f"failed: {exc}", None, f"{type(exc).__name__}: {exc}")
+        return self._result(g, Ending.FAILED, f"failed: {exc}", None,
+                            f"{type(exc).__name__}: {exc}")
 
 
 # -- announce lines -------------------------------------------------------------------------

@@ -7,8 +7,10 @@ client asks ``actorbt serve`` to run.
   resolved and the arguments bound to its signature.
 
 Text is parsed with ``yaml.safe_load`` only. Anything wrong raises :class:`GoalError`,
-whose message is the reason the goal is rejected. The server decodes each goal once,
-before it accepts it, and runs exactly what was decoded.
+whose message is the reason the goal is refused: the server accepts it and aborts it at
+once with that reason in ``error_msg`` and ``INVALID_GOAL`` in ``error_code``, as Nav2
+does, so a stock client sees why. The server decodes each goal once, when it arrives,
+and runs exactly what was decoded.
 """
 from __future__ import annotations
 
@@ -19,13 +21,20 @@ import yaml
 
 from ..errors import ActorbtError
 from ..yaml_hints import syntax_mark, syntax_message
+from .error_codes import Ending
 
 __all__ = ["GoalError", "Invocation", "decode_call_goal", "decode_tree_goal",
            "parse_call_args", "parse_inputs"]
 
 
 class GoalError(ActorbtError, ValueError):
-    """A goal that cannot be run: bad YAML, bad arguments, unknown actor, busy tree."""
+    """A goal that cannot be run: bad YAML, bad arguments, unknown actor, busy tree.
+
+    ``ending`` is the result's error code for it (``INVALID_GOAL`` unless told)."""
+
+    def __init__(self, message: str, ending: Ending = Ending.INVALID_GOAL) -> None:
+        super().__init__(message)
+        self.ending = ending
 
 
 @dataclass(frozen=True)

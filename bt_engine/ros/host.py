@@ -134,20 +134,34 @@ class RosHost:
         self._thread.start()
 
     # -- nodes -------------------------------------------------------------------------
-    def create_node(self, name: str, namespace: str | None = None, *, lean: bool = False) -> Any:
+    def create_node(self, name: str, namespace: str | None = None, *, lean: bool = False,
+                    ros_args: list[str] | None = None) -> Any:
         """A node in this context, spun by this host's executor.
 
         ``lean``: a client's node, without ``/rosout`` and the type description service
-        (``~/get_type_description``), which cost about 0.1 s to create."""
+        (``~/get_type_description``), which cost about 0.1 s to create.
+        ``ros_args``: rclpy's command-line arguments for this node only, e.g.
+        ``["-r", "__ns:=/robot1"]`` (``--ros-args`` is added in front when missing).
+
+        Raises:
+            ValueError: ``ros_args`` that rcl does not understand."""
         import rclpy
+        import rclpy.exceptions
         self._check_open()
         options: dict[str, Any] = {}
         if lean:
             from rclpy.parameter import Parameter
             options = {"enable_rosout": False, "parameter_overrides": [
                 Parameter("start_type_description_service", value=False)]}
-        node = rclpy.create_node(name, context=self.context, namespace=namespace,
-                                 start_parameter_services=False, **options)
+        if ros_args:
+            options["cli_args"] = ros_args if ros_args[0] == "--ros-args" else ["--ros-args", *ros_args]
+        try:
+            node = rclpy.create_node(name, context=self.context, namespace=namespace,
+                                     start_parameter_services=False, **options)
+        except rclpy.exceptions.InvalidNamespaceException as e:
+            raise ValueError(f"invalid namespace {namespace!r}: {e}") from None
+        except rclpy._rclpy_pybind11.RCLError as e:  # unknown --ros-args
+            raise ValueError(f"invalid ROS arguments {' '.join(ros_args or [])!r}: {e}") from None
         with self._lock:
             self._nodes.append(node)
         self.executor.add_node(node)

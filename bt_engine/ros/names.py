@@ -1,29 +1,32 @@
-"""The names a server and its clients agree on: node, action and topic names of
-``actorbt serve``, and how a goal is identified in a rejection message.
+"""The names a server and its clients agree on: node, action and service names of
+``actorbt serve``, in the root namespace or a robot's.
 
     /actorbt/call          CallActor: call any actor
     /actorbt/tree/<name>   RunTree: one action per tree (``nav.patrol`` -> ``nav/patrol``)
-    /actorbt/rejections    std_msgs/String, reliable, transient local: why goals were
-                           rejected (the action protocol carries no reason)
+    /actorbt/describe      Describe: the JSON Schema of every served tree and actor
+    /actorbt/call_now      CallActorNow: a quick actor as a service
+
+The constants are the names in the root namespace. The server creates its endpoints
+under their relative names (:func:`relative`), so ``serve --namespace robot1`` (or
+``--ros-args -r __ns:=/robot1``) serves ``/robot1/actorbt/call``; a client names the
+same namespace (:func:`in_namespace`).
 """
 from __future__ import annotations
 
 import re
-from typing import Any
 
 NODE_NAME = "actorbt"
 CALL_ACTION = "/actorbt/call"
 TREE_PREFIX = "/actorbt/tree/"
-REJECTIONS_TOPIC = "/actorbt/rejections"
-#: rejections kept for late subscribers on /actorbt/rejections
-REJECTIONS_DEPTH = 50
+DESCRIBE_SERVICE = "/actorbt/describe"
+CALL_NOW_SERVICE = "/actorbt/call_now"
 
-__all__ = ["CALL_ACTION", "NODE_NAME", "REJECTIONS_DEPTH", "REJECTIONS_TOPIC", "TREE_PREFIX",
-           "goal_text", "rejections_qos", "tree_action_name", "tree_of_action"]
+__all__ = ["CALL_ACTION", "CALL_NOW_SERVICE", "DESCRIBE_SERVICE", "NODE_NAME", "TREE_PREFIX",
+           "in_namespace", "namespace_of", "relative", "tree_action_name", "tree_of_action"]
 
 
-def tree_action_name(tree: str) -> str:
-    """``/actorbt/tree/<name>`` for a tree path (dots become slashes)."""
+def tree_action_name(tree: str, namespace: str = "") -> str:
+    """``/actorbt/tree/<name>`` for a tree path (dots become slashes), in ``namespace``."""
     parts = []
     for part in tree.replace("/", ".").split("."):
         part = re.sub(r"[^A-Za-z0-9_]", "_", part)
@@ -31,27 +34,29 @@ def tree_action_name(tree: str) -> str:
             part = "_" + part
         if part:
             parts.append(part)
-    return TREE_PREFIX + "/".join(parts)
+    return in_namespace(TREE_PREFIX + "/".join(parts), namespace)
 
 
-def tree_of_action(action: str) -> str | None:
+def tree_of_action(action: str, namespace: str = "") -> str | None:
     """The tree path an action name serves (``/actorbt/tree/nav/patrol`` -> ``nav.patrol``),
-    or None when it is not a tree action."""
-    if not action.startswith(TREE_PREFIX) or len(action) == len(TREE_PREFIX):
+    or None when it is not a tree action of ``namespace``."""
+    prefix = in_namespace(TREE_PREFIX, namespace)
+    if not action.startswith(prefix) or len(action) == len(prefix):
         return None
-    return action[len(TREE_PREFIX):].replace("/", ".")
+    return action[len(prefix):].replace("/", ".")
 
 
-def goal_text(goal: Any) -> str:
-    """What identifies a goal in a rejection message: the inputs of a RunTree goal,
-    ``actor`` and ``args_yaml`` of a CallActor goal."""
-    if hasattr(goal, "inputs_yaml"):
-        return goal.inputs_yaml
-    return f"{goal.actor}\n{goal.args_yaml}"
+def namespace_of(namespace: str | None) -> str:
+    """``robot1``, ``/robot1/`` -> ``/robot1``; empty or ``/`` -> ``""`` (the root)."""
+    parts = [p for p in (namespace or "").split("/") if p]
+    return "/" + "/".join(parts) if parts else ""
 
 
-def rejections_qos() -> Any:
-    """The QoS of /actorbt/rejections, on both sides (imports rclpy)."""
-    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
-    return QoSProfile(depth=REJECTIONS_DEPTH, reliability=ReliabilityPolicy.RELIABLE,
-                      durability=DurabilityPolicy.TRANSIENT_LOCAL)
+def in_namespace(name: str, namespace: str | None = "") -> str:
+    """A root-namespace name (``/actorbt/call``) inside ``namespace`` (``/robot1/actorbt/call``)."""
+    return namespace_of(namespace) + "/" + relative(name)
+
+
+def relative(name: str) -> str:
+    """``/actorbt/call`` -> ``actorbt/call``: what a node resolves in its own namespace."""
+    return name.lstrip("/")

@@ -9,15 +9,19 @@ Blocking methods wait in the calling thread; rclpy runs in the Remote's own exec
 thread (its own Context), so Ctrl-C reaches the caller as KeyboardInterrupt and
 :meth:`RemoteGoal.cancel` can cancel the goal.
 
-What is served is read from the ROS graph (no extra service): :meth:`Remote.served_actions`
-and :meth:`Remote.served_trees` list the discovered ``/actorbt/...`` action servers, and
+What is served is read from the ROS graph: :meth:`Remote.served_actions` and
+:meth:`Remote.served_trees` list the discovered ``/actorbt/...`` action servers, and
 :meth:`Remote.check_tree` fails at once with close matches when a tree is not served.
 One Remote keeps its node, so calls after the first skip start-up and discovery
-(``actorbt rshell``).
+(``actorbt rshell``). ``Remote(namespace="robot1")`` talks to ``serve --namespace robot1``.
+
+A goal the server cannot run is accepted and aborted at once with ``INVALID_GOAL`` (or
+``BUSY``: the tree runs another goal) and the reason in ``error_msg``; a RemoteGoal
+tells it as refused: status ``rejected``, error :class:`GoalRefusedError` (a
+GoalRejectedError) with the reason, since the goal never ran.
 """
 from __future__ import annotations
 
-import collections
 import difflib
 import os
 import threading
@@ -30,15 +34,26 @@ import yaml
 from ..errors import ActorbtError, ActorTimeout
 from .client import (STATUS_NAMES, ActionGoalError, GoalCall, GoalNotSentError,
                      GoalRejectedError, ServerUnavailableError, ServerWait)
+from .error_codes import REFUSED, ending_of
 from .host import RosClosedError, RosHost
-from .names import (CALL_ACTION, NODE_NAME, REJECTIONS_TOPIC, goal_text, rejections_qos,
-                    tree_action_name, tree_of_action)
+from .names import CALL_ACTION, NODE_NAME, in_namespace, tree_action_name, tree_of_action
 from .yamlio import dump
 
-__all__ = ["NoServeError", "Remote", "RemoteCallError", "RemoteGoal", "UnknownTreeError"]
+__all__ = ["GoalRefusedError", "NoServeError", "Remote", "RemoteCallError", "RemoteGoal",
+           "UnknownTreeError"]
 
-#: what every action of ``actorbt serve`` starts with
+#: what every action of ``actorbt serve`` starts with (in the root namespace)
 SERVE_PREFIX = f"/{NODE_NAME}/"
+
+
+class GoalRefusedError(GoalRejectedError):
+    """The server accepted the goal and aborted it at once: it cannot run (``error_code``
+    ``INVALID_GOAL`` or ``BUSY``, the reason in ``error_msg``)."""
+
+    def __init__(self, server: str, reason: str, code: str) -> None:
+        super().__init__(server, reason)
+        self.code = code
+        self.args = (f"{server} refused the goal ({code}): {reason}",)
 
 
 class NoServeError(ServerUnavailableError):
@@ -116,8 +131,12 @@ class RemoteGoal:
         self.done.set()
 
     def _on_error(self, exc: BaseException) -> None:
+        if isinstance(exc, ActionGoalError) and exc.result is not None:
+            ending = ending_of(type(exc.result), getattr(exc.result, "error_code", 0))
+            if ending in REFUSED:
+                exc = GoalRefusedError(self.action, exc.result.error_msg, ending.value)
         if isinstance(exc, GoalRejectedError):
-            self.status = "rejected"  # wait() adds the reason, off the executor thread
+            self.status = "rejected"
         elif isinstance(exc, GoalNotSentError):
             self.status = "canceled"
         elif not isinstance(exc, ActionGoalError):
@@ -135,11 +154,6 @@ class RemoteGoal:
             if step <= 0:
                 return False
             self.done.wait(step)
-        err = self.error
-        if isinstance(err, GoalRejectedError) and not err.reason:
-            reason = self.remote.rejection_reason(self.action, self.goal)
-            if reason:
-                self.error = GoalRejectedError(self.action, reason)
         return True
 
     def cancel(self) -> None:
@@ -167,10 +181,16 @@ class Remote:
     Args:
         node_name: this client's node name (default ``actorbt_client_<pid>_<host id>``).
         wait: how long to wait for a server to be discovered [s].
+        namespace: the namespace of the ``actorbt serve`` to talk to (``robot1``).
     """
 
-    def __init__(self, node_name: str | None = None, *, wait: float = 10.0) -> None:
+    def __init__(self, node_name: str | None = None, *, wait: float = 10.0,
+                 namespace: str | None = None) -> None:
         self.wait = wait
+        self.namespace = namespace or ""
+        #: what every action of the serve starts with (``/robot1/actorbt/``)
+        self.prefix = in_namespace(SERVE_PREFIX, self.namespace)
+        self.call_action = in_namespace(CALL_ACTION, self.namespace)
         self.host = RosHost("client")
         try:
             self.node = self.host.create_node(
@@ -179,39 +199,9 @@ class Remote:
             self._clients: dict[str, Any] = {}
             self._created: dict[str, float] = {}
             self._feedback: dict[bytes, tuple[RemoteGoal, Callable[[Any], None]]] = {}
-            self._rejections: collections.deque = collections.deque(maxlen=200)
-            self._rej_cond = threading.Condition()
-            from std_msgs.msg import String
-            self.host.call(lambda: self.node.create_subscription(
-                String, REJECTIONS_TOPIC, self._on_rejection, rejections_qos()))
         except BaseException:
             self.host.close()
             raise
-
-    # -- rejections -------------------------------------------------------------------
-    def _on_rejection(self, msg: Any) -> None:
-        try:
-            data = yaml.safe_load(msg.data)
-        except yaml.YAMLError:
-            return
-        if isinstance(data, dict):
-            with self._rej_cond:
-                self._rejections.append(data)
-                self._rej_cond.notify_all()
-
-    def rejection_reason(self, action: str, goal: Any, timeout: float = 1.0) -> str:
-        """The reason the server published for rejecting ``goal`` on ``action``."""
-        key = goal_text(goal)
-        deadline = time.monotonic() + timeout
-        with self._rej_cond:
-            while True:
-                for d in reversed(self._rejections):
-                    if d.get("action") == action and d.get("goal") == key:
-                        return str(d.get("reason", ""))
-                left = deadline - time.monotonic()
-                if left <= 0:
-                    return ""
-                self._rej_cond.wait(left)
 
     # -- what is served (the ROS graph) ---------------------------------------------------
     #: once a serve is discovered, how long its list of actions must stay the same before
@@ -224,13 +214,13 @@ class Remote:
             from rclpy.action.graph import get_action_names_and_types
             node = self.node
             return sorted(name for name, _ in get_action_names_and_types(node)
-                          if name.startswith(SERVE_PREFIX)
+                          if name.startswith(self.prefix)
                           and node.count_services(f"{name}/_action/send_goal") > 0)
         return self.host.call(query)
 
     def served_trees(self) -> list[str]:
         """The trees served now (``nav.patrol`` for ``/actorbt/tree/nav/patrol``)."""
-        return [t for t in map(tree_of_action, self.served_actions()) if t]
+        return [t for t in (tree_of_action(a, self.namespace) for a in self.served_actions()) if t]
 
     def wait_for_serve(self, timeout: float | None = None) -> list[str]:
         """Wait until an ``actorbt serve`` is discovered and return its actions.
@@ -256,7 +246,7 @@ class Remote:
             NoServeError: no ``actorbt serve`` within ``timeout`` [s] (default ``wait``).
             UnknownTreeError: the serve has no such tree (with close matches).
         """
-        action = tree_action_name(tree)
+        action = tree_action_name(tree, self.namespace)
         seconds = self.wait if timeout is None else timeout
         deadline = time.monotonic() + seconds
         actions = self.wait_for_serve(seconds)
@@ -264,7 +254,8 @@ class Remote:
         while action not in actions:
             now = time.monotonic()
             if now - changed >= self.GRAPH_SETTLE or now >= deadline:
-                raise UnknownTreeError(tree, [t for t in map(tree_of_action, actions) if t])
+                raise UnknownTreeError(tree, [t for t in (tree_of_action(a, self.namespace)
+                                                          for a in actions) if t])
             time.sleep(0.02)
             latest = self.served_actions()
             if latest != actions:
@@ -351,7 +342,7 @@ class Remote:
         """Start a goal on ``/actorbt/tree/<tree>``; ``inputs`` a mapping or YAML text."""
         from actorbt_interfaces.action import RunTree
         text = inputs if isinstance(inputs, str) else (dump(inputs) if inputs else "")
-        return self.send(RunTree, tree_action_name(tree), RunTree.Goal(inputs_yaml=text),
+        return self.send(RunTree, tree_action_name(tree, self.namespace), RunTree.Goal(inputs_yaml=text),
                          on_feedback=on_feedback, wait=wait)
 
     def run_tree(self, tree: str, inputs: "dict | str | None" = None, *,
@@ -367,7 +358,7 @@ class Remote:
         """Start a call of ``actor`` through ``/actorbt/call``."""
         from actorbt_interfaces.action import CallActor
         text = dump({"args": list(args), "kwargs": kwargs}) if (args or kwargs) else ""
-        return self.send(CallActor, CALL_ACTION, CallActor.Goal(actor=actor, args_yaml=text))
+        return self.send(CallActor, self.call_action, CallActor.Goal(actor=actor, args_yaml=text))
 
     def call(self, actor: str, *args: Any, timeout: float | None = None, **kwargs: Any) -> Any:
         """Call ``actor`` in the served runtime and return its result (as YAML data)."""
@@ -396,7 +387,7 @@ class Remote:
         if g.error is not None:
             if isinstance(g.error, ActionGoalError):
                 res = g.error.result
-                detail = getattr(res, "error", "") or getattr(res, "status", "")
+                detail = getattr(res, "error_msg", "") or getattr(res, "status", "")
                 raise RemoteCallError(what, g.status, detail) from None
             raise g.error
 

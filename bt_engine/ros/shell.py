@@ -32,7 +32,7 @@ from typing import Any, Callable
 from ..errors import ActorbtError
 from ..literals import parse_args, split_line
 from .client import GoalRejectedError, ServerUnavailableError
-from .remote import NoServeError, Remote, close_matches
+from .remote import GoalRefusedError, NoServeError, Remote, close_matches
 
 HISTORY = pathlib.Path(os.environ.get("ACTORBT_HISTORY", pathlib.Path.home() / ".actorbt_history"))
 
@@ -181,8 +181,9 @@ class RemoteShell(cmd.Cmd):
         except KeyboardInterrupt:
             self.stdout.write("interrupted (the call was canceled)\n")
             return
-        except GoalRejectedError as e:
-            self.stdout.write(f"error: rejected: {e.reason or e}\n")
+        except GoalRejectedError as e:  # an invalid call: GoalRefusedError, with its code
+            word = f"refused ({e.code})" if isinstance(e, GoalRefusedError) else "rejected"
+            self.stdout.write(f"error: {word}: {e.reason or e}\n")
             return
         except ServerUnavailableError as e:
             self.stdout.write(f"error: {NoServeError(e.seconds)}\n")

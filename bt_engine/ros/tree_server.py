@@ -1,14 +1,16 @@
 """The RunTree action of one tree, ``/actorbt/tree/<name>``: one goal at a time,
 feedback from the trees layer's progress, and a trace of every goal.
 
-- A second goal for a running tree is rejected, unless the owner preempts: then the
-  running goal is cancelled (``preempted by a newer goal``) and the new one starts once
-  it has stopped.
-- Feedback: ``running`` when the work starts; for missions of the trees layer, one
-  message after every tick in which a node changed status (``active_node`` is the
-  running tip, through nested trees joined with `` > ``; ``tick_count`` the root run's
-  ticks) and a last one when the run finishes. Other tree actors get a last
-  ``success`` or ``failure``.
+- A second goal for a running tree is refused (aborted at once, ``BUSY``), unless the
+  owner preempts: then the running goal is cancelled (``preempted by a newer goal``,
+  ``PREEMPTED``) and the new one starts once it has stopped.
+- Feedback, each with ``elapsed`` (seconds since the work started): one message right
+  after the goal starts (``running``; ``active_node`` the tree's name until the first
+  tick tells the running node); for missions of the trees layer, one message after
+  every tick in which a node changed status (``active_node`` is the running tip, through
+  nested trees joined with `` > ``; ``tick_count`` the root run's ticks) and a last one
+  when the run finishes, before the result. Other tree actors get a last ``success`` or
+  ``failure``.
 - With the owner's ``record_dir``, each goal is recorded as a JSON Lines trace,
   ``<record_dir>/<time>-<tree>-<goal id>.jsonl``, that ``actorbt replay`` replays.
   The recorder follows the goal's transaction, so the trace holds only the goal's runs
@@ -23,7 +25,7 @@ import pathlib
 import time
 from typing import Any
 
-from ..errors import Failure
+from .error_codes import Ending
 from .goal_server import GoalServer, Owner, ServedGoal, one_line, shown_path
 from .goals import GoalError, Invocation, decode_tree_goal
 from .yamlio import dump, flow
@@ -97,8 +99,9 @@ class TreeGoal(ServedGoal):
 
     server: "TreeServer"
 
-    def __init__(self, server: "TreeServer", handle: Any, call: Invocation) -> None:
-        super().__init__(server, handle, call)
+    def __init__(self, server: "TreeServer", handle: Any, call: Invocation | None,
+                 refusal: GoalError | None = None) -> None:
+        super().__init__(server, handle, call, refusal)
         self.top: Any = None      # the root TreeRun, once the trees layer reports one
         self.last_run: Any = None
         self.final: str | None = None
@@ -110,6 +113,10 @@ class TreeGoal(ServedGoal):
     def starting(self) -> None:
         if self.server.owner.record_dir is not None:
             self._open_trace()
+        # the first feedback, right after the start (after the first tick when that
+        # comes at once, so it names the running node)
+        self.flush_scheduled = True
+        self.rt.hub.call_soon(self.flush)
 
     def started(self, txn: Any) -> None:
         self.server.progress.goals[txn.id] = self
@@ -139,7 +146,8 @@ class TreeGoal(ServedGoal):
             return
         self.flush_scheduled = False
         top, run = self.top, self.last_run
-        if top is None:
+        if top is None:  # no tick yet, or not a mission: the tree itself is active
+            self.send_feedback(self.server.feedback(self, "running", self.subject))
             return
         chain = []
         r = run
@@ -157,7 +165,7 @@ class TreeGoal(ServedGoal):
             if tip:
                 tips.append(tip if r is top else f"{r.mission.name}:{tip}")
         status = self.final or _status_name(getattr(top, "status", None))
-        self.send_feedback(self.server.feedback(status, " > ".join(tips),
+        self.send_feedback(self.server.feedback(self, status, " > ".join(tips) or self.subject,
                                                 int(getattr(top, "ticks", 0))))
 
     def _open_trace(self) -> None:
@@ -199,14 +207,19 @@ class TreeServer(GoalServer):
 
     def admit(self, goal: Any) -> Invocation:
         call = decode_tree_goal(self.owner.rt, self.ref, goal.inputs_yaml)
-        if self.goals and not self.owner.preempt:
+        if self.active_goals() and not self.owner.preempt:
             raise GoalError(f"tree {self.ref.path} is already running a goal; cancel it "
-                            "first (this server rejects a second goal: it was started "
-                            "without preempt)")
+                            "first (this server refuses a second goal: it was started "
+                            "without preempt)", Ending.BUSY)
         return call
 
-    def new_goal(self, handle: Any, call: Invocation) -> TreeGoal:
-        return TreeGoal(self, handle, call)
+    def active_goals(self) -> list[ServedGoal]:
+        """The goals that run or wait to run (not the refused ones, ending now)."""
+        return [g for g in self.goals.values() if g.refusal is None]
+
+    def new_goal(self, handle: Any, call: Invocation | None,
+                 refusal: GoalError | None = None) -> TreeGoal:
+        return TreeGoal(self, handle, call, refusal)
 
     def describe(self, call: Invocation) -> str:
         return f"{call.path} {one_line(flow(call.kwargs))}" if call.kwargs else call.path
@@ -219,21 +232,26 @@ class TreeServer(GoalServer):
         path = getattr(g, "trace_path", None)
         return f" (trace {shown_path(path)})" if path else ""
 
-    def feedback(self, status: str, active: str = "", ticks: int = 0) -> Any:
-        return self.action_type.Feedback(status=status, active_node=active,
-                                         tick_count=max(0, ticks))
+    def feedback(self, g: ServedGoal, status: str, active: str = "", ticks: int = 0) -> Any:
+        return self.action_type.Feedback(status=status, active_node=active or g.subject,
+                                         tick_count=max(0, ticks), elapsed=g.elapsed())
 
-    def result(self, success: bool, status: str, value: Any, error: str) -> Any:
+    def first_feedback(self, g: ServedGoal) -> None:
+        """Sent from the hub once the work starts (TreeGoal.starting)."""
+
+    def result(self, success: bool, status: str, value: Any, error: str, code: int) -> Any:
         res = self.action_type.Result()
         res.success = success
         res.status = status
         res.outputs_yaml = dump(value) if success else ""
+        res.error_code = code
+        res.error_msg = error
         return res
 
     async def take_turn(self, g: ServedGoal) -> None:
         prev = self.active
         if prev is not None:
-            prev.cancel("preempted by a newer goal")
+            prev.cancel("preempted by a newer goal", Ending.PREEMPTED)
             await prev.finished
         self.active = g  # type: ignore[assignment]
 
@@ -244,5 +262,4 @@ class TreeServer(GoalServer):
     def concluding(self, g: ServedGoal, outcome: Any) -> None:
         if g.top is None:  # type: ignore[attr-defined]
             # No progress from the trees layer for this actor: a last feedback at the end.
-            g.handle.publish_feedback(self.feedback(
-                "failure" if isinstance(outcome, Failure) else "success"))
+            super().concluding(g, outcome)
