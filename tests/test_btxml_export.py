@@ -114,6 +114,9 @@ def node_problems(el: ET.Element, declared: dict, trees: dict) -> list[str]:
     elif tag in BUILTIN:
         kind, names = BUILTIN[tag]
         ports = {n: "input_port" for n in names}
+    elif tag in ("Action", "Condition") and attrs.get("ID") in declared:
+        # the long form: BehaviorTree.CPP builds the declared node whatever the tag says
+        kind, ports = tag, declared[attrs.pop("ID")][1]
     elif tag in declared:
         kind, ports = declared[tag]
     else:
@@ -303,6 +306,7 @@ root:
     - {do: echo, with: {value: "json:not", timeout: null}}
     - {do: echo, with: {value: "true", items: ["x"]}}
     - {do: echo, with: {value: "two\\nlines"}}
+    - {name: guard, condition: echo, with: {value: true}, out: guarded}
     - {name: to sub, do: sub, with: {goal: "{where}", mode: "2"}, out: result}
     - {do: sub, with: {goal: {x: 0, y: "{t}"}, speed: 1}}
     - set: {pair: [1, 2]}
@@ -347,7 +351,10 @@ def test_every_control_node_round_trips(parts: Any, tmp_path: Path) -> None:
             "RecoveryNode", "RateController", "SingleTrigger", "ActorbtCheck", "ActorbtSet", "ActorbtWait",
             "ActorbtTimeout", "ActorbtParallel", "ActorbtRunOnce", "ActorbtBehaviour"} <= tags
     model = {e.get("ID"): e.tag for e in root.find("TreeNodesModel")}
-    assert model["ready"] == "Condition" and model["move"] == "Action" and model["ActorbtCheck"] == "Condition"
+    # a leaf's kind is how the tree uses it: echo is called with do: first, so its model
+    # says Action and its condition: use names the kind in the long form
+    assert model["ready"] == "Action" and model["move"] == "Action" and model["ActorbtCheck"] == "Condition"
+    assert model["echo"] == "Action" and root.find(".//Condition[@ID='echo']") is not None
 
 
 def test_values_are_plain_where_plain_text_reads_back(parts: Any, tmp_path: Path) -> None:

@@ -98,6 +98,30 @@ def test_nav2_navigator_runs_replanning_and_recovering(rt: Runtime, tmp_path: Pa
     assert rt.stats() == {"transactions": 0, "tasks": 0}
 
 
+def test_nav2_recovery_subtree_runs_to_its_end_under_its_reactive_guard(rt: Runtime, tmp_path: Path) -> None:
+    # GoalUpdated is a Condition in the node model: it becomes a condition leaf, which
+    # answers within the tick, so the ReactiveFallback re-asks it without halting the
+    # recovery sequence behind it (a do: leaf would restart it on every tick)
+    convert(tmp_path, "nav2_navigate.xml", nodes="nav2_nodes.xml")
+    assert "condition: GoalUpdated" in (tmp_path / "RecoveryActions.yaml").read_text()
+    nav = rt.add_subsystem("nav", Nav2Actors)
+    TreeHost(rt, max_period=0.1).load_folder(tmp_path)
+    rt.call("RecoveryActions")
+    assert nav.calls == ["clear local_costmap", "clear global_costmap", "spin", "backup"]
+    assert rt.now() == pytest.approx(5.0)  # the 5 s Wait ran whole, re-guarded every 0.1 s
+    assert rt.stats() == {"transactions": 0, "tasks": 0}
+
+
+def test_a_long_form_condition_is_a_condition_leaf(tmp_path: Path) -> None:
+    xml = tmp_path / "guard.xml"
+    xml.write_text('<root BTCPP_format="4"><BehaviorTree ID="Guard"><ReactiveSequence>'
+                   '<Condition ID="BatteryOk"/><Action ID="Patrol"/>'
+                   '</ReactiveSequence></BehaviorTree></root>')
+    [path] = write_missions(import_files([xml], None), tmp_path / "out", "guard.xml")
+    text = path.read_text()
+    assert "condition: BatteryOk" in text and "do: Patrol" in text
+
+
 # ---------------------------------------------------------------- tutorial-shaped trees
 
 

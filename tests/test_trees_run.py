@@ -385,3 +385,71 @@ def test_a_tree_may_not_replace_a_root_actor(rt: Runtime, tmp_path: Path) -> Non
     with pytest.raises(DuplicateTreeError, match="tree name 'sleep' is already the actor sleep"):
         TreeHost(rt).load_folder(tmp_path)
     assert not rt.resolve("sleep").is_tree
+
+
+def test_a_condition_under_a_reactive_parent_lets_its_sibling_finish(rt: Runtime, tmp_path: Path) -> None:
+    # the guard is asked again on every tick (one a second); as a condition it answers
+    # within the tick, so the running sibling is never halted
+    write_trees(tmp_path, guarded="""
+        name: guarded
+        root:
+          reactive_fallback:
+            - condition: echo
+              with: {value: false}
+            - {do: block, with: {tag: work, seconds: 5}}
+    """)
+    host, script, rec = host_for(rt, tmp_path, max_period=1.0)
+    assert rt.call("guarded") == {}
+    assert rt.now() == pytest.approx(5.0)
+    assert script.started == ["work"] and script.cancelled == []
+    guard_states = {e[4] for e in rec.events if e[0] == "status" and e[2].endswith("echo")}
+    assert "RUNNING" not in guard_states
+    assert_clean(rt, host)
+
+
+def test_the_same_guard_as_a_do_leaf_halts_its_sibling_on_every_tick(rt: Runtime, tmp_path: Path) -> None:
+    # why condition: exists (a do: leaf is RUNNING for a tick, and the reactive parent
+    # halts whatever ran after it)
+    write_trees(tmp_path, restless="""
+        name: restless
+        root:
+          timeout:
+            seconds: 10
+            child:
+              reactive_fallback:
+                - do: echo
+                  with: {value: false}
+                - {do: block, with: {tag: work, seconds: 5}}
+    """)
+    host, script, rec = host_for(rt, tmp_path, max_period=1.0)
+    with pytest.raises(ActorError, match="timed out after 10 s"):
+        rt.call("restless")
+    assert len(script.cancelled) >= 5
+    assert_clean(rt, host)
+
+
+def test_a_condition_holds_the_tick_until_it_answers_and_cancels_cleanly(rt: Runtime, tmp_path: Path) -> None:
+    write_trees(tmp_path, slow_guard="""
+        name: slow_guard
+        root:
+          sequence:
+            - condition: block
+              with: {tag: guard, seconds: 2}
+              out: answer
+            - condition: act
+              with: {tag: stuck}
+    """)
+    host, script, rec = host_for(rt, tmp_path)
+    outcomes: list[Any] = []
+    txn = rt.start("slow_guard", on_done=outcomes.append)
+    deadline = time.monotonic() + 2
+    while "stuck" not in script.started and time.monotonic() < deadline:
+        time.sleep(0.001)
+    assert rt.now() == pytest.approx(2.0)
+    assert rec.ticks("slow_guard") == 1  # both answers came within the first tick
+    txn.cancel("operator abort")
+    while not outcomes and time.monotonic() < deadline:
+        time.sleep(0.001)
+    assert outcomes and outcomes[0].cancelled
+    assert script.cancelled == ["stuck"]
+    assert_clean(rt, host)

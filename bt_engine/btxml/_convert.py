@@ -341,7 +341,7 @@ class Importer:
             raise UnknownXmlNodeError(
                 el.pos, f"unknown node {node_id!r}{suggest(node_id, choices)}, expected a built-in node, a tree or a "
                         f"node declared in the node model ({', '.join(self.model.files) or 'the XML'})")
-        return self.leaf(el, node_id, ports, ctx, spec)
+        return self.leaf(el, node_id, ports, ctx, spec, condition=declared == "Condition")
 
     # ------------------------------------------------------------ values
 
@@ -473,7 +473,10 @@ class Importer:
 
     # ------------------------------------------------------------ leaves and subtrees
 
-    def leaf(self, el: XElement, node_id: str, ports: dict[str, str], ctx: _Tree, spec: NodeSpec | None) -> dict:
+    def leaf(self, el: XElement, node_id: str, ports: dict[str, str], ctx: _Tree, spec: NodeSpec | None,
+             condition: bool = False) -> dict:
+        """An actor call: a ``condition:`` leaf for a node declared a Condition (it answers
+        within the tick, as reactive parents need), else ``do:``."""
         if not _ACTOR.match(node_id):
             raise BtXmlError(el.pos, f"node {node_id!r} is not a valid actor name, expected letters, digits and '_'")
         args: dict[str, Any] = {}
@@ -509,10 +512,11 @@ class Importer:
             if port.writes:
                 outs.append((port.name, key))
                 ctx.write(key, el.pos)
-        return self.call(node_id, args, outs, ctx)
+        return self.call(node_id, args, outs, ctx, "condition" if condition else "do")
 
-    def call(self, actor: str, args: dict[str, Any], outs: list[tuple[str, str]], ctx: _Tree) -> dict:
-        node: dict[str, Any] = {"do": actor}
+    def call(self, actor: str, args: dict[str, Any], outs: list[tuple[str, str]], ctx: _Tree,
+             kind: str = "do") -> dict:
+        node: dict[str, Any] = {kind: actor}
         if args:
             node["with"] = args
         if len(outs) == 1:

@@ -27,7 +27,7 @@ from typing import Any, Callable
 
 from ..errors import ActorbtError
 from ..trees._library import TreeLibrary
-from ..trees._model import (Check, Do, ForceFailure, ForceSuccess, IfThenElse, Invert, Mission, Node, Parallel,
+from ..trees._model import (Check, Condition, Do, ForceFailure, ForceSuccess, IfThenElse, Invert, Mission, Node, Parallel,
                             ParallelPolicy, PipelineSequence, RateController, ReactiveSelector, ReactiveSequence,
                             Recovery, Ref, Repeat, ResumeSequence, Retry, RunOnce, RunOnceThen, Selector, Sequence,
                             SetValues, Timeout, UseBehaviour, Wait, WhileDoElse, children_of)
@@ -239,9 +239,11 @@ class Exporter:
             attrs[model.result_port] = "{" + node.out + "}"
         if tree:
             return "SubTree", {"ID": node.actor, **attrs}
+        if model.kind != _leaf_kind(node):  # the actor is also used the other way: say which
+            return _leaf_kind(node), {"ID": node.actor, **attrs}
         if node.actor in BUILTINS or node.actor in NAV2 or node.actor in UNSUPPORTED or node.actor in EXTENSIONS \
                 or node.actor in ("SubTree", "BehaviorTree", "root", "include", "TreeNodesModel"):
-            raise ExportError(node.at("do"), f"actor {node.actor!r} has the name of a BehaviorTree.CPP node, "
+            raise ExportError(node.at(node.kind), f"actor {node.actor!r} has the name of a BehaviorTree.CPP node, "
                                              "expected an actor named otherwise")
         return node.actor, attrs
 
@@ -279,7 +281,7 @@ class Exporter:
         if node.actor in self.library:
             model = _tree_model(self.library[node.actor])
         else:
-            model = _actor_model(node.actor, self.info(node.actor))
+            model = _actor_model(node.actor, self.info(node.actor), _leaf_kind(node))
         self.models[node.actor] = model
         return model
 
@@ -370,12 +372,17 @@ def _tree_model(mission: Mission) -> LeafModel:
     return model
 
 
-def _actor_model(actor: str, info: Any) -> LeafModel:
+def _leaf_kind(node: Do) -> str:
+    """``condition:`` leaves are BehaviorTree.CPP Conditions (answered within the tick),
+    ``do:`` leaves Actions."""
+    return "Condition" if isinstance(node, Condition) else "Action"
+
+
+def _actor_model(actor: str, info: Any, kind: str) -> LeafModel:
     tool = _tool(info)
     props = (tool.get("parameters") or {}).get("properties") or {}
     signature: inspect.Signature | None = getattr(info, "signature", None)
     returns = signature.return_annotation if signature is not None else inspect.Signature.empty
-    kind = "Condition" if _type_text(returns) == "bool" else "Action"
     model = LeafModel(kind, actor, (tool.get("description") or getattr(info, "doc", None) or "").strip())
     for param in signature.parameters.values() if signature is not None else ():
         if param.kind in (param.VAR_POSITIONAL, param.VAR_KEYWORD):

@@ -14,6 +14,7 @@ import py_trees
 from py_trees.common import Status
 
 from ..errors import ActorbtError
+from ..signal import Signal
 from ..transaction import TxnState
 from ._errors import CheckEvaluationError
 from ._expr import evaluate
@@ -21,7 +22,7 @@ from ._model import Check, Do, Ref, SetValues, resolve_value
 from ._blackboard import RunBlackboard
 
 __all__ = [
-    "ActorLeaf", "CheckLeaf", "RepeatNode", "RetryNode", "RunContext", "SetLeaf", "TimeoutNode", "WaitLeaf",
+    "ActorLeaf", "CheckLeaf", "ConditionLeaf", "RepeatNode", "RetryNode", "RunContext", "SetLeaf", "TimeoutNode", "WaitLeaf",
 ]
 
 
@@ -53,6 +54,9 @@ class ActorLeaf(py_trees.behaviour.Behaviour):
     fails on ``False``, on an exception, or when the transaction was cancelled elsewhere.
     """
 
+    #: the actor's end asks for a tick (the answer is news to the tree)
+    wakes_tree = True
+
     def __init__(self, name: str, ctx: RunContext, node: Do, actor_path: str, actor_kind: str = "sync",
                  path: str = "") -> None:
         super().__init__(name)
@@ -79,7 +83,7 @@ class ActorLeaf(py_trees.behaviour.Behaviour):
         token = self._token = object()
 
         def done(_outcome: Any) -> None:
-            if self._token is token:  # not halted meanwhile
+            if self._token is token and self.wakes_tree:  # not halted meanwhile
                 self.ctx.wake()
 
         try:
@@ -116,6 +120,28 @@ class ActorLeaf(py_trees.behaviour.Behaviour):
         if new_status is Status.INVALID and self.txn is not None and not self.txn.done:
             self._token = None
             self.txn.cancel(self.ctx.halt_reason(self.path))
+
+
+class ConditionLeaf(ActorLeaf):
+    """``condition: actor``: like ``do:``, but the tick waits for the actor's answer, so
+    the node succeeds or fails in the tick that reached it and is never RUNNING.
+
+    The wait blocks the tree's own greenlet only; the actors that other leaves started
+    keep running meanwhile. Cancelling the tree raises ``Cancelled`` out of the wait, and
+    the tree's halt then cancels the actor.
+    """
+
+    # the answer is read in the tick that waited for it; a tick more would ask again, and
+    # a condition that is always asked would keep a reactive tree ticking in a loop
+    wakes_tree = False
+
+    def update(self) -> Status:
+        txn = self.txn
+        if self.error is None and not txn.done:
+            answered = Signal(self.ctx.rt)
+            txn.add_done_callback(lambda _txn: answered.set())
+            answered.wait()
+        return super().update()
 
 
 class SetLeaf(py_trees.behaviour.Behaviour):

@@ -336,7 +336,7 @@ class TreeLibrary:
                             chain, root = [node.actor, *error.chain], error.root
                         else:
                             chain, root = [node.actor], error
-                        skipped[name] = BrokenDependencyError(node.at("do"), chain, root)
+                        skipped[name] = BrokenDependencyError(node.at(node.kind), chain, root)
                         self.skip(name, skipped[name])
                         changed = True
                         break

@@ -21,6 +21,7 @@ from ._expr import Expr, read_path
 __all__ = [
     "REQUIRED",
     "Check",
+    "Condition",
     "Composite",
     "Decorator",
     "Do",
@@ -469,6 +470,20 @@ class Do(Node):
 
     def default_label(self) -> str:
         return self.actor
+
+
+@dataclass(frozen=True, eq=False, kw_only=True)
+class Condition(Do):
+    """Ask an actor within the tick: ``condition: actor``, with ``with:`` and ``out:`` as
+    for ``do:``.
+
+    The tick waits for the answer, so the node is never RUNNING: it succeeds or fails in
+    the tick that reached it. This is what a condition under a reactive parent needs
+    (BehaviorTree.CPP's Condition nodes): re-asked on every tick, a ``do:`` leaf would be
+    restarted and halt its running siblings each time.
+    """
+
+    kind: ClassVar[str] = "condition"
 
 
 @dataclass(frozen=True, eq=False, kw_only=True)

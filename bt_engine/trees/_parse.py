@@ -30,6 +30,7 @@ from ._model import (
     REQUIRED,
     Check,
     Composite,
+    Condition,
     Do,
     ForceFailure,
     ForceSuccess,
@@ -98,13 +99,14 @@ _DECORATOR_EXAMPLES = {
 }
 # composites whose children are a condition and one or two branches
 _BRANCHING = ("if_then_else", "while_do_else")
-_LEAVES = ("do", "set", "check", "wait", "behaviour")
+_LEAVES = ("do", "condition", "set", "check", "wait", "behaviour")
 
 #: Every node type keyword, in the order the docs list them.
 NODE_TYPES: tuple[str, ...] = (*_COMPOSITES, *_DECORATOR_FIELDS, *_SIMPLE_DECORATORS, *_LEAVES)
 
 # Fields a node may carry besides its type keyword.
-_NODE_FIELDS: dict[str, tuple[str, ...]] = {"do": ("with", "out"), "behaviour": ("with", "writes")}
+_NODE_FIELDS: dict[str, tuple[str, ...]] = {"do": ("with", "out"), "condition": ("with", "out"),
+                                             "behaviour": ("with", "writes")}
 
 _IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
 _ACTOR_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*(\.[A-Za-z_][A-Za-z0-9_]*)*\Z")
@@ -541,10 +543,11 @@ class _Parser:
 
     # ------------------------------------------------------------ leaves
 
-    def leaf_do(self, y: YMap, value: YNode, common: dict[str, Any]) -> Node:
-        actor = self.string(value, "do")
+    def leaf_do(self, y: YMap, value: YNode, common: dict[str, Any], node_class: type[Do] = Do) -> Node:
+        kind = node_class.kind
+        actor = self.string(value, kind)
         if not _ACTOR_NAME.match(actor):
-            raise InvalidValueError(value.pos, f"do {shorten(actor)} is not an actor name, expected e.g. navigate or robot.navigation.goto")
+            raise InvalidValueError(value.pos, f"{kind} {shorten(actor)} is not an actor name, expected e.g. navigate or robot.navigation.goto")
         args: tuple[Any, ...] = ()
         kwargs: dict[str, Any] = {}
         arg_pos: dict[str, Pos] = {}
@@ -565,7 +568,11 @@ class _Parser:
             )
         out_node = y.get("out")
         out = self.ident(out_node, "out key") if out_node is not None else None
-        return Do(actor=actor, args=args, kwargs=kwargs, out=out, arg_pos=arg_pos, arg_key_pos=arg_key_pos, **common)
+        return node_class(actor=actor, args=args, kwargs=kwargs, out=out, arg_pos=arg_pos, arg_key_pos=arg_key_pos,
+                          **common)
+
+    def leaf_condition(self, y: YMap, value: YNode, common: dict[str, Any]) -> Node:
+        return self.leaf_do(y, value, common, Condition)
 
     def leaf_set(self, y: YMap, value: YNode, common: dict[str, Any]) -> Node:
         m = self.mapping(value, "set", "{attempts: 0, target: \"{found}\"}")

@@ -16,13 +16,14 @@ import py_trees
 from py_trees.common import Status
 
 from ..signal import Signal
-from ._behaviours import ActorLeaf, CheckLeaf, RepeatNode, RetryNode, SetLeaf, TimeoutNode, WaitLeaf
+from ._behaviours import ActorLeaf, CheckLeaf, ConditionLeaf, RepeatNode, RetryNode, SetLeaf, TimeoutNode, WaitLeaf
 from ._blackboard import RunBlackboard
 from ._controls import (CountingParallel, IfThenElseNode, PipelineSequenceNode, RateControllerNode, RecoveryNode,
                         ResumeSequenceNode, RunOnceNode, WhileDoElseNode)
 from ._errors import TreeFailure
 from ._model import (
     Check,
+    Condition,
     Do,
     ForceFailure,
     ForceSuccess,
@@ -219,7 +220,8 @@ class TreeRun:
         label = path.rsplit("/", 1)[-1]
         b: py_trees.behaviour.Behaviour
         if isinstance(node, Do):
-            b = ActorLeaf(label, self, node, *self.host.actor_target(node.actor), path=path)
+            leaf_class = ConditionLeaf if isinstance(node, Condition) else ActorLeaf
+            b = leaf_class(label, self, node, *self.host.actor_target(node.actor), path=path)
         elif isinstance(node, SetValues):
             b = SetLeaf(label, self, node)
         elif isinstance(node, Check):

@@ -56,7 +56,7 @@ def describe(node: Node) -> str:
     """One line about a node: its kind and what it does."""
     if isinstance(node, Do):
         args = [_value(a) for a in node.args] + [f"{k}={_value(v)}" for k, v in node.kwargs.items()]
-        text = f"do {node.actor}({', '.join(args)})"
+        text = f"{node.kind} {node.actor}({', '.join(args)})"
         return text + (f" -> {node.out}" if node.out else "")
     if isinstance(node, SetValues):
         return "set " + ", ".join(f"{k}={_value(v)}" for k, v in node.values.items())

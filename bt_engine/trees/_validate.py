@@ -210,7 +210,7 @@ class _Validator:
                     message = f"unknown actor {shorten(node.actor)}{hint}, expected a registered actor or tree name"
                 else:
                     message = f"cannot resolve actor {shorten(node.actor)}: {exc}"
-                self.errors.append(UnresolvedActorError(node.at("do"), message))
+                self.errors.append(UnresolvedActorError(node.at(node.kind), message))
 
     def check_do(self, node: Do) -> None:
         for value in (*node.args, *node.kwargs.values()):
@@ -235,7 +235,7 @@ class _Validator:
             bound = sig.bind(*node.args, **node.kwargs)
         except TypeError as exc:
             self.errors.append(ArgumentMismatchError(
-                node.at("with") if "with" in node.field_pos else node.at("do"),
+                node.at("with") if "with" in node.field_pos else node.at(node.kind),
                 f"arguments do not fit actor {node.actor!r}: {exc}, expected {shown}",
             ))
             return
@@ -380,7 +380,7 @@ class _Validator:
             cycle = self.path_back(callee)
             if cycle is not None:
                 self.errors.append(SubtreeCycleError(
-                    node.at("do"),
+                    node.at(node.kind),
                     f"subtree cycle {' -> '.join([start, *cycle])}, expected trees that do not call "
                     "themselves directly or through other trees",
                 ))
