@@ -16,7 +16,7 @@ from typing import Any, Awaitable, Callable
 import anyio
 
 from ..actor import ActorRef
-from ..errors import ActorError, Cancelled, Failure
+from ..errors import ActorCancelled, ActorError, Cancelled, Failure
 from ..invoke import dispatch
 from ..modes import Mode
 from ..trees import TreeFailure
@@ -41,7 +41,8 @@ class CallOutcome:
         failed_at: for a tree that failed, the node path where.
         sim_time, wall_time: how long it ran [s] on the runtime clock and the wall.
         ticks: the outermost tree run's ticks (0 for a plain actor).
-        trace: the trace events of its tree runs.
+        trace: the trace events of its tree runs (``dropped``: how many did not fit).
+        cancelled: it was cancelled (``error`` says by whom).
     """
 
     value: Any = None
@@ -52,6 +53,7 @@ class CallOutcome:
     ticks: int = 0
     trace: list[dict[str, Any]] = field(default_factory=list)
     dropped: int = 0
+    cancelled: bool = False
 
     @property
     def ok(self) -> bool:
@@ -64,9 +66,12 @@ class _Done:
 
 
 async def run_call(rt: Any, ref: ActorRef, args: tuple, kwargs: dict, watcher: RunWatcher | None,
-                   on_transition: Callable[[dict[str, Any]], Awaitable[None]]) -> CallOutcome:
+                   on_transition: Callable[[dict[str, Any]], Awaitable[None]],
+                   on_end: Callable[[CallOutcome], None] | None = None,
+                   on_cancel: Callable[[], None] | None = None) -> CallOutcome:
     """Run actor ``ref`` to its end, awaiting ``on_transition(event)`` for every node
-    transition of its tree runs.
+    transition of its tree runs; ``on_end(outcome)`` is called however it ended, and
+    ``on_cancel()`` as soon as a cancellation starts (``on_end`` follows once it stopped).
 
     When the awaiting task is cancelled (the client's ``notifications/cancelled``), the
     transaction is cancelled with the engine's cancellation (a tree halts its nodes,
@@ -103,14 +108,21 @@ async def run_call(rt: Any, ref: ActorRef, args: tuple, kwargs: dict, watcher: R
             await on_transition(item)
     except BaseException:
         txn.cancel("cancelled by the MCP client")
+        if on_cancel is not None:
+            on_cancel()
         with anyio.CancelScope(shield=True), anyio.move_on_after(CANCEL_GRACE):
-            while not isinstance(await queue.get(), _Done):
+            while not isinstance(item := await queue.get(), _Done):
                 pass
+            if on_end is not None:
+                on_end(_outcome(item, started["sim"], time.perf_counter() - wall0, watch))
         raise
     finally:
         if watcher is not None:
             watcher.unwatch(txn.id)
-    return _outcome(item, started.get("sim", item.at), time.perf_counter() - wall0, watch)
+    outcome = _outcome(item, started["sim"], time.perf_counter() - wall0, watch)
+    if on_end is not None:
+        on_end(outcome)
+    return outcome
 
 
 def _outcome(done: _Done, sim0: float, wall: float, watch: CallWatch) -> CallOutcome:
@@ -123,7 +135,8 @@ def _outcome(done: _Done, sim0: float, wall: float, watch: CallWatch) -> CallOut
         if failure is not None:
             out.failed_at = failure.node_path
             out.error = f"FAILURE at {failure.node_path}" + (f": {failure.reason}" if failure.reason else "")
-        elif isinstance(error, Cancelled):
+        elif isinstance(error, (Cancelled, ActorCancelled)):
+            out.cancelled = True
             out.error = f"cancelled: {error.reason or 'cancelled'}"
         else:
             out.error = _error_text(error)

@@ -19,7 +19,7 @@ from ..errors import ActorbtError
 from ..modes import Kind
 from ..trees import MissionError, tree_host
 from ..trees._safety import mission_safety
-from .calls import CallOutcome, run_call
+from .calls import CANCEL_GRACE, CallOutcome, run_call
 from .mission_tools import (MISSION_TOOLS, check_draft, error_entries, errors_text, show_text,
                             trace_result)
 from .progress import RunWatcher
@@ -51,6 +51,8 @@ class ToolService:
         self.watcher = RunWatcher()
         rt.run_on_hub(self.host.observers.append, self.watcher)
         self.last_run: dict[str, Any] | None = None
+        self._stopping = 0                  # cancelled tree calls not stopped yet
+        self._stopped = anyio.Event()
         self._entries = self._catalog()
         self._mission_tools = {t["name"]: t for t in MISSION_TOOLS}
         clash = set(self._entries) & set(self._mission_tools)
@@ -102,15 +104,35 @@ class ToolService:
             entry.ref.check_args(args, kwargs)
         except ActorbtError as error:
             return _refused(name, [str(error)])
-        outcome = await run_call(self.rt, entry.ref, args, kwargs, self.watcher, report)
-        if entry.ref.is_tree:
-            self._keep_trace(name, arguments, outcome)
-        return outcome_result(name, outcome, entry.ref.is_tree)
+        if not entry.ref.is_tree:
+            outcome = await run_call(self.rt, entry.ref, args, kwargs, self.watcher, report)
+            return outcome_result(name, outcome, False)
+        outcome = await self._run_tree(name, arguments, entry.ref, args, kwargs, report)
+        return outcome_result(name, outcome, True)
+
+    async def _run_tree(self, shown: str, arguments: dict[str, Any], ref: ActorRef, args: tuple,
+                        kwargs: dict, report: Report) -> CallOutcome:
+        """A tree call whose trace is kept for ``get_trace``, also when it is cancelled."""
+        cancelled = False
+
+        def on_cancel() -> None:
+            nonlocal cancelled
+            cancelled = True
+            self._stopping += 1
+
+        def on_end(outcome: CallOutcome) -> None:
+            self._keep_trace(shown, arguments, outcome)
+            if cancelled:
+                self._stopping -= 1
+                if not self._stopping:
+                    self._stopped.set()
+                    self._stopped = anyio.Event()
+        return await run_call(self.rt, ref, args, kwargs, self.watcher, report, on_end, on_cancel)
 
     def _keep_trace(self, name: str, arguments: dict[str, Any], outcome: CallOutcome) -> None:
         self.last_run = {"tool": name, "arguments": arguments, "events": outcome.trace,
                          "dropped": outcome.dropped,
-                         "outcome": {"status": "SUCCESS" if outcome.ok else "FAILURE", "error": outcome.error,
+                         "outcome": {"status": _status(outcome), "error": outcome.error,
                                      "ticks": outcome.ticks, "sim_time": round(outcome.sim_time, 3)}}
 
     # -- the mission tools (called with their validated arguments) -------------------------
@@ -135,8 +157,8 @@ class ToolService:
             mission.bind_inputs(**(inputs or {}))
         except ActorbtError as error:
             return _refused("run_mission", [f"inputs: {error}"])
-        outcome = await run_call(self.rt, ref, (), dict(inputs or {}), self.watcher, report)
-        self._keep_trace("run_mission", {"mission": mission.name, "inputs": inputs or {}}, outcome)
+        outcome = await self._run_tree("run_mission", {"mission": mission.name, "inputs": inputs or {}},
+                                       ref, (), dict(inputs or {}), report)
         return outcome_result(mission.name, outcome, True)
 
     async def _show_tree(self, report: Report, tree: str | None = None, yaml: str | None = None) -> dict[str, Any]:
@@ -147,11 +169,20 @@ class ToolService:
         return text_result(text, {"text": text})
 
     async def _get_trace(self, report: Report, limit: int = 500, types: list[str] | None = None) -> dict[str, Any]:
+        with anyio.move_on_after(CANCEL_GRACE):  # a run being cancelled is the last run once it stopped
+            while self._stopping:
+                await self._stopped.wait()
         result = trace_result(self.last_run, limit, types)
         shown = len(result["events"])
         head = (f"{result['tool']}: {shown} event(s)" + (f", {result['omitted']} omitted" if result["omitted"] else "")
                 if result["tool"] else result["note"])
         return text_result(head + "\n" + "\n".join(_event_line(e) for e in result["events"]), result)
+
+
+def _status(outcome: CallOutcome) -> str:
+    if outcome.ok:
+        return "SUCCESS"
+    return "CANCELLED" if outcome.cancelled else "FAILURE"
 
 
 def _event_line(event: dict[str, Any]) -> str:
