@@ -220,7 +220,7 @@ def cmd_serve(args: argparse.Namespace, app: Any) -> int:
 # -- clients -----------------------------------------------------------------------------
 def _print_feedback(fb: Any) -> None:
     active = f"  {fb.active_node}" if fb.active_node else ""
-    print(f"[tick {fb.tick_count:4d}] {fb.status}{active}", flush=True)
+    print(f"[tick {fb.tick_count:4d} {fb.elapsed:7.2f} s] {fb.status}{active}", flush=True)
 
 
 def _follow(goal: Any, timeout: float | None) -> int | None:
