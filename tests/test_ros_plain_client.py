@@ -183,3 +183,22 @@ def test_the_trees_folder_is_watched(robots):
     (still,) = client({"op": "goal", "action": "/robot1/actorbt/tree/steps_tree",
                        "inputs": "{steps: 1, period: 0.0}"})
     assert still["status"] == STATUS_SUCCEEDED  # the other trees are served on
+
+
+def test_the_documented_client_runs(robots, tmp_path):
+    """The plain rclpy client in docs/ros-clients.md, as a reader would copy it."""
+    text = (ROOT / "docs" / "ros-clients.md").read_text()
+    script = text.split("```python\n", 1)[1].split("```", 1)[0]
+    path = tmp_path / "plain_client.py"
+    path.write_text(script)
+    run = [sys.executable, str(path), "/robot1", "steps_tree"]
+    ok = subprocess.run([*run, "{steps: 2, period: 0.01}"], cwd=tmp_path, env=ENV,
+                        capture_output=True, text=True, timeout=60)
+    assert ok.returncode == 0, ok.stdout + ok.stderr
+    assert "steps_tree: Count steps slowly" in ok.stdout and '"steps": {"type": "integer"' in ok.stdout
+    assert "succeeded; outputs: {count: 2}" in ok.stdout
+    bad = subprocess.run([*run, "{steps: many}"], cwd=tmp_path, env=ENV, capture_output=True,
+                         text=True, timeout=60)
+    assert bad.returncode == 1, bad.stdout + bad.stderr
+    assert f"error_code {RunTree.Result.INVALID_GOAL}: tree 'steps_tree': input 'steps'" in bad.stdout, \
+        bad.stdout

@@ -1,6 +1,7 @@
 """ROS 2 (rclpy) side of the engine, one concept per module. Imports go down this list:
 
-    names        node, action and topic names of ``actorbt serve``, shared with clients
+    names        node, action and service names of ``actorbt serve`` (and namespaces)
+    error_codes  why a goal ended -> the ``error_code`` constants of the interface files
     yamlio       values as YAML text (results, and the arguments a client sends)
     goals        a goal's YAML text -> a validated call (the one place goals are decoded)
     host         RosHost: one rclpy Context, its nodes and one executor thread
@@ -10,7 +11,10 @@
     goal_server  one action server and the goals it runs: accept, cancel, result
     call_server  ``/actorbt/call`` (CallActor)
     tree_server  ``/actorbt/tree/<name>`` (RunTree): one goal at a time, progress, traces
-    server       ``serve(rt)``: the node, its action servers and rejections, shutdown
+    describe_service  ``/actorbt/describe``: the JSON Schema of served trees and actors
+    call_now_service  ``/actorbt/call_now``: a quick actor as a service
+    tree_watch   the trees folder polled; a change reloads its trees
+    server       ``serve(rt)``: the node, its actions and services, the served trees, shutdown
     remote       Remote: a client of a running ``actorbt serve``; what it serves (ROS graph)
     shell        RemoteShell: ``actorbt rshell``, one warm client for many calls
     cli          ``actorbt serve``, ``actorbt goal``, ``actorbt rcall``, ``actorbt rshell``

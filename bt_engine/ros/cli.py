@@ -58,8 +58,8 @@ def register(sub: Any, common: Callable[[argparse.ArgumentParser], None]) -> Non
                    help="Serve the trees loaded at start-up only (default: watch the trees "
                         "folder; trees added get an action, removed ones are withdrawn).")
     p.add_argument("--ros-args", dest="ros_args", nargs=argparse.REMAINDER, metavar="ARG",
-                   help="rclpy arguments for the serve's node, last on the line: e.g. "
-                        "--ros-args -r __ns:=/robot1 -r /actorbt/tree/x:=/foo")
+                   help="Arguments of rclpy for the serve's node, last on the line (e.g. "
+                        "--ros-args -r __ns:=/robot1 -r /actorbt/tree/x:=/foo).")
     add_live_options(p, trace=False)
     p.set_defaults(func=cmd_serve)
 

@@ -12,8 +12,8 @@ The response's ``tools_json`` is a JSON object::
 Each tool is the catalog's description (:func:`bt_engine.catalog.tool_schema`, what
 ``actorbt catalog --json`` prints) plus the action that runs it: a served tree its own
 RunTree action, any other actor ``/actorbt/call``. The request's ``name`` narrows the
-list to one tree or actor (by path or name) or a subsystem's actors; a name that matches
-nothing answers ``UNKNOWN_NAME`` with close matches.
+list to one tree or actor (its path; else every actor of that name) or a subsystem's
+actors; a name that matches nothing answers ``UNKNOWN_NAME`` with close matches.
 """
 from __future__ import annotations
 
@@ -36,7 +36,9 @@ def describe(refs: list[Any], tree_actions: dict[str, str], call_action: str,
              namespace: str, name: str = "") -> tuple[dict[str, Any], list[str]]:
     """The describe document for actors ``refs`` (``tree_actions``: tree path -> its
     action), narrowed to ``name``; and, when nothing matched, the close matches."""
-    chosen = [r for r in refs if _matches(r, name)] if name else list(refs)
+    # an exact path wins: "steps_tree" is the tree, not also some "nav.steps_tree"
+    chosen = ([r for r in refs if r.path == name] or [r for r in refs if _matches(r, name)]
+              if name else list(refs))
     tools = []
     for ref in sorted(chosen, key=lambda r: r.path):
         try:
