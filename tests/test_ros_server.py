@@ -18,7 +18,7 @@ from bt_engine.ros.client import GoalRejectedError  # noqa: E402
 from bt_engine.ros.goals import GoalError, parse_call_args, parse_inputs  # noqa: E402
 from bt_engine.ros.names import tree_action_name  # noqa: E402
 from bt_engine.ros.remote import Remote, RemoteCallError  # noqa: E402
-from bt_engine.ros.server import serve  # noqa: E402
+from bt_engine.ros.server import Server, serve  # noqa: E402
 from bt_engine.ros.transport import RosTransport  # noqa: E402
 from bt_engine.ros.yamlio import dump  # noqa: E402
 from tests.test_ros_common import Work, wait_until, write_trees  # noqa: E402
@@ -135,6 +135,11 @@ def test_call_actor_results_and_failures(served):
     with pytest.raises(RemoteCallError) as e:
         remote.call("work.boom")
     assert e.value.status == "aborted" and "kaput" in str(e.value)
+    g = remote.call_goal("work.boom")
+    assert g.wait(5) and g.result.error_code == CallActor.Result.ACTOR_FAILED
+    assert "ValueError: kaput" in g.result.error_msg
+    g = remote.call_goal("work.echo", 1)
+    assert g.wait(5) and g.result.error_code == CallActor.Result.NONE and g.result.error_msg == ""
 
 
 @pytest.mark.parametrize("actor, args_yaml, reason", [
@@ -147,8 +152,9 @@ def test_malformed_calls_are_rejected_with_a_reason(served, actor, args_yaml, re
     rt, server, remote, tmp = served
     g = remote.send(CallActor, "/actorbt/call", CallActor.Goal(actor=actor, args_yaml=args_yaml))
     assert g.wait(5.0)
-    assert g.status == "rejected"
+    assert g.status == "rejected"  # accepted, and aborted at once with the reason
     assert isinstance(g.error, GoalRejectedError) and reason in g.error.reason
+    assert g.result.error_code == CallActor.Result.INVALID_GOAL and reason in g.result.error_msg
     assert remote.call("work.echo", 5) == {"args": [5], "kwargs": {}}  # still serving
 
 
@@ -175,6 +181,7 @@ def test_cancel_halts_the_tree_and_cancels_its_transactions(served):
     g.cancel()
     assert g.wait(5.0)
     assert g.status == "canceled" and not g.result.success and g.result.status == "canceled"
+    assert g.result.error_code == RunTree.Result.CANCELED and g.result.error_msg == "goal canceled"
     stats = remote.call("work.stats")
     assert stats["cancelled"] == before["cancelled"] + 1
     assert stats["live"] == []  # nothing the tree started is still running
@@ -186,8 +193,9 @@ def test_a_second_goal_for_a_running_tree_is_rejected_by_default(served):
     first = remote.tree_goal("steps_tree", {"steps": 500, "period": 0.01})
     assert first.accepted.wait(5.0) and first.status == "accepted"
     second = remote.tree_goal("steps_tree", {"steps": 1})
-    assert second.wait(5.0) and second.status == "rejected"
-    assert "already running" in second.error.reason
+    assert second.wait(5.0) and second.status == "rejected"  # accepted, aborted at once
+    assert "already running" in second.error.reason and second.error.code == "BUSY"
+    assert second.result.error_code == RunTree.Result.BUSY
     other = remote.tree_goal("quick_tree", {"x": 1})  # other trees are not blocked
     assert other.wait(5.0) and other.status == "succeeded"
     first.cancel()
@@ -203,6 +211,7 @@ def test_preempt_cancels_the_running_goal_first(served):
         second = remote.tree_goal("steps_tree", {"steps": 2})
         assert second.wait(5.0) and first.wait(5.0)
         assert first.status == "aborted" and "preempted" in first.result.status
+        assert first.result.error_code == RunTree.Result.PREEMPTED
         assert second.status == "succeeded"
         assert yaml.safe_load(second.result.outputs_yaml) == {"count": 2}
     finally:
@@ -221,3 +230,41 @@ def test_goal_yaml_parsing():
             parse_call_args(bad)
     assert yaml.safe_load(dump({"t": (1, 2), "s": {3}, "o": RunTree.Goal(inputs_yaml="x")})) == \
         {"t": [1, 2], "s": [3], "o": {"inputs_yaml": "x"}}
+
+
+def test_a_watched_folder_serves_new_trees_and_withdraws_removed_ones(tmp_path):
+    """In one process: a tree file added gets its action, removing it ends its running
+    goal with TREE_REMOVED and withdraws the action; a broken file is told, not served."""
+    from bt_engine.trees import register_tree_folder
+    from tests.test_ros_common import STEPS_TREE
+    rt = Runtime(clock="wall", bus=RosTransport)
+    server = remote = None
+    lines: list[str] = []
+    try:
+        rt.add_subsystem("work", Work)
+        folder = write_trees(tmp_path / "trees")
+        register_tree_folder(rt, folder)
+        server = Server(rt, trees_folder=folder, watch_period=0.05, on_event=lines.append)
+        remote = Remote()
+        (folder / "more.yaml").write_text(STEPS_TREE.replace("name: steps_tree", "name: more"))
+        (folder / "bad.yaml").write_text("name: bad\nroot: {do: work.nothing}\n")
+        assert wait_until(lambda: "/actorbt/tree/more" in server.actions, 5.0), lines
+        assert "tree more: served on /actorbt/tree/more" in lines
+        assert any(line.startswith("tree file not served: ") and "bad.yaml:2:" in line
+                   for line in lines), lines
+        assert "/actorbt/tree/bad" not in server.actions
+        g = remote.tree_goal("more", {"steps": 1000, "period": 0.01})
+        assert g.accepted.wait(10.0)
+        (folder / "more.yaml").unlink()
+        assert g.wait(10.0) and g.status == "aborted", g.status
+        assert g.result.error_code == RunTree.Result.TREE_REMOVED
+        assert wait_until(lambda: "/actorbt/tree/more" not in server.actions, 5.0)
+        assert "tree more: withdrawn /actorbt/tree/more" in lines
+        assert rt.run_on_hub(lambda: "more" not in rt.root.actors())
+        assert remote.run_tree("steps_tree", {"steps": 1}) == {"count": 1}
+    finally:
+        if remote is not None:
+            remote.close()
+        if server is not None:
+            server.close()
+        rt.close()

@@ -45,7 +45,7 @@ def register(sub: Any, common: Callable[[argparse.ArgumentParser], None]) -> Non
     common(p)
     p.add_argument("--preempt", action="store_true",
                    help="A new goal for a tree that is running cancels the running goal "
-                        "(default: the new goal is rejected).")
+                        "(default: the new goal is refused: aborted at once, BUSY).")
     p.add_argument("--record-dir", metavar="DIR",
                    help="The folder where each tree goal's trace is written "
                         "(default: .actorbt/goals beside actorbt.yaml).")

@@ -51,7 +51,7 @@ class Owner(Protocol):
     host: RosHost
     #: no new goals: the server is shutting down
     closing: bool
-    #: a goal for a running tree preempts it (otherwise it is rejected)
+    #: a goal for a running tree preempts it (otherwise it is refused: BUSY)
     preempt: bool
     #: where tree goals are recorded (None: not recorded)
     record_dir: "str | pathlib.Path | None"
