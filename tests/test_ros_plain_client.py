@@ -202,3 +202,24 @@ def test_the_documented_client_runs(robots, tmp_path):
     assert bad.returncode == 1, bad.stdout + bad.stderr
     assert f"error_code {RunTree.Result.INVALID_GOAL}: tree 'steps_tree': input 'steps'" in bad.stdout, \
         bad.stdout
+
+
+def test_the_goal_command_takes_a_namespace(robots):
+    one, two = robots
+    proc = subprocess.run([sys.executable, "-m", "bt_engine.cli.main", "--config", str(two.cfg),
+                           "goal", "steps_tree", "--namespace", "robot2", "--args",
+                           "{steps: 2, period: 0.01}"], cwd=ROOT, env=ENV, capture_output=True,
+                          text=True, timeout=60)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    assert "status: succeeded" in proc.stdout and "count: 2" in proc.stdout
+    assert " s] running" in proc.stdout  # feedback lines show the elapsed time
+
+
+def test_bad_ros_args_are_told(tmp_path):
+    cfg = write_config(tmp_path)
+    proc = subprocess.run([sys.executable, "-m", "bt_engine.cli.main", "--config", str(cfg),
+                           "serve", "--no-record", "--ros-args", "-r", "nonsense"], cwd=ROOT,
+                          env=ENV, capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 2, proc.stdout + proc.stderr
+    assert "actorbt serve: error: invalid ROS arguments '-r nonsense'" in proc.stderr
+    assert "Couldn't parse remap rule" in proc.stderr
