@@ -110,11 +110,16 @@ async def run_call(rt: Any, ref: ActorRef, args: tuple, kwargs: dict, watcher: R
         txn.cancel("cancelled by the MCP client")
         if on_cancel is not None:
             on_cancel()
+        item = None
         with anyio.CancelScope(shield=True), anyio.move_on_after(CANCEL_GRACE):
             while not isinstance(item := await queue.get(), _Done):
                 pass
-            if on_end is not None:
+        if on_end is not None:
+            if isinstance(item, _Done):
                 on_end(_outcome(item, started["sim"], time.perf_counter() - wall0, watch))
+            else:  # still stopping after the grace period: say so rather than wait on
+                on_end(CallOutcome(error="cancelled: still stopping", cancelled=True, ticks=watch.ticks,
+                                   trace=watch.events, dropped=watch.dropped))
         raise
     finally:
         if watcher is not None:
