@@ -77,6 +77,8 @@ log = logging.getLogger("actorbt.ros.server")
 
 #: seconds a finished goal's result is kept (see Server)
 RESULT_TIMEOUT = 2
+#: seconds a withdrawn tree's action server outlives its last goal (its result goes out)
+WITHDRAW_DELAY = 0.5
 
 __all__ = ["Server", "serve"]
 
@@ -190,10 +192,15 @@ class Server:
         gone = self.host.call(self._apply_trees, refs, announce)
         if not gone:
             return
-        goals = [g for ep in gone for g in ep.goals.values()]
+        goals = self.host.call(lambda: [g for ep in gone for g in ep.goals.values()])
         deadline = time.monotonic() + grace
         while goals and not all(g.finished.done() for g in goals) and time.monotonic() < deadline:
             time.sleep(0.01)
+        # as in close(): the execute coroutines end, then their results go out; only then
+        # may the action server go, or a client waits for a result forever
+        self.host.flush(timeout=1.0)
+        self.host.flush(timeout=1.0)
+        time.sleep(WITHDRAW_DELAY)
         self.host.call(lambda: [ep.destroy() for ep in gone])
 
     def _apply_trees(self, refs: list[Any], announce: bool) -> list[TreeServer]:
