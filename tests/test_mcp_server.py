@@ -8,6 +8,7 @@ import pathlib
 import shutil
 import subprocess
 import sys
+import threading
 from typing import Any, Awaitable, Callable
 
 import anyio
@@ -240,3 +241,30 @@ def test_the_project_catalog_is_served_with_its_motion_marked():
     assert tools["robot.navigation.get_pose"].annotations.read_only_hint is True
     assert tools["robot.navigation.mini_walk"].input_schema["properties"]["speed"]["maximum"] == 0.26
     assert refused.is_error and refused.structured_content == {"refused": "motion"}
+
+
+def test_the_wire_carries_only_protocol_messages(project):
+    # robot.chatter writes to fd 1 and to C's stdout, as pybullet does
+    hello = {"jsonrpc": "2.0", "id": 1, "method": "initialize",
+             "params": {"protocolVersion": "2025-06-18", "capabilities": {},
+                        "clientInfo": {"name": "raw", "version": "0"}}}
+    chatter = {"jsonrpc": "2.0", "id": 2, "method": "tools/call", "params": {"name": "robot.chatter", "arguments": {}}}
+    proc = subprocess.Popen([sys.executable, *_command(project, "mcp")], cwd=str(project), env=_env(project),
+                            stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    killer = threading.Timer(SCENARIO_TIMEOUT, proc.kill)
+    killer.start()
+    try:
+        for message in (hello, {"jsonrpc": "2.0", "method": "notifications/initialized"}, chatter):
+            proc.stdin.write(json.dumps(message) + "\n")
+        proc.stdin.flush()
+        replies = []
+        while len(replies) < 2:
+            line = proc.stdout.readline()
+            assert line, "the server ended before answering"
+            replies.append(json.loads(line))            # every line on the wire is JSON-RPC
+        rest, err = proc.communicate()                  # closes stdin: the server ends
+    finally:
+        killer.cancel()
+    assert [r.get("id") for r in replies] == [1, 2] and not replies[1]["result"].get("isError")
+    assert all(json.loads(line) for line in rest.splitlines())
+    assert "raw line on fd 1" in err and "buffered C stdout line" in err

@@ -33,19 +33,21 @@ def cmd_mcp(args: argparse.Namespace, app: Any) -> int:
     from .server import serve_stdio
     from .service import ToolService
     from .settings import McpSettings
+    from .wire import held_wire
 
     settings = McpSettings.of(app.cfg.mcp, args.allow_motion)
-    rt = app.runtime()
-    service = ToolService(rt, settings)
-    motion = "allowed" if settings.allow_motion else "off (--allow-motion allows it)"
-    print(f"actorbt mcp: {len(service.list_tools())} tools on stdio; motion {motion}", file=sys.stderr)
     try:
         version = metadata.version("actorbt")
     except metadata.PackageNotFoundError:
         version = ""
-    try:
-        serve_stdio(service, version)
-    finally:
-        service.close()
-        app.close(rt)
+    with held_wire() as wire:  # the world's own prints must not reach the protocol
+        rt = app.runtime()
+        service = ToolService(rt, settings)
+        motion = "allowed" if settings.allow_motion else "off (--allow-motion allows it)"
+        print(f"actorbt mcp: {len(service.list_tools())} tools on stdio; motion {motion}", file=sys.stderr)
+        try:
+            serve_stdio(service, version, wire)
+        finally:
+            service.close()
+            app.close(rt)
     return 0

@@ -3,13 +3,15 @@ tools/call handler, both answered by :class:`~bt_engine.mcp.service.ToolService`
 
 A tree's node transitions become ``notifications/progress`` of its call (when the
 client sent a progress token): ``progress`` counts them, ``message`` is
-``tree:node/path status``. While serving, the SDK points file descriptor 1 at stderr,
-so what actors print cannot corrupt the protocol.
+``tree:node/path status``. The protocol writes to its own duplicate of stdout
+(:mod:`bt_engine.mcp.wire`); file descriptor 1 points at stderr, so what actors and the
+simulator's libraries print cannot corrupt it.
 """
 from __future__ import annotations
 
+import io
 import logging
-from typing import Any
+from typing import Any, BinaryIO
 
 import anyio
 import mcp_types as types
@@ -62,12 +64,14 @@ def build_server(service: ToolService, version: str = "") -> Server:
                   on_list_tools=list_tools, on_call_tool=call_tool)
 
 
-def serve_stdio(service: ToolService, version: str = "") -> None:
-    """Serve ``service`` on stdin/stdout until the client closes the connection."""
+def serve_stdio(service: ToolService, version: str = "", wire: BinaryIO | None = None) -> None:
+    """Serve ``service`` on stdin and ``wire`` (default: stdout) until the client closes
+    the connection."""
     server = build_server(service, version)
 
     async def main() -> None:
-        async with stdio_server() as (read_stream, write_stream):
+        out = anyio.wrap_file(io.TextIOWrapper(wire, encoding="utf-8", write_through=True)) if wire else None
+        async with stdio_server(stdout=out) as (read_stream, write_stream):
             await server.run(read_stream, write_stream, server.create_initialization_options())
 
     anyio.run(main)
