@@ -15,7 +15,13 @@
   scans, the robot is declared lost (it was kidnapped, or the estimate diverged) and, with
   ``auto_recover``, the filter is relocalised globally from the current scan (or uniformly,
   ``recovery="uniform"``), keeping ``keep_share`` of its particles so that a false alarm
-  is undone by the next measurement update.
+  is undone by the next measurement update;
+* while such a relocalisation runs, ``map_to_odom`` (what is published) holds the last
+  localised transform and follows the odometry: the filter's estimate is adopted once it
+  has converged again. A false alarm (an arm or an object in front of the laser at a table)
+  then costs nothing, where the estimate of a half-done relocalisation used to jump to a
+  look-alike place metres away for a few seconds. The health check scores the filter's
+  own estimate (``filter_map_to_odom``), so a real kidnap still converges and is adopted.
 """
 from __future__ import annotations
 
@@ -125,7 +131,10 @@ class Amcl:
         self.rng = self.pf.rng
         self.clock = clock
         self.status = Status()
-        self.map_to_odom = (0.0, 0.0, 0.0)
+        self.map_to_odom = (0.0, 0.0, 0.0)          # published: held while relocalising
+        self.filter_map_to_odom = (0.0, 0.0, 0.0)   # the filter's own estimate
+        self.holding = False                         # relocalising after lost, map_to_odom held
+        self._trusted = False                        # map_to_odom is a pose given or converged to
         self.estimate: Estimate | None = None
         self._odom_at_update = None      # odometry pose at the last filter update
         self._last_odom = None           # the newest odometry pose
@@ -152,12 +161,19 @@ class Amcl:
         self._restart(odom)
         self.estimate = self.pf.mean()
         pose = tuple(float(v) for v in pose)
-        self.map_to_odom = compose(pose, inverse(odom)) if odom is not None else pose
+        self.map_to_odom = self.filter_map_to_odom = compose(pose, inverse(odom)) if odom is not None else pose
+        self.holding = False                         # told where it is: nothing to hold
+        self._trusted = True
 
-    def global_localisation(self, informed: bool | None = None, keep_share: float = 0.0) -> None:
+    def global_localisation(self, informed: bool | None = None, keep_share: float = 0.0,
+                            hold: bool = False) -> None:
         """Forget the pose: uniform particles (AMCL), or seeded from the next scan's
         matches over the map (``informed``; the default follows ``params.recovery``),
-        keeping ``keep_share`` of the current particles."""
+        keeping ``keep_share`` of the current particles. ``hold``: keep ``map_to_odom``
+        until the filter has converged (a recovery from lost; a caller who asks to
+        forget the pose gets the filter's estimate as it goes)."""
+        self.holding = hold
+        self._trusted = self._trusted and hold
         if informed is None:
             informed = self.params.recovery == "informed"
         if informed:
@@ -226,7 +242,9 @@ class Amcl:
             self.estimate = est = self.pf.estimate()
             if self.status.updates % self.params.resample_interval == 0:
                 self.pf.resample()
-            self.map_to_odom = compose(tuple(est.pose), inverse(odom))
+            self.filter_map_to_odom = compose(tuple(est.pose), inverse(odom))
+            if not self.holding:
+                self.map_to_odom = self.filter_map_to_odom
             self._odom_at_update = odom
             self._force_update = False
             dt = time.perf_counter() - t0
@@ -262,7 +280,7 @@ class Amcl:
         st.particles = len(self.pf.particles)
         if np.count_nonzero(scan.valid()) < p.min_beams:
             return                      # too little to judge by (a blocked or empty view)
-        score = self.match_score(scan, self.pose(odom))
+        score = self.match_score(scan, compose(self.filter_map_to_odom, tuple(odom)))
         a = p.score_smoothing
         st.score = score if st.updates <= 1 and st.score == 0 else (1 - a) * st.score + a * score
         if st.state == LOCALISED:
@@ -275,15 +293,22 @@ class Amcl:
         low = st.score < p.lost_score or st.score < p.lost_drop * st.baseline
         self._low_scans = self._low_scans + 1 if low else 0
         if self._low_scans >= p.lost_scans and now >= self._grace_until:
+            # the transform of the last localised state is kept until the filter converges
+            hold = self._trusted        # (the low scans before have made the state uncertain)
             st.state = LOST
             st.last_lost = now
             st.lost_count += 1
             if p.auto_recover:
                 st.recoveries += 1
-                self.global_localisation(informed=p.recovery == "informed", keep_share=p.keep_share)
+                self.global_localisation(informed=p.recovery == "informed", keep_share=p.keep_share,
+                                         hold=hold)
             return
         if st.state in (UNCERTAIN, LOCALISED):
             converged = est is not None and st.score >= p.ok_score \
                 and est.std_xy <= p.converged_std_xy and est.std_yaw <= p.converged_std_yaw \
                 and est.weight >= p.converged_weight
             st.state = LOCALISED if converged else UNCERTAIN
+            self._trusted = self._trusted or converged
+            if converged and self.holding:
+                self.holding = False
+                self.map_to_odom = self.filter_map_to_odom
