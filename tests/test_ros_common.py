@@ -1,5 +1,6 @@
 """Shared pieces of the ROS tests (real rclpy over Fast DDS, on loopback): test actors,
-test missions, and leak checks for threads and /dev/shm segments.
+test missions, leak checks for threads and /dev/shm segments, and ``actorbt serve`` in a
+subprocess.
 
 This module holds no tests itself. ``actorbt serve`` subprocesses import ``Work`` from
 here (through a temporary actorbt.yaml).
@@ -8,6 +9,9 @@ from __future__ import annotations
 
 import os
 import pathlib
+import signal
+import subprocess
+import sys
 import textwrap
 import threading
 import time
@@ -149,3 +153,50 @@ def wait_until(cond, timeout: float = 5.0, step: float = 0.01) -> bool:
             return True
         time.sleep(step)
     return bool(cond())
+
+
+#: the environment of actorbt subprocesses: DDS on this machine, output unbuffered
+SUBPROCESS_ENV = dict(os.environ, ROS_AUTOMATIC_DISCOVERY_RANGE=os.environ.get(
+    "ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST"), PYTHONUNBUFFERED="1")
+
+
+def actorbt(*args: str, **kw) -> subprocess.Popen:
+    """``actorbt ARGS`` in a subprocess, stdout and stderr merged into one text pipe."""
+    return subprocess.Popen([sys.executable, "-m", "bt_engine.cli.main", *args], cwd=ROOT,
+                            env=SUBPROCESS_ENV, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                            text=True, **kw)
+
+
+class ServeProcess:
+    """``actorbt --config CFG serve SERVE_ARGS`` in a subprocess; its output lines are
+    collected, and ``ready`` is set when it says it is ready."""
+
+    def __init__(self, tmp: pathlib.Path, *serve_args: str) -> None:
+        self.tmp = tmp
+        self.cfg = write_config(tmp)
+        self.lines: list[str] = []
+        self.proc = actorbt("--config", str(self.cfg), "serve", *serve_args)
+        self.ready = threading.Event()
+        self._reader = threading.Thread(target=self._read, daemon=True)
+        self._reader.start()
+
+    def _read(self) -> None:
+        for line in self.proc.stdout:
+            self.lines.append(line.rstrip())
+            if "ready in" in line:
+                self.ready.set()
+
+    def output(self) -> str:
+        return "\n".join(self.lines)
+
+    def stop(self) -> int:
+        """Ctrl-C, then kill after 15 s; the exit status."""
+        if self.proc.poll() is None:
+            self.proc.send_signal(signal.SIGINT)
+            try:
+                self.proc.wait(15)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.proc.wait()
+        self._reader.join(5)
+        return self.proc.returncode

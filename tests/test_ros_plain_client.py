@@ -5,12 +5,8 @@ watched trees folder, feedback with elapsed time and the active node."""
 from __future__ import annotations
 
 import json
-import os
-import signal
 import subprocess
 import sys
-import threading
-import time
 
 import pytest
 
@@ -18,52 +14,24 @@ pytest.importorskip("rclpy")
 from actorbt_interfaces.action import RunTree  # noqa: E402
 from actorbt_interfaces.srv import CallActorNow, Describe  # noqa: E402
 
-from tests.test_ros_common import ROOT, STEPS_TREE, wait_until, write_config  # noqa: E402
+from tests.test_ros_common import (ROOT, STEPS_TREE, SUBPROCESS_ENV, ServeProcess, wait_until,  # noqa: E402
+                                   write_config)
 
-ENV = dict(os.environ, ROS_AUTOMATIC_DISCOVERY_RANGE=os.environ.get(
-    "ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST"), PYTHONUNBUFFERED="1")
+ENV = SUBPROCESS_ENV
 CLIENT = ROOT / "tests" / "programs" / "plain_rclpy_client.py"
 STATUS_ABORTED, STATUS_SUCCEEDED = 6, 4
 
 
-class Serve:
-    """`actorbt serve` in a subprocess, its output collected."""
-
-    def __init__(self, tmp, *ns_args: str) -> None:
-        self.tmp = tmp
-        self.cfg = write_config(tmp)
-        self.lines: list[str] = []
-        self.proc = subprocess.Popen(
-            [sys.executable, "-m", "bt_engine.cli.main", "--config", str(self.cfg), "serve",
-             "--no-record", *ns_args], cwd=ROOT, env=ENV, stdout=subprocess.PIPE,
-            stderr=subprocess.STDOUT, text=True)
-        self.ready = threading.Event()
-        threading.Thread(target=self._read, daemon=True).start()
-
-    def _read(self) -> None:
-        for line in self.proc.stdout:
-            self.lines.append(line.rstrip())
-            if "ready in" in line:
-                self.ready.set()
-
-    def output(self) -> str:
-        return "\n".join(self.lines)
-
-    def stop(self) -> None:
-        if self.proc.poll() is None:
-            self.proc.send_signal(signal.SIGINT)
-            try:
-                self.proc.wait(15)
-            except subprocess.TimeoutExpired:
-                self.proc.kill()
-                self.proc.wait()
+def serve_in(tmp, *ns_args: str) -> ServeProcess:
+    """A serve that records no traces, in a namespace given by ``ns_args``."""
+    return ServeProcess(tmp, "--no-record", *ns_args)
 
 
 @pytest.fixture(scope="module")
 def robots(tmp_path_factory):
     """Two serves on one domain: robot1 by --namespace, robot2 by --ros-args remapping."""
-    one = Serve(tmp_path_factory.mktemp("robot1"), "--namespace", "robot1")
-    two = Serve(tmp_path_factory.mktemp("robot2"), "--ros-args", "-r", "__ns:=/robot2")
+    one = serve_in(tmp_path_factory.mktemp("robot1"), "--namespace", "robot1")
+    two = serve_in(tmp_path_factory.mktemp("robot2"), "--ros-args", "-r", "__ns:=/robot2")
     try:
         assert one.ready.wait(60), one.output()
         assert two.ready.wait(60), two.output()

@@ -7,10 +7,8 @@ from __future__ import annotations
 import json
 import os
 import re
-import signal
 import subprocess
 import sys
-import threading
 import time
 
 import pytest
@@ -22,49 +20,19 @@ from actorbt_interfaces.action import CallActor, RunTree  # noqa: E402
 from bt_engine import ActorError, Runtime  # noqa: E402
 from bt_engine.ros.remote import Remote  # noqa: E402
 from bt_engine.ros.transport import RosTransport  # noqa: E402
-from tests.test_ros_common import ROOT, shm_leaks, shm_mapped, wait_until, write_config  # noqa: E402
+from tests.test_ros_common import (ROOT, SUBPROCESS_ENV, ServeProcess, actorbt, shm_leaks,  # noqa: E402
+                                   shm_mapped, wait_until)
 
-ENV = dict(os.environ, ROS_AUTOMATIC_DISCOVERY_RANGE=os.environ.get(
-    "ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST"), PYTHONUNBUFFERED="1")
-
-
-def actorbt(*args: str, **kw) -> subprocess.Popen:
-    return subprocess.Popen([sys.executable, "-m", "bt_engine.cli.main", *args], cwd=ROOT,
-                            env=ENV, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                            text=True, **kw)
+ENV = SUBPROCESS_ENV
 
 
-class Server:
+class Server(ServeProcess):
+    """The module's serve: on the ROS bus (``transport: ros`` in the configuration),
+    recording its goals."""
+
     def __init__(self, tmp):
-        self.tmp = tmp
-        self.cfg = write_config(tmp)
-        self.lines: list[str] = []
-        # the ROS bus: `transport: ros` in the configuration
-        self.proc = actorbt("--config", str(self.cfg), "serve", "--record-dir", str(tmp / "goals"))
-        self.ready = threading.Event()
-        self._reader = threading.Thread(target=self._read, daemon=True)
-        self._reader.start()
+        super().__init__(tmp, "--record-dir", str(tmp / "goals"))
         self.segments: set[str] = set()
-
-    def _read(self):
-        for line in self.proc.stdout:
-            self.lines.append(line.rstrip())
-            if "ready" in line:
-                self.ready.set()
-
-    def output(self) -> str:
-        return "\n".join(self.lines)
-
-    def stop(self) -> int:
-        if self.proc.poll() is None:
-            self.proc.send_signal(signal.SIGINT)
-            try:
-                self.proc.wait(15)
-            except subprocess.TimeoutExpired:
-                self.proc.kill()
-                self.proc.wait()
-        self._reader.join(5)
-        return self.proc.returncode
 
 
 @pytest.fixture(scope="module")
