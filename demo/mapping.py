@@ -12,12 +12,13 @@ import dataclasses
 import pathlib
 import time
 from dataclasses import dataclass
-from typing import TextIO
+from typing import Callable, TextIO
 
 from geometry_msgs.msg import PoseWithCovarianceStamped
 
-from bt_engine import ActorError
+from bt_engine import ActorError, Runtime
 from bt_engine.cli.config import find_config, load_config
+from sim import SimWorld
 
 from .episode import REPO_CONFIG, Episode, TruthProbe, episode_app, initial_pose_msg, without_map_server
 
@@ -41,10 +42,13 @@ class MappingRun:
 
 
 def build_map(world: str, seed: int, out_dir: str | pathlib.Path, *, locations: str | None = None,
-              max_time: float = 900.0, progress: TextIO | None = None) -> MappingRun:
+              max_time: float = 900.0, progress: TextIO | None = None,
+              observe: Callable[[Runtime, SimWorld], Callable[[], None]] | None = None) -> MappingRun:
     """Explore ``world`` (seed ``seed``) from its start pose and write the map to
     ``out_dir``/map.yaml (+ map.pgm). The map frame is the world's: the mapper is told
-    the start pose on ``/initialpose``, as slam_toolbox's ``map_start_pose``."""
+    the start pose on ``/initialpose``, as slam_toolbox's ``map_start_pose``.
+    ``observe(rt, sim)`` is called once the world runs (a referee's recorder, as
+    bench/mapping_replay.py's); what it returns is called when the run ends."""
     run = MappingRun(world=world, seed=seed)
     out = pathlib.Path(out_dir)
     wall0 = time.perf_counter()
@@ -53,6 +57,7 @@ def build_map(world: str, seed: int, out_dir: str | pathlib.Path, *, locations: 
     sim = app.world
     ep = Episode(tree="map_build", world=world, seed=seed, category="")
     probe = TruthProbe(rt, sim, ep)
+    stop_observing = observe(rt, sim) if observe is not None else None
     try:
         rt.bus.publisher("/initialpose", PoseWithCovarianceStamped).publish(
             initial_pose_msg(tuple(sim.spec.robot_start)))
@@ -75,6 +80,8 @@ def build_map(world: str, seed: int, out_dir: str | pathlib.Path, *, locations: 
         if progress is not None:
             print(f"explored for {run.sim_time:.0f} s sim: {run.explore or run.reason}", file=progress)
     finally:
+        if stop_observing is not None:
+            stop_observing()
         probe.close()
         probe.summarise()
         app.close(rt)
