@@ -42,6 +42,8 @@ NEW_VIEW = math.radians(25) # after a failed grasp, headings this close to it co
 PUSHED = 0.45               # a failed grasp may push the object this far [m]
 LOOK_AROUND = math.radians(35)  # after a failed grasp, also look this far to either side
 MIN_LOOK = 0.3              # [m] nearer than this, the camera sees too little of an object
+CONFIRM_RANGE = 1.2         # [m] from this near, a close look that sees something else at
+#                             the target's place (and never the category) rejects the target
 ASIDE = (math.radians(45), math.radians(-45))  # headings, relative to a lying body's axis,
 #                             of the closer look at it
 
@@ -254,18 +256,37 @@ class Catcher(SubSystem):
                 for d in self.run_actor("object_glance")
                 if math.dist((d["x"], d["y"]), xy) > max(SAME_OBJECT, own)]
 
-    def _refine(self, target: dict, category: str) -> dict:
-        """Look again from close by, when a perception actor is available."""
+    def _refine(self, target: dict, category: str, confirm: bool = False) -> dict:
+        """Look again from close by, when a perception actor is available. With
+        ``confirm``, a look that sees an object of no known category where the target
+        should be, and the category nowhere near it, rejects the target."""
         if not self.check_actor("get_found"):
             return target
         seen = self.run_actor("get_found", category)
-        if not seen:
-            return target
-        if math.dist(_target_xy(seen), _target_xy(target)) > 0.3:
-            return target  # a different object came into view: keep ours
+        if not seen or math.dist(_target_xy(seen), _target_xy(target)) > 0.3:
+            if confirm:
+                self._reject_if_something_else(target, category)
+            return target  # not seen, or a different object came into view: keep ours
         if _ends_swapped(seen, target) and seen.get("confidence", 0.0) < target.get("confidence", 0.0):
             return target  # seen nearly end on, its base and top taken for each other
         return {**target, **seen}
+
+    def _reject_if_something_else(self, target: dict, category: str) -> None:
+        """Raise ApproachError when, from close by, the object at the target's place is
+        one of no known category: a distractor taken for the category from afar (a yellow
+        mug for a lying carton at 2.7 m). The search is told, so that it does not send the
+        robot back to it."""
+        xy = _target_xy(target)
+        rx, ry, _ = self.run_actor("get_pose")
+        if math.dist((rx, ry), xy) > CONFIRM_RANGE:
+            return                                  # too far to tell shapes apart
+        other = self.run_actor("get_found", "unknown")
+        if not other or math.dist(_target_xy(other), xy) > SAME_OBJECT:
+            return                                  # nothing else there: a missed look
+        if self.check_actor("reject_sighting"):
+            self.run_actor("reject_sighting", xy[0], xy[1], category)
+        raise ApproachError(f"no {category} at ({xy[0]:.2f}, {xy[1]:.2f}): seen from "
+                            f"{math.dist((rx, ry), xy):.2f} m, the object there is of no known category")
 
     @actor(moves=True)
     def approach_object(self, target: dict, category: str | None = None) -> dict:
@@ -294,7 +315,7 @@ class Catcher(SubSystem):
             # face it, look (again), and keep what else is around it out of the way
             self._face(xy, strategy)
             if step == "standoff":
-                target = self._refine(target, cat)
+                target = self._refine(target, cat, confirm=True)
                 xy = _target_xy(target)
             others = self._others(target, strategy)
             self.run_actor("mark_obstacles", others)

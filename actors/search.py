@@ -24,6 +24,7 @@ WAYPOINT_CLEARANCE = 0.25      # room a search location needs for the base [m] (
 MAX_SHIFT = 1.0                # how far a blocked search location may be moved [m]
 SIDESTEP = 0.45                # where to look from when the navigation refuses a location [m]
 SAME_OBJECT = 0.20             # survey sightings closer than this are one object [m]
+REJECTED_RADIUS = 0.2          # sightings this near a rejected one are passed over [m]
 LOOKS_PER_TURN = 2             # frames a survey takes at each of its views
 
 
@@ -69,6 +70,10 @@ class SearchExhausted(ActorbtError):
 class Search(SubSystem):
     """Search behaviour built from navigation and perception actors."""
 
+    def __init__(self) -> None:
+        super().__init__()
+        self.set_value("rejected", [])   # (x, y, category) a closer look said were not
+
     @actor(read_only=True)
     def watch(self, category: str = "any") -> dict:
         """Watch the camera until an object of ``category`` ("any": any known category) is
@@ -81,8 +86,24 @@ class Search(SubSystem):
         cat = None if category in ANY else category
         while True:
             found = self.run_actor("find_object", cat)
-            if found and not in_own_hand(found):
+            if found and not in_own_hand(found) and not self._rejected(found):
                 return found
+
+    @actor
+    def reject_sighting(self, x: float, y: float, category: str) -> None:
+        """Remember that what was seen at (x, y) is no ``category`` after all (a closer
+        look saw something else there): ``watch`` passes over it from now on.
+
+        Args:
+            x: where it was seen, map frame [m]
+            y: where it was seen, map frame [m]
+            category: what it was taken for
+        """
+        self.set_value("rejected", [*self.get_value("rejected"), (float(x), float(y), category)])
+
+    def _rejected(self, detection: dict) -> bool:
+        return any(c == detection["category"] and math.hypot(detection["x"] - x, detection["y"] - y) < REJECTED_RADIUS
+                   for x, y, c in self.get_value("rejected"))
 
     @actor(moves=True, limits={"turns": (1, 8)})
     def look_around(self, turns: int = 4) -> None:

@@ -4,6 +4,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 
 from actors.catch import BASE_OUTLINE, Catcher, fresh_views_first, outline_discs
 from bt_engine import SubSystem, actor
@@ -64,3 +65,44 @@ def test_the_base_drives_up_to_a_table_edge_to_reach_an_object_on_it(rt):
         assert run_in_actor(rt, lambda: table._corridor_clear(standoff, obj, reach, []))
     # a hand that reaches only 0.12 m would drive the base into the table
     assert not run_in_actor(rt, lambda: table._corridor_clear((1.6, 1.5, 0.0), (2.05, 1.5), 0.12, []))
+
+
+class _Eyes(SubSystem):
+    """The pose and perception actors the close look asks: from (1.0, 0.5) the robot sees,
+    per category, what ``sees`` says (a detection dict or None)."""
+
+    def __init__(self, sees):
+        super().__init__()
+        self.sees = sees
+
+    @actor
+    def get_pose(self) -> tuple:
+        return (1.0, 0.5, 0.0)
+
+    @actor
+    def get_found(self, category: str | None = None, looks: int = 5) -> dict | None:
+        return self.sees.get(category)
+
+
+def test_a_close_look_at_a_distractor_rejects_the_target_and_the_search_passes_it_over(rt):
+    from actors.search import Search
+    from bt_engine import ActorError
+    mug = {"category": "unknown", "x": 1.62, "y": 0.51, "z": 0.0}
+    rt.add_subsystem("eyes", _Eyes, {"unknown": mug})
+    catch = rt.add_subsystem("catch", Catcher)
+    search = rt.add_subsystem("search", Search)
+    target = {"category": "carton", "x": 1.6, "y": 0.5, "z": 0.0, "pose": "lying"}
+    with pytest.raises(ActorError, match=r"no carton at \(1\.60, 0\.50\): seen from 0\.60 m, the object there is of no known"):
+        run_in_actor(rt, lambda: catch._refine(target, "carton", confirm=True))
+    assert search.get_value("rejected") == [(1.6, 0.5, "carton")]
+    assert search._rejected({"category": "carton", "x": 1.7, "y": 0.55})        # that one again
+    assert not search._rejected({"category": "carton", "x": 2.5, "y": 0.5})     # another carton
+    assert not search._rejected({"category": "can", "x": 1.6, "y": 0.5})        # not what was rejected
+
+
+def test_a_close_look_that_sees_nothing_keeps_the_target(rt):
+    # a missed look is no evidence: the target stands, and nothing is rejected
+    rt.add_subsystem("eyes", _Eyes, {})
+    catch = rt.add_subsystem("catch", Catcher)
+    target = {"category": "bottle", "x": 1.6, "y": 0.5, "z": 0.0}
+    assert run_in_actor(rt, lambda: catch._refine(target, "bottle", confirm=True)) == target
