@@ -193,13 +193,10 @@ class Server:
         if not gone:
             return
         goals = self.host.call(lambda: [g for ep in gone for g in ep.goals.values()])
-        deadline = time.monotonic() + grace
-        while goals and not all(g.finished.done() for g in goals) and time.monotonic() < deadline:
-            time.sleep(0.01)
-        # as in close(): the execute coroutines end, then their results go out; only then
-        # may the action server go, or a client waits for a result forever
-        self.host.flush(timeout=1.0)
-        self.host.flush(timeout=1.0)
+        _wait_finished(goals, grace)
+        # their results must be out before the action server goes, or a client waits for
+        # a result forever
+        self._flush_results()
         time.sleep(WITHDRAW_DELAY)
         self.host.call(lambda: [ep.destroy() for ep in gone])
 
@@ -242,6 +239,10 @@ class Server:
         if not self.closing:
             self.sync_trees()
 
+    def _flush_results(self) -> None:
+        self.host.flush(timeout=1.0)   # the execute coroutines finish
+        self.host.flush(timeout=1.0)   # their results go out
+
     # -- lifecycle -----------------------------------------------------------------------
     def close(self, grace: float = 3.0) -> None:
         """Cancel running goals (they end aborted), then destroy the servers and node."""
@@ -259,17 +260,12 @@ class Server:
                 goals = []
             for g in goals:
                 g.cancel("the server is shutting down", Ending.SHUTDOWN)
-            deadline = time.monotonic() + grace
-            while goals and time.monotonic() < deadline:
-                if all(g.finished.done() for g in goals):
-                    break
-                time.sleep(0.005)
+            _wait_finished(goals, grace)
             for g in goals:  # the runtime did not answer: end them anyway
                 if not g.finished.done():
                     g.cancel_ending = Ending.SHUTDOWN
                     g.resolve(Failure(Cancelled(None, "the server is shutting down")))
-            host.flush(timeout=1.0)   # the execute coroutines finish
-            host.flush(timeout=1.0)   # their results go out
+            self._flush_results()
         self._progress.remove()
         if not host.closed:
             def destroy() -> None:
@@ -290,6 +286,13 @@ class Server:
 
     def __exit__(self, *exc: Any) -> None:
         self.close()
+
+
+def _wait_finished(goals: list[Any], grace: float) -> None:
+    """Wait up to ``grace`` [s] for ``goals`` to finish (not on the executor thread)."""
+    deadline = time.monotonic() + grace
+    while goals and not all(g.finished.done() for g in goals) and time.monotonic() < deadline:
+        time.sleep(0.005)
 
 
 def serve(rt: Any, *, preempt: bool = False, node_name: str = NODE_NAME,
