@@ -69,6 +69,9 @@ SATURATION_SHARE = 0.55 # a category's segments keep this share of its saturatio
 #                         hue drifts into a category's keeps about 0.45 of its saturation)
 PATCH_SHARE = 0.4       # a segment whose surroundings continue it in colour this much
 #                         (or more) is a patch of something larger
+OCCLUDER_LOOK = 3       # [px] how far beyond a segment's edge an occluder is looked for
+GRAZING_SLACK = 0.10    # [m] a face seen at a grazing angle may look this much longer than
+#                         the box's longest side (depth noise along the view); no more
 LABEL_GAP = 0.10        # [m] a printed label this tall may split an object's colour in two
 UPRIGHT_TILT = math.radians(12)   # an axis nearer the vertical than this is standing
 LYING_TILT = math.radians(65)     # ... farther than this, lying; between them, leaning
@@ -275,7 +278,10 @@ class _Segment:
     v: float
     bbox: tuple[int, int, int, int]
     truncated: dict           # sides cut by the image border
-    occluded: dict            # sides hidden by something nearer
+    occluded: dict            # sides hidden by something nearer (right next to it)
+    hidden: dict              # sides that may be hidden: something nearer is within
+    #                           OCCLUDER_LOOK pixels (past pixels with no depth, or its
+    #                           own pixels cut off by an occluder of its colour)
     pts: np.ndarray           # (N, 3) map-frame surface points
     hts: np.ndarray           # (N,) height above the base [m]
     base: float               # support height [m]
@@ -332,6 +338,12 @@ class _Segment:
     def cut(self, side: str) -> bool:
         """Part of the object is out of view on ``side`` (image border or occluder)."""
         return self.truncated.get(side, False) or self.occluded.get(side, False)
+
+    def may_continue(self, side: str) -> bool:
+        """Part of the object may be out of view on ``side``: cut, or something nearer is
+        close by (a measurement that must be complete takes this reading of an edge; a
+        lower bound, ``cut``)."""
+        return self.cut(side) or self.hidden.get(side, False)
 
     @property
     def height(self) -> float:
@@ -396,8 +408,9 @@ def _measure(colour: str, comp: np.ndarray, x0: int, y0: int, P: np.ndarray, dep
     bx0, by0 = int(xs.min()), int(ys.min())
     trunc = {"left": bx0 <= 0, "right": x1 >= w, "top": by0 <= 0, "bottom": y1 >= h}
     occluded = _occluded_sides(xs, ys, depth, P, base)
+    hidden = _occluded_sides(xs, ys, depth, P, base, OCCLUDER_LOOK)
     return _Segment(colour=colour, pixels=int(len(xs)), u=float(xs.mean()), v=float(ys.mean()),
-                    bbox=(bx0, by0, x1, y1), truncated=trunc, occluded=occluded, pts=pts,
+                    bbox=(bx0, by0, x1, y1), truncated=trunc, occluded=occluded, hidden=hidden, pts=pts,
                     hts=pts[:, 2] - base, base=base, top=float(pts[:, 2].max()), cam_xy=cam_xy,
                     ray=ray, lateral=lateral,
                     m_per_px=m_per_px, range=rng, frame=frame, grid=_segment_grid(comp, x0, y0, P))
@@ -412,11 +425,11 @@ def _segment_grid(comp: np.ndarray, x0: int, y0: int, P: np.ndarray) -> np.ndarr
 
 
 def _occluded_sides(xs: np.ndarray, ys: np.ndarray, depth: np.ndarray, P: np.ndarray,
-                    base: float) -> dict[str, bool]:
+                    base: float, look: int = 1) -> dict[str, bool]:
     """Sides (left, right, top) along which something nearer hides part of the segment:
-    on at least a quarter of the rows (columns), the pixel next to the outermost one is
-    nearer by more than OCCLUSION_JUMP. Rows within 2 cm of the base are skipped (the
-    floor in front of the base is nearer there)."""
+    on at least a quarter of the rows (columns), the nearest of the ``look`` pixels beyond
+    the outermost one is nearer by more than OCCLUSION_JUMP. Rows within 2 cm of the base
+    are skipped (the floor in front of the base is nearer there)."""
     h, w = depth.shape
     out = {}
     for side in ("left", "right", "top"):
@@ -431,15 +444,19 @@ def _occluded_sides(xs: np.ndarray, ys: np.ndarray, depth: np.ndarray, P: np.nda
         ks = np.arange(len(edge)) + k0
         inside = (edge >= 0) & (edge < (1 << 30)) & (edge != lim)
         ks, edge = ks[inside], edge[inside]
-        if side == "top":
-            ex, ey, nx, ny = ks, edge, ks, np.maximum(edge - 1, 0)
-        else:
-            ex, ey, nx, ny = edge, ks, np.clip(edge + step, 0, w - 1), ks
+        ex, ey = (ks, edge) if side == "top" else (edge, ks)
         keep = P[ey, ex, 2] - base > 0.02
         if keep.sum() < 3:
             out[side] = False
             continue
-        d_edge, d_next = depth[ey, ex][keep], depth[ny, nx][keep]
+        d_edge = depth[ey, ex][keep]
+        d_next = np.full(len(d_edge), np.inf)
+        for k in range(1, look + 1):
+            if side == "top":
+                nx, ny = ks, np.maximum(edge - k, 0)
+            else:
+                nx, ny = np.clip(edge + k * step, 0, w - 1), ks
+            d_next = np.fmin(d_next, depth[ny, nx][keep])        # (NaN: no depth, skipped)
         with np.errstate(invalid="ignore"):
             nearer = np.isfinite(d_next) & (d_next < d_edge - OCCLUSION_JUMP)
         out[side] = bool(nearer.mean() >= 0.25)
@@ -860,6 +877,30 @@ def _score_box(seg: _Segment, app: Appearance) -> tuple[float, dict]:
     return best
 
 
+def _whole_faces(seg: _Segment, side: np.ndarray, rect: _Rectangle) -> list[bool]:
+    """Whether each face of ``rect`` (along e1, along e2) that the top-view points
+    ``side`` lie on ends in view: it does not reach the segment's left or right side where
+    the object may continue out of view (``may_continue``: the image border, or something
+    nearer). A face reaches a side when its points come within two pixels of the
+    segment's outermost point there, across the view."""
+    perp = np.array([-seg.ray[1], seg.ray[0]])     # towards the image's left
+    lat = (side - seg.cam_xy) @ perp
+    q = side - rect.c
+    a1, a2 = q @ rect.e1, q @ rect.e2
+    on_e1 = np.abs(np.abs(a2) - 0.5 * rect.s2) <= np.abs(np.abs(a1) - 0.5 * rect.s1)
+    near = 2 * seg.m_per_px
+    out = []
+    for face in (on_e1, ~on_e1):
+        if not face.any():
+            out.append(False)
+            continue
+        f = lat[face]
+        reaches_cut = ((seg.may_continue("left") and f.max() >= lat.max() - near)
+                       or (seg.may_continue("right") and f.min() <= lat.min() + near))
+        out.append(not reaches_cut)
+    return out
+
+
 def _score_box_resting(seg: _Segment, sides: tuple[float, float], bz: float) -> tuple[float, dict]:
     """Confidence that ``seg`` is a box whose top-view sides are ``sides`` and whose height
     is ``bz``, from its measured dimensions: its height above the support, and the lengths
@@ -878,30 +919,50 @@ def _score_box_resting(seg: _Segment, sides: tuple[float, float], bz: float) -> 
         return 0.0, {"reason": "body not visible"}
     rect = _rectangle_fit(side, _face_direction(seg.grid, lo, hi))
     side_cut = seg.cut("left") or seg.cut("right")
-
-    def err(measured: float, true: float) -> float:
-        return max(0.0, measured - true) if side_cut else measured - true   # cut: only shorter
-
     # A side's length is measured only on faces seen well: at a grazing angle a face is
     # a few scattered pixels. The faces along e1 face the camera by |ray . e2|.
     seen = [abs(float(seg.ray @ rect.e2)) >= GRAZING, abs(float(seg.ray @ rect.e1)) >= GRAZING]
     ext = [rect.s1 + px, rect.s2 + px]             # the points stop half a pixel short each side
+    # ... but a face seen at a grazing angle still spans its points: one far longer than
+    # the box's longest side is part of something larger (a pallet's side seen edge-on)
+    if any(not seen[i] and ext[i] > max(bx, by) + GRAZING_SLACK for i in (0, 1)):
+        return 0.0, {"reason": "a face longer than the box", "extents": ext}
+    # A face that runs into a side where the box may go on out of view (the image border,
+    # or something nearer next to it) is only a lower bound on its length; one that ends
+    # in view at both ends is measured. A box none of whose faces seen ends in view may
+    # be anything longer (the corner of a pallet at the image border or beside a desk):
+    # too little of it is in view to tell.
+    open_side = seg.may_continue("left") or seg.may_continue("right")
+    whole = _whole_faces(seg, side, rect) if open_side else [True, True]
+    if not any(seen[i] and whole[i] for i in (0, 1)):
+        return 0.0, {"reason": "too little of it in view", "extents": ext}
+
+    def err(i: int, true: float) -> float:
+        return ext[i] - true if whole[i] else max(0.0, ext[i] - true)   # cut: only shorter
+
     axes = [rect.e1, rect.e2]
     fits = []
     for x_is in (0, 1):                            # the box's x side along e1, or along e2
         true = [bx, by] if x_is == 0 else [by, bx]
-        errs = [err(ext[i], true[i]) for i in (0, 1) if seen[i]]
+        errs = [err(i, true[i]) for i in (0, 1) if seen[i]]
         fits.append((math.sqrt(float(np.mean(np.square(errs)))), x_is, true))
     e_face, x_is, true = min(fits)
     # the centre: along a side measured, the middle of its extent; along one not seen,
-    # half the box behind the face that is seen
+    # half the box behind the face that is seen; along a face cut off, half its length
+    # from its end in view
     centre = rect.c.copy()
+    perp = np.array([-seg.ray[1], seg.ray[0]])     # towards the image's left
     for i in (0, 1):
+        e = axes[i]
         if not seen[i]:                            # the face seen squarely has normal +-axes[i]
-            e = axes[i]
             away = 1.0 if float(seg.ray @ e) > 0 else -1.0
             near = float(rect.c @ e) - away * 0.5 * ext[i]          # that face, nearest the camera
             centre = centre + (near + away * 0.5 * true[i] - float(rect.c @ e)) * e
+        elif not whole[i]:
+            # towards the cut (+e or -e): the side of the image that is cut off
+            to_cut = 1.0 if (float(perp @ e) > 0) == seg.may_continue("left") else -1.0
+            end = float(rect.c @ e) - to_cut * 0.5 * ext[i]         # the end in view
+            centre = centre + (end + to_cut * 0.5 * true[i] - float(rect.c @ e)) * e
     x_axis = axes[x_is]
     one_face = not all(seen)
     e_h = seg.height - bz
@@ -919,7 +980,7 @@ def _score_box_resting(seg: _Segment, sides: tuple[float, float], bz: float) -> 
     elif yaw > math.pi / 2:
         yaw -= math.pi
     return conf, {"face_err": e_face, "height_err": e_h, "rect_rms": rect.rms, "faces": 1 if one_face else 2,
-                  "axis": centre, "yaw": yaw}
+                  "extents": ext, "seen": seen, "whole": whole, "axis": centre, "yaw": yaw}
 
 
 def detect(frame: RGBDFrame, appearances: dict[str, Appearance] | None = None) -> list[dict]:

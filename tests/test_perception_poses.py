@@ -114,6 +114,38 @@ def test_a_patch_of_a_table_in_a_categorys_colour_is_no_object():
     finally:
         world.close()
 
+#: seed 2004's pallet (0.6 x 0.4 x 0.12 m: a carton's height; under that light in the
+#: carton's hue) seen so that a carton-sized part of it shows: the robot's pose, and where
+#: a carton is put in the same frame (None: none)
+PALLET_VIEWS = [
+    ((8.57, 3.56, 2.785), (7.41, 3.89)),        # the search's view from 3 m: its corner at
+    #                                             the image's right border, the rest out of view
+    ((6.72, 5.50, 2.033), (6.43, 5.97)),        # the close look from 0.5 m: the same
+    ((7.89, 2.80, math.pi / 2), (7.79, 3.80)),  # its corner beside a nearer wall, its 0.4 m
+    #                                             side seen edge-on
+    ((4.59, 7.79, -0.349), None),               # its corner beside the nearer desk, of its hue
+]
+
+
+def test_a_part_of_the_pallet_is_no_carton_and_a_carton_in_the_same_view_is():
+    # the pick-and-place mission went for a "carton" at the pallet's corner, seen from 3 m
+    # and from the close look: a part of a long box must not pass for a carton's face
+    world = SimWorld(None, "house_hard", seed=2004)
+    try:
+        pallet = world.spec.place
+        carton = next(n for n in world.object_names() if world.object_category(n) == "carton")
+        for (x, y, yaw), put in PALLET_VIEWS:
+            world.set_object_pose(carton, *(put or (40.0, 40.0)), 0.3)
+            _teleport(world, x, y, yaw)
+            dets = detect(_frame(world), registered_appearances())
+            on_pallet = [d for d in dets if d["category"] != "unknown"
+                         and abs(d["x"] - pallet.x) < pallet.sx / 2 + 0.1
+                         and abs(d["y"] - pallet.y) < pallet.sy / 2 + 0.1]
+            assert not on_pallet, ((x, y, yaw), on_pallet)
+            if put:
+                assert _near(dets, "carton", put, 0.02), ((x, y, yaw), dets)
+    finally:
+        world.close()
 
 
 def test_a_segment_of_a_categorys_hue_and_shape_but_dull_is_not_of_that_category(sim):
