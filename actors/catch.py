@@ -42,8 +42,9 @@ NEW_VIEW = math.radians(25) # after a failed grasp, headings this close to it co
 PUSHED = 0.45               # a failed grasp may push the object this far [m]
 LOOK_AROUND = math.radians(35)  # after a failed grasp, also look this far to either side
 MIN_LOOK = 0.3              # [m] nearer than this, the camera sees too little of an object
-CONFIRM_RANGE = 1.2         # [m] from this near, a close look that sees something else at
-#                             the target's place (and never the category) rejects the target
+CONFIRM_RANGE = (0.45, 1.2)  # [m] from this near, a close look that sees something else at
+#                             the target's place (and never the category) rejects the target;
+#                             nearer than the first, a lying box's faces are misread (unknown)
 ASIDE = (math.radians(45), math.radians(-45))  # headings, relative to a lying body's axis,
 #                             of the closer look at it
 
@@ -278,8 +279,9 @@ class Catcher(SubSystem):
         robot back to it."""
         xy = _target_xy(target)
         rx, ry, _ = self.run_actor("get_pose")
-        if math.dist((rx, ry), xy) > CONFIRM_RANGE:
-            return                                  # too far to tell shapes apart
+        near, far = CONFIRM_RANGE
+        if not near <= math.dist((rx, ry), xy) <= far:
+            return                                  # too far to tell shapes apart, or too near
         other = self.run_actor("get_found", "unknown")
         if not other or math.dist(_target_xy(other), xy) > SAME_OBJECT:
             return                                  # nothing else there: a missed look
