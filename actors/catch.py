@@ -47,6 +47,8 @@ CONFIRM_RANGE = (0.45, 1.2)  # [m] from this near, a close look that sees someth
 #                             nearer than the first, a lying box's faces are misread (unknown)
 ASIDE = (math.radians(45), math.radians(-45))  # headings, relative to a lying body's axis,
 #                             of the closer look at it
+MARK_SPACING = 0.03         # [m] between the discs that mark a lying target on the way to it
+MARK_MARGIN = 0.02          # [m] around the target's body, marked on the way to it
 
 
 class GraspError(ActorbtError):
@@ -117,6 +119,31 @@ def _object_yaw(target: dict, plan: GraspPlan) -> float | None:
     if plan.one_way and up and math.hypot(up[0], up[1]) > 0.3:
         return math.atan2(up[1], up[0])
     return target.get("yaw")
+
+
+def target_marks(target: dict, length: float, goal: tuple[float, float]) -> list[dict]:
+    """The target itself as obstacles (x, y, radius) for the drive to ``goal`` (a look
+    or standoff pose's x, y): too low for the lidar, a lying body is otherwise driven over
+    and pushed. A lying body (``length`` [m] long) is marked along its axis; discs
+    within STANDOFF_CLEARANCE of the goal are left out, so the goal keeps its room."""
+    x, y = _target_xy(target)
+    r = max(0.03, float(target.get("width") or 0.07) / 2) + MARK_MARGIN
+    pts = [(x, y)]
+    if target.get("pose") == "lying" and length > 0:
+        base, up = target.get("axis_base"), target.get("axis_dir")
+        if base and up and math.hypot(up[0], up[1]) > 0.3:
+            n = math.hypot(up[0], up[1])
+            (ux, uy), (bx, by) = (up[0] / n, up[1] / n), (base[0], base[1])
+        elif target.get("yaw") is not None:
+            ux, uy = math.cos(target["yaw"]), math.sin(target["yaw"])
+            bx, by = x - 0.5 * length * ux, y - 0.5 * length * uy
+        else:
+            ux = uy = 0.0
+            bx, by, r = x, y, 0.5 * length + MARK_MARGIN
+        k = max(1, math.ceil(length / MARK_SPACING))
+        pts += [(bx + i / k * length * ux, by + i / k * length * uy) for i in range(k + 1)]
+    return [{"x": px, "y": py, "radius": r} for px, py in pts
+            if math.dist((px, py), goal) - r >= STANDOFF_CLEARANCE]
 
 
 def fresh_views_first(poses: list[tuple[float, float, float]], xy: tuple[float, float],
@@ -340,14 +367,37 @@ class Catcher(SubSystem):
                 plan = self._plan(strategy, target)    # the close look may see it otherwise
                 poses = self._free_standoff((rx, ry), xy, strategy, others=others,
                                             object_yaw=_object_yaw(target, plan), plan=plan)
-            self._goto_first(self._fresh_views_first(poses, xy), xy)
+            self._goto_first(self._fresh_views_first(poses, xy), xy, target, strategy.length, others)
         self._face(xy, strategy)
         # a last look from the standoff, the nearest and most precise one: the way here
         # may have moved the localisation's estimate by a few centimetres
         target = self._refine(target, cat)
         xy = _target_xy(target)
+        plan = self._plan(strategy, target)
+        if self._off_sides(target, plan) > plan.tolerance:
+            # seen from here, facing it would bring the hand too far off the side it must
+            # come from (a lying body: across it): it is not where the standoff was
+            # chosen for (nudged, or seen better now). Line up with it again.
+            rx, ry, _ = self.run_actor("get_pose")
+            try:
+                poses = self._free_standoff((rx, ry), xy, strategy, others=others,
+                                            object_yaw=_object_yaw(target, plan), plan=plan)
+            except ApproachError:
+                poses = []
+            if poses:
+                self._goto_first(poses, xy, target, strategy.length, others)
+                self._face(xy, strategy)
+                target = self._refine(target, cat)
+                xy = _target_xy(target)
         self._face(xy, strategy)
         return {**target, "category": cat}
+
+    def _off_sides(self, target: dict, plan: GraspPlan) -> float:
+        """How far [rad] the hand, the base facing the target from where it is, would
+        come off the nearest side the plan may grasp it from (0: any side will do)."""
+        x, y, _ = self.run_actor("get_pose")
+        gx, gy = _grasp_xy(target, plan)
+        return plan.off_sides(math.atan2(gy - y, gx - x), _object_yaw(target, plan))
 
     @staticmethod
     def _plan(strategy: Strategy, target: dict) -> GraspPlan:
@@ -360,15 +410,25 @@ class Catcher(SubSystem):
             raise GraspError(f"the {strategy.category} strategy has no grasp for an object {pose}")
         return plan
 
-    def _goto_first(self, poses: list[tuple[float, float, float]], xy: tuple[float, float]) -> None:
-        """Go to the first of ``poses`` that the base can reach (up to three tries)."""
+    def _goto_first(self, poses: list[tuple[float, float, float]], xy: tuple[float, float],
+                    target: dict | None = None, length: float = 0.0, others: list[dict] = ()) -> None:
+        """Go to the first of ``poses`` that the base can reach (up to three tries). With
+        ``target``, the way there keeps off it (``target_marks``; ``others`` are the
+        marks already made, kept); if no way does, the base goes there as before."""
         errors = []
         for pose in poses[:3]:
+            marks = target_marks(target, length, pose[:2]) if target is not None else []
             try:
-                self.run_actor("goto", *pose)
-                return
-            except ActorbtError as e:
-                errors.append(str(e))
+                for keep_off in ([True, False] if marks else [False]):
+                    self.run_actor("mark_obstacles", list(others) + (marks if keep_off else []))
+                    try:
+                        self.run_actor("goto", *pose)
+                        return
+                    except ActorbtError as e:
+                        errors.append(str(e))
+            finally:
+                if marks:
+                    self.run_actor("mark_obstacles", list(others))
         raise ApproachError(f"could not reach a standoff near ({xy[0]:.2f}, {xy[1]:.2f}): "
                             + "; ".join(errors))
 

@@ -98,6 +98,27 @@ class GraspPlan:
         return self.closed_min <= closed_width <= self.closed_max
 
     @property
+    def tolerance(self) -> float:
+        """How far off its ``sides`` [rad] the hand may come and still close around the
+        object: any heading for a round one (no sides); from above, across a lying body,
+        as far as its offsets go (LYING_OFFSETS); otherwise its offsets and
+        SIDE_TOLERANCE beyond them (a box's narrow side, a leaning body)."""
+        if not self.sides:
+            return math.pi
+        reach = max(abs(o) for o in self.offsets)
+        if self.pitch > math.radians(45):
+            return max(reach, max(LYING_OFFSETS)) + math.radians(1)
+        return reach + SIDE_TOLERANCE
+
+    def off_sides(self, heading: float, object_yaw: float | None) -> float:
+        """How far [rad] a hand coming along ``heading`` is off the nearest of the plan's
+        sides of an object whose yaw is ``object_yaw`` (0 without sides or yaw)."""
+        if not self.sides or object_yaw is None:
+            return 0.0
+        flips = (0.0,) if self.one_way else (0.0, math.pi)
+        return min(abs(_wrap(heading - object_yaw - s - f)) for s in self.sides for f in flips)
+
+    @property
     def across(self) -> float:
         """The width the fingers close on [m], from the range that means holding it."""
         return 0.5 * (self.closed_min + self.closed_max)
@@ -111,6 +132,9 @@ TILTED_OFFSETS = tuple(math.radians(a) for a in (0, 15, -15, 30, -30))
 #: from above, the pads (30 mm wide) close across a lying body only when the hand is
 #: nearly square to it: 8 degrees off, a 70 mm body spans 75 mm of an 85 mm opening
 LYING_OFFSETS = tuple(math.radians(a) for a in (0, 8, -8))
+#: a box upright (held across its narrow side) or a leaning body: the hand may come this
+#: far beyond its offsets (a 45 x 70 mm carton 15 degrees off spans 62 mm)
+SIDE_TOLERANCE = math.radians(15)
 
 
 @dataclass(frozen=True)
