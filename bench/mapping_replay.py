@@ -94,7 +94,8 @@ def replay(path: pathlib.Path, overrides: dict, edges: bool = False) -> dict:
     from sim.gridmap import read_map
     from sim.map_score import score_maps, truth_grid
 
-    d = np.load(path)
+    with np.load(path) as npz:                  # each access of an npz member reads it again
+        d = {k: npz[k] for k in npz.files}
     angle_min, angle_inc, range_min, range_max = (float(v) for v in d["meta"])
     angles = angle_min + angle_inc * np.arange(d["ranges"].shape[1])
     params = {"sensor_offset": (-0.15, 0.0, 0.0), **overrides}   # the URDF's base_scan
@@ -138,15 +139,25 @@ def edge_errors(slam, kf_true: np.ndarray, relative) -> dict:
     """Per edge kind (pair links by their span): the error along the edge's own
     translation against the truth: mean [mm] and per metre of edge [mm/m]."""
     rows: dict[str, list] = {}
+    turns: dict[str, list] = {}
     for e in slam.graph.edges:
+        kind = e.kind if e.kind != "pair" else f"pair{e.j - e.i}"
         zt = relative(kf_true[e.i], kf_true[e.j])
+        turns.setdefault(kind, []).append((math.remainder(e.z[2] - zt[2], 2 * math.pi), zt[2]))
         n = math.hypot(zt[0], zt[1])
         if n < 0.05:
             continue                                  # a turn on the spot: no direction
         along = ((e.z[0] - zt[0]) * zt[0] + (e.z[1] - zt[1]) * zt[1]) / n
-        rows.setdefault(e.kind if e.kind != "pair" else f"pair{e.j - e.i}", []).append((along, n))
-    return {k: {"n": len(v), "mean_mm": 1000 * float(np.mean([a for a, _ in v])),
-                "per_metre_mm": 1000 * sum(a for a, _ in v) / sum(n for _, n in v)} for k, v in sorted(rows.items())}
+        rows.setdefault(kind, []).append((along, n))
+    out = {}
+    for k in sorted(turns):
+        v, yaw = rows.get(k, [(0.0, 1.0)]), np.array(turns[k])
+        out[k] = {"n": len(turns[k]), "mean_mm": 1000 * float(np.mean([a for a, _ in v])),
+                  "per_metre_mm": 1000 * sum(a for a, _ in v) / sum(n for _, n in v),
+                  "yaw_mdeg": 1000 * math.degrees(float(yaw[:, 0].mean())),
+                  # the yaw error per radian turned (a rotation "shrink" is negative)
+                  "yaw_per_turn": float((yaw[:, 0] * yaw[:, 1]).sum() / max((yaw[:, 1] ** 2).sum(), 1e-12))}
+    return out
 
 
 def main(argv=None) -> int:
@@ -185,7 +196,8 @@ def main(argv=None) -> int:
           f"{res['loop_closures']} loop closures, SLAM {res['slam_wall_s']:.0f} s wall")
     for kind, e in res.get("edges", {}).items():
         print(f"  {kind:6s} {e['n']:4d} edges: along-track error {e['mean_mm']:+6.2f} mm mean, "
-              f"{e['per_metre_mm']:+6.2f} mm/m")
+              f"{e['per_metre_mm']:+6.2f} mm/m; yaw error {e['yaw_mdeg']:+6.1f} mdeg mean, "
+              f"{1000 * e['yaw_per_turn']:+6.2f} mrad per rad turned")
     return 0
 
 

@@ -215,3 +215,28 @@ def write_map_yaml(m: OccupancyMap, out_yaml: str | Path) -> tuple[Path, Path]:
         f"origin: [{m.origin[0]:.6g}, {m.origin[1]:.6g}, {m.origin[2]:.6g}]\n"
         f"negate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\n")
     return out_yaml, out_pgm
+
+
+def write_trajectory_tum(poses, path: str | Path) -> Path:
+    """Write (t [s], x [m], y [m], yaw [rad]) poses in the TUM format that trajectory
+    tools (evo, the TUM RGB-D benchmark's scripts) read: ``t x y z qx qy qz qw`` per line,
+    z 0 and the yaw as a quaternion about z."""
+    path = Path(path)
+    lines = [f"{t:.6f} {x:.6f} {y:.6f} 0 0 0 {math.sin(yaw / 2):.9f} {math.cos(yaw / 2):.9f}"
+             for t, x, y, yaw in poses]
+    path.write_text("# t x y z qx qy qz qw: the SLAM keyframes in the map frame\n" + "\n".join(lines) + "\n")
+    return path
+
+
+def read_trajectory_tum(path: str | Path) -> list[tuple[float, float, float, float]]:
+    """(t, x, y, yaw) per line of a TUM trajectory file (the yaw from the quaternion)."""
+    out = []
+    for n, line in enumerate(Path(path).read_text().splitlines(), 1):
+        if not line.strip() or line.startswith("#"):
+            continue
+        f = line.split()
+        if len(f) != 8:
+            raise MapError(f"{path}:{n}: expected 't x y z qx qy qz qw', got {len(f)} fields")
+        t, x, y, _, qx, qy, qz, qw = (float(v) for v in f)
+        out.append((t, x, y, math.atan2(2 * (qw * qz + qx * qy), 1 - 2 * (qy * qy + qz * qz))))
+    return out

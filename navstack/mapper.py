@@ -26,7 +26,7 @@ from tf2_msgs.msg import TFMessage
 
 from bt_engine import ActorbtError, SubSystem
 
-from .map_io import write_map_yaml
+from .map_io import write_map_yaml, write_trajectory_tum
 from .odometry import OdomHistory, seconds, yaw_of
 from .slam import Slam, SlamParams
 from .tf import TF, TfListener, TransformError, planar_transform
@@ -137,8 +137,9 @@ class Mapper(SubSystem):
 
     # -- what navstack's actors do (NavStack.save_map, mapping_status, localise_on_map) ----
     def save(self, path: str) -> dict:
-        """Write the map as map_server YAML + PGM (nav2's map_saver), and return the files,
-        its size and the trajectory's length.
+        """Write the map as map_server YAML + PGM (nav2's map_saver) and, beside them, the
+        keyframe trajectory (``<name>.tum``, TUM format), and return the files, the map's
+        size and the trajectory's length.
 
         Args:
             path: the YAML file to write; the PGM goes beside it
@@ -154,10 +155,11 @@ class Mapper(SubSystem):
         try:
             out.parent.mkdir(parents=True, exist_ok=True)
             yaml_path, pgm_path = write_map_yaml(occ, out)
+            tum_path = write_trajectory_tum(traj, yaml_path.with_suffix(".tum"))
         except OSError as e:
             raise MappingError(f"cannot write the map to {out}: {e}") from None
         length = sum(math.dist(a[1:3], b[1:3]) for a, b in zip(traj, traj[1:]))
-        return {"yaml": str(yaml_path), "pgm": str(pgm_path), "width": occ.width,
+        return {"yaml": str(yaml_path), "pgm": str(pgm_path), "trajectory": str(tum_path), "width": occ.width,
                 "height": occ.height, "resolution": occ.resolution, "keyframes": len(traj),
                 "travelled": round(length, 2)}
 

@@ -11,9 +11,12 @@
   same returns, weighted by 1 / range noise^2 (:func:`match_points`: which returns).
   Matching against the recent stretch only (not the whole map) keeps an old, drifted part
   of the map from pulling the robot before the loop is closed explicitly;
-* **a pose graph** (:class:`~navstack.pose_graph.PoseGraph`): per keyframe a match edge
-  (the matcher's covariance) from the previous keyframe, or an odometry edge
-  (uncertainty growing with the distance and the turn) where the match failed;
+* **a pose graph** (:class:`~navstack.pose_graph.PoseGraph`): per keyframe, links to the
+  ``pair_edges`` keyframes before it, each a Gauss-Newton match against that keyframe's
+  returns alone (all its scans, placed by the odometry: short baselines, little shrink);
+  else a match edge (the matcher's covariance) from the previous keyframe, or an
+  odometry edge (uncertainty growing with the distance and the turn) where the match
+  failed;
 * **loop closures**: a keyframe is matched against the submap around an old keyframe
   (``loop_min_travel`` back along the path but within ``loop_radius``), over a wide window;
   a good score, a refinement that stays within ``loop_max_refine_shift`` and a
@@ -67,6 +70,10 @@ class SlamParams:
     pair_edges: int = 3                       # link each keyframe to the N before it, each
     #                                           matched alone (0: one link, the local-map match)
     pair_sigma: tuple = (0.03, math.radians(1.0))   # those links' sigma [m, rad]
+    pair_all_scans: bool = True               # a link's reference: every scan of the older
+    #   keyframe (each at its odometry offset), not only its first: 3-5 noisy scans of the same
+    #   walls average out, and the links' shrink and heading noise drop (bench/mapping_replay.py)
+    pair_scan_turn: float = math.radians(5)   # but only the scans turned at most this much from it
     optimize_every: int = 5                   # keyframes between two graph optimisations
     #                                           when pair_edges > 0
     refine: str = "gauss_newton"              # off the lattice: "gauss_newton" (on a fine density
@@ -111,7 +118,7 @@ class Keyframe:
     weights: np.ndarray          # (K,) their weight in a local map: 1 / range noise^2, relative
     travel: float                # odometry path length from the start [m]
     scans: list = field(default_factory=list)   # (relative pose to this keyframe, scan) to rebuild the map
-    density: LikelihoodMap | None = None         # of its own returns, for pair edges (lazily)
+    density: LikelihoodMap | None = None         # of its returns, for pair edges (lazily, once complete)
 
 
 @dataclass
@@ -120,6 +127,7 @@ class _Scan:
     angles: np.ndarray
     range_max: float
     range_min: float
+    t: float = 0.0
 
 
 class Slam:
@@ -154,8 +162,9 @@ class Slam:
         self._t = float(t)
         self._travel += math.hypot(odom[0] - self._odom[0], odom[1] - self._odom[1]) if self.keyframes else 0.0
         self._odom = odom
-        scan = _Scan(np.asarray(ranges, dtype=np.float32), np.asarray(angles, dtype=np.float64),
-                     float(range_max), float(range_min))
+        # copies: a row of a caller's larger array would keep all of it alive
+        scan = _Scan(np.array(ranges, dtype=np.float32), np.array(angles, dtype=np.float64),
+                     float(range_max), float(range_min), float(t))
         if not self.keyframes:
             self._new_keyframe(t, odom, scan, p.initial_pose or odom)
             return True
@@ -210,9 +219,7 @@ class Slam:
     def _new_keyframe(self, t: float, odom: tuple, scan: _Scan, pose) -> None:
         p = self.params
         pts = match_points(scan, p.match_max_range, p.sensor_offset)
-        sensor_xy = np.asarray(p.sensor_offset[:2], dtype=np.float64)
-        sigma = np.maximum(p.range_noise[0], p.range_noise[1] * np.hypot(*(pts - sensor_xy).T))
-        kf = Keyframe(t, odom, pts, (p.range_noise[0] / sigma) ** 2, self._travel, [(IDENTITY, scan)])
+        kf = Keyframe(t, odom, pts, self._weights(pts), self._travel, [(IDENTITY, scan)])
         if pose is not None:                         # the first keyframe
             self.graph.add_node(pose)
             self.keyframes.append(kf)
@@ -276,16 +283,43 @@ class Slam:
         out = []
         for i in range(k - 1, max(-1, k - 1 - p.pair_edges), -1):
             kf = self.keyframes[i]
-            if kf.density is None:
-                if len(kf.points) < 20:
-                    continue
-                kf.density = LikelihoodMap.from_density(kf.points, p.refine_resolution, p.refine_sigma,
-                                                        levels=0, weights=kf.weights)
+            if len(kf.points) < 20:
+                continue
             z0 = relative(self.graph.pose(i), matched)
+            if kf.density is None:
+                ref, w = self._pair_reference(i)
+                kf.density = LikelihoodMap.from_density(ref, p.refine_resolution, p.refine_sigma,
+                                                        levels=0, weights=w)
             z = refine(kf.density, pts, z0)[0]
             if math.hypot(z[0] - z0[0], z[1] - z0[1]) < 2 * p.resolution:
                 out.append((i, z))
         return out
+
+    def _pair_reference(self, i: int) -> tuple[np.ndarray, np.ndarray]:
+        """Keyframe i's returns as a pair link's reference, in its base frame, and their
+        weights: with ``pair_all_scans`` those of all its scans, else its first scan's.
+
+        The odometry places the later scans, its heading corrected by the graph's: the
+        heading error from keyframe i to i + 1 (a drift) is taken off each scan in
+        proportion to the time elapsed. Raw, a drift of 0.5 deg/s (wheel odometry without a
+        gyro) smears the reference and pulls every link its way. The odometry's distance
+        is kept: the matches' own is the one that shrinks."""
+        p = self.params
+        kf = self.keyframes[i]
+        if not p.pair_all_scans or len(kf.scans) < 2 or i + 1 >= len(self.keyframes):
+            return kf.points, kf.weights
+        nxt = self.keyframes[i + 1]
+        err = relative(relative(kf.odom, nxt.odom), relative(self.graph.pose(i), self.graph.pose(i + 1)))
+        span = max(nxt.t - kf.t, 1e-9)
+        parts = []
+        for delta, scan in kf.scans:
+            if abs(delta[2]) > p.pair_scan_turn:
+                continue
+            f = min(max((scan.t - kf.t) / span, 0.0), 1.0)
+            at = (delta[0], delta[1], delta[2] + f * err[2])
+            parts.append(transform(at, match_points(scan, p.match_max_range, p.sensor_offset)))
+        pts = np.vstack(parts)
+        return pts, self._weights(pts)
 
     def _local_keyframes(self) -> list[int]:
         """The keyframes of the local map: those less than ``loop_min_travel`` back along
@@ -397,6 +431,13 @@ class Slam:
         """The keyframes' returns in the map frame, at their current poses."""
         parts = [transform(self.graph.pose(i), self.keyframes[i].points) for i in indices]
         return np.vstack(parts) if parts else np.zeros((0, 2))
+
+    def _weights(self, pts: np.ndarray) -> np.ndarray:
+        """Base-frame returns' weights in a match: 1 / range noise^2, relative to the nearest's."""
+        p = self.params
+        sensor_xy = np.asarray(p.sensor_offset[:2], dtype=np.float64)
+        sigma = np.maximum(p.range_noise[0], p.range_noise[1] * np.hypot(*(pts - sensor_xy).T))
+        return (p.range_noise[0] / sigma) ** 2
 
     def _weights_of(self, indices) -> np.ndarray:
         parts = [self.keyframes[i].weights for i in indices]

@@ -11,7 +11,7 @@ from nav_msgs.msg import OccupancyGrid
 
 from bt_engine import Runtime
 from demo.episode import initial_pose_msg
-from navstack.map_io import read_map_yaml
+from navstack.map_io import read_map_yaml, read_trajectory_tum
 
 sim_mod = pytest.importorskip("sim")
 
@@ -69,6 +69,8 @@ def test_save_map_then_localise_on_it(mapping, tmp_path):
     saved = rt.call("save_map", str(tmp_path / "built.yaml"))
     m = read_map_yaml(saved["yaml"])
     assert (m.data == 100).sum() > 100 and m.resolution == pytest.approx(0.05)
+    traj = read_trajectory_tum(saved["trajectory"])          # the keyframes, beside the map
+    assert len(traj) == saved["keyframes"] and saved["trajectory"].endswith("built.tum")
     pose = rt.call("localise_on_map")
     assert rt.call("mapping_status")["frozen"]
     rt.call("sleep", 1.0)
