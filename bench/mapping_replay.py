@@ -90,6 +90,7 @@ def replay(path: pathlib.Path, overrides: dict, edges: bool = False) -> dict:
     from navstack.map_io import write_map_yaml
     from navstack.odometry import OdomHistory
     from navstack.pose_graph import relative
+    from navstack.log_odds import LogOddsParams
     from navstack.slam import Slam, SlamParams
     from sim.gridmap import read_map
     from sim.map_score import score_maps, truth_grid
@@ -98,7 +99,11 @@ def replay(path: pathlib.Path, overrides: dict, edges: bool = False) -> dict:
         d = {k: npz[k] for k in npz.files}
     angle_min, angle_inc, range_min, range_max = (float(v) for v in d["meta"])
     angles = angle_min + angle_inc * np.arange(d["ranges"].shape[1])
-    params = {"sensor_offset": (-0.15, 0.0, 0.0), **overrides}   # the URDF's base_scan
+    grid = {k.removeprefix("grid."): v for k, v in overrides.items() if k.startswith("grid.")}
+    params = {"sensor_offset": (-0.15, 0.0, 0.0),                 # the URDF's base_scan
+              **{k: v for k, v in overrides.items() if not k.startswith("grid.")}}
+    if grid:
+        params["grid"] = LogOddsParams(**{**SlamParams().grid.__dict__, **grid})
     slam = Slam(SlamParams(initial_pose=tuple(d["truth"][0]), **params))
     odom, odom_msgs, next_odom, online = OdomHistory(maxlen=1 << 20), d["odom"], 0, []
     t0 = time.perf_counter()
@@ -171,7 +176,8 @@ def main(argv=None) -> int:
     p = sub.add_parser("replay", help="replay a recording through the SLAM and score it")
     p.add_argument("recording", type=pathlib.Path)
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
-                   help="override a navstack.slam.SlamParams field (the value is YAML)")
+                   help="override a navstack.slam.SlamParams field (the value is YAML); "
+                        "grid.FIELD: a field of its occupancy grid's LogOddsParams")
     p.add_argument("--edges", action="store_true", help="also the pose-graph edges' errors")
     p.add_argument("--json", action="store_true")
     args = ap.parse_args(argv)

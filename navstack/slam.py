@@ -106,8 +106,10 @@ class SlamParams:
     loop_gate_yaw: tuple = (math.radians(2.0), math.radians(0.3))   # a + b * metres travelled since
     # the map
     map_all_scans: bool = True                # every scan, not only keyframes
-    grid: LogOddsParams = field(default_factory=lambda: LogOddsParams(far_range=3.0))   # returns beyond
-    #                                           3 m (9 cm noise) count less
+    grid: LogOddsParams = field(default_factory=lambda: LogOddsParams(far_range=3.0, l_occ=0.55, l_free=-0.3))
+    #   returns beyond 3 m (9 cm noise) count less; and it takes two returns to mark a cell
+    #   (p 0.63 after one, 0.75 after two): a lone return that its noise put behind a wall
+    #   stays there (no later beam crosses that cell), a speckle outside the house
 
 
 @dataclass
