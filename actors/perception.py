@@ -874,7 +874,164 @@ def _score_box(seg: _Segment, app: Appearance) -> tuple[float, dict]:
         conf, ev = _score_box_resting(seg, sides, height)
         if conf > best[0] or "reason" in best[1]:
             best = (conf, {**ev, "pose": pose, "width": min(sides)} if "reason" not in ev else ev)
+    if best[0] < 0.9:                              # no resting face fits well: leaning?
+        conf, ev = _score_box_tilted(seg, app.box)
+        if conf > best[0]:
+            best = (conf, ev)
     return best
+
+
+TILT_FACE_ANGLE = math.radians(20)  # a face's normals stay this close to its plane's
+
+
+def _box_faces(seg: _Segment, max_faces: int = 2) -> list[tuple[np.ndarray, np.ndarray, float]]:
+    """The segment's dominant plane faces, most supported first: (centre, unit normal
+    towards the camera, RMS of its points off the plane [m]). A face's normal is the one
+    most of the surface normals agree with (within 15 degrees); its plane is fitted to the
+    points whose normals lie within TILT_FACE_ANGLE of it."""
+    pts, nrm = seg.normals()
+    if len(pts) < 30:
+        return []
+    cam = seg.frame.T_map_cam[:3, 3]
+    nrm = nrm * np.where(((cam - pts) * nrm).sum(axis=1) < 0, -1.0, 1.0)[:, None]
+    free = np.ones(len(pts), bool)
+    faces = []
+    for _ in range(max_faces):
+        idx = np.flatnonzero(free)
+        if len(idx) < 30:
+            break
+        n = nrm[idx]
+        sample = n[np.linspace(0, len(n) - 1, min(len(n), 200)).astype(int)]
+        votes = (sample @ n.T > math.cos(math.radians(15))).sum(axis=1)
+        n0 = sample[int(np.argmax(votes))]
+        member = idx[n @ n0 > math.cos(TILT_FACE_ANGLE)]
+        if len(member) < 30:
+            break
+        P = pts[member]
+        c = P.mean(axis=0)
+        w, v = np.linalg.eigh(np.cov(P.T))
+        normal = v[:, 0] if float(v[:, 0] @ n0) > 0 else -v[:, 0]
+        faces.append((c, normal, math.sqrt(max(0.0, float(w[0])))))
+        free[member] = False
+    return faces
+
+
+def _score_box_tilted(seg: _Segment, box: tuple[float, float, float]) -> tuple[float, dict]:
+    """Confidence that ``seg`` is the box of sizes ``box`` (x, y, z) leaning: its z axis
+    between UPRIGHT_TILT and LYING_TILT from the vertical. Its largest visible face is
+    fitted as a plane (_box_faces) and measured along its in-plane principal axes (a side
+    that runs into a side of the segment where it may continue out of view is only a lower
+    bound on its length); two of the box's sizes must fit them, the third lies behind the
+    face (a second face seen beside it, perpendicular, must be that deep). The box's
+    lowest corner must be on the support and nothing seen above its highest. Evidence as
+    for a leaning body of revolution: ``pose`` tilted, ``axis`` (x, y of the box's centre),
+    ``yaw`` (the direction it leans to), ``tilt``, ``axis_base`` (its bottom face's centre)
+    and ``axis_dir`` (its z axis, base to top), ``width`` (its side across the lean)."""
+    faces = _box_faces(seg)
+    if not faces:
+        return 0.0, {"reason": "no plane face"}
+    px = seg.m_per_px
+    tol_w = max(0.008, 1.6 * px)
+    tol_h = max(0.006, 1.5 * px)
+    tol_r = max(2 * seg.surface_tolerance, 0.25 * px)
+    cam = seg.frame.T_map_cam[:3, 3]
+    c, n, _ = faces[0]
+    view = c - cam
+    view = view / np.linalg.norm(view)
+    if abs(float(view @ n)) < GRAZING:
+        return 0.0, {"reason": "face seen at a grazing angle"}
+    # the face's points: every segment point on its plane
+    off = (seg.pts - c) @ n
+    on = np.abs(off) < max(3 * tol_r, 0.004)
+    F = seg.pts[on]
+    if len(F) < 30:
+        return 0.0, {"reason": "body not visible"}
+    rms = float(np.sqrt(np.mean(off[on] ** 2)))
+    q = F - F.mean(axis=0)
+    w, v = np.linalg.eigh(np.cov(q.T))
+    axes = [v[:, 2], v[:, 1]]
+    # which ends of the face may continue out of view
+    perp = np.array([-seg.ray[1], seg.ray[0], 0.0])
+    lat_all = seg.pts @ perp
+    z_all = seg.pts[:, 2]
+    near = 2.5 * px
+    touches = []
+    for side, vals, lim, sgn in (("left", lat_all, lat_all.max(), 1), ("right", lat_all, lat_all.min(), -1),
+                                 ("top", z_all, z_all.max(), 1), ("bottom", z_all, z_all.min(), -1)):
+        if seg.may_continue(side):
+            touches.append((side, vals[on], lim, sgn))
+    ext, mid, open_ends = [], [], []
+    for a in axes:
+        s = q @ a
+        lo, hi = float(s.min()), float(s.max())
+        ends = []
+        for end_sel in (s <= lo + near, s >= hi - near):
+            ends.append(any(bool(np.any(sgn * (vals[end_sel] - lim) >= -near)) for _, vals, lim, sgn in touches))
+        ext.append(hi - lo + px)
+        mid.append(0.5 * (lo + hi))
+        open_ends.append(ends)            # [low end open, high end open]
+    if all(any(e) for e in open_ends) or any(all(e) for e in open_ends):
+        return 0.0, {"reason": "too little of it in view", "extents": ext}
+    dims = [float(d) for d in box]
+    best = None
+    for i0, i1, i2 in ((0, 1, 2), (1, 0, 2), (0, 2, 1), (2, 0, 1), (1, 2, 0), (2, 1, 0)):
+        true = [dims[i0], dims[i1]]
+        errs = [ext[k] - true[k] if not any(open_ends[k]) else max(0.0, ext[k] - true[k]) for k in (0, 1)]
+        e = math.sqrt(float(np.mean(np.square(errs))))
+        if best is None or e < best[0]:
+            best = (e, (i0, i1, i2), true)
+    e_face, assign, true = best
+    # the box's centre: along each face axis the middle of its extent, or half its size
+    # from the end in view; behind the face half the third size
+    centre = F.mean(axis=0) - 0.5 * dims[assign[2]] * n
+    for k in (0, 1):
+        a = axes[k]
+        if not any(open_ends[k]):
+            centre = centre + mid[k] * a
+        else:
+            s = q @ a
+            if open_ends[k][1]:                         # the low end is in view
+                centre = centre + (float(s.min()) + 0.5 * true[k]) * a
+            else:
+                centre = centre + (float(s.max()) - 0.5 * true[k]) * a
+    box_axes = [None, None, None]
+    box_axes[assign[0]], box_axes[assign[1]], box_axes[assign[2]] = axes[0], axes[1], n
+    up = box_axes[2] if box_axes[2][2] >= 0 else -box_axes[2]
+    tilt = math.acos(min(1.0, abs(float(up[2]))))
+    if not UPRIGHT_TILT < tilt < LYING_TILT:
+        return 0.0, {"reason": "not leaning", "tilt": tilt}
+    # its corners: the lowest on the support, nothing of it seen above the highest
+    half = [0.5 * dims[k] * box_axes[k] for k in range(3)]
+    corners = np.array([centre + sx * half[0] + sy * half[1] + sz * half[2]
+                        for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)])
+    e_base = float(corners[:, 2].min()) - seg.base
+    e_top = max(0.0, seg.top - float(corners[:, 2].max()))
+    # a second face beside it: perpendicular, as deep as the third size
+    e_depth = 0.0
+    if len(faces) > 1:
+        c2, n2, _ = faces[1]
+        v2 = (c2 - cam) / np.linalg.norm(c2 - cam)
+        if abs(float(n2 @ n)) < math.sin(math.radians(15)) and abs(float(v2 @ n2)) >= GRAZING:
+            off2 = (seg.pts - c2) @ n2
+            on2 = (np.abs(off2) < max(3 * tol_r, 0.004)) & ~on
+            if on2.sum() >= 30:
+                d2 = (seg.pts[on2] - F.mean(axis=0)) @ -n
+                e_depth = float(np.ptp(d2)) + px - dims[assign[2]]
+                e_depth = e_depth if e_depth > 0 else 0.5 * e_depth   # seen at an angle: shorter
+    z = np.array([e_face / tol_w, rms / tol_r, e_base / (2 * tol_h), e_top / tol_h, e_depth / tol_w])
+    conf = float(math.exp(-0.5 * float(np.mean(z * z))))
+    if np.any(np.abs(z) > 2.5):
+        conf = min(conf, 0.1)
+    if any(seg.cut(k) for k in ("left", "right", "top", "bottom")):
+        conf *= 0.85
+    base_pt = centre - 0.5 * dims[2] * up
+    # the side the fingers close across: the box's x or y axis the more level, across the lean
+    across = np.cross(up, [0.0, 0.0, 1.0])
+    width = dims[0] if abs(float(box_axes[0] @ across)) >= abs(float(box_axes[1] @ across)) else dims[1]
+    return conf, {"pose": "tilted", "axis": centre[:2].copy(), "yaw": math.atan2(up[1], up[0]), "tilt": tilt,
+                  "axis_base": base_pt.tolist(), "axis_dir": up.tolist(), "width": width,
+                  "face_err": e_face, "rect_rms": rms, "base_err": e_base, "top_err": e_top,
+                  "depth_err": e_depth, "extents": ext}
 
 
 def _whole_faces(seg: _Segment, side: np.ndarray, rect: _Rectangle) -> list[bool]:

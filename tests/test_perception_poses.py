@@ -162,3 +162,31 @@ def test_a_segment_of_a_categorys_hue_and_shape_but_dull_is_not_of_that_category
     dull = dataclasses.replace(seg, saturation=0.45 * app.saturation)
     assert _score(dull, app) == (0.0, {"reason": "colour too dull"})
     sim.set_object_pose(name, 40.0, 40.0)
+
+
+def test_a_leaning_carton_is_recognised_tilted_with_its_lean():
+    # seed 2001's carton leans 38 degrees against the north wall (towards +y); seen from
+    # ~0.8 m it is a tilted carton at its centre, leaning that way, its base below its top
+    world = SimWorld(None, "house_hard", seed=2001)
+    try:
+        name = next(n for n in world.object_names() if world.object_category(n) == "carton")
+        pose = world.object_poses()[name]
+        R = np.array(p.getMatrixFromQuaternion(pose[3:])).reshape(3, 3)
+        up = R[:, 2] if R[2, 2] > 0 else -R[:, 2]
+        tilt = math.degrees(math.acos(up[2]))
+        assert 30 < tilt < 40
+        lean = math.atan2(up[1], up[0])
+        for bearing in (0.0, math.pi / 2, math.pi):
+            _teleport(world, pose[0] - 0.8 * math.cos(bearing), pose[1] - 0.8 * math.sin(bearing), bearing)
+            dets = detect(_frame(world), registered_appearances())
+            found = _near(dets, "carton", pose[:2], 0.03)
+            assert found, (bearing, dets)
+            d = found[0]
+            assert d["pose"] == "tilted", d
+            assert math.degrees(abs(math.remainder(d["yaw"] - lean, 2 * math.pi))) < 20.0, (d["yaw"], lean)
+            assert abs(d["tilt_deg"] - tilt) < 10.0, d
+            base, axis = np.array(d["axis_base"]), np.array(d["axis_dir"])
+            assert axis[2] > 0 and float(axis @ up) > math.cos(math.radians(15)), d
+            assert np.linalg.norm(base - (np.array(pose[:3]) - 0.06 * up)) < 0.03, d
+    finally:
+        world.close()
