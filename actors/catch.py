@@ -177,6 +177,7 @@ class Catcher(SubSystem):
         self.set_value("failed_views", [])   # (x, y, heading) of grasps that failed
         self.set_value("moved_to", None)     # (was x, y; the detection seen after): where
         #                                      a failed grasp left the object
+        self.set_value("rejected", [])       # (x, y, category): a close look saw something else there
 
     def _fresh_views_first(self, poses: list[tuple[float, float, float]],
                            xy: tuple[float, float]) -> list[tuple[float, float, float]]:
@@ -312,6 +313,7 @@ class Catcher(SubSystem):
         other = self.run_actor("get_found", "unknown")
         if not other or math.dist(_target_xy(other), xy) > SAME_OBJECT:
             return                                  # nothing else there: a missed look
+        self.set_value("rejected", self.get_value("rejected")[-19:] + [(xy[0], xy[1], category)])
         if self.check_actor("reject_sighting"):
             self.run_actor("reject_sighting", xy[0], xy[1], category)
         raise ApproachError(f"no {category} at ({xy[0]:.2f}, {xy[1]:.2f}): seen from "
@@ -338,6 +340,12 @@ class Catcher(SubSystem):
         cat = strategy.category
         target = self._where_now(target)
         xy = _target_xy(target)
+        for x, y, c in self.get_value("rejected"):
+            # the retry of a target the close look rejected: the next look might call the
+            # distractor by the category again, and the grasp would close on it
+            if c == cat and math.dist((x, y), xy) < SAME_OBJECT:
+                raise ApproachError(f"no {cat} at ({xy[0]:.2f}, {xy[1]:.2f}): a close look saw an "
+                                    f"object of no known category there before")
         look = strategy.approach.look_distance
         plan = self._plan(strategy, target)
         for step in ("look", "standoff"):

@@ -95,6 +95,9 @@ def test_a_close_look_at_a_distractor_rejects_the_target_and_the_search_passes_i
     with pytest.raises(ActorError, match=r"no carton at \(1\.60, 0\.50\): seen from 0\.60 m, the object there is of no known"):
         run_in_actor(rt, lambda: catch._refine(target, "carton", confirm=True))
     assert search.get_value("rejected") == [(1.6, 0.5, "carton")]
+    # bt_catch's retry of the same target fails at once, before anything moves
+    with pytest.raises(ActorError, match=r"no carton at \(1\.60, 0\.50\): a close look saw an object of no known"):
+        run_in_actor(rt, lambda: catch.approach_object(target))
     assert search._rejected({"category": "carton", "x": 1.7, "y": 0.55})        # that one again
     assert not search._rejected({"category": "carton", "x": 2.5, "y": 0.5})     # another carton
     assert not search._rejected({"category": "can", "x": 1.6, "y": 0.5})        # not what was rejected
