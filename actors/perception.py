@@ -661,9 +661,7 @@ def _score_upright(seg: _Segment, app: Appearance) -> tuple[float, dict]:
         e_h = seg.height - top
     tol_r = seg.surface_tolerance
     z = np.array([e_prof / tol_w, e_h / tol_h, rms / tol_r])
-    conf = float(math.exp(-0.5 * float(np.mean(z * z))))
-    if np.any(np.abs(z) > 2.5):
-        conf = min(conf, 0.1)
+    conf = _confidence(z)
     if seg.cut("top") or side_cut:
         conf *= 0.85                                 # part of the evidence is out of view
     return conf, {"profile_err": e_prof, "height_err": e_h, "cylinder_rms": rms, "line_rms": flat,
@@ -707,9 +705,7 @@ def _score_posed(seg: _Segment, app: Appearance, direction: np.ndarray) -> tuple
     if cut or seg.occluded["top"]:
         e_len = max(0.0, e_len)              # part of it out of view: only shorter
     z = np.array([rms / tol_r, e_len / tol_h])
-    conf = float(math.exp(-0.5 * float(np.mean(z * z))))
-    if np.any(np.abs(z) > 2.5):
-        conf = min(conf, 0.1)
+    conf = _confidence(z)
     if cut:
         conf *= 0.85
     tilt = math.acos(min(1.0, abs(float(d[2]))))
@@ -881,6 +877,20 @@ def _score_box(seg: _Segment, app: Appearance) -> tuple[float, dict]:
     return best
 
 
+def _confidence(z: np.ndarray) -> float:
+    """Confidence from measurement errors ``z`` in units of their tolerances: a Gaussian
+    of their mean square, at most 0.1 when any is off by more than 2.5 tolerances."""
+    conf = float(math.exp(-0.5 * float(np.mean(z * z))))
+    return min(conf, 0.1) if np.any(np.abs(z) > 2.5) else conf
+
+
+def _box_tolerances(seg: _Segment) -> tuple[float, float, float]:
+    """A box fit's tolerances [m]: on a face's length, on a height, and on the points'
+    distance from the fitted faces (the depth noise, or a quarter pixel)."""
+    px = seg.m_per_px
+    return max(0.008, 1.6 * px), max(0.006, 1.5 * px), max(2 * seg.surface_tolerance, 0.25 * px)
+
+
 TILT_FACE_ANGLE = math.radians(20)  # a face's normals stay this close to its plane's
 
 
@@ -931,9 +941,7 @@ def _score_box_tilted(seg: _Segment, box: tuple[float, float, float]) -> tuple[f
     if not faces:
         return 0.0, {"reason": "no plane face"}
     px = seg.m_per_px
-    tol_w = max(0.008, 1.6 * px)
-    tol_h = max(0.006, 1.5 * px)
-    tol_r = max(2 * seg.surface_tolerance, 0.25 * px)
+    tol_w, tol_h, tol_r = _box_tolerances(seg)
     cam = seg.frame.T_map_cam[:3, 3]
     c, n, _ = faces[0]
     view = c - cam
@@ -1019,9 +1027,7 @@ def _score_box_tilted(seg: _Segment, box: tuple[float, float, float]) -> tuple[f
                 e_depth = float(np.ptp(d2)) + px - dims[assign[2]]
                 e_depth = e_depth if e_depth > 0 else 0.5 * e_depth   # seen at an angle: shorter
     z = np.array([e_face / tol_w, rms / tol_r, e_base / (2 * tol_h), e_top / tol_h, e_depth / tol_w])
-    conf = float(math.exp(-0.5 * float(np.mean(z * z))))
-    if np.any(np.abs(z) > 2.5):
-        conf = min(conf, 0.1)
+    conf = _confidence(z)
     if any(seg.cut(k) for k in ("left", "right", "top", "bottom")):
         conf *= 0.85
     base_pt = centre - 0.5 * dims[2] * up
@@ -1066,9 +1072,7 @@ def _score_box_resting(seg: _Segment, sides: tuple[float, float], bz: float) -> 
     its first side in (-pi/2, pi/2]."""
     bx, by = sides
     px = seg.m_per_px
-    tol_w = max(0.008, 1.6 * px)
-    tol_h = max(0.006, 1.5 * px)
-    tol_r = max(2 * seg.surface_tolerance, 0.25 * px)
+    tol_w, tol_h, tol_r = _box_tolerances(seg)
     # the sides, from the points above the bottom rim (the floor's edge pixels blur it)
     lo, hi = seg.base + 0.15 * bz, seg.base + 0.85 * bz
     side = seg.pts[(seg.pts[:, 2] > lo) & (seg.pts[:, 2] < hi), :2]
@@ -1126,9 +1130,7 @@ def _score_box_resting(seg: _Segment, sides: tuple[float, float], bz: float) -> 
     if seg.cut("top") or seg.occluded["top"]:
         e_h = max(0.0, e_h)                           # part of it may be hidden: a lower bound
     z = np.array([e_face / tol_w, e_h / tol_h, rect.rms / tol_r])
-    conf = float(math.exp(-0.5 * float(np.mean(z * z))))
-    if np.any(np.abs(z) > 2.5):
-        conf = min(conf, 0.1)
+    conf = _confidence(z)
     if seg.cut("top") or side_cut:
         conf *= 0.85
     yaw = math.atan2(x_axis[1], x_axis[0])
