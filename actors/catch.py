@@ -479,7 +479,7 @@ class Catcher(SubSystem):
                              f"{g.closed_max * 1000:.0f} mm")
         # Test lift: a slip shows when the fingers close again, and the object drops only
         # a little (a can dropped from the full lift height may fall over).
-        for x, z in ((g.reach, height + TEST_LIFT), (g.reach - 0.02, height + g.lift)):
+        for x, z in ((g.reach, height + TEST_LIFT), self._lift_pose(g, height)):
             self.run_actor("move_to_pose", x, 0.0, z, g.pitch)
             grip = self.run_actor("grip_check")
             if not _holds(g, grip):
@@ -494,6 +494,19 @@ class Catcher(SubSystem):
         self.set_value("held_plan", g)
         self.set_value("moved_to", None)
         return held
+
+    def _lift_pose(self, g: GraspPlan, height: float) -> tuple[float, float]:
+        """(x, z) of the full lift: the plan's lift, a little drawn in. From a table the
+        arm may not reach that high (its wrist is 0.25 m from the shoulder at most), so it
+        lifts as high as it reaches there, drawing the hand in further first."""
+        top, bottom = height + g.lift, height + TEST_LIFT + 0.01
+        for x in (g.reach - 0.02, g.reach - 0.05, g.reach - 0.08):
+            z = top
+            while z >= bottom:
+                if self.run_actor("reachable", x, 0.0, z, g.pitch):
+                    return x, z
+                z -= 0.01
+        return g.reach, height + TEST_LIFT      # stay where the test lift held it
 
     @actor(moves=True)
     def grip_check(self) -> dict:

@@ -119,3 +119,33 @@ def test_a_look_from_too_near_rejects_nothing(rt):
     catch = rt.add_subsystem("catch", Catcher)
     target = {"category": "carton", "x": 1.33, "y": 0.5, "z": 0.0, "pose": "lying"}
     assert run_in_actor(rt, lambda: catch._refine(target, "carton", confirm=True)) == target
+
+
+class _ArmReach(SubSystem):
+    """The arm's ``reachable`` actor, answered by the arm's own inverse kinematics."""
+
+    def __init__(self):
+        super().__init__()
+        from planning import ArmKinematics
+        self.kinematics = ArmKinematics.from_urdf()
+
+    @actor
+    def reachable(self, x: float, y: float, z: float, pitch: float) -> bool:
+        return bool(self.kinematics.ik(x, y, z, pitch).ok)
+
+
+def test_the_lift_from_a_table_stays_within_the_arms_reach(rt):
+    import categories
+    arm = rt.add_subsystem("arm", _ArmReach)
+    catch = rt.add_subsystem("catch", Catcher)
+    bottle = categories.get("bottle").strategy.plan_for("upright")
+    # on the floor: the full lift, drawn in 2 cm
+    x, z = run_in_actor(rt, lambda: catch._lift_pose(bottle, bottle.height))
+    assert (x, z) == pytest.approx((bottle.reach - 0.02, bottle.height + bottle.lift))
+    # on a 0.24 m table the full lift (z 0.40 m) is out of reach (house_hard 2002): it
+    # lifts as high as the arm reaches, well clear of the table
+    on_table = 0.24 + bottle.height
+    assert not arm.kinematics.ik(bottle.reach - 0.02, 0.0, on_table + bottle.lift, bottle.pitch).ok
+    x, z = run_in_actor(rt, lambda: catch._lift_pose(bottle, on_table))
+    assert arm.kinematics.ik(x, 0.0, z, bottle.pitch).ok
+    assert z >= on_table + 0.05 and x <= bottle.reach - 0.02
