@@ -81,6 +81,8 @@ class Episode:
     loc_rmse_m: float = float("nan")   # localisation error (position) over the episode
     loc_max_m: float = float("nan")
     grasp_tilt_deg: float = float("nan")  # largest tilt of the held object in the fingers
+    pose: str = ""                     # pose kind (upright, lying, tilted) of the object
+    support: str = ""                  # placed, else last picked at; and what it stood on
     objects: int | None = None         # a tidy-up: objects of a known category in the world,
     placed: int | None = None          # and how many ended where they belong
     result: Any = field(default=None, repr=False)   # what the tree (or actor) returned
@@ -280,7 +282,7 @@ def run_episode(tree: str = "bt_pick_place", world: str = "house", seed: int = 0
             host.library[tree]  # a skipped tree raises why, before anything runs
         if progress is not None:
             host.observers.append(DemoProgress(progress, rt))
-        grasp = GraspProbe(sim)
+        grasp = GraspProbe(sim, tuple(categories.names()))
         host.observers.append(grasp)
         host.observers.extend(observers or ())
         args = dict(inputs or {})
@@ -342,6 +344,7 @@ def run_episode(tree: str = "bt_pick_place", world: str = "house", seed: int = 0
                 ep.success = False
                 ep.failed_node = "ground truth"
                 ep.reason = "the tree succeeded but no object of the category is on the place location"
+        ep.pose, ep.support = _start_pose(sim, ep.placed_object or (grasp.picked or [""])[-1])
         if "belongs" in params:                 # a tidy-up: every object where it belongs
             belongs = args.get("belongs", params["belongs"].default)
             ep.objects, ep.placed = _tidied(sim, world_places(sim), belongs)
@@ -357,6 +360,14 @@ def run_episode(tree: str = "bt_pick_place", world: str = "house", seed: int = 0
         app.close(rt)
     ep.wall_time = time.perf_counter() - wall0
     return ep
+
+
+def _start_pose(sim: SimWorld, name: str) -> tuple[str, str]:
+    """(pose kind, support) the world gave object ``name``; ("", "") for no object."""
+    for o in sim.spec.objects:
+        if o.name == name:
+            return o.pose_kind, o.support
+    return "", ""
 
 
 def _failed_node(reason: str) -> str:
@@ -396,6 +407,9 @@ def print_outcome(ep: Episode, out: TextIO = sys.stdout) -> None:
         out.write(f"FAILURE at {ep.failed_node or '?'}: {ep.reason}\n")
     out.write(f"sim time {ep.sim_time:.1f} s, wall time {ep.wall_time:.1f} s "
               f"({ep.realtime_factor:.1f}x real time)\n")
+    if ep.pose:
+        out.write(f"the object {'placed' if ep.success else 'picked at last'}: {ep.pose}, "
+                  f"support: {ep.support}\n")
     if ep.objects is not None:
         out.write(f"objects where they belong: {ep.placed} of {ep.objects}\n")
     if ep.grasp_tilt_deg == ep.grasp_tilt_deg:

@@ -18,7 +18,7 @@ from bt_engine.cli.config import Config
 from .episode import Episode, episode_app, run_episode
 
 CSV_FIELDS = ["tree", "world", "seed", "category", "success", "tree_status", "failed_node",
-              "reason", "placed_object", "sim_time", "wall_time", "loc_rmse_m", "loc_max_m",
+              "reason", "placed_object", "pose", "support", "sim_time", "wall_time", "loc_rmse_m", "loc_max_m",
               "grasp_tilt_deg", "objects", "placed", "trace"]
 
 #: this process's App (one per worker, so each skipped tree is reported once per process)
@@ -127,6 +127,8 @@ def print_table(episodes: list[Episode], out: TextIO = sys.stdout) -> None:
                   f"{100 * statistics.median(rms) if rms else float('nan'):11.1f} "
                   f"{100 * max(worst) if worst else float('nan'):11.1f} "
                   f"{statistics.median(tilts) if tilts else float('nan'):9.1f}\n")
+    if any(e.pose for e in episodes):
+        print_pose_table(episodes, out)
     tidy = [e for e in episodes if e.objects is not None]
     if tidy:
         total, placed = sum(e.objects for e in tidy), sum(e.placed for e in tidy)
@@ -141,6 +143,19 @@ def print_table(episodes: list[Episode], out: TextIO = sys.stdout) -> None:
         for e in episodes:
             if not e.success:
                 out.write(f"  seed {e.seed:3d} {e.category:7s} {e.failed_node}: {e.reason[:150]}\n")
+
+
+def print_pose_table(episodes: list[Episode], out: TextIO = sys.stdout) -> None:
+    """Successes per category and the pose its object had in the world (the one placed,
+    else the one the last pick went for; "none": no pick was tried)."""
+    poses = ("upright", "lying", "tilted", "none")
+    cells: dict[tuple[str, str], list[bool]] = collections.defaultdict(list)
+    for e in episodes:
+        cells[e.category, e.pose or "none"].append(e.success)
+    out.write(f"\n{'by pose':10s}" + "".join(f"{p:>10s}" for p in poses) + "\n")
+    for cat in sorted({e.category for e in episodes}):
+        row = [cells.get((cat, p), []) for p in poses]
+        out.write(f"{cat:10s}" + "".join(f"{f'{sum(r)}/{len(r)}' if r else '-':>10s}" for r in row) + "\n")
 
 
 def print_rates(rows: list[tuple[str, list[Episode]]], label: str, target_rate: float,

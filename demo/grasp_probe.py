@@ -6,6 +6,9 @@ its axis (a body's z: a can's or a bottle's axis, a box's height) against the gr
 z axis, the axis it is held along whichever way the hand came. An object held as it was
 grasped keeps 0 degrees; one that pivots about the fingers' line tilts. The episode keeps
 the largest tilt seen while the object was held.
+
+It also notes which object each pick went for: the category object nearest the base as
+the pick starts (the robot stands at its standoff, about 0.4 m from it).
 """
 from __future__ import annotations
 
@@ -24,6 +27,8 @@ HELD_DISTANCE = 0.15
 AFTER = ("pick", "verify_grasp", "carry_pose")
 BEFORE = ("place", "place_on")
 HAND = "end_effector_link"
+#: a pick's object is at most this far from base_footprint when the pick starts [m]
+PICKED_DISTANCE = 0.8
 
 
 def _axis_z(quat) -> np.ndarray:
@@ -48,12 +53,15 @@ def held_tilt(sim: SimWorld) -> float | None:
 
 class GraspProbe(TreeObserver):
     """Keeps ``worst``: the largest held-object tilt [deg] seen in an episode (NaN: never
-    held)."""
+    held), and ``picked``: the objects the picks went for, in order (see
+    :func:`nearest_object`)."""
 
-    def __init__(self, sim: SimWorld) -> None:
+    def __init__(self, sim: SimWorld, categories: tuple[str, ...] = ()) -> None:
         self.sim = sim
+        self.categories = categories
         self.worst = float("nan")
         self.samples: list[float] = []
+        self.picked: list[str] = []
 
     def _sample(self) -> None:
         tilt = held_tilt(self.sim)
@@ -64,7 +72,25 @@ class GraspProbe(TreeObserver):
     def actor_started(self, run: Any, leaf: Any, args: tuple, kwargs: dict, txn: Any) -> None:
         if leaf.node.actor in BEFORE:
             self._sample()
+        if leaf.node.actor == "pick":
+            name = nearest_object(self.sim, self.categories)
+            if name is not None:
+                self.picked.append(name)
 
     def actor_finished(self, run: Any, leaf: Any, txn: Any) -> None:
         if leaf.node.actor in AFTER and txn.state.value != "failed":
             self._sample()
+
+
+def nearest_object(sim: SimWorld, categories: tuple[str, ...] = ()) -> str | None:
+    """The object (of one of ``categories``; () any) nearest base_footprint within
+    PICKED_DISTANCE, or None. Reads the simulator's truth."""
+    x, y, _ = sim.robot_pose()
+    best = None
+    for name, pose in sim.object_poses().items():
+        if categories and sim.object_category(name) not in categories:
+            continue
+        d = math.hypot(pose[0] - x, pose[1] - y)
+        if d <= PICKED_DISTANCE and (best is None or d < best[0]):
+            best = (d, name)
+    return None if best is None else best[1]

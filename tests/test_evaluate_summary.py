@@ -2,7 +2,7 @@
 import io
 
 from demo.episode import Episode
-from demo.evaluate import print_rates
+from demo.evaluate import print_pose_table, print_rates
 
 
 def ep(success: bool, sim: float, wall: float) -> Episode:
@@ -20,3 +20,15 @@ def test_rates_medians_and_targets():
     assert "target >= 90%: MISSED" in can and "RTF >= 10x: MISSED" in can
     assert "4/4" in bottle and "100.0%" in bottle and "20.0x" in bottle
     assert "target >= 90%: ok" in bottle and "RTF >= 10x: ok" in bottle
+
+
+def test_successes_per_category_and_pose():
+    def posed(cat, success, pose):
+        return Episode("bt_pick_place", "house_hard", 0, cat, success=success, pose=pose)
+    out = io.StringIO()
+    print_pose_table([posed("can", True, "upright"), posed("can", False, "upright"),
+                      posed("can", True, "lying"), posed("carton", False, "")], out)
+    head, *rows = out.getvalue().strip().splitlines()
+    assert head.split() == ["by", "pose", "upright", "lying", "tilted", "none"]
+    assert rows[0].split() == ["can", "1/2", "1/1", "-", "-"]
+    assert rows[1].split() == ["carton", "-", "-", "-", "0/1"]     # no pick was tried

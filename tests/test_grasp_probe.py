@@ -8,7 +8,7 @@ import pytest
 
 import sim as sim_mod
 from bt_engine import Runtime
-from demo.grasp_probe import HAND, held_tilt
+from demo.grasp_probe import HAND, held_tilt, nearest_object
 
 
 @pytest.fixture(scope="module")
@@ -43,3 +43,17 @@ def test_nothing_near_the_hand_is_none(world):
     for i, name in enumerate(world.object_names()):
         world.set_object_pose(name, 2.5, -2.5 + 0.3 * i)
     assert held_tilt(world) is None
+
+
+def test_the_picked_object_is_the_category_object_nearest_the_base(world):
+    x, y, _ = world.robot_pose()
+    names = world.object_names()
+    for i, name in enumerate(names):
+        world.set_object_pose(name, 2.5, -2.5 + 0.3 * i)
+    assert nearest_object(world) is None                     # nothing within reach
+    can = next(n for n in names if world.object_category(n) == "can")
+    other = next(n for n in names if world.object_category(n) != "can")
+    world.set_object_pose(can, x + 0.6, y)
+    world.set_object_pose(other, x + 0.4, y)
+    assert nearest_object(world) == other
+    assert nearest_object(world, ("can",)) == can
