@@ -183,30 +183,43 @@ UNKNOWN = "unknown"
 HUE_WINDOW = 7          # OpenCV hue units (2 degrees each) either side of a category's hue
 
 
-def _hue_lut(appearances=()) -> tuple[np.ndarray, list[str]]:
-    """Hue -> palette index; around each appearance's hue its colour's range is widened to
-    HUE_WINDOW (colour jitter and white balance move a hue across a palette boundary: a
-    yellow carton near orange)."""
+def _hue_lut(appearances=()) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[str]]:
+    """Hue -> palette index, twice: the palette's own ranges, and those ranges widened to
+    HUE_WINDOW around each appearance's hue (colour jitter and white balance move a hue
+    across a palette boundary: a yellow carton near orange). And hue -> the saturation a
+    pixel needs for the widened colour: in a widened part, the share SATURATION_SHARE of
+    the appearance's own (brown furniture has hues near a yellow carton's but half its
+    saturation; taken for yellow, a wardrobe merges with a carton leaning on it). Returns
+    (widened, palette, saturation floor, names)."""
     names = list(PALETTE)
-    lut = np.zeros(256, np.uint8)
+    palette = np.zeros(256, np.uint8)
     for i, name in enumerate(names, 1):
         for lo, hi in PALETTE[name]:
-            lut[lo:min(hi, 256)] = i
+            palette[lo:min(hi, 256)] = i
+    widened = palette.copy()
+    floor = np.full(256, MIN_SATURATION, np.int32)
     for app in appearances:
         if app.hue is not None and app.colour in names:
-            lut[np.arange(app.hue - HUE_WINDOW, app.hue + HUE_WINDOW + 1) % 180] = names.index(app.colour) + 1
-    return lut, names
+            k = names.index(app.colour) + 1
+            hues = np.arange(app.hue - HUE_WINDOW, app.hue + HUE_WINDOW + 1) % 180
+            widened[hues] = k
+            if app.saturation is not None:
+                moved = hues[palette[hues] != k]
+                floor[moved] = np.maximum(floor[moved], int(SATURATION_SHARE * app.saturation))
+    return widened, palette, floor, names
 
 
 def colour_labels(bgr: np.ndarray, appearances=(), hsv: np.ndarray | None = None) -> tuple[np.ndarray, list[str]]:
     """Per-pixel palette index (0 = no colour) and the palette's names (index - 1);
-    ``appearances`` widen their colours' ranges around their hues (see _hue_lut).
+    ``appearances`` widen their colours' ranges around their hues for pixels saturated
+    as they are (see _hue_lut); a duller pixel keeps the palette's colour.
     ``hsv``: the image in HSV, when the caller has it already."""
     if hsv is None:
         hsv = cv2.cvtColor(bgr, cv2.COLOR_BGR2HSV)
-    lut, names = _hue_lut(appearances)
-    lab = lut[hsv[:, :, 0]]
-    lab[(hsv[:, :, 1] < MIN_SATURATION) | (hsv[:, :, 2] < MIN_VALUE)] = 0
+    widened, palette, floor, names = _hue_lut(appearances)
+    hue, sat = hsv[:, :, 0], hsv[:, :, 1]
+    lab = np.where(sat >= floor[hue], widened[hue], palette[hue])
+    lab[(sat < MIN_SATURATION) | (hsv[:, :, 2] < MIN_VALUE)] = 0
     return lab, names
 
 
@@ -889,6 +902,32 @@ def _box_tolerances(seg: _Segment) -> tuple[float, float, float]:
     distance from the fitted faces (the depth noise, or a quarter pixel)."""
     px = seg.m_per_px
     return max(0.008, 1.6 * px), max(0.006, 1.5 * px), max(2 * seg.surface_tolerance, 0.25 * px)
+
+
+FACE_BOW = 0.002        # [m] a flat face may seem to bow this much (edge pixels, the render
+#                         mesh) on top of what its noise allows
+
+
+def _bow(u: np.ndarray, v: np.ndarray, d: np.ndarray) -> float:
+    """How far a face's points bow off a plane, in tolerances: ``d`` [m], their offset
+    from it, is fitted as a quadratic in ``u`` and ``v`` (across the face); the larger
+    sagitta over the points' span (a bow in the middle against the ends) is compared with
+    FACE_BOW plus 1.5 its standard error (from the fit's residuals: the depth noise,
+    averaged over the points). A box's face does not bow; a cylinder's side seen across
+    its axis (a mug, upright or on its side) bows by r (1 - cos) towards the camera,
+    which averaging finds below the noise of a single point."""
+    if len(d) < 12:
+        return 0.0
+    X = np.stack([np.ones_like(u), u, v, u * u - np.mean(u * u), v * v - np.mean(v * v)], axis=1)
+    coef, *_ = np.linalg.lstsq(X, d, rcond=None)
+    res = d - X @ coef
+    var = float(res @ res) / (len(d) - 5)
+    cov = np.linalg.pinv(X.T @ X) * var
+    z = 0.0
+    for k, span in ((3, float(np.ptp(u))), (4, float(np.ptp(v)))):
+        s = (0.5 * span) ** 2
+        z = max(z, abs(float(coef[k])) * s / (FACE_BOW + 1.5 * math.sqrt(max(0.0, float(cov[k, k]))) * s))
+    return z
 
 
 TILT_FACE_ANGLE = math.radians(20)  # a face's normals stay this close to its plane's
