@@ -32,6 +32,8 @@ from .grasp_probe import GraspProbe
 
 #: the reference application's own actorbt.yaml, used when none is found from here
 REPO_CONFIG = pathlib.Path(__file__).resolve().parents[1] / "actorbt.yaml"
+#: [m] an object moved farther than this, that no pick went for, was pushed by the robot
+PUSHED = 0.05
 #: [s] between two samples of the localisation error, and of the true path
 LOC_PERIOD, PATH_PERIOD = 0.5, 0.1
 #: the /initialpose the user gives: the start pose, to within these standard deviations
@@ -83,6 +85,7 @@ class Episode:
     grasp_tilt_deg: float = float("nan")  # largest tilt of the held object in the fingers
     pose: str = ""                     # pose kind (upright, lying, tilted) of the object
     support: str = ""                  # placed, else last picked at; and what it stood on
+    pushed: list = field(default_factory=list)   # objects moved > PUSHED m that no pick went for
     objects: int | None = None         # a tidy-up: objects of a known category in the world,
     placed: int | None = None          # and how many ended where they belong
     result: Any = field(default=None, repr=False)   # what the tree (or actor) returned
@@ -345,6 +348,8 @@ def run_episode(tree: str = "bt_pick_place", world: str = "house", seed: int = 0
                 ep.failed_node = "ground truth"
                 ep.reason = "the tree succeeded but no object of the category is on the place location"
         ep.pose, ep.support = _start_pose(sim, ep.placed_object or (grasp.picked or [""])[-1])
+        ep.pushed = sorted(n for n in sim.object_names() if n not in grasp.picked
+                           and math.dist(before[n][:2], sim.object_pose(n)[:2]) > PUSHED)
         if "belongs" in params:                 # a tidy-up: every object where it belongs
             belongs = args.get("belongs", params["belongs"].default)
             ep.objects, ep.placed = _tidied(sim, world_places(sim), belongs)
@@ -410,6 +415,8 @@ def print_outcome(ep: Episode, out: TextIO = sys.stdout) -> None:
     if ep.pose:
         out.write(f"the object {'placed' if ep.success else 'picked at last'}: {ep.pose}, "
                   f"support: {ep.support}\n")
+    if ep.pushed:
+        out.write(f"objects the robot pushed more than {PUSHED * 100:.0f} cm: {', '.join(ep.pushed)}\n")
     if ep.objects is not None:
         out.write(f"objects where they belong: {ep.placed} of {ep.objects}\n")
     if ep.grasp_tilt_deg == ep.grasp_tilt_deg:

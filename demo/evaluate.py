@@ -19,7 +19,7 @@ from .episode import Episode, episode_app, run_episode
 
 CSV_FIELDS = ["tree", "world", "seed", "category", "success", "tree_status", "failed_node",
               "reason", "placed_object", "pose", "support", "sim_time", "wall_time", "loc_rmse_m", "loc_max_m",
-              "grasp_tilt_deg", "objects", "placed", "trace"]
+              "grasp_tilt_deg", "pushed", "objects", "placed", "trace"]
 
 #: this process's App (one per worker, so each skipped tree is reported once per process)
 _app: App | None = None
@@ -105,6 +105,7 @@ def write_csv(episodes: list[Episode], path: pathlib.Path) -> None:
             row["loc_rmse_m"] = f"{e.loc_rmse_m:.4f}"
             row["loc_max_m"] = f"{e.loc_max_m:.4f}"
             row["grasp_tilt_deg"] = f"{e.grasp_tilt_deg:.1f}"
+            row["pushed"] = " ".join(e.pushed)
             w.writerow(row)
 
 
@@ -134,6 +135,10 @@ def print_table(episodes: list[Episode], out: TextIO = sys.stdout) -> None:
         total, placed = sum(e.objects for e in tidy), sum(e.placed for e in tidy)
         out.write(f"\nobjects where they belong: {placed} of {total} "
                   f"({100 * placed / total if total else float('nan'):.1f}%)\n")
+    pushed = [e for e in episodes if e.pushed]
+    if pushed:
+        out.write(f"\nepisodes in which the robot pushed objects it did not pick: {len(pushed)} of "
+                  f"{len(episodes)} ({sum(len(e.pushed) for e in pushed)} objects)\n")
     failures = collections.Counter(e.failed_node or "?" for e in episodes if not e.success)
     if failures:
         out.write("\nfailures by node:\n")

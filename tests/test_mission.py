@@ -14,6 +14,8 @@ def test_pick_place_episode_puts_the_object_on_the_pallet(tmp_path):
     ep = run_episode("bt_pick_place", "house", seed=0, category="any", out_dir=tmp_path)
     assert ep.success, f"{ep.failed_node}: {ep.reason}"
     assert ep.placed_object                      # ground truth: it stands on the pallet
+    assert ep.pose == "upright" and ep.support == "floor"      # as the house puts it
+    assert ep.placed_object not in ep.pushed
     assert (tmp_path / "trace.jsonl").stat().st_size > 0
     assert (tmp_path / "top_view.png").stat().st_size > 0
     assert ep.realtime_factor > 2.0
