@@ -904,7 +904,7 @@ def _box_tolerances(seg: _Segment) -> tuple[float, float, float]:
     return max(0.008, 1.6 * px), max(0.006, 1.5 * px), max(2 * seg.surface_tolerance, 0.25 * px)
 
 
-FACE_BOW = 0.002        # [m] a flat face may seem to bow this much (edge pixels, the render
+FACE_BOW = 0.001        # [m] a flat face may seem to bow this much (edge pixels, the render
 #                         mesh) on top of what its noise allows
 
 
@@ -918,6 +918,7 @@ def _bow(u: np.ndarray, v: np.ndarray, d: np.ndarray) -> float:
     which averaging finds below the noise of a single point."""
     if len(d) < 12:
         return 0.0
+    u, v = u - u.mean(), v - v.mean()
     X = np.stack([np.ones_like(u), u, v, u * u - np.mean(u * u), v * v - np.mean(v * v)], axis=1)
     coef, *_ = np.linalg.lstsq(X, d, rcond=None)
     res = d - X @ coef
@@ -1065,7 +1066,13 @@ def _score_box_tilted(seg: _Segment, box: tuple[float, float, float]) -> tuple[f
                 d2 = (seg.pts[on2] - F.mean(axis=0)) @ -n
                 e_depth = float(np.ptp(d2)) + px - dims[assign[2]]
                 e_depth = e_depth if e_depth > 0 else 0.5 * e_depth   # seen at an angle: shorter
-    z = np.array([e_face / tol_w, rms / tol_r, e_base / (2 * tol_h), e_top / tol_h, e_depth / tol_w])
+    # the face must be flat (a mug on its side is not): its edges left out, where the
+    # points of a face beside it are as near its plane as the band that took its points
+    trim = max(3 * tol_r, 0.004) + px
+    s0, s1 = q @ axes[0], q @ axes[1]
+    keep = ((s0 > s0.min() + trim) & (s0 < s0.max() - trim) & (s1 > s1.min() + trim) & (s1 < s1.max() - trim))
+    bow = _bow(s0[keep], s1[keep], off[on][keep])
+    z = np.array([e_face / tol_w, max(rms / tol_r, bow), e_base / (2 * tol_h), e_top / tol_h, e_depth / tol_w])
     conf = _confidence(z)
     if any(seg.cut(k) for k in ("left", "right", "top", "bottom")):
         conf *= 0.85
@@ -1075,7 +1082,7 @@ def _score_box_tilted(seg: _Segment, box: tuple[float, float, float]) -> tuple[f
     width = dims[0] if abs(float(box_axes[0] @ across)) >= abs(float(box_axes[1] @ across)) else dims[1]
     return conf, {"pose": "tilted", "axis": centre[:2].copy(), "yaw": math.atan2(up[1], up[0]), "tilt": tilt,
                   "axis_base": base_pt.tolist(), "axis_dir": up.tolist(), "width": width,
-                  "face_err": e_face, "rect_rms": rms, "base_err": e_base, "top_err": e_top,
+                  "face_err": e_face, "rect_rms": rms, "bow": bow, "base_err": e_base, "top_err": e_top,
                   "depth_err": e_depth, "extents": ext}
 
 
@@ -1103,6 +1110,32 @@ def _whole_faces(seg: _Segment, side: np.ndarray, rect: _Rectangle) -> list[bool
     return out
 
 
+def _resting_bow(seg: _Segment, pts: np.ndarray, rect: _Rectangle, seen: list[bool]) -> float:
+    """_bow of a standing box's faces that are seen well, from its side points ``pts``
+    (3-D). In the view each face lies to one side of the rectangle's corner nearest the
+    camera, so the points are split there (across the view: depth noise hardly moves
+    them); a pixel and a half at the corner and at the outer edges is left out."""
+    perp = np.array([-seg.ray[1], seg.ray[0]])
+    lat = (pts[:, :2] - seg.cam_xy) @ perp
+    ends = [(a, b) for a in (-0.5, 0.5) for b in (-0.5, 0.5)]
+    a, b = min(ends, key=lambda ab: float(np.linalg.norm(
+        rect.c + ab[0] * rect.s1 * rect.e1 + ab[1] * rect.s2 * rect.e2 - seg.cam_xy)))
+    corner = rect.c + a * rect.s1 * rect.e1 + b * rect.s2 * rect.e2
+    lat_c = float((corner - seg.cam_xy) @ perp)
+    margin = 1.5 * seg.m_per_px
+    inner = (lat > lat.min() + margin) & (lat < lat.max() - margin)
+    z = 0.0
+    # the face along e1 runs from the corner by -2a s1 e1; the one along e2 by -2b s2 e2
+    for i, (e, n, step) in enumerate(((rect.e1, rect.e2, -2 * a * rect.s1 * rect.e1),
+                                      (rect.e2, rect.e1, -2 * b * rect.s2 * rect.e2))):
+        if not seen[i]:
+            continue
+        away = 1.0 if float(step @ perp) > 0 else -1.0
+        on = inner & (away * (lat - lat_c) > margin)
+        z = max(z, _bow(pts[on, :2] @ e, pts[on, 2], pts[on, :2] @ n))
+    return z
+
+
 def _score_box_resting(seg: _Segment, sides: tuple[float, float], bz: float) -> tuple[float, dict]:
     """Confidence that ``seg`` is a box whose top-view sides are ``sides`` and whose height
     is ``bz``, from its measured dimensions: its height above the support, and the lengths
@@ -1114,7 +1147,8 @@ def _score_box_resting(seg: _Segment, sides: tuple[float, float], bz: float) -> 
     tol_w, tol_h, tol_r = _box_tolerances(seg)
     # the sides, from the points above the bottom rim (the floor's edge pixels blur it)
     lo, hi = seg.base + 0.15 * bz, seg.base + 0.85 * bz
-    side = seg.pts[(seg.pts[:, 2] > lo) & (seg.pts[:, 2] < hi), :2]
+    side3 = seg.pts[(seg.pts[:, 2] > lo) & (seg.pts[:, 2] < hi)]
+    side = side3[:, :2]
     if len(side) < 10:
         return 0.0, {"reason": "body not visible"}
     rect = _rectangle_fit(side, _face_direction(seg.grid, lo, hi))
@@ -1168,7 +1202,10 @@ def _score_box_resting(seg: _Segment, sides: tuple[float, float], bz: float) -> 
     e_h = seg.height - bz
     if seg.cut("top") or seg.occluded["top"]:
         e_h = max(0.0, e_h)                           # part of it may be hidden: a lower bound
-    z = np.array([e_face / tol_w, e_h / tol_h, rect.rms / tol_r])
+    # the points on the rectangle's sides: each within the noise, and the faces flat
+    # (averaged over many points: a mug's side hugs a rectangle within the noise far off)
+    bow = _resting_bow(seg, side3, rect, seen)
+    z = np.array([e_face / tol_w, e_h / tol_h, max(rect.rms / tol_r, bow)])
     conf = _confidence(z)
     if seg.cut("top") or side_cut:
         conf *= 0.85
@@ -1177,7 +1214,7 @@ def _score_box_resting(seg: _Segment, sides: tuple[float, float], bz: float) -> 
         yaw += math.pi
     elif yaw > math.pi / 2:
         yaw -= math.pi
-    return conf, {"face_err": e_face, "height_err": e_h, "rect_rms": rect.rms, "faces": 1 if one_face else 2,
+    return conf, {"face_err": e_face, "height_err": e_h, "rect_rms": rect.rms, "bow": bow, "faces": 1 if one_face else 2,
                   "extents": ext, "seen": seen, "whole": whole, "axis": centre, "yaw": yaw}
 
 
