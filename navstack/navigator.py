@@ -14,10 +14,12 @@ A goal is a pose in the map frame (or any frame tf can put into it). The server
    odom -> base_footprint transforms on /tf at most ``controller_frequency`` (20 Hz: 15 Hz
    on the simulator's 30 Hz odometry), then turns in place to the goal's yaw; it succeeds
    within ``xy_goal_tolerance`` and ``yaw_goal_tolerance``;
-4. **watches** ``/scan``: beams ending in the corridor of the path ahead (closer than
-   ``collision_radius`` to it, over ``collision_lookahead``) where the map has nothing
-   stop the robot; if the obstacle is still there after ``obstacle_wait`` s, the path is
-   planned again with the scan's unmapped points marked, up to ``max_recoveries`` times;
+4. **watches** ``/scan``, and while it drives the depth camera (``depth_topic``, with
+   its ``camera_info_topic``) for what stands out of the floor below the scan's plane
+   (:mod:`navstack.depth_obstacles`): points in the corridor of the path ahead (closer
+   than ``collision_radius`` to it, over ``collision_lookahead``) where the map has
+   nothing stop the robot; if the obstacle is still there after ``obstacle_wait`` s, the
+   path is planned again with the unmapped points marked, up to ``max_recoveries`` times;
 5. **recovers** from a start inside the inflated obstacles (the robot stands close to
    something, after a pick or a place) by backing up ``backup_distance`` (when the scan
    shows room behind) and planning again.
@@ -32,20 +34,21 @@ second, and ends each goal once:
 * canceled on a client's request, after stopping the base (a zero /cmd_vel).
 
 A newer goal preempts the running one, which is aborted. Only ``/scan``, ``/map``,
-``/perceived_obstacles`` and tf are read; only ``/cmd_vel`` is commanded.
+``/perceived_obstacles``, the depth camera (during a goal: a simulated camera renders only
+while someone subscribes) and tf are read; only ``/cmd_vel`` is commanded.
 """
 from __future__ import annotations
 
 import logging
 import math
-from dataclasses import dataclass, fields, replace
+from dataclasses import dataclass, field, fields, replace
 
 import numpy as np
 from builtin_interfaces.msg import Duration
 from geometry_msgs.msg import Twist
 from nav2_msgs.action import NavigateToPose
 from nav_msgs.msg import OccupancyGrid as OccupancyGridMsg
-from sensor_msgs.msg import LaserScan, PointCloud2
+from sensor_msgs.msg import CameraInfo, Image, LaserScan, PointCloud2
 
 from bt_engine import SubSystem, actor
 from planning.base_planner import BasePath, GridPlanner
@@ -53,6 +56,7 @@ from planning.failure import FailureReason
 from planning.grid import OccupancyGrid, inflate
 from planning.tf_buffer import planar
 
+from .depth_obstacles import DepthObstacleParams, depth_obstacle_points
 from .tf import TfListener, TransformError, to_stamp
 
 log = logging.getLogger("navstack.navigator")
@@ -96,6 +100,11 @@ class NavigatorParams:
     max_recoveries: int = 3             # replans around obstacles and back-ups per goal
     self_box: tuple = (-0.23, 0.10, 0.18)   # x_min, x_max, |y| max in base_footprint:
     #                                     beams ending there hit the robot or what it holds
+    # obstacles the depth camera sees below the scan (empty topic: none)
+    depth_topic: str = "/camera/depth/image_raw"
+    camera_info_topic: str = "/camera/camera_info"
+    depth_period: float = 0.5           # [s] between the depth images taken (0: every one)
+    depth: DepthObstacleParams = field(default_factory=DepthObstacleParams)
     backup_distance: float = 0.15       # start inside the inflation: back up this far
     escape_distance: float = 0.3        # or else leave it through a free cell this near [m]
     backup_speed: float = 0.08
@@ -241,6 +250,8 @@ class Navigator(SubSystem):
         for key, value in (params or {}).items():
             if key not in {f.name for f in fields(p)}:
                 raise ValueError(f"unknown navigator parameter {key!r}")
+            if key == "depth" and isinstance(value, dict):     # from a configuration file
+                value = DepthObstacleParams(**value)
             setattr(p, key, value)
         bus = self.runtime.bus
         self.tf = TfListener(bus, on_tf=self._on_tf)
@@ -251,7 +262,10 @@ class Navigator(SubSystem):
         self._planners: dict = {}           # marks key -> GridPlanner
         self._goal: _Goal | None = None
         self._scan_pts: np.ndarray | None = None   # the newest scan's beams, map frame
-        self._scan_seq = 0                          # scans received
+        self._scan_seq = 0                          # scans (and depth images) received
+        self._depth_pts = np.zeros((0, 2))          # the newest depth image's obstacles, map frame
+        self._depth_subs: list = []                 # the depth camera's, while a goal runs
+        self._camera_info: CameraInfo | None = None
         self.last_path: BasePath | None = None
         self.stats = {"goals": 0, "succeeded": 0, "aborted": 0, "canceled": 0, "recoveries": 0,
                       "obstacle_stops": 0, "last_error": ""}
@@ -326,6 +340,54 @@ class Navigator(SubSystem):
         pb = pb[~robot]
         self._scan_pts = pb @ T_mb[:2, :2].T + T_mb[:2, 3]
         self._scan_seq += 1
+
+    def _watch_depth(self, on: bool) -> None:
+        """Take depth images while a goal runs, one each depth_period: between them the
+        subscription is closed, as a simulated camera renders only for subscribers (a
+        frame costs it ~40 ms; at its 5 Hz a drive would take twice as long)."""
+        if on and not self._depth_subs and self.params.depth_topic:
+            bus = self.runtime.bus
+            self._depth_subs = [
+                bus.subscribe(self.params.camera_info_topic, CameraInfo, self._on_camera_info, "sensor"),
+                bus.subscribe(self.params.depth_topic, Image, self._on_depth, "sensor")]
+        elif not on and self._depth_subs:
+            for sub in self._depth_subs:
+                sub.close()
+            self._depth_subs = []
+        if not on and self._goal is None:
+            self._depth_pts = np.zeros((0, 2))
+
+    def _next_depth(self, g: _Goal) -> None:
+        if self._goal is g:
+            self._watch_depth(True)
+
+    def _on_camera_info(self, msg: CameraInfo) -> None:
+        self._camera_info = msg
+
+    def _on_depth(self, msg: Image) -> None:
+        info = self._camera_info
+        if info is None or msg.encoding != "32FC1" or self._goal is None:
+            return
+        dt = np.dtype(">f4" if msg.is_bigendian else "<f4")
+        depth = np.frombuffer(bytes(msg.data), np.uint8).reshape(msg.height, msg.step)[:, :msg.width * 4]
+        depth = depth.copy().view(dt).reshape(msg.height, msg.width)
+        t = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
+        buf = self.tf.buffer
+        try:
+            T_bc = buf.lookup(BASE_FRAME, msg.header.frame_id or info.header.frame_id)
+            try:
+                T_mb = buf.lookup(GLOBAL_FRAME, BASE_FRAME, t)
+            except TransformError:
+                T_mb = buf.lookup(GLOBAL_FRAME, BASE_FRAME)
+        except TransformError:
+            return
+        k = info.k
+        pb = depth_obstacle_points(depth, k[0], k[4], k[2], k[5], T_bc, self.params.depth)
+        self._depth_pts = pb @ T_mb[:2, :2].T + T_mb[:2, 3]
+        self._scan_seq += 1
+        if self.params.depth_period > 0:
+            self._watch_depth(False)
+            self.runtime.call_later(self.params.depth_period, self._next_depth, self._goal)
 
     def _on_tf(self, msg) -> None:
         g = self._goal
@@ -446,6 +508,7 @@ class Navigator(SubSystem):
             self._end(old)
             old.handle.abort(self._result(PLAN_UNKNOWN, "preempted by a newer goal"))
         g = self._goal = _Goal(handle, pose, self.runtime.now())
+        self._watch_depth(True)
         self.stats["goals"] += 1
         handle.on_cancel(lambda: self._cancel(g))
         self.runtime.call_later(self.params.tf_timeout, self._check_started, g)
@@ -474,6 +537,7 @@ class Navigator(SubSystem):
         self._cmd.publish(_twist())
         if self._goal is g:
             self._goal = None
+            self._watch_depth(False)
 
     def _abort(self, g: _Goal, code: int, msg: str) -> None:
         self._end(g)
@@ -603,9 +667,12 @@ class Navigator(SubSystem):
         return True
 
     def _near(self, g: _Goal, radius: float) -> np.ndarray:
-        """The newest scan's points within ``radius`` of the robot (map frame)."""
-        pts = self._scan_pts
-        if pts is None or not len(pts):
+        """The newest scan's points, and the newest depth image's obstacle points, within
+        ``radius`` of the robot (map frame)."""
+        pts = self._scan_pts if self._scan_pts is not None else np.zeros((0, 2))
+        if len(self._depth_pts):
+            pts = np.vstack([pts, self._depth_pts])
+        if not len(pts):
             return np.zeros((0, 2))
         x, y, _ = g.pose
         return pts[np.hypot(pts[:, 0] - x, pts[:, 1] - y) < radius]

@@ -150,3 +150,33 @@ def test_a_start_inside_the_inflation_leaves_through_the_nearest_free_cell():
     assert 0.05 < math.dist(start, via) <= 0.3 and via[0] < start[0]   # away from the wall
     # nothing free within reach: no way out
     assert plan_out_of(planner, start, goal, escape_distance=0.04) is None
+
+
+@pytest.fixture(scope="module")
+def floor_with_camera():
+    """As ``floor``, with the robot's depth camera."""
+    rt = Runtime(clock="virtual")
+    world = sim_mod.SimWorld(rt, "open_floor", seed=0).start()
+    rt.add_subsystem("navstack", NavStack)
+    rt.root.register_action("nav", NavigateToPose, "/navigate_to_pose")
+    rt.bus.publisher("/initialpose", PoseWithCovarianceStamped).publish(initial_pose_msg(world.spec.robot_start))
+    rt.call("sleep", 0.5)
+    yield rt, world
+    world.close()
+    rt.close()
+
+
+def test_an_obstacle_below_the_scan_is_seen_by_the_depth_camera_and_driven_around(floor_with_camera):
+    rt, world = floor_with_camera
+    rt.call("nav", goal_msg(-1.5, 0.0, 0.0), timeout=120)
+    # a flat box, 4 cm tall: under the scan plane, only the depth camera sees it
+    name = world.add_object("flat_box", 0.0, 0.03)
+    before = world.object_pose(name)
+    stats0 = rt.call("navigator_status")
+    rt.call("nav", goal_msg(1.5, 0.0, 0.0), timeout=120)
+    st = rt.call("navigator_status")
+    assert st["succeeded"] > stats0["succeeded"], st
+    assert st["obstacle_stops"] > stats0["obstacle_stops"] and st["recoveries"] > stats0["recoveries"]
+    after = world.object_pose(name)
+    assert math.hypot(after[0] - before[0], after[1] - before[1]) < 0.005, "the box was not touched"
+    assert rt.bus.subscription_count("/camera/depth/image_raw") == 0     # only while driving
