@@ -717,7 +717,8 @@ def _score_posed(seg: _Segment, app: Appearance, direction: np.ndarray) -> tuple
     e_len = length - app.height
     if cut or seg.occluded["top"]:
         e_len = max(0.0, e_len)              # part of it out of view: only shorter
-    z = np.array([rms / tol_r, e_len / tol_h])
+    e_rise = _rise_error(seg, app, base_pt, up)
+    z = np.array([rms / tol_r, e_len / tol_h, e_rise / tol_h])
     conf = _confidence(z)
     if cut:
         conf *= 0.85
@@ -731,7 +732,24 @@ def _score_posed(seg: _Segment, app: Appearance, direction: np.ndarray) -> tuple
         yaw = math.atan2(up[1], up[0])
     return conf, {"pose": pose, "axis": centre[:2].copy(), "yaw": yaw, "tilt": tilt,
                   "axis_base": base_pt.tolist(), "axis_dir": up.tolist(), "profile_rms": rms,
-                  "length_err": e_len}
+                  "length_err": e_len, "rise_err": e_rise}
+
+
+def _rise_error(seg: _Segment, app: Appearance, base_pt: np.ndarray, up: np.ndarray) -> float:
+    """How much taller [m] the segment stands above its support than the body would, posed
+    by its fitted axis (base point ``base_pt``, direction ``up``): from its lowest rim to
+    its highest (a lying can rises 2 r). A lower segment counts only when its top is in
+    view. An axis fits a flat box's long side as well as a lying can's; its rise does not
+    (a 4 cm box is no 6.6 cm can)."""
+    across = math.sqrt(max(0.0, 1.0 - float(up[2]) ** 2))     # a rim's vertical half-extent per radius
+    rims = [(base_pt, app.body_radius), (base_pt + app.body_top * up, app.body_radius),
+            (base_pt + app.height * up, app.radius_at(app.height - 1e-3))]
+    low = min(float(c[2]) - r * across for c, r in rims[:2])
+    high = max(float(c[2]) + r * across for c, r in rims)
+    e = (seg.top - seg.base) - (high - low)
+    if seg.cut("top") or seg.occluded["top"]:
+        e = max(0.0, e)
+    return e
 
 
 def _profile_fit(seg: _Segment, app: Appearance, fit: axis_fit.AxisFit, signs=(1.0, -1.0)):

@@ -1,6 +1,7 @@
-"""A box is recognised by its measured shape, not its colour: house_hard seed 2004's yellow
-mug (a pybullet_data mesh, a distractor) must not pass the carton's box fit, and the
-world's real carton must still be found. detect() on rendered frames (depth noise on)."""
+"""Objects are recognised by their measured shape, not their colour: house_hard seed
+2004's yellow mug (a pybullet_data mesh, a distractor) must not pass the carton's box
+fit, and the world's real carton must still be found; seed 2001's red flat box is no
+lying can. detect() on rendered frames (depth noise on)."""
 import math
 
 import pytest
@@ -80,3 +81,17 @@ def test_the_real_carton_is_still_found(world):
     for distance, bearing in ((0.45, -60), (0.6, 0), (0.6, 60), (0.8, -30), (1.3, -60)):
         found = [d for d in _near(_look(world, xy, distance, bearing), xy, 0.03) if d["category"] == "carton"]
         assert found and found[0]["pose"] == "lying", (distance, bearing, found)
+
+
+def test_a_flat_box_is_no_lying_can():
+    # seed 2001's flat box (140 x 100 x 40 mm, red like the can): an axis fits its long
+    # side as well as a lying can's, but it rises 4 cm above the floor, not 6.6
+    flat = SimWorld(None, "house_hard", seed=2001)
+    try:
+        name = next(o.name for o in flat.spec.objects if o.category == "flat_box")
+        xy = flat.object_poses()[name][:2]
+        for distance, bearing in ((0.6, 90), (0.6, 30), (0.9, 60), (1.3, -120), (1.8, 0)):
+            cans = [d for d in _near(_look(flat, xy, distance, bearing), xy) if d["category"] == "can"]
+            assert not cans, (distance, bearing, cans)
+    finally:
+        flat.close()
