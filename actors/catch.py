@@ -11,9 +11,11 @@ import math
 from dataclasses import replace
 from typing import Any
 
+import numpy as np
+
 from bt_engine import ActorbtError, SubSystem, actor
 
-from .ros_conv import wrap
+from .ros_conv import pose2d, wrap
 from .strategies import GraspPlan, Strategy, strategy_for
 
 #: place surface height and the part of the object held decide the release height
@@ -49,6 +51,24 @@ ASIDE = (math.radians(45), math.radians(-45))  # headings, relative to a lying b
 #                             of the closer look at it
 MARK_SPACING = 0.03         # [m] between the discs that mark a lying target on the way to it
 MARK_MARGIN = 0.02          # [m] around the target's body, marked on the way to it
+CHORD_MARGIN = 0.004        # [m] fingers that stall this much narrower than a round body is
+#                             wide closed on a chord of it, at their tips
+FINGERTIPS = 0.024          # [m] the finger pads end this far ahead of the tool point
+FINGER_THICKNESS = 0.010    # [m] of each finger, outside the opening
+FINGER_SPAN = (-0.10, -0.04, 0.0, FINGERTIPS)   # [m] along the hand from the object's axis
+#                             at the grasp: where the fingers pass (the last of the way in)
+LONG_DRIVE = 0.25            # [m] a longer drive in faces the object again on the way
+LONG_DRIVE_SPEED = 0.22     # [m/s] the first part of it (the Waffle's top speed is 0.26)
+REGRASP_BACK = 0.05         # [m] the base backs off this far before it grasps again
+SLIP = 0.004                # [m] a held object slipped when the fingers close this much
+#                             narrower than they held it after the pick (and narrower than
+#                             the grasp's range)
+RAISED = 0.05               # [m] an object whose base is higher stands on a surface (a table)
+LOOK_SEEN = 0.75            # the closer look at a raised object is from where the camera sees
+#                             this much of its height: the camera looks down, and from the
+#                             usual look distance it sees nothing of a bottle on a 0.25 m TV
+#                             bench (perception found it from 1.8 m, not from 1.5 m or less)
+MAX_LOOK = 2.5              # [m] the farthest look distance
 
 
 class GraspError(ActorbtError):
@@ -162,6 +182,30 @@ def _holds(plan: GraspPlan, grip: dict) -> bool:
     return bool(grip["stalled"]) and plan.holding(grip["width"])
 
 
+def _beyond_tips(plan: GraspPlan, grip: dict) -> float:
+    """How far [m] the axis of a round body is beyond the line the fingers closed on it
+    along, 0 when they closed across its axis (or it is no round body held from the side).
+    The fingers stalled narrower than the body (``plan.across``) but within the range the
+    pick takes for holding it: they cannot close on a chord of it between their roots and
+    their tips, so they pinched it with their tips, the hand short of it (the base stopped
+    short, or pushed it ahead): a grip that may not last the carry."""
+    if plan.sides or plan.pitch > math.radians(45) or not grip["stalled"]:
+        return 0.0
+    body, w = plan.across, grip["width"]
+    if not plan.closed_min <= w <= body - CHORD_MARGIN:
+        return 0.0      # narrower still: a miss (squeezed out, tipped), which the tree retries
+    return math.sqrt((body / 2) ** 2 - (w / 2) ** 2)
+
+
+def _still_holds(plan: GraspPlan, held_width: float, grip: dict) -> bool:
+    """Does a grip check (``close`` again) mean the object picked at ``held_width`` [m] is
+    still held? The fingers stall on it, no more than SLIP narrower than they held it
+    (or within the grasp's range): squeezing, they creep in a little over a carry, and
+    one that slips out closes them fully."""
+    return (bool(grip["stalled"]) and grip["width"] <= plan.closed_max
+            and grip["width"] >= min(plan.closed_min, held_width - SLIP))
+
+
 def _grip_text(grip: dict) -> str:
     how = "stalled" if grip["stalled"] else "closed" if grip["reached_goal"] else "stopped"
     return f"fingers {how} at {grip['width'] * 1000:.0f} mm"
@@ -178,6 +222,7 @@ class Catcher(SubSystem):
         self.set_value("moved_to", None)     # (was x, y; the detection seen after): where
         #                                      a failed grasp left the object
         self.set_value("rejected", [])       # (x, y, category): a close look saw something else there
+        self.set_value("camera_view", None)  # see _camera_view
 
     def _fresh_views_first(self, poses: list[tuple[float, float, float]],
                            xy: tuple[float, float]) -> list[tuple[float, float, float]]:
@@ -325,7 +370,9 @@ class Catcher(SubSystem):
 
         From a look distance the robot first faces the object and looks again (when
         perception is available): the target is re-measured, and other objects near it are
-        marked on the planner's map and kept out of the approach. Returns the target.
+        marked on the planner's map and kept out of the approach. An object on a raised
+        surface is looked at from farther (where the camera sees it) and the robot stays
+        there, facing it: the pick drives straight in from there. Returns the target.
 
         Args:
             target: the object, as perception reports it: a dict with its axis x, y in
@@ -346,20 +393,33 @@ class Catcher(SubSystem):
             if c == cat and math.dist((x, y), xy) < SAME_OBJECT:
                 raise ApproachError(f"no {cat} at ({xy[0]:.2f}, {xy[1]:.2f}): a close look saw an "
                                     f"object of no known category there before")
-        look = strategy.approach.look_distance
         plan = self._plan(strategy, target)
+        look = self._look_distance(target, strategy)
+        # a raised object (on a table): from nearer than its look distance the camera sees
+        # nothing of it, and the look's estimate is only as good as the localisation's
+        # heading (1 degree is 3 cm at 1.8 m). So the pick drives straight in from the
+        # look pose, where the estimate and the heading to it are the same belief.
+        raised = float(target.get("z") or 0.0) > RAISED
+        direct = False
         for step in ("look", "standoff"):
             # face it, look (again), and keep what else is around it out of the way
             self._face(xy, strategy)
             if step == "standoff":
                 target = self._refine(target, cat, confirm=True)
                 xy = _target_xy(target)
+                if direct:
+                    break
             others = self._others(target, strategy)
             self.run_actor("mark_obstacles", others)
             rx, ry, _ = self.run_actor("get_pose")
             if step == "look":
-                if not look or math.dist((rx, ry), xy) <= look + 0.3:
+                here = math.dist((rx, ry), xy)
+                if not look or (here <= look + 0.3 and not raised):
                     continue  # close enough already
+                if raised and abs(here - look) <= 0.3 and self._corridor_clear(
+                        (rx, ry, math.atan2(xy[1] - ry, xy[0] - rx)), xy, plan.reach, others):
+                    direct = True
+                    continue  # a look pose already, the way in clear
                 extra = look - plan.reach - strategy.approach.standoff
                 # a look needs no particular side (a box's grasp does): from the robot's
                 # side, or around it; a lying body, though, from aside: seen end on it is
@@ -371,10 +431,12 @@ class Catcher(SubSystem):
                                                 object_yaw=target.get("yaw"), plan=look_plan)
                 except ApproachError:
                     continue  # no room to look from there (a cramped corner): go closer
+                direct = raised     # the look poses have a clear way in (the corridor)
             else:
                 plan = self._plan(strategy, target)    # the close look may see it otherwise
                 poses = self._free_standoff((rx, ry), xy, strategy, others=others,
                                             object_yaw=_object_yaw(target, plan), plan=plan)
+                poses = self._finger_room_first(poses, xy, plan, target)
             self._goto_first(self._fresh_views_first(poses, xy), xy, target, strategy.length, others)
         self._face(xy, strategy)
         # a last look from the standoff, the nearest and most precise one: the way here
@@ -399,6 +461,65 @@ class Catcher(SubSystem):
                 xy = _target_xy(target)
         self._face(xy, strategy)
         return {**target, "category": cat}
+
+    def _finger_room_first(self, poses: list[tuple[float, float, float]], xy: tuple[float, float],
+                           plan: GraspPlan, target: dict) -> list[tuple[float, float, float]]:
+        """Standoff ``poses`` from which the open fingers, coming in beside an object on
+        the floor, stay off the map's obstacles first (else in their order). A finger that
+        runs into furniture the object stands against stops the base short, its wheels
+        slipping, and the fingertips pinch the object (house_hard 2009: a bottle against
+        the TV bench's side, the hand coming along it, held at 60 of its 70 mm)."""
+        if float(target.get("z") or 0.0) > RAISED or plan.pitch > math.radians(45):
+            return poses        # above a table, or from above: the fingers are clear of the map
+        side = 0.5 * plan.open_width + FINGER_THICKNESS
+
+        def blocked(pose: tuple[float, float, float]) -> bool:
+            c, s = math.cos(pose[2]), math.sin(pose[2])
+            return any(self.run_actor("clearance", xy[0] + a * c - k * side * s,
+                                      xy[1] + a * s + k * side * c) <= 0.0
+                       for a in FINGER_SPAN for k in (1, -1))
+
+        flags = [blocked(pose) for pose in poses]
+        return [p for p, b in zip(poses, flags) if not b] + [p for p, b in zip(poses, flags) if b]
+
+    def _look_distance(self, target: dict, strategy: Strategy) -> float:
+        """How far from the target [m] the base stops for the closer look: the strategy's
+        look distance; for an object on a raised surface, far enough that the camera sees
+        LOOK_SEEN of its height (up to MAX_LOOK): nearer, the camera looks under it (and
+        the pick keeps the far, less precise estimate)."""
+        look = strategy.approach.look_distance
+        z = float(target.get("z") or 0.0)
+        if not look or z <= RAISED:
+            return look
+        tall = strategy.length if target.get("pose") != "lying" else float(target.get("width") or 0.07)
+        view = self._camera_view()
+        if view is None:
+            return look
+        cam_x, cam_z, slope = view
+        if slope <= 0.0:
+            return look
+        need = cam_x + (z + LOOK_SEEN * tall - cam_z) / slope
+        return min(max(look, need), MAX_LOOK)
+
+    def _camera_view(self) -> tuple[float, float, float] | None:
+        """The camera's mount and the upper edge of its view, in the base frame: (x, z)
+        of the camera [m] and the slope (rise per metre) of its highest ray straight ahead;
+        None without a posed RGB-D camera. The mount is fixed: measured once."""
+        view = self.get_value("camera_view")
+        if view is not None:
+            return view
+        if not self.check_actor("rgbd"):
+            return None
+        try:
+            frame = self.run_actor_mode("rgbd", "timed", 2.0)
+        except ActorbtError:
+            return None
+        T = np.linalg.inv(frame.T_map_base) @ frame.T_map_cam
+        k = frame.intrinsics
+        ray = T[:3, :3] @ np.array([0.0, -k.cy / k.fy, 1.0])     # image row 0, centre column
+        view = (float(T[0, 3]), float(T[2, 3]), float(ray[2] / math.hypot(ray[0], ray[1])))
+        self.set_value("camera_view", view)
+        return view
 
     def _off_sides(self, target: dict, plan: GraspPlan) -> float:
         """How far [rad] the hand, the base facing the target from where it is, would
@@ -466,10 +587,33 @@ class Catcher(SubSystem):
         above = height + (g.lift if g.pitch > math.radians(45) else 0.0)
         self.run_actor("move_to_pose", g.reach, 0.0, above, g.pitch)
         distance = self._face(xy, strategy)
-        driven = self._drive_in(distance - g.reach)
+        driven = 0.0
+        if distance - g.reach > LONG_DRIVE:
+            # from a look pose (a raised object), not a standoff: most of the way, then
+            # face it again from near (mini_turn leaves up to half a degree: 15 mm at
+            # 1.8 m), on the odometry: the localisation may correct itself on the way
+            # and move the target's estimate with it
+            obj = self._in_odom(xy)
+            # briskly: the gyro's drift, which bends the way, grows with the time it takes
+            driven += self.run_actor("mini_walk", distance - g.reach - strategy.approach.standoff,
+                                     speed=LONG_DRIVE_SPEED, tolerance=DRIVE_IN_TOLERANCE)
+            distance = self._face_odom(obj, strategy) if obj is not None else self._face(xy, strategy)
+        driven += self._drive_in(distance - g.reach)
         if above != height:
             self.run_actor("move_to_pose", g.reach, 0.0, height, g.pitch)
         grip = self.run_actor("close")
+        deeper = _beyond_tips(g, grip)
+        if deeper > 0:
+            # the fingertips pinched it, its axis ahead of them: a grip that slips or
+            # twists out. Where they felt it is known better than any look: back off a
+            # little, line up with that and grasp again (driving in with the fingers
+            # around it, the fingertips would push it ahead: they grip).
+            xy = self._felt_xy(g, grip, deeper)
+            self.run_actor("open", g.open_width)
+            driven += self.run_actor("mini_walk", -REGRASP_BACK)
+            distance = self._face(xy, strategy)
+            driven += self._drive_in(distance - g.reach)
+            grip = self.run_actor("close")
         if not _holds(g, grip):
             self._remember_failed_view(xy)
             self._back_off(driven, g)
@@ -480,7 +624,14 @@ class Catcher(SubSystem):
         # Test lift: a slip shows when the fingers close again, and the object drops only
         # a little (a can dropped from the full lift height may fall over).
         for x, z in ((g.reach, height + TEST_LIFT), self._lift_pose(g, height)):
-            self.run_actor("move_to_pose", x, 0.0, z, g.pitch)
+            try:
+                self.run_actor("move_to_pose", x, 0.0, z, g.pitch)
+            except ActorbtError as e:
+                # put it back down and let go: held on, it would be carried to the next
+                # try and dropped there (house_hard 2009: off the TV bench's edge)
+                self._put_back(g, height)
+                self._back_off(driven, g)
+                raise GraspError(f"{strategy.category} could not be lifted: {e}") from e
             grip = self.run_actor("grip_check")
             if not _holds(g, grip):
                 self._remember_failed_view(xy)
@@ -494,6 +645,47 @@ class Catcher(SubSystem):
         self.set_value("held_plan", g)
         self.set_value("moved_to", None)
         return held
+
+    def _odom_pose(self) -> tuple[float, float, float] | None:
+        if not self.check_actor("odom"):
+            return None
+        return pose2d(self.run_actor_mode("odom", "timed", 5.0))
+
+    def _in_odom(self, xy: tuple[float, float]) -> tuple[float, float] | None:
+        """The map point ``xy`` in the odometry's frame (None without odometry)."""
+        od = self._odom_pose()
+        if od is None:
+            return None
+        mx, my, myaw = self.run_actor("get_pose")
+        a = od[2] - myaw
+        dx, dy = xy[0] - mx, xy[1] - my
+        return od[0] + math.cos(a) * dx - math.sin(a) * dy, od[1] + math.sin(a) * dx + math.cos(a) * dy
+
+    def _face_odom(self, obj: tuple[float, float], strategy: Strategy) -> float:
+        """Turn until ``obj`` (odometry frame, see ``_in_odom``) is straight ahead; returns
+        its distance [m]."""
+        for _ in range(3):
+            x, y, yaw = self._odom_pose()
+            bearing = wrap(math.atan2(obj[1] - y, obj[0] - x) - yaw)
+            if abs(bearing) <= strategy.approach.max_bearing:
+                return math.hypot(obj[0] - x, obj[1] - y)
+            self.run_actor("mini_turn", bearing)
+        raise ApproachError(f"could not face the object: {math.degrees(bearing):.1f} deg off")
+
+    def _put_back(self, g: GraspPlan, height: float) -> None:
+        """Lower the held object to where it was grasped (as near as the arm gets)."""
+        try:
+            self.run_actor("move_to_pose", g.reach, 0.0, height + 0.003, g.pitch)
+        except ActorbtError:
+            pass            # the arm stays where it stopped: let go there
+
+    def _felt_xy(self, g: GraspPlan, grip: dict, beyond: float) -> tuple[float, float]:
+        """The map x, y of a round body's axis the fingertips closed on (``beyond`` [m]
+        ahead of them, ``grip["centre"]`` to the left of the hand's axis)."""
+        x, y, yaw = self.run_actor("get_pose")
+        ahead, left = g.reach + FINGERTIPS + beyond, float(grip.get("centre") or 0.0)
+        c, s = math.cos(yaw), math.sin(yaw)
+        return x + c * ahead - s * left, y + s * ahead + c * left
 
     def _lift_pose(self, g: GraspPlan, height: float) -> tuple[float, float]:
         """(x, z) of the full lift: the plan's lift, a little drawn in. From a table the
@@ -517,11 +709,13 @@ class Catcher(SubSystem):
     @actor(moves=True)
     def verify_grasp(self) -> bool:
         """True while the gripper holds what the last pick took: closing the gripper
-        again, the fingers stall at a width that fits the object."""
+        again, the fingers stall at a width that fits the object, and no narrower than
+        they held it after the pick (see ``_still_holds``)."""
         held = self.get_value("holding")
         if not held:
             return False
-        return _holds(self.get_value("held_plan"), self.run_actor("grip_check"))
+        return _still_holds(self.get_value("held_plan"), float(held.get("width") or 0.0),
+                            self.run_actor("grip_check"))
 
     def _drive_in(self, distance: float) -> float:
         """Drive straight in by ``distance`` [m]; returns how far it drove. The walk stops

@@ -194,7 +194,8 @@ class Manipulator(SubSystem):
         """Close the gripper; on an object the fingers stall at its width. Returns the
         controller's result: ``width`` (the finger opening) [m], ``position`` (on the
         controller's scale) [m], ``effort`` [N], ``stalled`` (stopped short of ``width``:
-        something is between the fingers) and ``reached_goal``.
+        something is between the fingers), ``reached_goal`` and ``centre`` (the middle
+        between the fingers, to the left of the tool's axis [m]).
 
         Args:
             width: finger opening to close to; 0 closes fully [m]
@@ -217,9 +218,20 @@ class Manipulator(SubSystem):
                 raise
         state = {"width": gripper_width(result.position), "position": float(result.position),
                  "effort": float(result.effort), "stalled": bool(result.stalled),
-                 "reached_goal": bool(result.reached_goal)}
+                 "reached_goal": bool(result.reached_goal), "centre": self._finger_centre()}
         self.set_value("gripper", state)
         return state
+
+    def _finger_centre(self) -> float:
+        """Where the middle between the fingers is [m], to the left of the tool's axis
+        (gripper_left_joint and gripper_right_joint in /joint_states; 0 when the fingers
+        are coupled, as on a real OpenManipulator-X, or not reported). Closed on an object,
+        each finger stops where it meets it: the middle says where the object is."""
+        msg = self.run_actor("joint_states")
+        q = dict(zip(msg.name, msg.position))
+        if not all(f in q for f in FINGERS):
+            return 0.0
+        return 0.5 * (float(q[FINGERS[0]]) - float(q[FINGERS[1]]))
 
     def _run_plan(self, plan: MotionPlan) -> list[float]:
         self.set_value("last_plan", plan)
