@@ -27,7 +27,7 @@ import numpy as np
 class DepthObstacleParams:
     """Which depth pixels are obstacles (units: m)."""
     stride: int = 4                  # use every stride-th pixel in each direction
-    min_height: float = 0.025        # above the floor
+    min_height: float = 0.015        # above the floor (a jenga block lying flat is 24 mm)
     max_height: float = 0.40
     min_range: float = 0.25          # from the camera, along its view
     max_range: float = 1.5
