@@ -37,6 +37,8 @@ PLACE_INSET = 0.12          # how far inside a surface's edge the object is put 
 #                             at most: a hand of short reach (from above) puts it nearer
 PLACE_ABOVE = 0.03          # the hand comes this far above where it lets go [m]
 MIN_PLACE_REACH = 0.10      # [m] nearer the base, the object would be on it
+PLACE_SPACING = 0.11        # [m] between the axes of objects put down on one surface
+PLACE_EDGE_MARGIN = 0.06    # [m] an object's axis stays this far from a surface's corner
 PLACE_STANDOFF = 0.39       # the base stops at least this far from where it puts an
 #                             object down before driving in [m]: room to turn (the
 #                             upright grasp's standoff; a grasp from above reaches less)
@@ -206,6 +208,31 @@ def _still_holds(plan: GraspPlan, held_width: float, grip: dict) -> bool:
             and grip["width"] >= min(plan.closed_min, held_width - SLIP))
 
 
+def surface_spots(surface: tuple[float, float, float, float], inset: float, standoff: float,
+                  taken: list, robot: tuple[float, float]) -> list[tuple[float, ...]]:
+    """Where an object may be put down on a box-shaped surface (x, y, size_x, size_y) [m]:
+    ``inset`` inside an edge, along it PLACE_SPACING apart (the middle first), at least
+    PLACE_SPACING from the ``taken`` spots. Each (x, y, heading of the base facing the
+    surface across that edge, and the standoff x, y ``standoff`` back from it), nearest
+    the ``robot`` (x, y) first."""
+    x, y, size_x, size_y = surface
+    spots = []
+    for nx, ny, half, along in ((1, 0, size_x / 2, size_y / 2), (-1, 0, size_x / 2, size_y / 2),
+                                (0, 1, size_y / 2, size_x / 2), (0, -1, size_y / 2, size_x / 2)):
+        heading = math.atan2(-ny, -nx)
+        for k in (0, 1, -1, 2, -2):
+            t = k * PLACE_SPACING
+            if abs(t) > along - PLACE_EDGE_MARGIN:
+                continue
+            px, py = x + nx * (half - inset) - ny * t, y + ny * (half - inset) + nx * t
+            if any(math.dist((px, py), q) < PLACE_SPACING for q in taken):
+                continue
+            sx, sy = px - standoff * math.cos(heading), py - standoff * math.sin(heading)
+            # a spot off the edge's middle costs a little: the middle is the surest
+            spots.append((math.dist((sx, sy), robot) + 0.05 * abs(k), px, py, heading, sx, sy))
+    return [spot[1:] for spot in sorted(spots)]
+
+
 def _grip_text(grip: dict) -> str:
     how = "stalled" if grip["stalled"] else "closed" if grip["reached_goal"] else "stopped"
     return f"fingers {how} at {grip['width'] * 1000:.0f} mm"
@@ -222,6 +249,7 @@ class Catcher(SubSystem):
         self.set_value("moved_to", None)     # (was x, y; the detection seen after): where
         #                                      a failed grasp left the object
         self.set_value("rejected", [])       # (x, y, category): a close look saw something else there
+        self.set_value("put_down", [])       # (x, y): where place_on put objects down
         self.set_value("camera_view", None)  # see _camera_view
 
     def _fresh_views_first(self, poses: list[tuple[float, float, float]],
@@ -807,7 +835,9 @@ class Catcher(SubSystem):
     def place_on(self, x: float, y: float, size_x: float, size_y: float, height: float) -> dict:
         """Place the held object on a box-shaped surface (a pallet) centred at (x, y) [m],
         ``size_x`` by ``size_y`` [m], ``height`` [m] high: near the edge the robot can reach
-        best, since the base cannot drive over the surface.
+        best, since the base cannot drive over the surface, and PLACE_SPACING away from
+        the objects it put down before (a tidy-up brings several to one pallet: put on the
+        same spot, one knocks the other off).
 
         Args:
             x: the surface's centre, map frame x [m]
@@ -828,13 +858,14 @@ class Catcher(SubSystem):
         reach = self._place_reach(plan, height + plan.height + RELEASE_CLEARANCE)
         inset = min(PLACE_INSET, reach - BASE_OUTLINE[1] - BASE_MARGIN)
         rx, ry, _ = self.run_actor("get_pose")
-        sides = []
-        for nx, ny, half in ((1, 0, size_x / 2), (-1, 0, size_x / 2), (0, 1, size_y / 2), (0, -1, size_y / 2)):
-            px, py = x + nx * (half - inset), y + ny * (half - inset)
-            heading = math.atan2(-ny, -nx)  # facing the surface across this edge
-            sx, sy = px - standoff * math.cos(heading), py - standoff * math.sin(heading)
-            sides.append((math.hypot(sx - rx, sy - ry), px, py, heading, sx, sy))
-        for _, px, py, heading, sx, sy in sorted(sides):
+        taken = self.get_value("put_down")
+        spots = surface_spots((x, y, size_x, size_y), inset, standoff, taken, (rx, ry))
+        if not spots:
+            raise ApproachError(f"the surface at ({x:.2f}, {y:.2f}) has no free spot left: "
+                                f"{len(taken)} objects were put down on it")
+        for px, py, heading, sx, sy in spots:
             if self.run_actor("clearance", sx, sy) >= STANDOFF_CLEARANCE:
-                return self.run_actor("place", px, py, height, heading)
+                released = self.run_actor("place", px, py, height, heading)
+                self.set_value("put_down", taken + [(px, py)])
+                return released
         raise ApproachError(f"no side of the surface at ({x:.2f}, {y:.2f}) has room for the base")

@@ -149,3 +149,22 @@ def test_the_lift_from_a_table_stays_within_the_arms_reach(rt):
     x, z = run_in_actor(rt, lambda: catch._lift_pose(bottle, on_table))
     assert arm.kinematics.ik(x, 0.0, z, bottle.pitch).ok
     assert z >= on_table + 0.05 and x <= bottle.reach - 0.02
+
+
+def test_objects_put_on_one_surface_get_spots_of_their_own():
+    from actors.catch import PLACE_SPACING, surface_spots
+    pallet = (7.0, 6.2, 0.6, 0.4)
+    robot = (7.0, 5.0)                          # south of it
+    taken = []
+    for _ in range(6):                          # a tidy-up brings six objects
+        spots = surface_spots(pallet, 0.12, 0.39, taken, robot)
+        px, py, heading, sx, sy = spots[0]
+        assert 6.7 < px < 7.3 and 6.0 < py < 6.4                      # on the pallet
+        assert all(math.dist((px, py), q) >= PLACE_SPACING for q in taken)
+        assert math.dist((sx, sy), (px, py)) == pytest.approx(0.39)   # the base outside it
+        taken.append((px, py))
+    first = surface_spots(pallet, 0.12, 0.39, [], robot)[0]
+    assert first[:3] == pytest.approx((7.0, 6.12, math.pi / 2))       # the near edge's middle
+    # full: no spot left
+    full = [(x, y) for x in (6.78, 6.89, 7.0, 7.11, 7.22) for y in (6.12, 6.28)] + [(6.82, 6.2), (7.18, 6.2)]
+    assert surface_spots(pallet, 0.12, 0.39, full, robot) == []
