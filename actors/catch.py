@@ -29,6 +29,7 @@ BASE_MARGIN = 0.025         # room kept between that outline and an obstacle [m]
 OUTLINE_REACH = math.hypot(-BASE_OUTLINE[0], BASE_OUTLINE[2])   # its farthest corner [m]
 HAND_HALF_WIDTH = 0.07      # half the open hand's width, with margin [m]
 SAME_OBJECT = 0.12          # detections closer than this to the target are the target [m]
+GIVE_UP = 3                 # failed grasps of one object after which the search passes it over
 TEST_LIFT = 0.02            # first, short lift that checks the grip [m]
 GENTLE_RELEASE = 0.006      # first opening step past the held width when letting go [m]
 DRIVE_IN_TOLERANCE = 0.015  # how close the drive around an object must end [m]: the
@@ -256,9 +257,18 @@ class Catcher(SubSystem):
                            xy: tuple[float, float]) -> list[tuple[float, float, float]]:
         return fresh_views_first(poses, xy, self.get_value("failed_views"))
 
-    def _remember_failed_view(self, xy: tuple[float, float]) -> None:
+    def _remember_failed_view(self, xy: tuple[float, float], category: str) -> None:
+        """Note a failed grasp of the object at ``xy``; after GIVE_UP of them (bt_catch's
+        attempts) the search is told to pass it over, as after a close look that rejects
+        it: a distractor the looks take for the category (a lego brick for a lying carton)
+        would otherwise draw every later search back to it, while the object sought waits
+        elsewhere (house_hard 2015: nine grasps at a brick)."""
         _, _, yaw = self.run_actor("get_pose")
-        self.set_value("failed_views", self.get_value("failed_views")[-9:] + [(xy[0], xy[1], yaw)])
+        views = self.get_value("failed_views")[-9:] + [(xy[0], xy[1], yaw)]
+        self.set_value("failed_views", views)
+        if sum(math.dist((x, y), xy) <= SAME_OBJECT for x, y, _ in views) >= GIVE_UP \
+                and self.check_actor("reject_sighting"):
+            self.run_actor("reject_sighting", xy[0], xy[1], category)
 
     def _look_for_it(self, xy: tuple[float, float], category: str) -> None:
         """After a failed grasp of the object at ``xy`` (the base backed off, facing it):
@@ -643,7 +653,7 @@ class Catcher(SubSystem):
             driven += self._drive_in(distance - g.reach)
             grip = self.run_actor("close")
         if not _holds(g, grip):
-            self._remember_failed_view(xy)
+            self._remember_failed_view(xy, strategy.category)
             self._back_off(driven, g)
             self._look_for_it(xy, strategy.category)
             raise GraspError(f"{strategy.category} grasp missed: {_grip_text(grip)}, expected "
@@ -662,7 +672,7 @@ class Catcher(SubSystem):
                 raise GraspError(f"{strategy.category} could not be lifted: {e}") from e
             grip = self.run_actor("grip_check")
             if not _holds(g, grip):
-                self._remember_failed_view(xy)
+                self._remember_failed_view(xy, strategy.category)
                 self._back_off(driven, g)
                 self._look_for_it(xy, strategy.category)
                 raise GraspError(f"{strategy.category} slipped out while lifting "

@@ -92,7 +92,8 @@ class Search(SubSystem):
     @actor
     def reject_sighting(self, x: float, y: float, category: str) -> None:
         """Remember that what was seen at (x, y) is no ``category`` after all (a closer
-        look saw something else there): ``watch`` passes over it from now on.
+        look saw something else there, or grasps there kept failing): ``watch`` passes
+        over it from now on.
 
         Args:
             x: where it was seen, map frame [m]

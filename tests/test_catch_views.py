@@ -168,3 +168,16 @@ def test_objects_put_on_one_surface_get_spots_of_their_own():
     # full: no spot left
     full = [(x, y) for x in (6.78, 6.89, 7.0, 7.11, 7.22) for y in (6.12, 6.28)] + [(6.82, 6.2), (7.18, 6.2)]
     assert surface_spots(pallet, 0.12, 0.39, full, robot) == []
+
+
+def test_after_three_failed_grasps_of_one_object_the_search_passes_it_over(rt):
+    from actors.search import Search
+    rt.add_subsystem("eyes", _Eyes, {})
+    catch = rt.add_subsystem("catch", Catcher)
+    search = rt.add_subsystem("search", Search)
+    brick = (1.6, 0.5)                    # a lego brick the looks take for a carton
+    for k in range(3):
+        assert not search.get_value("rejected")
+        run_in_actor(rt, lambda: catch._remember_failed_view((brick[0] + 0.02 * k, brick[1]), "carton"))
+    assert search._rejected({"category": "carton", "x": 1.62, "y": 0.5})
+    assert not search._rejected({"category": "carton", "x": 3.0, "y": 0.5})
