@@ -322,16 +322,10 @@ class Navigator(SubSystem):
         if not ok.any():
             self._scan_pts = np.zeros((0, 2))
             return
-        t = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
-        buf = self.tf.buffer
-        try:
-            T_bl = buf.lookup(BASE_FRAME, msg.header.frame_id)
-            try:
-                T_mb = buf.lookup(GLOBAL_FRAME, BASE_FRAME, t)
-            except TransformError:
-                T_mb = buf.lookup(GLOBAL_FRAME, BASE_FRAME)
-        except TransformError:
+        poses = self._sensor_poses(msg.header, msg.header.frame_id)
+        if poses is None:
             return
+        T_bl, T_mb = poses
         r, a = r[ok], a[ok]
         pl = np.column_stack([r * np.cos(a), r * np.sin(a)])
         pb = pl @ T_bl[:2, :2].T + T_bl[:2, 3]
@@ -340,6 +334,21 @@ class Navigator(SubSystem):
         pb = pb[~robot]
         self._scan_pts = pb @ T_mb[:2, :2].T + T_mb[:2, 3]
         self._scan_seq += 1
+
+    def _sensor_poses(self, header, frame: str) -> tuple[np.ndarray, np.ndarray] | None:
+        """(sensor ``frame`` in base_footprint, base_footprint in the map at the header's
+        stamp, or the newest) from tf; None when tf cannot tell."""
+        t = header.stamp.sec + header.stamp.nanosec * 1e-9
+        buf = self.tf.buffer
+        try:
+            T_bs = buf.lookup(BASE_FRAME, frame)
+            try:
+                T_mb = buf.lookup(GLOBAL_FRAME, BASE_FRAME, t)
+            except TransformError:
+                T_mb = buf.lookup(GLOBAL_FRAME, BASE_FRAME)
+        except TransformError:
+            return None
+        return T_bs, T_mb
 
     def _watch_depth(self, on: bool) -> None:
         """Take depth images while a goal runs, one each depth_period: between them the
@@ -371,16 +380,10 @@ class Navigator(SubSystem):
         dt = np.dtype(">f4" if msg.is_bigendian else "<f4")
         depth = np.frombuffer(bytes(msg.data), np.uint8).reshape(msg.height, msg.step)[:, :msg.width * 4]
         depth = depth.copy().view(dt).reshape(msg.height, msg.width)
-        t = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
-        buf = self.tf.buffer
-        try:
-            T_bc = buf.lookup(BASE_FRAME, msg.header.frame_id or info.header.frame_id)
-            try:
-                T_mb = buf.lookup(GLOBAL_FRAME, BASE_FRAME, t)
-            except TransformError:
-                T_mb = buf.lookup(GLOBAL_FRAME, BASE_FRAME)
-        except TransformError:
+        poses = self._sensor_poses(msg.header, msg.header.frame_id or info.header.frame_id)
+        if poses is None:
             return
+        T_bc, T_mb = poses
         k = info.k
         pb = depth_obstacle_points(depth, k[0], k[4], k[2], k[5], T_bc, self.params.depth)
         self._depth_pts = pb @ T_mb[:2, :2].T + T_mb[:2, 3]

@@ -2,6 +2,7 @@
 carry (actors/catch.py)."""
 from __future__ import annotations
 
+import contextlib
 import math
 
 import pybullet as p
@@ -15,6 +16,20 @@ from geometry_msgs.msg import PoseWithCovarianceStamped
 FAR_SIGHTING = {"category": "bottle", "x": 5.2513, "y": 3.7729, "z": 0.2546, "height": 0.299,
                 "width": 0.0712, "distance": 2.729, "confidence": 0.886, "colour": "green",
                 "truncated": [], "frame": "map", "pose": "upright"}
+
+
+@contextlib.contextmanager
+def _localised_rig(seed: int, start: tuple, setup):
+    """house_hard ``seed``'s episode runtime, its world set up by ``setup(sim)``, the robot
+    told it stands at ``start`` and localised there: yields (runtime, sim)."""
+    app = episode_app("house_hard", seed)
+    rt = app.runtime(watchdog=None, world_first=True, world_setup=setup)
+    try:
+        rt.bus.publisher("/initialpose", PoseWithCovarianceStamped).publish(initial_pose_msg(start))
+        rt.call("require_localised")
+        yield rt, app.world
+    finally:
+        app.close(rt)
 
 
 def _robot_at(sim, start):
@@ -35,12 +50,7 @@ def test_a_bottle_on_a_low_bench_is_looked_at_from_where_the_camera_sees_it():
     the fingertips closed on it at 56 mm; the retries closed on nothing. The closer look
     is now from where the camera sees the bottle (about 1.8 m), and the pick holds it."""
     start = (4.60, 6.00, math.atan2(3.79 - 6.00, 5.28 - 4.60))
-    app = episode_app("house_hard", 2002)
-    rt = app.runtime(watchdog=None, world_first=True, world_setup=lambda sim: _robot_at(sim, start))
-    sim = app.world
-    try:
-        rt.bus.publisher("/initialpose", PoseWithCovarianceStamped).publish(initial_pose_msg(start))
-        rt.call("require_localised")
+    with _localised_rig(2002, start, lambda sim: _robot_at(sim, start)) as (rt, sim):
         truth = sim.object_pose("bottle_1")
         close = rt.call("approach_object", target=dict(FAR_SIGHTING))
         # the estimate the hand goes to (relative to where the robot believes it is)
@@ -54,8 +64,6 @@ def test_a_bottle_on_a_low_bench_is_looked_at_from_where_the_camera_sees_it():
         assert rt.call("verify_grasp")
         rt.call("carry_pose")
         assert rt.call("verify_grasp"), "the bottle came loose while the arm folded"
-    finally:
-        app.close(rt)
 
 
 def test_a_bottle_on_the_bench_is_held_from_a_look_that_sees_it_and_a_straight_drive_in():
@@ -66,12 +74,7 @@ def test_a_bottle_on_the_bench_is_held_from_a_look_that_sees_it_and_a_straight_d
     estimate and the heading to it come from one belief and the errors cancel."""
     h = math.radians(80)      # from the south, as the robot came in the episode
     start = (5.177 - 2.2 * math.cos(h), 2.823 - 2.2 * math.sin(h), h)
-    app = episode_app("house_hard", 2009)
-    rt = app.runtime(watchdog=None, world_first=True, world_setup=lambda sim: _robot_at(sim, start))
-    sim = app.world
-    try:
-        rt.bus.publisher("/initialpose", PoseWithCovarianceStamped).publish(initial_pose_msg(start))
-        rt.call("require_localised")
+    with _localised_rig(2009, start, lambda sim: _robot_at(sim, start)) as (rt, sim):
         truth = sim.object_pose("bottle_1")
         found = rt.call("get_found", category="bottle")
         assert found and found["z"] > 0.2
@@ -81,8 +84,6 @@ def test_a_bottle_on_the_bench_is_held_from_a_look_that_sees_it_and_a_straight_d
         assert sim.object_pose("bottle_1")[2] > truth[2] + 0.03 and sim.in_gripper("bottle_1")
         rt.call("carry_pose")
         assert rt.call("verify_grasp") and sim.in_gripper("bottle_1")
-    finally:
-        app.close(rt)
 
 
 #: house_hard seed 2009 (before the pick from the TV bench lifted within reach, the bottle
@@ -119,19 +120,13 @@ def test_where_its_fingertips_pinched_a_bottle_the_hand_grasps_it_again_and_hold
         state["name"] = _bottle_at(sim, bottle)
         _robot_at(sim, start)
 
-    app = episode_app("house_hard", 2009)
-    rt = app.runtime(watchdog=None, world_first=True, world_setup=setup)
-    sim, name = app.world, state["name"]
-    try:
-        rt.bus.publisher("/initialpose", PoseWithCovarianceStamped).publish(initial_pose_msg(start))
-        rt.call("require_localised")
+    with _localised_rig(2009, start, setup) as (rt, sim):
+        name = state["name"]
         held = rt.call("pick", target=target)
         assert 0.064 <= held["width"] <= 0.078, f"held at {held['width'] * 1000:.0f} mm: by the fingertips"
         assert sim.object_pose(name)[2] > 0.2 and sim.in_gripper(name)         # lifted
         rt.call("carry_pose")
         assert sim.in_gripper(name) and rt.call("verify_grasp")
-    finally:
-        app.close(rt)
 
 
 def test_a_bottle_against_furniture_is_grasped_from_where_the_fingers_have_room():
@@ -146,12 +141,8 @@ def test_a_bottle_against_furniture_is_grasped_from_where_the_fingers_have_room(
         state["name"] = _bottle_at(sim, FALLEN)
         _robot_at(sim, start)
 
-    app = episode_app("house_hard", 2009)
-    rt = app.runtime(watchdog=None, world_first=True, world_setup=setup)
-    sim, name = app.world, state["name"]
-    try:
-        rt.bus.publisher("/initialpose", PoseWithCovarianceStamped).publish(initial_pose_msg(start))
-        rt.call("require_localised")
+    with _localised_rig(2009, start, setup) as (rt, sim):
+        name = state["name"]
         found = rt.call("get_found", category="bottle")
         assert found and math.dist((found["x"], found["y"]), FALLEN) < 0.05
         close = rt.call("approach_object", target=found)
@@ -159,8 +150,6 @@ def test_a_bottle_against_furniture_is_grasped_from_where_the_fingers_have_room(
         assert 0.064 <= held["width"] <= 0.078, f"held at {held['width'] * 1000:.0f} mm: by the fingertips"
         rt.call("carry_pose")
         assert sim.in_gripper(name) and rt.call("verify_grasp")
-    finally:
-        app.close(rt)
 
 
 def test_a_grip_check_judges_against_the_width_the_object_was_picked_at():
@@ -198,12 +187,8 @@ def test_a_pick_that_cannot_lift_puts_the_bottle_back_and_lets_go(monkeypatch):
         state["name"] = _bottle_at(sim, bottle)
         _robot_at(sim, start)
 
-    app = episode_app("house_hard", 2009)
-    rt = app.runtime(watchdog=None, world_first=True, world_setup=setup)
-    sim, name = app.world, state["name"]
-    try:
-        rt.bus.publisher("/initialpose", PoseWithCovarianceStamped).publish(initial_pose_msg(start))
-        rt.call("require_localised")
+    with _localised_rig(2009, start, setup) as (rt, sim):
+        name = state["name"]
         target = {"category": "bottle", "x": bottle[0], "y": bottle[1], "z": 0.0, "pose": "upright"}
         with pytest.raises(Exception, match="could not be lifted"):
             rt.call("pick", target=target)
@@ -211,5 +196,3 @@ def test_a_pick_that_cannot_lift_puts_the_bottle_back_and_lets_go(monkeypatch):
         assert not sim.in_gripper(name)
         assert abs(pose[2] - 0.1525) < 0.005 and math.dist(pose[:2], bottle) < 0.03   # upright, in place
         assert rt.call("get_status")["gripper"]["width"] > 0.08
-    finally:
-        app.close(rt)

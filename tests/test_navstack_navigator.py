@@ -27,11 +27,10 @@ def goal_msg(x, y, yaw=0.0, frame="map"):
     return g
 
 
-@pytest.fixture(scope="module")
-def floor():
+def _open_floor(camera: bool):
     """open_floor with the navstack, localised from /initialpose; a client actor ``nav``."""
     rt = Runtime(clock="virtual")
-    world = sim_mod.SimWorld(rt, "open_floor", seed=0, camera=False).start()
+    world = sim_mod.SimWorld(rt, "open_floor", seed=0, camera=camera).start()
     rt.add_subsystem("navstack", NavStack)
     rt.root.register_action("nav", NavigateToPose, "/navigate_to_pose")
     rt.bus.publisher("/initialpose", PoseWithCovarianceStamped).publish(initial_pose_msg(world.spec.robot_start))
@@ -39,6 +38,12 @@ def floor():
     yield rt, world
     world.close()
     rt.close()
+
+
+@pytest.fixture(scope="module")
+def floor():
+    """_open_floor without the camera."""
+    yield from _open_floor(camera=False)
 
 
 def test_lookahead_point_walks_along_the_path():
@@ -154,16 +159,8 @@ def test_a_start_inside_the_inflation_leaves_through_the_nearest_free_cell():
 
 @pytest.fixture(scope="module")
 def floor_with_camera():
-    """As ``floor``, with the robot's depth camera."""
-    rt = Runtime(clock="virtual")
-    world = sim_mod.SimWorld(rt, "open_floor", seed=0).start()
-    rt.add_subsystem("navstack", NavStack)
-    rt.root.register_action("nav", NavigateToPose, "/navigate_to_pose")
-    rt.bus.publisher("/initialpose", PoseWithCovarianceStamped).publish(initial_pose_msg(world.spec.robot_start))
-    rt.call("sleep", 0.5)
-    yield rt, world
-    world.close()
-    rt.close()
+    """_open_floor with the robot's depth camera."""
+    yield from _open_floor(camera=True)
 
 
 def test_an_obstacle_below_the_scan_is_seen_by_the_depth_camera_and_driven_around(floor_with_camera):
