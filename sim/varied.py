@@ -189,6 +189,24 @@ def stable_lean(model, theta_deg: float, phi: float) -> Lean | None:
 
 
 # ----------------------------------------------------------------------------- placement
+def _facing_yaw(cat_name: str, heading: float, u: float) -> float:
+    """The yaw of an object on a table, from ``u`` drawn in [-pi, pi): any for a round
+    one; a box's is turned so that a side its grasp takes it from faces the base coming
+    along ``heading`` across the free edge, within half the grasp's tolerance (else the
+    hand could reach it from a side with no room for the base only: a carton at a
+    table's end, its narrow side towards the wall)."""
+    try:
+        plan = registry.get(cat_name).strategy.plan_for("upright")
+    except registry.UnknownCategoryError:
+        return u
+    if plan is None or not plan.sides:
+        return u
+    side = plan.sides[int((u + math.pi) / (2 * math.pi) * len(plan.sides)) % len(plan.sides)]
+    jitter = 0.5 * plan.tolerance * math.sin(3.0 * u)       # spread, from the same draw
+    flip = math.pi if u > 0 and not plan.one_way else 0.0
+    return math.remainder(heading - side + flip + jitter, 2 * math.pi)
+
+
 def _grasp_reach(cat_name: str, kind: str) -> tuple[float, float]:
     """(reach, standoff) of the robot's grasp for a category in a pose kind."""
     try:
@@ -357,7 +375,7 @@ class Placer:
                 continue
             self.on_table[table.name].append((ox, oy, r))
             self.keep(ox, oy, heading, reach, standoff)
-            yaw = float(self.rng.uniform(-math.pi, math.pi))
+            yaw = _facing_yaw(cat, heading, float(self.rng.uniform(-math.pi, math.pi)))
             return PlacedObject(name, cat, ox, oy, yaw, z=table.sz + model.height / 2 + 1e-4,
                                 pose_kind="upright", support=table.name)
         return None

@@ -265,3 +265,24 @@ def test_explicit_pose_kinds_and_supports(tmp_path):
         assert (can.pose_kind, can.support) == ("upright", "low") and can.z > 0.22
         assert bottle.pose_kind == "tilted" and bottle.support.startswith("wall_")
         assert carton.pose_kind == "lying" and carton.quat is not None
+
+
+def test_a_box_on_a_table_shows_a_side_its_grasp_takes_it_from_to_the_free_edge(worlds):
+    boxes = 0
+    for seed, w in worlds.items():
+        tables = {f.name: f for f in w.furniture if f.support}
+        for o in _category_objects(w):
+            plan = categories.get(o.category).strategy.plan_for("upright")
+            if o.support not in tables or o.pose_kind != "upright" or not plan.sides:
+                continue
+            boxes += 1
+            # the base comes across the free edge, facing the table (see the test above)
+            t = tables[o.support]
+            heading = min((math.atan2(-ny, -nx) for nx, ny in ((1, 0), (-1, 0), (0, 1), (0, -1))
+                           if t.distance(o.x + nx * 0.39, o.y + ny * 0.39) > 0.1
+                           and all(ob.distance(o.x + nx * 0.39, o.y + ny * 0.39) >= ROBOT_RADIUS
+                                   for ob in w.obstacles)),
+                          key=lambda h: 0.0, default=None)
+            assert heading is not None, (seed, o.name)
+            assert plan.off_sides(heading, o.yaw) <= 0.5 * plan.tolerance + 1e-6, (seed, o.name)
+    assert boxes >= 1
