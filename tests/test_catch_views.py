@@ -181,3 +181,43 @@ def test_after_three_failed_grasps_of_one_object_the_search_passes_it_over(rt):
         run_in_actor(rt, lambda: catch._remember_failed_view((brick[0] + 0.02 * k, brick[1]), "carton"))
     assert search._rejected({"category": "carton", "x": 1.62, "y": 0.5})
     assert not search._rejected({"category": "carton", "x": 3.0, "y": 0.5})
+
+
+class _Base(SubSystem):
+    """A base at (1.0, 0.5) that turns on the spot and goes where it is sent at once."""
+
+    def __init__(self):
+        super().__init__()
+        self.pose = [1.0, 0.5, 0.0]
+
+    @actor
+    def get_pose(self) -> tuple:
+        return tuple(self.pose)
+
+    @actor
+    def mini_turn(self, angle: float) -> float:
+        self.pose[2] += angle
+        return angle
+
+    @actor
+    def mark_obstacles(self, obstacles: list) -> int:
+        return len(obstacles)
+
+    @actor
+    def goto(self, x: float, y: float, yaw: float) -> tuple:
+        self.pose = [x, y, yaw]
+        return (x, y, yaw)
+
+
+def test_a_target_with_no_side_to_take_it_from_is_passed_over_by_the_search(rt):
+    from actors.search import Search
+    from bt_engine import ActorError
+    rt.add_subsystem("map", _Map, _room_with_a_table(2.0))
+    rt.add_subsystem("base", _Base)
+    catch = rt.add_subsystem("catch", Catcher)
+    search = rt.add_subsystem("search", Search)
+    # a "carton" in the middle of the table: 0.3 m from every edge, out of the hand's reach
+    target = {"category": "carton", "x": 2.3, "y": 1.5, "z": 0.25, "yaw": 0.0}
+    with pytest.raises(ActorError, match="no free standoff"):
+        run_in_actor(rt, lambda: catch.approach_object(target))
+    assert search._rejected({"category": "carton", "x": 2.3, "y": 1.5})
