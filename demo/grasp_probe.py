@@ -7,8 +7,8 @@ z axis, the axis it is held along whichever way the hand came. An object held as
 grasped keeps 0 degrees; one that pivots about the fingers' line tilts. The episode keeps
 the largest tilt seen while the object was held.
 
-It also notes which object each pick went for: the category object nearest the base as
-the pick starts (the robot stands at its standoff, about 0.4 m from it).
+It also notes which object each pick went for: the category object nearest the pick's
+target as the pick starts (the robot may stand 1.8 m from an object on a table).
 """
 from __future__ import annotations
 
@@ -27,7 +27,7 @@ HELD_DISTANCE = 0.15
 AFTER = ("pick", "verify_grasp", "carry_pose")
 BEFORE = ("place", "place_on")
 HAND = "end_effector_link"
-#: a pick's object is at most this far from base_footprint when the pick starts [m]
+#: a pick's object is at most this far from its target (or the base) as the pick starts [m]
 PICKED_DISTANCE = 0.8
 
 
@@ -73,7 +73,9 @@ class GraspProbe(TreeObserver):
         if leaf.node.actor in BEFORE:
             self._sample()
         if leaf.node.actor == "pick":
-            name = nearest_object(self.sim, self.categories)
+            target = kwargs.get("target", args[0] if args else None)
+            at = (target["x"], target["y"]) if isinstance(target, dict) and "x" in target else None
+            name = nearest_object(self.sim, self.categories, at)
             if name is not None:
                 self.picked.append(name)
 
@@ -82,10 +84,12 @@ class GraspProbe(TreeObserver):
             self._sample()
 
 
-def nearest_object(sim: SimWorld, categories: tuple[str, ...] = ()) -> str | None:
-    """The object (of one of ``categories``; () any) nearest base_footprint within
-    PICKED_DISTANCE, or None. Reads the simulator's truth."""
-    x, y, _ = sim.robot_pose()
+def nearest_object(sim: SimWorld, categories: tuple[str, ...] = (),
+                   at: tuple[float, float] | None = None) -> str | None:
+    """The object (of one of ``categories``; () any) nearest ``at`` (x, y) [m], the pick's
+    target (default: base_footprint), within PICKED_DISTANCE, or None. Reads the
+    simulator's truth."""
+    x, y = at if at is not None else sim.robot_pose()[:2]
     best = None
     for name, pose in sim.object_poses().items():
         if categories and sim.object_category(name) not in categories:

@@ -57,3 +57,4 @@ def test_the_picked_object_is_the_category_object_nearest_the_base(world):
     world.set_object_pose(other, x + 0.4, y)
     assert nearest_object(world) == other
     assert nearest_object(world, ("can",)) == can
+    assert nearest_object(world, at=(x + 0.62, y)) == can        # nearest the pick's target
