@@ -282,6 +282,8 @@ class Navigator(SubSystem):
         for s in self._subs:
             s.close()
         self._subs = []
+        self._goal = None
+        self._watch_depth(False)
         self.tf.close()
 
     @actor(read_only=True)
