@@ -164,7 +164,8 @@ class Strategy:
         """The grasp for an object standing ``upright`` (or of unknown pose), ``lying`` on
         its side, or ``tilted`` (leaning on something): held as if upright, the hand coming
         from the side its base is on (heading = the direction it leans to, its ``yaw``), so
-        that the top leans away from the hand and the fingers close across the body;
+        that the top leans away from the hand and the fingers close across the body (a
+        box: across the side ``width`` perception measured across the lean);
         None when the category has none for that pose. Lying, the face whose width across
         fits ``width`` (as perception measured it) is held, None if none does; without a
         width, the first."""
@@ -176,7 +177,14 @@ class Strategy:
             fits = [p for p in self.lying if p.holding(width)]
             return min(fits, key=lambda p: abs(p.across - width)) if fits else None
         if pose == "tilted":
-            return replace(self.upright, sides=(0.0,), one_way=True, offsets=TILTED_OFFSETS)
+            plan = replace(self.upright, sides=(0.0,), one_way=True, offsets=TILTED_OFFSETS)
+            if self.upright.sides and width is not None and not plan.holding(width) \
+                    and width < plan.open_width - 0.01:
+                # a box leaning with another side across the lean (house_hard 2015: its
+                # 70 mm side, the hand closing on it at 73 mm): the same grip on that side
+                plan = replace(plan, closed_min=width - (plan.across - plan.closed_min),
+                               closed_max=min(width + (plan.closed_max - plan.across), plan.open_width - 0.002))
+            return plan
         return self.upright
 
     def standoff_poses(self, robot_xy: tuple[float, float], obj_xy: tuple[float, float],

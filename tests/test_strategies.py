@@ -103,3 +103,17 @@ def test_a_box_lying_on_a_face_too_wide_for_the_hand_has_no_grasp():
 def test_a_lying_bottle_is_approached_from_its_base_end_and_a_can_from_either():
     assert strategy_for("bottle").plan_for("lying").one_way      # the neck end is long
     assert not strategy_for("can").plan_for("lying").one_way
+
+
+def test_a_leaning_box_is_held_across_the_side_measured_across_its_lean():
+    carton = strategy_for("carton")
+    upright = carton.plan_for("upright")
+    narrow = carton.plan_for("tilted", 0.045)          # its 45 mm side across: as upright
+    assert (narrow.closed_min, narrow.closed_max) == (upright.closed_min, upright.closed_max)
+    assert narrow.sides == (0.0,) and narrow.one_way
+    wide = carton.plan_for("tilted", 0.070)            # its 70 mm side across (house_hard 2015)
+    assert wide.holding(0.073) and wide.holding(0.070) and not wide.holding(0.045)
+    assert wide.closed_max < wide.open_width
+    # a round body keeps its own grip whatever width is passed
+    can = strategy_for("can")
+    assert can.plan_for("tilted", 0.05).closed_min == can.plan_for("upright").closed_min
