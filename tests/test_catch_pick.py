@@ -12,6 +12,8 @@ from categories import get as category
 from demo.episode import episode_app, initial_pose_msg
 from geometry_msgs.msg import PoseWithCovarianceStamped
 
+from tests.conftest import place_robot
+
 #: a bottle lying on the floor, as perception reports it: axis from base to top
 LYING = {"category": "bottle", "x": 8.84, "y": 7.28, "z": 0.0, "pose": "lying", "width": 0.07,
          "yaw": -0.507, "axis_base": [8.754, 7.327, 0.035], "axis_dir": [0.874, -0.486, 0.0]}
@@ -74,15 +76,8 @@ def test_the_way_to_a_lying_bottle_does_not_push_it_and_the_pick_holds_it():
         name = [n for n in sim.object_names() if sim.object_category(n) == "bottle"][-1]
         state["name"] = name
 
-        def place():
-            _lay(sim, name, 8.887, 7.253, -0.507, 0.035)
-            p.resetBasePositionAndOrientation(sim.robot.body, [start[0], start[1], 0.0],
-                                              p.getQuaternionFromEuler([0, 0, start[2]]),
-                                              physicsClientId=sim.cid)
-            js = sim.robot.joint_states()[0]
-            sim.odometry.reset(js[0], js[1], start[2])
-        sim._on_hub_call(place)
-        sim.spec.robot_start = start
+        sim._on_hub_call(lambda: _lay(sim, name, 8.887, 7.253, -0.507, 0.035))
+        place_robot(sim, start)
 
     app = episode_app("house_hard", 2000)
     rt = app.runtime(watchdog=None, world_first=True, world_setup=setup)

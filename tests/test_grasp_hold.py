@@ -5,11 +5,12 @@ from __future__ import annotations
 import contextlib
 import math
 
-import pybullet as p
 import pytest
 
 from demo.episode import episode_app, initial_pose_msg
 from geometry_msgs.msg import PoseWithCovarianceStamped
+
+from tests.conftest import place_robot
 
 #: house_hard seed 2002: the search's sighting of bottle_1 on the TV bench (0.25 m high),
 #: from 2.7 m away: 35 mm from where it stands (5.279, 3.794)
@@ -32,17 +33,6 @@ def _localised_rig(seed: int, start: tuple, setup):
         app.close(rt)
 
 
-def _robot_at(sim, start):
-    def place():
-        p.resetBasePositionAndOrientation(sim.robot.body, [start[0], start[1], 0.0],
-                                          p.getQuaternionFromEuler([0, 0, start[2]]),
-                                          physicsClientId=sim.cid)
-        js = sim.robot.joint_states()[0]
-        sim.odometry.reset(js[0], js[1], start[2])
-    sim._on_hub_call(place)
-    sim.spec.robot_start = start
-
-
 def test_a_bottle_on_a_low_bench_is_looked_at_from_where_the_camera_sees_it():
     """house_hard seed 2002: from the usual look distance (0.75 m) the camera, looking
     down, sees nothing of a bottle on the 0.25 m TV bench, so the pick went to the search's
@@ -50,7 +40,7 @@ def test_a_bottle_on_a_low_bench_is_looked_at_from_where_the_camera_sees_it():
     the fingertips closed on it at 56 mm; the retries closed on nothing. The closer look
     is now from where the camera sees the bottle (about 1.8 m), and the pick holds it."""
     start = (4.60, 6.00, math.atan2(3.79 - 6.00, 5.28 - 4.60))
-    with _localised_rig(2002, start, lambda sim: _robot_at(sim, start)) as (rt, sim):
+    with _localised_rig(2002, start, lambda sim: place_robot(sim, start)) as (rt, sim):
         truth = sim.object_pose("bottle_1")
         close = rt.call("approach_object", target=dict(FAR_SIGHTING))
         # the estimate the hand goes to (relative to where the robot believes it is)
@@ -74,7 +64,7 @@ def test_a_bottle_on_the_bench_is_held_from_a_look_that_sees_it_and_a_straight_d
     estimate and the heading to it come from one belief and the errors cancel."""
     h = math.radians(80)      # from the south, as the robot came in the episode
     start = (5.177 - 2.2 * math.cos(h), 2.823 - 2.2 * math.sin(h), h)
-    with _localised_rig(2009, start, lambda sim: _robot_at(sim, start)) as (rt, sim):
+    with _localised_rig(2009, start, lambda sim: place_robot(sim, start)) as (rt, sim):
         truth = sim.object_pose("bottle_1")
         found = rt.call("get_found", category="bottle")
         assert found and found["z"] > 0.2
@@ -118,7 +108,7 @@ def test_where_its_fingertips_pinched_a_bottle_the_hand_grasps_it_again_and_hold
 
     def setup(sim):
         state["name"] = _bottle_at(sim, bottle)
-        _robot_at(sim, start)
+        place_robot(sim, start)
 
     with _localised_rig(2009, start, setup) as (rt, sim):
         name = state["name"]
@@ -139,7 +129,7 @@ def test_a_bottle_against_furniture_is_grasped_from_where_the_fingers_have_room(
 
     def setup(sim):
         state["name"] = _bottle_at(sim, FALLEN)
-        _robot_at(sim, start)
+        place_robot(sim, start)
 
     with _localised_rig(2009, start, setup) as (rt, sim):
         name = state["name"]
@@ -185,7 +175,7 @@ def test_a_pick_that_cannot_lift_puts_the_bottle_back_and_lets_go(monkeypatch):
 
     def setup(sim):
         state["name"] = _bottle_at(sim, bottle)
-        _robot_at(sim, start)
+        place_robot(sim, start)
 
     with _localised_rig(2009, start, setup) as (rt, sim):
         name = state["name"]
