@@ -220,17 +220,23 @@ class Navigation(SubSystem):
         return float(costmap.clearance[row, col])
 
     @actor(read_only=True)
-    def search_views(self, view_range: float = 2.5) -> list[list[float]]:
+    def search_views(self, view_range: float = 2.5, seen_from: list | None = None) -> list[list[float]]:
         """Places [x, y] [m] from which the camera sees all the floor the base can reach
         from where it is, in a visiting order from here (for a search given no
         locations: a map the robot built, a user's map).
 
         Args:
             view_range: how far the camera is trusted to see an object [m]
+            seen_from: places [x, y] [m] already looked around from: only places for
+                the floor they do not see are returned
         """
+        try:
+            seen = [(float(p[0]), float(p[1])) for p in seen_from or ()]
+        except (TypeError, ValueError, IndexError):
+            raise NavigationError(f"seen_from must be a list of [x, y], got {seen_from!r}") from None
         x, y, _ = self.get_pose()
         return [[round(px, 2), round(py, 2)]
-                for px, py in viewpoints(self._planner().costmap, (x, y), view_range=view_range)]
+                for px, py in viewpoints(self._planner().costmap, (x, y), view_range=view_range, seen_from=seen)]
 
     def _plan_from_here(self, x: float, y: float) -> BasePath:
         sx, sy, _ = self.get_pose()

@@ -158,10 +158,13 @@ class Search(SubSystem):
                 continue
         return str(first)
 
-    def _visit(self, locations: list, at_each: Callable[[], None]) -> tuple[list, list[str]]:
+    def _visit(self, locations: list, at_each: Callable[[], None], cover_map: bool = False) -> tuple[list, list[str]]:
         """Drive to each location (moved or skipped when blocked; see ``patrol``) and call
-        ``at_each`` there. Returns the locations and the reasons of those not reached."""
-        if not locations:
+        ``at_each`` there; with ``cover_map``, then also at places chosen from the map
+        that see the floor those leave unseen. Returns the locations and the reasons of
+        those not reached."""
+        given = bool(locations)
+        if not given:
             locations = self.run_actor("search_views")
             if not locations:
                 raise SearchExhausted("no search locations given, and the map has no reachable free space")
@@ -171,7 +174,22 @@ class Search(SubSystem):
                 places.append((float(loc[0]), float(loc[1])))
             except (TypeError, ValueError, IndexError):
                 raise ActorbtError(f"search location {i} must be [x, y], got {loc!r}") from None
-        missed = []
+        missed: list[str] = []
+        looked_from = self._look_from_each(places, at_each, missed)
+        if cover_map and given:
+            rest = [tuple(p) for p in self.run_actor("search_views", seen_from=looked_from)]
+            if rest:
+                log.info("search: %d more places from the map see the floor the %d locations did not",
+                         len(rest), len(places))
+                self._look_from_each(rest, at_each, missed)
+                places += rest
+        return places, missed
+
+    def _look_from_each(self, places: list[tuple[float, float]], at_each: Callable[[], None],
+                        missed: list[str]) -> list[list[float]]:
+        """The visiting loop of ``_visit``: returns where the robot looked from; why a
+        place was not reached goes into ``missed``."""
+        looked_from = []
         for x0, y0 in places:
             spot = self._free_spot_near(x0, y0)
             if spot is None:
@@ -190,10 +208,12 @@ class Search(SubSystem):
                 if math.hypot(sx - rx, sy - ry) < 0.5:
                     continue                    # it did not get anywhere new
             at_each()
-        return places, missed
+            sx, sy, _ = self.run_actor("get_pose")
+            looked_from.append([sx, sy])
+        return looked_from
 
     @actor(moves=True, limits={"turns": (0, 8)})
-    def patrol(self, locations: list, turns: int = 4) -> None:
+    def patrol(self, locations: list, turns: int = 4, cover_map: bool = False) -> None:
         """Visit each (x, y) [m] of ``locations`` in turn and look around there. A place
         where the base does not fit (an object or furniture stands on it) is moved to the
         nearest spot within 1 m where it does, or skipped. A place the base cannot reach
@@ -205,13 +225,16 @@ class Search(SubSystem):
             locations: the places to visit, each [x, y] in the map frame [m]; empty:
                 places chosen from the map (search_views)
             turns: look_around steps at each place
+            cover_map: after the locations, also look around from places chosen from the
+                map that see the floor they leave unseen (a hand-made list rarely sees
+                every corner)
         """
-        places, missed = self._visit(locations, lambda: self.run_actor("look_around", turns))
+        places, missed = self._visit(locations, lambda: self.run_actor("look_around", turns), cover_map)
         raise SearchExhausted(f"visited {len(places)} search locations and saw nothing"
                               + (f"; {len(missed)} not reached: " + "; ".join(missed) if missed else ""))
 
     @actor(moves=True, limits={"views": (1, 16)})
-    def survey(self, locations: list, views: int = 8) -> list:
+    def survey(self, locations: list, views: int = 8, cover_map: bool = True) -> list:
         """Visit every search location (moved or skipped when blocked, as ``patrol``
         does), look all around at each, and return every object of a known category
         seen: [{category, x, y, z, sightings, confidence (, yaw)}] in the map frame,
@@ -223,6 +246,8 @@ class Search(SubSystem):
             locations: the places to visit, each [x, y] in the map frame [m]; empty:
                 places chosen from the map (search_views)
             views: how many views, evenly spaced over a full turn, at each place
+            cover_map: after the locations, also look from places chosen from the map
+                that see the floor they leave unseen (a tidy-up wants every object)
         """
         sightings: list[dict] = []
         step = 2 * math.pi / max(1, views)
@@ -236,7 +261,7 @@ class Search(SubSystem):
                     sightings.extend(d for d in self.run_actor("object_glance")
                                      if d["category"] != "unknown" and not in_own_hand(d))
 
-        self._visit(locations, look)
+        self._visit(locations, look, cover_map)
         found = group_sightings(sightings)
         log.info("survey: %d objects from %d sightings", len(found), len(sightings))
         return found

@@ -10,6 +10,7 @@ ordered as a nearest-neighbour tour from the start.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -56,7 +57,7 @@ def _visible(see_through: np.ndarray, r0: int, c0: int, steps: int) -> np.ndarra
 
 def viewpoints(costmap: Costmap, start: tuple[float, float], *, view_range: float = 2.5,
                spacing: float = 0.5, coverage: float = 0.9, min_gain: float = 0.02,
-               max_views: int = 30) -> list[tuple[float, float]]:
+               max_views: int = 30, seen_from: Sequence[tuple[float, float]] = ()) -> list[tuple[float, float]]:
     """Places (x, y) [m] from which the reachable floor of ``costmap`` is seen.
 
     Args:
@@ -69,6 +70,8 @@ def viewpoints(costmap: Costmap, start: tuple[float, float], *, view_range: floa
         min_gain: a place must show at least this fraction of the floor not yet seen
             (the greedy cover's tail otherwise adds places for corners of a few cells).
         max_views: at most this many places.
+        seen_from: places already looked around from (a search's given locations): the
+            floor they see counts as seen, and only places for the rest are returned.
 
     Returns the places in visiting order; empty when nothing is reachable.
     """
@@ -92,14 +95,20 @@ def viewpoints(costmap: Costmap, start: tuple[float, float], *, view_range: floa
     floor &= see_through.ravel()
     target = floor.sum()
     covered = np.zeros_like(floor)
+    for x, y in seen_from:
+        r, c = g.cell_of(float(x), float(y))
+        if g.contains(r, c):
+            covered[_visible(see_through, r, c, steps)] = True
+    covered &= floor
     chosen: list[int] = []
     while covered.sum() < coverage * target and len(chosen) < max_views:
         gains = [int(np.count_nonzero(floor[s] & ~covered[s])) for s in seen_by]
         best = int(np.argmax(gains))
-        if gains[best] == 0 or (chosen and gains[best] < min_gain * target):
+        if gains[best] == 0 or ((chosen or seen_from) and gains[best] < min_gain * target):
             break
         chosen.append(best)
         covered[seen_by[best]] = True
+        covered &= floor
     places = [g.center_of(*cand[i]) for i in chosen]
     # nearest-neighbour tour from the start
     tour, here = [], (float(start[0]), float(start[1]))

@@ -86,7 +86,7 @@ def test_nothing_to_find_ends_the_search_with_failure():
         for i, name in enumerate(world.object_names()):
             world.set_object_pose(name, 50.0 + i, 50.0, 0.0)  # far outside the walls
     ep = run_episode("bt_search", "open_floor", seed=0, category="any", world_setup=hide_everything,
-                     inputs={"locations": [[1.0, 0.0], [-1.0, 1.0]]})
+                     inputs={"locations": [[1.0, 0.0], [-1.0, 1.0]], "cover_map": False})
     assert ep.tree_status == "FAILURE"
     assert "visited 2 search locations and saw nothing" in ep.reason
     assert ep.sim_time < 120
@@ -114,7 +114,7 @@ def test_a_blocked_search_location_is_moved_and_an_impossible_one_skipped():
     the nearest spot where it does. The other is off the map: skipped, not fatal."""
     end = PoseAtEnd()
     ep = run_episode("bt_search", "open_floor", seed=0, category="any", world_setup=end.hide_everything,
-                     observers=[end], inputs={"locations": [[-2.97, 0.0], [40.0, 40.0]]})
+                     observers=[end], inputs={"locations": [[-2.97, 0.0], [40.0, 40.0]], "cover_map": False})
     assert ep.tree_status == "FAILURE"
     assert "visited 2 search locations and saw nothing; 1 not reached: (40.00, 40.00)" in ep.reason
     x, y, _ = end.pose
@@ -146,6 +146,6 @@ def test_a_search_location_taken_by_an_object_is_looked_around_from_beside_it():
             if world.object_category(name) == "carton":
                 world.set_object_pose(name, 50.0, 50.0, 0.0)
     ep = run_episode("bt_search", "house", seed=1, category="carton", world_setup=hide_the_carton,
-                     inputs={"locations": [[1.8, 2.0]]})
+                     inputs={"locations": [[1.8, 2.0]], "cover_map": False})
     assert ep.tree_status == "FAILURE"
     assert ep.reason.endswith("visited 1 search locations and saw nothing"), ep.reason

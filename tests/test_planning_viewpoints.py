@@ -37,6 +37,17 @@ def test_a_longer_view_range_needs_fewer_places():
     assert len(viewpoints(cm, (1.0, 1.0), view_range=4.0)) < len(viewpoints(cm, (1.0, 1.0), view_range=1.5))
 
 
+def test_places_already_looked_from_leave_only_the_rest_to_cover():
+    """Given the left room's places as looked from, the rest are in the right room (or its
+    doorway); given the places for both rooms, none are left."""
+    cm = inflate(two_rooms(), 0.2)
+    everything = viewpoints(cm, (1.0, 1.0), view_range=2.5)
+    left = [(x, y) for x, y in everything if x < 4.0]
+    rest = viewpoints(cm, (1.0, 1.0), view_range=2.5, seen_from=left)
+    assert rest and all(x >= 4.0 for x, _ in rest), rest
+    assert viewpoints(cm, (1.0, 1.0), view_range=2.5, seen_from=everything) == []
+
+
 def test_a_start_inside_a_wall_uses_the_nearest_free_space():
     views = viewpoints(inflate(two_rooms(), 0.2), (0.0, 0.0))
     assert views
