@@ -15,7 +15,7 @@ import numpy as np
 
 from bt_engine import ActorbtError, SubSystem, actor
 
-from .ros_conv import pose2d, wrap
+from .ros_conv import wrap
 from .strategies import GraspPlan, Strategy, strategy_for
 
 #: place surface height and the part of the object held decide the release height
@@ -645,13 +645,14 @@ class Catcher(SubSystem):
         if distance - g.reach > LONG_DRIVE:
             # from a look pose (a raised object), not a standoff: most of the way, then
             # face it again from near (mini_turn leaves up to half a degree: 15 mm at
-            # 1.8 m), on the odometry: the localisation may correct itself on the way
-            # and move the target's estimate with it
-            obj = self._in_odom(xy)
-            # briskly: the gyro's drift, which bends the way, grows with the time it takes
+            # 1.8 m) and measure what is left on the map. Not on the odometry: a wheel's
+            # scale error (2 % is common) leaves the hand 3-4 cm short after 1.5 m
+            # (house_hard 2008: a bottle on the TV bench, the fingertips closed in front
+            # of it), where the localisation was off by 1.3 cm, and alike at the look.
+            # Briskly: the gyro's drift, which bends the way, grows with the time it takes.
             driven += self.run_actor("mini_walk", distance - g.reach - strategy.approach.standoff,
                                      speed=LONG_DRIVE_SPEED, tolerance=DRIVE_IN_TOLERANCE)
-            distance = self._face_odom(obj, strategy) if obj is not None else self._face(xy, strategy)
+            distance = self._face(xy, strategy)
         driven += self._drive_in(distance - g.reach)
         if above != height:
             self.run_actor("move_to_pose", g.reach, 0.0, height, g.pitch)
@@ -699,32 +700,6 @@ class Catcher(SubSystem):
         self.set_value("held_plan", g)
         self.set_value("moved_to", None)
         return held
-
-    def _odom_pose(self) -> tuple[float, float, float] | None:
-        if not self.check_actor("odom"):
-            return None
-        return pose2d(self.run_actor_mode("odom", "timed", 5.0))
-
-    def _in_odom(self, xy: tuple[float, float]) -> tuple[float, float] | None:
-        """The map point ``xy`` in the odometry's frame (None without odometry)."""
-        od = self._odom_pose()
-        if od is None:
-            return None
-        mx, my, myaw = self.run_actor("get_pose")
-        a = od[2] - myaw
-        dx, dy = xy[0] - mx, xy[1] - my
-        return od[0] + math.cos(a) * dx - math.sin(a) * dy, od[1] + math.sin(a) * dx + math.cos(a) * dy
-
-    def _face_odom(self, obj: tuple[float, float], strategy: Strategy) -> float:
-        """Turn until ``obj`` (odometry frame, see ``_in_odom``) is straight ahead; returns
-        its distance [m]."""
-        for _ in range(3):
-            x, y, yaw = self._odom_pose()
-            bearing = wrap(math.atan2(obj[1] - y, obj[0] - x) - yaw)
-            if abs(bearing) <= strategy.approach.max_bearing:
-                return math.hypot(obj[0] - x, obj[1] - y)
-            self.run_actor("mini_turn", bearing)
-        raise ApproachError(f"could not face the object: {math.degrees(bearing):.1f} deg off")
 
     def _put_back(self, g: GraspPlan, height: float) -> None:
         """Lower the held object to where it was grasped (as near as the arm gets)."""
