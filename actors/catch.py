@@ -444,12 +444,14 @@ class Catcher(SubSystem):
         # look pose, where the estimate and the heading to it are the same belief.
         raised = float(target.get("z") or 0.0) > RAISED
         direct = False
-        confirmed = True
+        recheck = False     # the look from afar saw nothing there: the last look must tell
         for step in ("look", "standoff"):
             # face it, look (again), and keep what else is around it out of the way
             self._face(xy, strategy)
             if step == "standoff":
-                target, confirmed = self._refine(target, cat, confirm=True)
+                target, seen = self._refine(target, cat, confirm=True)
+                # (from the standoff, the camera sees nothing of a raised object)
+                recheck = not seen and not raised
                 xy = _target_xy(target)
                 if direct:
                     break
@@ -495,7 +497,7 @@ class Catcher(SubSystem):
         # from afar saw nothing there, this one must tell: a ball with black patches,
         # taken for an end-on lying carton from 1.6 m, showed no whole segment from
         # 0.77 m, then came out of no known category from the standoff (house_hard 2052)
-        target, _ = self._refine(target, cat, confirm=not confirmed, near=MIN_LOOK)
+        target, _ = self._refine(target, cat, confirm=recheck, near=MIN_LOOK)
         xy = _target_xy(target)
         plan = self._plan(strategy, target)
         if self._off_sides(target, plan) > plan.tolerance:
