@@ -6,7 +6,8 @@ direction the normals avoid: the eigenvector of the smallest eigenvalue of their
 matrix (normals of an end cap, parallel to the axis, are dropped and the direction taken
 again). Across the axis, a circle of the known body radius is fitted to the points: its
 centre is a point of the axis. A joint least-squares refinement then moves direction and
-point together. Used by perception (``actors/perception_round.py``, ``actors/perception_segments.py``); plain numpy/scipy, no robot.
+point together. Used by perception (``actors/perception_round.py`` and
+``actors/perception_segments.py``); plain numpy/scipy, no robot.
 """
 from __future__ import annotations
 
