@@ -372,32 +372,30 @@ class Catcher(SubSystem):
                 for d in self.run_actor("object_glance")
                 if math.dist((d["x"], d["y"]), xy) > max(SAME_OBJECT, own)]
 
-    def _refine(self, target: dict, category: str, confirm: bool = False,
-                near: float = CONFIRM_RANGE[0]) -> tuple[dict, bool]:
-        """Look again from close by, when a perception actor is available: the target,
-        re-measured if the category was seen near it, and whether it was. With
-        ``confirm``, a look from ``near`` to CONFIRM_RANGE's far end that sees an object
-        of no known category where the target should be, and the category nowhere near
-        it, rejects the target."""
+    def _refine(self, target: dict, category: str, confirm: bool = False) -> dict:
+        """Look again from close by, when a perception actor is available. With
+        ``confirm``, a look that sees an object of no known category where the target
+        should be, and the category nowhere near it, rejects the target."""
         if not self.check_actor("get_found"):
-            return target, False
+            return target
         seen = self.run_actor("get_found", category)
         if not seen or math.dist(_target_xy(seen), _target_xy(target)) > 0.3:
             if confirm:
-                self._reject_if_something_else(target, category, near)
-            return target, False  # not seen, or a different object came into view: keep ours
+                self._reject_if_something_else(target, category)
+            return target  # not seen, or a different object came into view: keep ours
         if _ends_swapped(seen, target) and seen.get("confidence", 0.0) < target.get("confidence", 0.0):
-            return target, True  # seen nearly end on, its base and top taken for each other
-        return {**target, **seen}, True
+            return target  # seen nearly end on, its base and top taken for each other
+        return {**target, **seen}
 
-    def _reject_if_something_else(self, target: dict, category: str, near: float) -> None:
-        """Raise ApproachError when, from ``near`` or farther (up to CONFIRM_RANGE's end),
-        the object at the target's place is one of no known category: a distractor taken
-        for the category from afar (a yellow mug for a lying carton at 2.7 m). The search
-        is told, so that it does not send the robot back to it."""
+    def _reject_if_something_else(self, target: dict, category: str) -> None:
+        """Raise ApproachError when, from close by, the object at the target's place is
+        one of no known category: a distractor taken for the category from afar (a yellow
+        mug for a lying carton at 2.7 m). The search is told, so that it does not send the
+        robot back to it."""
         xy = _target_xy(target)
         rx, ry, _ = self.run_actor("get_pose")
-        if not near <= math.dist((rx, ry), xy) <= CONFIRM_RANGE[1]:
+        near, far = CONFIRM_RANGE
+        if not near <= math.dist((rx, ry), xy) <= far:
             return                                  # too far to tell shapes apart, or too near
         other = self.run_actor("get_found", "unknown")
         if not other or math.dist(_target_xy(other), xy) > SAME_OBJECT:
@@ -444,14 +442,11 @@ class Catcher(SubSystem):
         # look pose, where the estimate and the heading to it are the same belief.
         raised = float(target.get("z") or 0.0) > RAISED
         direct = False
-        recheck = False     # the look from afar saw nothing there: the last look must tell
         for step in ("look", "standoff"):
             # face it, look (again), and keep what else is around it out of the way
             self._face(xy, strategy)
             if step == "standoff":
-                target, seen = self._refine(target, cat, confirm=True)
-                # (from the standoff, the camera sees nothing of a raised object)
-                recheck = not seen and not raised
+                target = self._refine(target, cat, confirm=True)
                 xy = _target_xy(target)
                 if direct:
                     break
@@ -493,11 +488,8 @@ class Catcher(SubSystem):
             self._goto_first(self._fresh_views_first(poses, xy), xy, target, strategy.length, others)
         self._face(xy, strategy)
         # a last look from the standoff, the nearest and most precise one: the way here
-        # may have moved the localisation's estimate by a few centimetres. If the look
-        # from afar saw nothing there, this one must tell: a ball with black patches,
-        # taken for an end-on lying carton from 1.6 m, showed no whole segment from
-        # 0.77 m, then came out of no known category from the standoff (house_hard 2052)
-        target, _ = self._refine(target, cat, confirm=recheck, near=MIN_LOOK)
+        # may have moved the localisation's estimate by a few centimetres
+        target = self._refine(target, cat)
         xy = _target_xy(target)
         plan = self._plan(strategy, target)
         if self._off_sides(target, plan) > plan.tolerance:
@@ -513,7 +505,7 @@ class Catcher(SubSystem):
             if poses:
                 self._goto_first(poses, xy, target, strategy.length, others)
                 self._face(xy, strategy)
-                target, _ = self._refine(target, cat)
+                target = self._refine(target, cat)
                 xy = _target_xy(target)
         self._face(xy, strategy)
         return {**target, "category": cat}

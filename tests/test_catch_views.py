@@ -108,23 +108,17 @@ def test_a_close_look_that_sees_nothing_keeps_the_target(rt):
     rt.add_subsystem("eyes", _Eyes, {})
     catch = rt.add_subsystem("catch", Catcher)
     target = {"category": "bottle", "x": 1.6, "y": 0.5, "z": 0.0}
-    assert run_in_actor(rt, lambda: catch._refine(target, "bottle", confirm=True)) == (target, False)
+    assert run_in_actor(rt, lambda: catch._refine(target, "bottle", confirm=True)) == target
 
 
-def test_a_look_from_too_near_rejects_nothing_unless_the_look_from_afar_saw_nothing(rt):
+def test_a_look_from_too_near_rejects_nothing(rt):
     # from 0.33 m a lying carton's faces are misread and it comes out of no known category:
-    # that verdict is not trusted, the target stands. The approach asks the standoff's
-    # look to judge from there only when the look from afar saw nothing at the target's
-    # place (a ball with black patches, house_hard 2052)
-    from actors.catch import MIN_LOOK
-    from bt_engine import ActorError
-    something = {"category": "unknown", "x": 1.33, "y": 0.5, "z": 0.0}
-    rt.add_subsystem("eyes", _Eyes, {"unknown": something})
+    # that verdict is not trusted, the target stands
+    carton = {"category": "unknown", "x": 1.33, "y": 0.5, "z": 0.0}
+    rt.add_subsystem("eyes", _Eyes, {"unknown": carton})
     catch = rt.add_subsystem("catch", Catcher)
     target = {"category": "carton", "x": 1.33, "y": 0.5, "z": 0.0, "pose": "lying"}
-    assert run_in_actor(rt, lambda: catch._refine(target, "carton", confirm=True)) == (target, False)
-    with pytest.raises(ActorError, match=r"no carton at \(1\.33, 0\.50\): seen from 0\.33 m"):
-        run_in_actor(rt, lambda: catch._refine(target, "carton", confirm=True, near=MIN_LOOK))
+    assert run_in_actor(rt, lambda: catch._refine(target, "carton", confirm=True)) == target
 
 
 class _ArmReach(SubSystem):
