@@ -21,7 +21,7 @@ import sys
 import time
 
 from actors.perception import detect, registered_appearances
-from bench_perception_hard import _frame, _teleport
+from bench_perception_hard import _frame, _free, _teleport
 from planning.grid import OccupancyGrid, inflate
 from planning.viewpoints import viewpoints
 from sim import SimWorld
@@ -32,24 +32,15 @@ VIEWS = 8             # the survey's views per place (actors/search.py)
 ROOM = 0.25           # [m] clearance the base needs at a place (search WAYPOINT_CLEARANCE)
 
 
-def _has_room(sim: SimWorld, x: float, y: float) -> bool:
-    g = sim.grid
-    row, col = g.cell(x, y)
-    r = int(math.ceil(ROOM / g.resolution))
-    if not (r <= row < g.height - r and r <= col < g.width - r):
-        return False
-    return not (g.data[row - r:row + r + 1, col - r:col + r + 1] != 0).any()
-
-
 def _spot(sim: SimWorld, x: float, y: float) -> tuple[float, float] | None:
     """(x, y), or the nearest spot within 1 m with room for the base (as the search)."""
-    if _has_room(sim, x, y):
+    if _free(sim, x, y, ROOM):
         return x, y
     for k in range(1, 11):
         for j in range(16):
             a = j * math.pi / 8
             px, py = x + 0.1 * k * math.cos(a), y + 0.1 * k * math.sin(a)
-            if _has_room(sim, px, py):
+            if _free(sim, px, py, ROOM):
                 return px, py
     return None
 
