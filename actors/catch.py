@@ -661,6 +661,8 @@ class Catcher(SubSystem):
                                      speed=LONG_DRIVE_SPEED, tolerance=DRIVE_IN_TOLERANCE)
             distance = self._face(xy, strategy)
         driven += self._drive_in(distance - g.reach)
+        # a box is held across the side the hand came to (the narrow one may have had no room)
+        g = g.on_side(self.run_actor("get_pose")[2], _object_yaw(target, g))
         if above != height:
             self.run_actor("move_to_pose", g.reach, 0.0, height, g.pitch)
         grip = self.run_actor("close")

@@ -108,4 +108,5 @@ class Category:
         size = self.shape.height if isinstance(self.shape, Revolution) else \
             max(self.shape.x, self.shape.y, self.shape.z)
         return Strategy(self.name, self.approach, self.grasp, self.description, sides,
-                        self.lying_plans(), size)
+                        self.lying_plans(), size,
+                        tuple(self.shape.width_across(h) for h in sides) if sides else ())

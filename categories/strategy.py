@@ -93,6 +93,25 @@ class GraspPlan:
     one_way: bool = False       # only along sides, never from the opposite face
     offsets: tuple[float, ...] = (0.0,)   # one way: headings off each side [rad] the hand
     #                                       may also come from (a wall may be close)
+    widths: tuple[float, ...] = ()        # the width across the object from each of
+    #                                       ``sides`` [m] (a box's); the closed range fits the first
+
+    def on_side(self, heading: float, object_yaw: float | None) -> GraspPlan:
+        """This plan for a hand coming along ``heading`` [rad]: its closed range moved to
+        the width across the nearest of its ``sides`` (a box's other side, where the
+        narrow one has no room for the base: house_hard 2009, a carton at the study
+        table's edge, held across its 70 mm side at 71..77 mm). Itself without widths or
+        ``object_yaw``."""
+        if not self.widths or len(self.widths) != len(self.sides) or object_yaw is None:
+            return self
+        flips = (0.0,) if self.one_way else (0.0, math.pi)
+        k = min(range(len(self.sides)),
+                key=lambda i: min(abs(_wrap(heading - object_yaw - self.sides[i] - f)) for f in flips))
+        shift = self.widths[k] - self.widths[0]
+        if not shift:
+            return self
+        return replace(self, closed_min=self.closed_min + shift,
+                       closed_max=min(self.closed_max + shift, self.open_width - CLOSED_BELOW_OPEN))
 
     def holding(self, closed_width: float) -> bool:
         return self.closed_min <= closed_width <= self.closed_max
@@ -132,6 +151,8 @@ TILTED_OFFSETS = tuple(math.radians(a) for a in (0, 15, -15, 30, -30))
 #: from above, the pads (30 mm wide) close across a lying body only when the hand is
 #: nearly square to it: 8 degrees off, a 70 mm body spans 75 mm of an 85 mm opening
 LYING_OFFSETS = tuple(math.radians(a) for a in (0, 8, -8))
+#: the fingers stalled this much short of the opening still mean holding (no jam) [m]
+CLOSED_BELOW_OPEN = 0.002
 #: a box upright (held across its narrow side) or a leaning body: the hand may come this
 #: far beyond its offsets (a 45 x 70 mm carton 15 degrees off spans 62 mm)
 SIDE_TOLERANCE = math.radians(15)
@@ -153,12 +174,13 @@ class Strategy:
     lying: tuple[GraspPlan, ...] = ()   # how it is held lying on its side: one per face
     #                                     it may lie on (a box's differ in width), or none
     length: float = 0.0                 # the object's largest extent [m]
+    side_widths: tuple[float, ...] = () # the width across the object from each of ``sides``
 
     @property
     def upright(self) -> GraspPlan:
         g = self.grasp
         return GraspPlan(self.approach.reach, g.height, g.pitch, g.open_width, g.closed_min,
-                         g.closed_max, g.lift, self.sides)
+                         g.closed_max, g.lift, self.sides, widths=self.side_widths)
 
     def plan_for(self, pose: str | None, width: float | None = None) -> GraspPlan | None:
         """The grasp for an object standing ``upright`` (or of unknown pose), ``lying`` on
@@ -177,13 +199,13 @@ class Strategy:
             fits = [p for p in self.lying if p.holding(width)]
             return min(fits, key=lambda p: abs(p.across - width)) if fits else None
         if pose == "tilted":
-            plan = replace(self.upright, sides=(0.0,), one_way=True, offsets=TILTED_OFFSETS)
+            plan = replace(self.upright, sides=(0.0,), one_way=True, offsets=TILTED_OFFSETS, widths=())
             if self.upright.sides and width is not None and not plan.holding(width) \
                     and width < plan.open_width - 0.01:
                 # a box leaning with another side across the lean (house_hard 2015: its
                 # 70 mm side, the hand closing on it at 73 mm): the same grip on that side
                 plan = replace(plan, closed_min=width - (plan.across - plan.closed_min),
-                               closed_max=min(width + (plan.closed_max - plan.across), plan.open_width - 0.002))
+                               closed_max=min(width + (plan.closed_max - plan.across), plan.open_width - CLOSED_BELOW_OPEN))
             return plan
         return self.upright
 
