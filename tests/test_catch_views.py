@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pytest
 
-from actors.catch import BASE_OUTLINE, Catcher, fresh_views_first, outline_discs
+from actors.catch import BASE_OUTLINE, Catcher, fresh_views_first, outline_discs, seen_again
 from bt_engine import SubSystem, actor
 from planning.grid import OccupancyGrid, inflate
 from tests.conftest import run_in_actor
@@ -20,6 +20,17 @@ def test_the_side_of_a_failed_grasp_comes_last():
     assert [round(math.degrees(p[2])) for p in fresh_views_first(poses, obj, failed)] == [-30, 60, 0, 30]
     elsewhere = [(3.0, 2.0, math.radians(10))]                 # another object's failure
     assert fresh_views_first(poses, obj, elsewhere) == poses
+
+
+def test_a_look_again_keeps_the_lowest_base_seen():
+    far = {"category": "bottle", "x": 5.31, "y": 3.81, "z": 0.252, "pose": "upright"}
+    near = {"category": "bottle", "x": 5.29, "y": 3.80, "z": 0.386}     # only its top in view
+    again = seen_again(far, near)
+    assert (again["x"], again["y"], again["z"]) == (5.29, 3.80, 0.252)
+    assert again["pose"] == "upright"
+    fallen = seen_again(far, {"x": 5.5, "y": 3.9, "z": 0.0, "pose": "lying"})   # knocked off
+    assert fallen["z"] == 0.0 and fallen["pose"] == "lying"
+    assert seen_again({"x": 1.0, "y": 2.0}, {"x": 1.1, "y": 2.0, "z": 0.3})["z"] == 0.3
 
 
 def test_the_outline_discs_cover_the_base():
