@@ -1,0 +1,116 @@
+"""Putting a held object down (actors/catch.py: place, place_on), on a base that moves
+as told: what the place does when its way is blocked."""
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from actors.catch import Catcher
+from actors.strategies import strategy_for
+from bt_engine import ActorError, SubSystem, actor
+from tests.conftest import run_in_actor
+
+
+class _Base(SubSystem):
+    """The robot's actors a place calls. The base goes where it is told, except that its
+    first ``blocked`` gotos fail; a drive in stops ``short`` [m] before its end and fails,
+    as ``mini_walk`` does when the wheels push against something."""
+
+    def __init__(self, blocked=0, short=0.0):
+        super().__init__()
+        self.pose = [6.0, 5.0, 0.0]
+        self.blocked, self.short = blocked, short
+        self.gotos, self.released_at = [], None
+
+    @actor
+    def get_pose(self) -> tuple:
+        return tuple(self.pose)
+
+    @actor
+    def clearance(self, x: float, y: float) -> float:
+        return 1.0
+
+    @actor
+    def goto(self, x: float, y: float, yaw: float) -> None:
+        self.gotos.append((x, y))
+        if len(self.gotos) <= self.blocked:
+            raise RuntimeError(f"goto ({x:.2f}, {y:.2f}) failed: the goal is blocked")
+        self.pose = [x, y, yaw]
+
+    @actor
+    def mini_turn(self, angle: float) -> None:
+        self.pose[2] += angle
+
+    @actor
+    def mini_walk(self, distance: float, speed: float = 0.1, tolerance: float = 0.01) -> float:
+        if distance > 0 and self.short:
+            distance -= self.short
+            self._walk(distance)
+            raise RuntimeError(f"mini_walk timed out +{self.short:.3f} m short")
+        self._walk(distance)
+        return abs(distance)
+
+    def _walk(self, distance: float) -> None:
+        self.pose[0] += distance * math.cos(self.pose[2])
+        self.pose[1] += distance * math.sin(self.pose[2])
+
+    @actor
+    def reachable(self, x: float, y: float, z: float, pitch: float) -> bool:
+        return True
+
+    @actor
+    def move_to_pose(self, x: float, y: float, z: float, pitch: float) -> None:
+        self.hand = (x, z)
+
+    @actor
+    def open(self, width: float | None = None) -> None:
+        if width is not None and self.released_at is None:
+            x, y, yaw = self.pose
+            self.released_at = (x + self.hand[0] * math.cos(yaw), y + self.hand[0] * math.sin(yaw))
+
+    @actor
+    def home(self) -> None:
+        pass
+
+
+def _holding(catch: Catcher) -> None:
+    catch.set_value("holding", {"category": "can", "width": 0.066, "pose": "upright"})
+    catch.set_value("held_plan", strategy_for("can").plan_for("upright"))
+
+
+def test_a_drive_in_stopped_a_little_short_still_puts_the_object_down(rt):
+    base = rt.add_subsystem("base", _Base, short=0.015)
+    catch = rt.add_subsystem("catch", Catcher)
+    _holding(catch)
+    run_in_actor(rt, lambda: catch.place(7.0, 5.0, 0.12, 0.0))
+    assert catch.get_value("holding") is None
+    assert math.dist(base.released_at, (7.0, 5.0)) == pytest.approx(0.015, abs=0.01)
+
+
+def test_a_drive_in_stopped_far_short_fails_and_keeps_the_object(rt):
+    rt.add_subsystem("base", _Base, short=0.10)
+    catch = rt.add_subsystem("catch", Catcher)
+    _holding(catch)
+    with pytest.raises(ActorError, match="short"):
+        run_in_actor(rt, lambda: catch.place(7.0, 5.0, 0.12, 0.0))
+    assert catch.get_value("holding") is not None
+
+
+def test_a_pallet_spot_whose_standoff_is_blocked_gives_way_to_the_next(rt):
+    base = rt.add_subsystem("base", _Base, blocked=1)
+    catch = rt.add_subsystem("catch", Catcher)
+    _holding(catch)
+    run_in_actor(rt, lambda: catch.place_on(7.0, 6.2, 0.6, 0.4, 0.12))
+    assert len(base.gotos) == 2 and base.gotos[0] != base.gotos[1]   # the next spot
+    assert catch.get_value("holding") is None
+    assert catch.get_value("put_down") == [pytest.approx(base.released_at, abs=0.01)]
+
+
+def test_when_every_spot_is_blocked_the_place_fails_holding_the_object(rt):
+    rt.add_subsystem("base", _Base, blocked=100)
+    catch = rt.add_subsystem("catch", Catcher)
+    _holding(catch)
+    with pytest.raises(ActorError, match="blocked"):
+        run_in_actor(rt, lambda: catch.place_on(7.0, 6.2, 0.6, 0.4, 0.12))
+    assert catch.get_value("holding") is not None
