@@ -47,7 +47,7 @@ from .perception_box import (FACE_BOW, GRAZING, GRAZING_SLACK, TILT_FACE_ANGLE, 
 from .perception_colour import (HUE_WINDOW, MIN_SATURATION, MIN_VALUE, PALETTE, SATURATION_SHARE,  # noqa: F401
                                 Appearance, PerceptionError, _hsv_of, _hue_lut, appearance_of, colour_labels,
                                 hue_of, palette_colour, registered_appearances)
-from .perception_detect import PATCH_SHARE, UNKNOWN, _axis, _score, combine_sightings, detect  # noqa: F401
+from .perception_detect import PATCH_SHARE, UNKNOWN, _axis, _score, base_height, combine_sightings, detect  # noqa: F401
 from .perception_fit import FIT_POINTS, LYING_TILT, MAX_ERROR, UPRIGHT_TILT, _confidence  # noqa: F401
 from .perception_round import (MIN_VISIBLE_WIDTH, _profile_fit, _rise_error, _score_posed,  # noqa: F401
                                _score_upright, _visible_top, fit_circle_fixed)

@@ -126,6 +126,20 @@ def detect(frame: RGBDFrame, appearances: dict[str, Appearance] | None = None) -
     return out
 
 
+#: sightings that see at least this share of the most an object was seen of (its height)
+#: tell its base's height
+BASE_SEEN = 0.8
+
+
+def base_height(sightings: list[dict]) -> float:
+    """The height [m] of the base of an object seen in ``sightings`` (of one object): the
+    median ``z`` of those that show most of its height. Perception puts the base at the
+    lowest part in view, so from near, looking down on a table, it is the top's (house_hard
+    2002: a bottle on the TV bench, 0.25 m high, put at 0.39 m by a survey's median)."""
+    most = max(float(s.get("height") or 0.0) for s in sightings)
+    return float(np.median([s["z"] for s in sightings if float(s.get("height") or 0.0) >= BASE_SEEN * most]))
+
+
 def combine_sightings(sightings: list[dict], looks: int, gate: float = 0.08) -> dict | None:
     """One estimate from several detections of possibly several objects.
 
@@ -156,6 +170,7 @@ def combine_sightings(sightings: list[dict], looks: int, gate: float = 0.08) -> 
     kept_c = [s for s in kept if s["category"] == category] or kept
     xyz = np.array([[s["x"], s["y"], s["z"]] for s in kept_c])
     m = np.median(xyz, axis=0)
+    m[2] = base_height(kept_c)
     last = max(kept_c, key=lambda s: s["stamp"])
     est = dict(last)
     est.update({

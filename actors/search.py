@@ -12,6 +12,8 @@ from typing import Callable
 
 from bt_engine import ActorbtError, ActorError, SubSystem, actor
 
+from .perception_detect import base_height
+
 log = logging.getLogger("actors.search")
 
 #: a "category" meaning any category the perception knows
@@ -53,8 +55,9 @@ def group_sightings(sightings: list[dict], gate: float = SAME_OBJECT) -> list[di
         mine = [s for s in g if s["category"] == category]
         best = max(mine, key=lambda s: s["confidence"])
         obj = {"category": category, "sightings": len(mine), "confidence": best["confidence"]}
-        for k in ("x", "y", "z"):
+        for k in ("x", "y"):
             obj[k] = float(statistics.median(s[k] for s in mine))
+        obj["z"] = base_height(mine)
         for k in ("yaw", "pose", "axis_base", "axis_dir"):
             if best.get(k) is not None:
                 obj[k] = best[k]

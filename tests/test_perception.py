@@ -15,7 +15,7 @@ from sensor_msgs.msg import CameraInfo, Image
 from tf2_msgs.msg import TFMessage
 
 from actors.camera import RGBDFrame, image_to_array, stamp_seconds
-from actors.perception import Perception, combine_sightings, fit_circle_fixed, registered_appearances
+from actors.perception import Perception, base_height, combine_sightings, fit_circle_fixed, registered_appearances
 from bt_engine import ActorError, Runtime
 from sim import SimWorld
 from sim.description import load_world
@@ -142,6 +142,15 @@ def test_combine_sightings_rejects_outliers_and_picks_the_most_seen_object():
     est = combine_sightings(s, looks=6)
     assert est["sightings"] == 4 and est["x"] == pytest.approx(1.0) and est["category"] == "can"
     assert combine_sightings([], 3) is None
+
+
+def test_the_base_of_an_object_on_a_table_is_told_by_the_looks_that_see_most_of_it():
+    # a bottle on a 0.25 m bench: from afar its base is seen; from near only its top
+    far = [{"z": z, "height": 0.21} for z in (0.252, 0.254, 0.251)]
+    near = [{"z": z, "height": h} for z, h in ((0.386, 0.05), (0.39, 0.04), (0.37, 0.08), (0.38, 0.06))]
+    assert base_height(far + near) == pytest.approx(0.252)
+    assert base_height(near[:1]) == pytest.approx(0.386)          # all there is
+    assert base_height([{"z": 0.01}, {"z": 0.0}, {"z": 0.02}]) == pytest.approx(0.01)   # no heights
 
 
 # ----------------------------------------------------------------------------- camera

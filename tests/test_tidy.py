@@ -21,6 +21,13 @@ def test_sightings_of_one_object_are_one_entry():
     assert found[0]["x"] == pytest.approx(1.025) and found[1]["yaw"] == 0.5
 
 
+def test_a_survey_puts_an_objects_base_where_the_looks_that_see_most_of_it_do():
+    found = group_sightings([sighting("bottle", 5.30, 3.80, z=0.25, height=0.21),
+                             sighting("bottle", 5.29, 3.80, z=0.39, height=0.05),
+                             sighting("bottle", 5.29, 3.79, z=0.38, height=0.06)])
+    assert found[0]["z"] == pytest.approx(0.25)
+
+
 class FakeRobot(SubSystem):
     """Catches succeed except for bottles; carrying records where things went."""
 
