@@ -207,22 +207,27 @@ class Approaching:
                 # a look needs no particular side (a box's grasp does): from the robot's
                 # side, or around it; a lying body, though, from aside: seen end on it is
                 # often missed, or its ends mistaken
+                # (where no aside view has room, any: from end on, a look still tells a
+                # distractor from the category, which a grasp without a look cannot)
                 aside = target.get("pose") == "lying"
-                look_plan = replace(plan, sides=ASIDE if aside else (), one_way=False)
+                looks = [replace(plan, sides=sides, one_way=False) for sides in ((ASIDE, ()) if aside else ((),))]
                 poses = []
                 # a raised object is seen from a band of distances only, and its grasp
                 # comes straight in from the look: where the look distance has no room
                 # (house_hard 2005: a bottle at the study table's end, 1.8 m from it the
                 # wall), a little nearer or farther
                 steps = RAISED_LOOK_STEPS if raised else (0.0,)
-                for distance in (look + k for k in steps if look + k <= MAX_LOOK):
-                    try:
-                        poses = self._free_standoff((rx, ry), xy, strategy,
-                                                    distance - plan.reach - strategy.approach.standoff,
-                                                    others, object_yaw=target.get("yaw"), plan=look_plan)
+                for look_plan in looks:
+                    for distance in (look + k for k in steps if look + k <= MAX_LOOK):
+                        try:
+                            poses = self._free_standoff((rx, ry), xy, strategy,
+                                                        distance - plan.reach - strategy.approach.standoff,
+                                                        others, object_yaw=target.get("yaw"), plan=look_plan)
+                            break
+                        except ApproachError:
+                            continue
+                    if poses:
                         break
-                    except ApproachError:
-                        continue
                 if not poses:
                     continue  # no room to look from there (a cramped corner): go closer
                 direct = raised     # the look poses have a clear way in (the corridor)
