@@ -56,6 +56,16 @@ def _holds(plan: GraspPlan, grip: dict) -> bool:
     return bool(grip["stalled"]) and plan.holding(grip["width"])
 
 
+def _held_side(plan: GraspPlan, grip: dict) -> GraspPlan | None:
+    """The plan of the side the fingers hold the object across (``GraspPlan.side_plans``),
+    None when they hold it across none."""
+    return next((p for p in plan.side_plans() if _holds(p, grip)), None)
+
+
+def _ranges_text(plan: GraspPlan) -> str:
+    return " or ".join(f"{p.closed_min * 1000:.0f}..{p.closed_max * 1000:.0f}" for p in plan.side_plans())
+
+
 def _beyond_tips(plan: GraspPlan, grip: dict) -> float:
     """How far [m] the axis of a round body is beyond the line the fingers closed on it
     along, 0 when they closed across its axis (or it is no round body held from the side).
@@ -217,8 +227,6 @@ class Catcher(Approaching, Placing, SubSystem):
                                      speed=LONG_DRIVE_SPEED, tolerance=DRIVE_IN_TOLERANCE)
             distance = self._face(xy, strategy)
         driven += self._drive_in(distance - g.reach)
-        # a box is held across the side the hand came to (the narrow one may have had no room)
-        g = g.on_side(self.run_actor("get_pose")[2], object_yaw(target, g))
         if above != height:
             self.run_actor("move_to_pose", g.reach, 0.0, height, g.pitch)
         grip = self.run_actor("close")
@@ -234,13 +242,14 @@ class Catcher(Approaching, Placing, SubSystem):
             distance = self._face(xy, strategy)
             driven += self._drive_in(distance - g.reach)
             grip = self.run_actor("close")
-        if not _holds(g, grip):
+        held_side = _held_side(g, grip)
+        if held_side is None:
             self._remember_failed_view(xy, strategy.category)
             self._back_off(driven, g)
             self._look_for_it(xy, strategy.category)
             raise GraspError(f"{strategy.category} grasp missed: {_grip_text(grip)}, expected "
-                             f"them to stall on it at {g.closed_min * 1000:.0f}.."
-                             f"{g.closed_max * 1000:.0f} mm")
+                             f"them to stall on it at {_ranges_text(g)} mm")
+        g = held_side       # the slip checks expect the width across the side held
         # Test lift: a slip shows when the fingers close again, and the object drops only
         # a little (a can dropped from the full lift height may fall over).
         for x, z in ((g.reach, height + TEST_LIFT), self._lift_pose(g, height)):

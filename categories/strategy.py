@@ -96,22 +96,19 @@ class GraspPlan:
     widths: tuple[float, ...] = ()        # the width across the object from each of
     #                                       ``sides`` [m] (a box's); the closed range fits the first
 
-    def on_side(self, heading: float, object_yaw: float | None) -> GraspPlan:
-        """This plan for a hand coming along ``heading`` [rad]: its closed range moved to
-        the width across the nearest of its ``sides`` (a box's other side, where the
-        narrow one has no room for the base: house_hard 2009, a carton at the study
-        table's edge, held across its 70 mm side at 71..77 mm). Itself without widths or
-        ``object_yaw``."""
-        if not self.widths or len(self.widths) != len(self.sides) or object_yaw is None:
-            return self
-        flips = (0.0,) if self.one_way else (0.0, math.pi)
-        k = min(range(len(self.sides)),
-                key=lambda i: min(abs(_wrap(heading - object_yaw - self.sides[i] - f)) for f in flips))
-        shift = self.widths[k] - self.widths[0]
-        if not shift:
-            return self
-        return replace(self, closed_min=self.closed_min + shift,
-                       closed_max=min(self.closed_max + shift, self.open_width - CLOSED_BELOW_OPEN))
+    def side_plans(self) -> tuple[GraspPlan, ...]:
+        """This plan for each of its ``sides``, the first as declared: the closed range
+        moved by the width across that side (a box's wider side fits the open hand too,
+        where the narrow one has no room for the base: house_hard 2009, a carton at the
+        study table's edge, held across its 70 mm side at 71..77 mm). Which side the hand
+        came to is told by where the fingers stall: a box's yaw from afar may swap its
+        sides (house_hard 2003: the 45 mm side, taken for the 70 mm one from 2 m)."""
+        if not self.widths or len(self.widths) != len(self.sides):
+            return (self,)
+        return (self,) + tuple(replace(self, closed_min=self.closed_min + w - self.widths[0],
+                                       closed_max=min(self.closed_max + w - self.widths[0],
+                                                      self.open_width - CLOSED_BELOW_OPEN))
+                               for w in self.widths[1:])
 
     def holding(self, closed_width: float) -> bool:
         return self.closed_min <= closed_width <= self.closed_max

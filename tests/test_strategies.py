@@ -119,15 +119,13 @@ def test_a_leaning_box_is_held_across_the_side_measured_across_its_lean():
     assert can.plan_for("tilted", 0.05).closed_min == can.plan_for("upright").closed_min
 
 
-def test_an_upright_box_is_held_across_the_side_the_hand_came_to():
+def test_an_upright_box_is_held_across_either_side_that_fits_the_hand():
     upright = strategy_for("carton").plan_for("upright")
-    yaw = math.radians(30)
-    narrow = upright.on_side(yaw + math.pi + 0.05, yaw)     # either face of the 45 mm side
+    narrow, wide = upright.side_plans()
+    assert narrow == upright                                 # the range as declared: 45 mm
     assert narrow.holding(0.045) and not narrow.holding(0.072)
-    wide = upright.on_side(yaw - math.pi / 2, yaw)          # across its 70 mm side
-    assert wide.holding(0.072) and wide.holding(0.075) and not wide.holding(0.045)
+    assert wide.holding(0.072) and wide.holding(0.078) and not wide.holding(0.045)
     assert wide.closed_max < wide.open_width
-    assert upright.on_side(yaw, None) == upright            # no measured yaw: as declared
-    # a round body has one grip whatever the heading
-    can = strategy_for("can").plan_for("upright")
-    assert can.on_side(1.0, 0.0) == can
+    # a round body has one grip; so has a box lying or leaning (its plan names the side)
+    assert strategy_for("can").plan_for("upright").side_plans() == (strategy_for("can").plan_for("upright"),)
+    assert len(strategy_for("carton").plan_for("tilted", 0.045).side_plans()) == 1
