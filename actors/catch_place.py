@@ -72,8 +72,8 @@ class Placing:
         try:
             driven = self._drive_in(distance - g.reach)
         except ActorbtError:
-            # stopped short (house_hard 2003: the wheels against the pallet, 15 mm short):
-            # a little short of the spot, the object still goes down on the surface
+            # stopped short (house_hard 2003: the drive in to the pallet timed out 15 mm
+            # short): a little short of the spot, the object still goes down on the surface
             here = self.run_actor("get_pose")
             driven = math.dist(start[:2], here[:2])
             if distance - g.reach - driven > PLACE_SHORT:
@@ -150,8 +150,8 @@ class Placing:
                 except ActorbtError as e:
                     if not self.get_value("holding"):
                         raise
-                    # still held: the next spot (house_hard 2003: the standoff was free on
-                    # the map, but the costmap had an object lying on the floor by it)
+                    # still held: the next spot (house_hard 2003: a standoff free on the
+                    # map was "blocked: 0.125 m from an obstacle" for the navigation)
                     failed = e
                     continue
                 self.set_value("put_down", taken + [(px, py)])
