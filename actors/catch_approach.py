@@ -217,17 +217,14 @@ class Approaching:
                 # (house_hard 2005: a bottle at the study table's end, 1.8 m from it the
                 # wall), a little nearer or farther
                 steps = RAISED_LOOK_STEPS if raised else (0.0,)
-                for look_plan in looks:
-                    for distance in (look + k for k in steps if look + k <= MAX_LOOK):
-                        try:
-                            poses = self._free_standoff((rx, ry), xy, strategy,
-                                                        distance - plan.reach - strategy.approach.standoff,
-                                                        others, object_yaw=target.get("yaw"), plan=look_plan)
-                            break
-                        except ApproachError:
-                            continue
-                    if poses:
+                for look_plan, distance in ((p, look + k) for p in looks for k in steps if look + k <= MAX_LOOK):
+                    try:
+                        poses = self._free_standoff((rx, ry), xy, strategy,
+                                                    distance - plan.reach - strategy.approach.standoff,
+                                                    others, object_yaw=target.get("yaw"), plan=look_plan)
                         break
+                    except ApproachError:
+                        continue
                 if not poses:
                     continue  # no room to look from there (a cramped corner): go closer
                 direct = raised     # the look poses have a clear way in (the corridor)

@@ -105,10 +105,13 @@ class GraspPlan:
         sides (house_hard 2003: the 45 mm side, taken for the 70 mm one from 2 m)."""
         if not self.widths or len(self.widths) != len(self.sides):
             return (self,)
-        return (self,) + tuple(replace(self, closed_min=self.closed_min + w - self.widths[0],
-                                       closed_max=min(self.closed_max + w - self.widths[0],
-                                                      self.open_width - CLOSED_BELOW_OPEN))
-                               for w in self.widths[1:])
+        return (self,) + tuple(self.shifted(w - self.widths[0]) for w in self.widths[1:])
+
+    def shifted(self, by: float) -> GraspPlan:
+        """This plan holding a body ``by`` [m] wider: its closed range moved by that,
+        kept short of the opening."""
+        return replace(self, closed_min=self.closed_min + by,
+                       closed_max=min(self.closed_max + by, self.open_width - CLOSED_BELOW_OPEN))
 
     def holding(self, closed_width: float) -> bool:
         return self.closed_min <= closed_width <= self.closed_max
@@ -201,8 +204,7 @@ class Strategy:
                     and width < plan.open_width - 0.01:
                 # a box leaning with another side across the lean (house_hard 2015: its
                 # 70 mm side, the hand closing on it at 73 mm): the same grip on that side
-                plan = replace(plan, closed_min=width - (plan.across - plan.closed_min),
-                               closed_max=min(width + (plan.closed_max - plan.across), plan.open_width - CLOSED_BELOW_OPEN))
+                plan = plan.shifted(width - plan.across)
             return plan
         return self.upright
 
