@@ -22,6 +22,9 @@
   then costs nothing, where the estimate of a half-done relocalisation used to jump to a
   look-alike place metres away for a few seconds. The health check scores the filter's
   own estimate (``filter_map_to_odom``), so a real kidnap still converges and is adopted.
+  A converged pose farther than ``adopt_near`` from the held one is adopted only if the
+  scan fits it ``adopt_margin`` better: from a standstill by an unmapped object, one
+  scan's search may settle on a look-alike place metres away that fits no better.
 """
 from __future__ import annotations
 
@@ -40,6 +43,9 @@ UNINITIALISED = "uninitialised"
 LOCALISED = "localised"
 UNCERTAIN = "uncertain"       # initialised or relocalising, not converged yet
 LOST = "lost"                 # the scan no longer fits the map at the estimate
+
+# the spread the filter starts again with round a held pose it keeps (5 cm, 3 degrees)
+KEPT_POSE_COV = np.diag([0.05 ** 2, 0.05 ** 2, math.radians(3) ** 2])
 
 
 @dataclass
@@ -86,6 +92,8 @@ class AmclParams:
     converged_std_yaw: float = 0.12   # [rad]
     converged_weight: float = 0.8     # ... holding this share of the weight
     relocalise_grace: float = 6.0     # after a relocalisation, [s] before lost may be declared again
+    adopt_near: float = 0.5           # a relocalised pose this near the held one is adopted [m] ...
+    adopt_margin: float = 0.15        # ... one farther only if the scan fits it this much better
     auto_recover: bool = True
     recovery: str = "informed"        # "informed" (scan-matched seeding) or "uniform"
 
@@ -102,6 +110,7 @@ class Status:
     updates: int = 0
     recoveries: int = 0               # global relocalisations started because lost
     lost_count: int = 0               # times lost was declared
+    kept_count: int = 0               # relocalisations that found no better pose than the held one
     last_update_ms: float = 0.0
     last_lost: float | None = None    # when lost was last declared (clock time)
 
@@ -310,5 +319,26 @@ class Amcl:
             st.state = LOCALISED if converged else UNCERTAIN
             self._trusted = self._trusted or converged
             if converged and self.holding:
-                self.holding = False
-                self.map_to_odom = self.filter_map_to_odom
+                self._adopt_or_keep(scan, odom)
+
+    def _adopt_or_keep(self, scan: Scan, odom) -> None:
+        """The relocalisation after a lost has converged: adopt its pose, unless it lies
+        far from the held one and the scan fits it hardly better. Then the lost was a
+        false alarm (an unmapped object or the arm before the laser spoils the fit at the
+        right pose) and the search settled on a look-alike place metres away, having seen
+        one scan from a standstill. The filter starts again round the held pose, and the
+        baseline from the present fit, which the changed view has lowered."""
+        p, st = self.params, self.status
+        self.holding = False
+        held = compose(self.map_to_odom, tuple(odom))
+        found = compose(self.filter_map_to_odom, tuple(odom))
+        if math.hypot(found[0] - held[0], found[1] - held[1]) <= p.adopt_near:
+            self.map_to_odom = self.filter_map_to_odom
+            return
+        held_fit = self.match_score(scan, held)
+        if self.match_score(scan, found) >= held_fit + p.adopt_margin:
+            self.map_to_odom = self.filter_map_to_odom
+            return
+        self.initialise(held, KEPT_POSE_COV, odom=odom)
+        st.kept_count += 1
+        st.score = st.baseline = held_fit

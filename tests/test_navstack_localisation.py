@@ -263,6 +263,51 @@ def test_a_false_alarm_at_a_standstill_does_not_move_the_published_pose(house, b
     assert max(published) < 0.10
 
 
+def _converged_after_lost(world, amcl, held, found):
+    """The state in which a relocalisation after a lost converges: the published pose
+    held at ``held``, the filter's at ``found``; returns the newest scan's sample."""
+    s = world.step()
+    while s.scan is None:
+        s = world.step()
+    amcl.holding = True
+    amcl.map_to_odom = compose(held, inverse(s.odom))
+    amcl.filter_map_to_odom = compose(found, inverse(s.odom))
+    amcl._adopt_or_keep(s.scan, s.odom)
+    return s
+
+
+def test_a_relocalisation_elsewhere_that_fits_no_better_is_not_adopted(house, boxes):
+    """By an unmapped object the right pose fits the scan less: lost is declared, and
+    the search may settle on a look-alike place metres away. The held pose is kept and
+    the filter starts again round it."""
+    from navstack.synthetic import Boxes
+    world, amcl = make(house, boxes, seed=4, unmapped=0)
+    amcl.initialise(world.truth, np.diag([0.05 ** 2, 0.05 ** 2, 0.05 ** 2]), odom=world.odom)
+    drive(world, amcl, 4)
+    world.speed = world.turn = 0.0
+    x, y, th = world.truth
+    world.boxes = world.boxes + Boxes.from_list([(x + 0.45 * math.cos(th), y + 0.45 * math.sin(th), 0.3, 0.5, th)])
+    s = _converged_after_lost(world, amcl, world.truth, compose(world.truth, (0.0, 3.0, 1.5)))
+    assert not amcl.holding and amcl.status.kept_count == 1
+    assert error(amcl.pose(s.odom), s.truth)[0] < 0.01
+    assert np.all(np.abs(amcl.pf.particles[:, :2].mean(axis=0) - s.truth[:2]) < 0.05)
+    assert amcl.status.baseline == amcl.status.score < 0.9      # the present, lowered fit
+    drive(world, amcl, 3)
+    assert amcl.status.state == LOCALISED and error(amcl.pose(), world.truth)[0] < 0.05
+
+
+def test_a_relocalisation_that_fits_better_is_adopted_however_far(house, boxes):
+    """A kidnapping: the held pose is the wrong one, and the scan fits the found pose."""
+    world, amcl = make(house, boxes, seed=4, unmapped=0)
+    amcl.initialise(world.truth, np.diag([0.05 ** 2, 0.05 ** 2, 0.05 ** 2]), odom=world.odom)
+    drive(world, amcl, 4)
+    world.speed = world.turn = 0.0
+    wrong = compose(world.truth, (-2.0, 1.0, 2.0))
+    s = _converged_after_lost(world, amcl, wrong, world.truth)
+    assert amcl.status.kept_count == 0
+    assert error(amcl.pose(s.odom), s.truth)[0] < 1e-6
+
+
 def test_reproducible_with_a_seed(house, boxes):
     def run(seed):
         world, amcl = make(house, boxes, seed=1)
