@@ -38,7 +38,9 @@ def in_own_hand(detection: dict) -> bool:
 def group_sightings(sightings: list[dict], gate: float = SAME_OBJECT) -> list[dict]:
     """One entry per object from sightings of many: a sighting within ``gate`` of a
     group's first one joins it; a group's position is the median of its category's
-    sightings, its category the majority (ties: the most confident). Most-seen first."""
+    sightings, its category the majority (ties: the most confident), and so its pose
+    (upright, lying, tilted) and the yaw and axis of its most confident sighting in that
+    pose: one far sighting's lean is often noise. Most-seen first."""
     groups: list[list[dict]] = []
     for s in sightings:
         for g in groups:
@@ -58,9 +60,13 @@ def group_sightings(sightings: list[dict], gate: float = SAME_OBJECT) -> list[di
         for k in ("x", "y"):
             obj[k] = float(statistics.median(s[k] for s in mine))
         obj["z"] = base_height(mine)
+        poses = [s.get("pose") for s in mine]
+        pose = max(set(poses), key=lambda p: (poses.count(p),
+                                              max(s["confidence"] for s in mine if s.get("pose") == p)))
+        posed = max((s for s in mine if s.get("pose") == pose), key=lambda s: s["confidence"])
         for k in ("yaw", "pose", "axis_base", "axis_dir"):
-            if best.get(k) is not None:
-                obj[k] = best[k]
+            if posed.get(k) is not None:
+                obj[k] = posed[k]
         out.append(obj)
     out.sort(key=lambda o: -o["sightings"])
     return out

@@ -249,3 +249,24 @@ def test_a_target_with_no_side_to_take_it_from_is_passed_over_by_the_search(rt):
     with pytest.raises(ActorError, match="no free standoff"):
         run_in_actor(rt, lambda: catch.approach_object(target))
     assert search._rejected({"category": "carton", "x": 2.3, "y": 1.5})
+
+
+def test_a_leaning_target_whose_lean_side_has_no_room_is_approached_as_an_upright_one(rt):
+    """The survey called an upright bottle at a table's edge leaning towards the room:
+    its grasp would come from inside the table. The base comes from the room instead,
+    and the look from there measures the bottle again."""
+    rt.add_subsystem("map", _Map, _room_with_a_table(2.0))
+    catch = rt.add_subsystem("catch", Catcher)
+    target = {"category": "bottle", "x": 2.05, "y": 1.5, "z": 0.25, "pose": "tilted",
+              "yaw": math.pi, "axis_dir": [-0.25, 0.0, 0.97]}       # its top towards the room
+
+    def standoffs(target):
+        strategy = catch._strategy(target, None)
+        return catch._grasp_standoffs((0.5, 1.5), target, strategy, catch._plan(strategy, target), [])
+
+    poses = run_in_actor(rt, lambda: standoffs(target))
+    assert poses and all(x < 2.0 - 0.2 for x, _, _ in poses)             # from the room's side
+    assert math.cos(poses[0][2]) > 0.99                                  # facing the table
+    lying = {**target, "pose": "lying", "yaw": math.pi / 2, "axis_dir": None, "x": 2.3}
+    with pytest.raises(Exception, match="no free standoff"):             # no fallback for others
+        run_in_actor(rt, lambda: standoffs(lying))

@@ -28,6 +28,20 @@ def test_a_survey_puts_an_objects_base_where_the_looks_that_see_most_of_it_do():
     assert found[0]["z"] == pytest.approx(0.25)
 
 
+def test_a_surveyed_objects_pose_is_the_one_most_of_its_sightings_show():
+    """One far look's noisy axis calls an upright bottle leaning; three others do not."""
+    lean = {"pose": "tilted", "yaw": -0.86, "axis_dir": [0.18, -0.20, 0.96]}
+    found = group_sightings([sighting("bottle", 7.91, 7.44, 0.95, **lean),
+                             sighting("bottle", 7.92, 7.45, 0.80, pose="upright", yaw=0.1),
+                             sighting("bottle", 7.90, 7.43, 0.85, pose="upright", yaw=0.2),
+                             sighting("bottle", 7.91, 7.45, 0.70, pose="upright")])
+    assert found[0]["pose"] == "upright" and found[0]["yaw"] == 0.2 and "axis_dir" not in found[0]
+    assert found[0]["confidence"] == 0.95
+    tie = group_sightings([sighting("bottle", 7.91, 7.44, 0.95, **lean),
+                           sighting("bottle", 7.92, 7.45, 0.80, pose="upright")])
+    assert tie[0]["pose"] == "tilted" and tie[0]["yaw"] == -0.86
+
+
 class FakeRobot(SubSystem):
     """Catches succeed except for bottles; carrying records where things went."""
 
