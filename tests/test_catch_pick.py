@@ -1,5 +1,5 @@
 """The approach keeps off the object it goes for, and lines up with it again when it is
-off the side the hand must come from (actors/catch.py)."""
+off the side the hand must come from (actors/catch_approach.py)."""
 from __future__ import annotations
 
 import math

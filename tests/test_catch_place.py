@@ -1,4 +1,4 @@
-"""Putting a held object down (actors/catch.py: place, place_on), on a base that moves
+"""Putting a held object down (actors/catch_place.py: place, place_on), on a base that moves
 as told: what the place does when its way is blocked."""
 from __future__ import annotations
 

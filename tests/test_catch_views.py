@@ -1,4 +1,6 @@
-"""A grasp that failed is retried from another side (actors/catch.py)."""
+"""The approach to an object (actors/catch_approach.py, actors/catch_geometry.py): the
+closer looks, the standoffs with room for the base, and a failed grasp retried from
+another side."""
 from __future__ import annotations
 
 import math
