@@ -381,7 +381,9 @@ class Localiser(SubSystem):
             state (uninitialised, uncertain, localised or lost), pose [x m, y m, yaw rad]
             in the map frame now, score (share of beams that fit the map, smoothed),
             std_xy [m] and std_yaw [rad] of the estimate, particles, clusters, updates,
-            recoveries (times lost was declared), last_update_ms
+            recoveries (times lost was declared), kept_count (relocalisations after a
+            lost that found no better pose than the one held: false alarms),
+            last_update_ms
         """
         with self._lock:
             if self.amcl is None:
