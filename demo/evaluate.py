@@ -67,6 +67,8 @@ def evaluate(tree: str, seeds: int, world: str = "house", category: str = "mixed
     t0 = time.perf_counter()
 
     def tick() -> None:
+        if episodes:   # the CSV so far: a run cut off keeps the episodes it finished
+            write_csv(sorted(episodes, key=lambda e: (e.seed, e.category)), out / "episodes.csv")
         if progress is None:
             return
         n, ok = len(episodes), sum(e.success for e in episodes)

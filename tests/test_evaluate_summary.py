@@ -1,6 +1,10 @@
-"""demo.evaluate.print_rates: the benchmarks' success summary, one line per group."""
+"""demo.evaluate: the benchmarks' success summary (one line per group) and their CSV."""
+import csv
 import io
 
+import pytest
+
+import demo.evaluate as evaluation
 from demo.episode import Episode
 from demo.evaluate import print_pose_table, print_rates
 
@@ -32,3 +36,18 @@ def test_successes_per_category_and_pose():
     assert head.split() == ["by", "pose", "upright", "lying", "tilted", "none"]
     assert rows[0].split() == ["can", "1/2", "1/1", "-", "-"]
     assert rows[1].split() == ["carton", "-", "-", "-", "0/1"]     # no pick was tried
+
+
+def test_a_run_cut_off_keeps_the_episodes_it_finished_in_its_csv(tmp_path, monkeypatch):
+    def one(seed):
+        if seed == 3:
+            raise KeyboardInterrupt       # the run is stopped during its third episode
+        return Episode("bt_pick_place", "house", seed, "can", success=seed == 1, sim_time=10.0)
+
+    monkeypatch.setattr(evaluation, "_jobs", lambda tree, world, seeds, first, *rest: list(range(first, first + seeds)))
+    monkeypatch.setattr(evaluation, "_one", one)
+    with pytest.raises(KeyboardInterrupt):
+        evaluation.evaluate("bt_pick_place", 4, "house", "can", jobs=1, out_dir=tmp_path, first_seed=1,
+                            progress=None, config=object())
+    rows = list(csv.DictReader(open(tmp_path / "episodes.csv")))
+    assert [(r["seed"], r["success"]) for r in rows] == [("1", "True"), ("2", "False")]
