@@ -52,6 +52,8 @@ class Appearance:
                                 # as its colour, across a palette boundary
     saturation: int | None = None   # its saturation (0..255): a segment far less saturated
                                     # (SATURATION_SHARE) is something else of its hue
+    label: tuple[float, float] | None = None   # a band round it, from .. to [m] above its base,
+    #                                            in another colour (a paper label)
 
     @property
     def is_box(self) -> bool:
@@ -117,9 +119,20 @@ def appearance_of(category: categories.Category) -> Appearance:
     hue, sat, _ = _hsv_of(category.rgba)
     common = dict(name=category.name, colour=palette_colour(category.rgba), hue=hue, saturation=sat,
                   min_confidence=category.min_confidence, description=category.description)
+    label = category.label
+    if label is not None and not _same_colour(label.rgba, common["colour"]):
+        common["label"] = (label.bottom, label.top)
     if isinstance(shape, categories.Box):
         return Appearance(box=(shape.x, shape.y, shape.z), **common)
     return Appearance(sections=tuple(shape.sections), **common)
+
+
+def _same_colour(rgba, colour: str) -> bool:
+    """Is ``rgba`` the palette colour ``colour`` (a colourless one, white paper, is none)?"""
+    try:
+        return palette_colour(rgba) == colour
+    except PerceptionError:
+        return False
 
 
 def registered_appearances() -> dict[str, Appearance]:

@@ -21,6 +21,8 @@ DEPTH_NOISE = 0.001     # [m] RMS a true cylinder's surface may deviate from the
                         # with exact depth (the rendering's own error is ~0.3 mm)
 OCCLUDER_LOOK = 3       # [px] how far beyond a segment's edge an occluder is looked for
 LABEL_GAP = 0.10        # [m] a printed label this tall may split an object's colour in two
+BELOW_ROWS = (3, 4, 5)  # [px] below a segment's lowest pixels, where its surface is looked
+#                         for going on down (a label below it) rather than meeting a support
 
 
 def _occlusion_cuts(lab: np.ndarray, depth: np.ndarray) -> np.ndarray:
@@ -84,6 +86,8 @@ class _Segment:
     saturation: float = 255.0        # median saturation of its pixels (0..255)
     continued: float = 0.0           # share of its surroundings that continue its surface
     #                                  in colour (measured when in_structure: a patch of it)
+    continues_below: bool = False    # its surface goes on straight down below it, in no
+    #                                  category's colour: its lowest part is not its base
 
     @property
     def noise(self) -> float:
@@ -199,7 +203,33 @@ def _measure(colour: str, comp: np.ndarray, x0: int, y0: int, P: np.ndarray, dep
                     bbox=(bx0, by0, x1, y1), truncated=trunc, occluded=occluded, hidden=hidden, pts=pts,
                     hts=pts[:, 2] - base, base=base, top=float(pts[:, 2].max()), cam_xy=cam_xy,
                     ray=ray, lateral=lateral,
-                    m_per_px=m_per_px, range=rng, frame=frame, grid=_segment_grid(comp, x0, y0, P))
+                    m_per_px=m_per_px, range=rng, frame=frame, grid=_segment_grid(comp, x0, y0, P),
+                    continues_below=_continues_below(low, cols, P, lab, cam_xy, m_per_px))
+
+
+def _continues_below(low: np.ndarray, cols: np.ndarray, P: np.ndarray, lab: np.ndarray,
+                     cam_xy: np.ndarray, m_per_px: float) -> bool:
+    """Does the surface go on straight down below a segment (``low``: its lowest pixel's
+    row in each of ``cols``), in no category's colour? A pixel BELOW_ROWS rows lower is
+    then about as many pixel heights lower and no nearer; on a support it is at the same
+    height and nearer (the floor: 14..44 cm nearer 3..6 rows below a bottle at 1.6 m, the
+    camera 9 cm high). So a bottle on a table, seen across it from the low camera, shows
+    its cream label under the green above it: the green ends at the label's top."""
+    h = lab.shape[0]
+    rz, rh = [], []
+    for dy in BELOW_ROWS:
+        inside = low[cols] + dy < h
+        c, r = cols[inside], low[cols][inside]
+        q, b = P[r + dy, c], P[r, c]
+        ok = (lab[r + dy, c] == 0) & np.isfinite(q).all(axis=1) & np.isfinite(b).all(axis=1)
+        if not ok.any():
+            continue
+        step = dy * m_per_px
+        rz.append((q[ok, 2] - b[ok, 2]) / step)
+        rh.append((np.hypot(*(q[ok, :2] - cam_xy).T) - np.hypot(*(b[ok, :2] - cam_xy).T)) / step)
+    if not rz or sum(len(v) for v in rz) < 0.5 * len(BELOW_ROWS) * len(cols):
+        return False
+    return bool(np.median(np.concatenate(rz)) < -0.5 and np.median(np.abs(np.concatenate(rh))) < 0.5)
 
 
 def _segment_grid(comp: np.ndarray, x0: int, y0: int, P: np.ndarray) -> np.ndarray:
