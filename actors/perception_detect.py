@@ -59,7 +59,7 @@ def _base(seg: _Segment, app: Appearance | None, evidence: dict) -> float:
     if app is None or app.label is None or evidence.get("pose", "upright") == "lying" \
             or not seg.continues_below:
         return seg.base
-    return seg.base - app.label[1]     # (leaning, a little less: ignored, as its lean seen so is noise)
+    return seg.base - app.label[1]   # (a leaning one's is a little less; its lean, seen so, is noise)
 
 
 def detect(frame: RGBDFrame, appearances: dict[str, Appearance] | None = None) -> list[dict]:

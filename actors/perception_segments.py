@@ -212,7 +212,7 @@ def _continues_below(low: np.ndarray, cols: np.ndarray, P: np.ndarray, lab: np.n
     """Does the surface go on straight down below a segment (``low``: its lowest pixel's
     row in each of ``cols``), in no category's colour? A pixel BELOW_ROWS rows lower is
     then about as many pixel heights lower and no nearer; on a support it is at the same
-    height and nearer (the floor: 14..44 cm nearer 3..6 rows below a bottle at 1.6 m, the
+    height and nearer (the floor: 23..35 cm nearer 3..5 rows below a bottle at 1.6 m, the
     camera 9 cm high). So a bottle on a table, seen across it from the low camera, shows
     its cream label under the green above it: the green ends at the label's top."""
     h = lab.shape[0]
