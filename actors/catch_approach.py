@@ -266,17 +266,18 @@ class Approaching:
 
     def _grasp_standoffs(self, robot_xy: tuple[float, float], target: dict, strategy: Strategy,
                          plan: GraspPlan, others: list[dict]) -> list[tuple[float, float, float]]:
-        """The free standoffs for ``plan``. A leaning target is taken from the side its
-        base is on only; where that side has no room, it is approached as an upright one
-        would be: a lean measured from afar is a guess (house_hard 2011: an upright
-        bottle at the study table's end, called leaning by the survey, its lean side
-        towards the wall), and the look from the standoff measures it again."""
+        """The free standoffs for ``plan``. A leaning or lying target is taken from some
+        sides only; where none has room, it is approached as an upright one would be: a
+        pose measured from afar is a guess, and the look from the standoff measures it
+        again (house_hard 2011: an upright bottle at the study table's end, called leaning
+        by the survey, its lean side towards the wall; carton 2040: an upright carton on
+        the TV bench, called lying from 3.4 m)."""
         xy = target_xy(target)
         try:
             return self._free_standoff(robot_xy, xy, strategy, others=others,
                                        object_yaw=object_yaw(target, plan), plan=plan)
         except ApproachError:
-            if target.get("pose") != "tilted":
+            if target.get("pose") in (None, "upright"):
                 raise
         return self._free_standoff(robot_xy, xy, strategy, others=others, plan=strategy.upright)
 

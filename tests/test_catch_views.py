@@ -253,10 +253,10 @@ def test_a_target_with_no_side_to_take_it_from_is_passed_over_by_the_search(rt):
     assert search._rejected({"category": "carton", "x": 2.3, "y": 1.5})
 
 
-def test_a_leaning_target_whose_lean_side_has_no_room_is_approached_as_an_upright_one(rt):
-    """The survey called an upright bottle at a table's edge leaning towards the room:
-    its grasp would come from inside the table. The base comes from the room instead,
-    and the look from there measures the bottle again."""
+def test_a_leaning_or_lying_target_whose_sides_have_no_room_is_approached_as_an_upright_one(rt):
+    """The survey called an upright bottle at a table's edge leaning towards the room, or
+    lying along the edge: its grasp would come from inside the table. The base comes from
+    the room instead, and the look from there measures the bottle again."""
     rt.add_subsystem("map", _Map, _room_with_a_table(2.0))
     catch = rt.add_subsystem("catch", Catcher)
     target = {"category": "bottle", "x": 2.05, "y": 1.5, "z": 0.25, "pose": "tilted",
@@ -269,6 +269,12 @@ def test_a_leaning_target_whose_lean_side_has_no_room_is_approached_as_an_uprigh
     poses = run_in_actor(rt, lambda: standoffs(target))
     assert poses and all(x < 2.0 - 0.2 for x, _, _ in poses)             # from the room's side
     assert math.cos(poses[0][2]) > 0.99                                  # facing the table
-    lying = {**target, "pose": "lying", "yaw": math.pi / 2, "axis_dir": None, "x": 2.3}
-    with pytest.raises(Exception, match="no free standoff"):             # no fallback for others
-        run_in_actor(rt, lambda: standoffs(lying))
+    lying = {**target, "pose": "lying", "yaw": math.pi / 2, "axis_dir": None}   # along the edge
+    strategy = catch._strategy(lying, None)
+    with pytest.raises(Exception, match="no free standoff"):            # across it: in the table
+        run_in_actor(rt, lambda: catch._free_standoff((0.5, 1.5), (2.05, 1.5), strategy,
+                                                      object_yaw=math.pi / 2, plan=catch._plan(strategy, lying)))
+    assert all(x < 2.0 - 0.2 for x, _, _ in run_in_actor(rt, lambda: standoffs(lying)))
+    upright = {**target, "pose": "upright", "x": 2.3}       # in the table's middle: out of reach
+    with pytest.raises(Exception, match="no free standoff"):
+        run_in_actor(rt, lambda: standoffs(upright))
