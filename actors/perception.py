@@ -135,7 +135,8 @@ class Perception(SubSystem):
         return ret
 
     @actor(read_only=True)
-    def get_found(self, category: str | None = None, looks: int = 5) -> dict | None:
+    def get_found(self, category: str | None = None, looks: int = 5, near: list[float] | None = None,
+                  within: float = 0.3) -> dict | None:
         """A reliable estimate from ``looks`` consecutive frames: sightings are grouped by
         position, outliers dropped, and the median kept. Adds ``sightings``, ``looks`` and
         ``spread`` [m] to the detection fields; None when nothing was seen.
@@ -144,8 +145,13 @@ class Perception(SubSystem):
             category: the object category to look for (can, bottle, or unknown: an
                 object of no known category); None: any known category
             looks: how many consecutive camera frames to combine
+            near: [x, y] in the map frame [m]: only objects seen within ``within`` of it
+                (what is at that place); None: the object seen most often, then nearest
+            within: see ``near`` [m]
         """
         self._check_category(category)
+        if near is not None and (not isinstance(near, (list, tuple)) or len(near) != 2):
+            raise PerceptionError(f"near must be [x, y] in the map frame, got {near!r}")
         looks = max(1, int(looks))
         sightings: list[dict] = []
         n = 0
@@ -157,7 +163,8 @@ class Perception(SubSystem):
                     break
         if n == 0:
             raise PerceptionError("no camera frames")
-        return combine_sightings(sightings, n)
+        return combine_sightings(sightings, n, near=None if near is None else (float(near[0]), float(near[1])),
+                                 within=float(within))
 
     @actor(read_only=True)
     def measure_distance(self, category: str | None = None) -> Iterator[dict | None]:

@@ -153,13 +153,18 @@ def base_height(sightings: list[dict]) -> float:
     return float(np.median([s["z"] for s in sightings if float(s.get("height") or 0.0) >= BASE_SEEN * most]))
 
 
-def combine_sightings(sightings: list[dict], looks: int, gate: float = 0.08) -> dict | None:
+def combine_sightings(sightings: list[dict], looks: int, gate: float = 0.08,
+                      near: tuple[float, float] | None = None, within: float = 0.3) -> dict | None:
     """One estimate from several detections of possibly several objects.
 
     Detections are grouped by position (within ``gate`` [m] of a group's median); the group
     seen most often (then the nearest) wins. Its position is the median after dropping
     sightings more than max(2 cm, 3 MAD) from the first median; its category the majority.
+    With ``near`` (x, y [m]), only detections within ``within`` [m] of it count: what is
+    at a place, not the nearest or most seen object anywhere in view.
     """
+    if near is not None:
+        sightings = [d for d in sightings if math.hypot(d["x"] - near[0], d["y"] - near[1]) <= within]
     if not sightings:
         return None
     groups: list[list[dict]] = []

@@ -83,9 +83,11 @@ class _Segment:
     grid: np.ndarray | None = None   # (h, w, 3) map-frame points over the bounding box,
                                      # NaN outside the segment (image neighbours stay neighbours)
     in_structure: float = 0.0        # share of its pixels in a coloured region of furniture size
+    #                                  (its surface going on without a depth step)
     saturation: float = 255.0        # median saturation of its pixels (0..255)
     continued: float = 0.0           # share of its surroundings that continue its surface
-    #                                  in colour (measured when in_structure: a patch of it)
+    #                                  in colour (measured when it is mostly in a coloured
+    #                                  region of furniture size in the image: a patch of it)
     continues_below: bool = False    # its surface goes on straight down below it, in no
     #                                  category's colour: its lowest part is not its base
 
@@ -336,12 +338,32 @@ def _bridge_labels(mask: np.ndarray, lab: np.ndarray, depth: np.ndarray, P: np.n
     return out
 
 
-def _structure(lab: np.ndarray, P: np.ndarray) -> np.ndarray:
-    """Pixels of coloured regions (of any colours together, before depth cuts) larger than
-    MAX_UNKNOWN_SIZE: furniture and walls. Light and noise break a brown bench into
-    small patches of two hues; none of them is an object."""
-    big = np.zeros(lab.shape, bool)
-    for x0, y0, roi in _components(lab > 0):
+def _depth_steps(coloured: np.ndarray, depth: np.ndarray) -> np.ndarray:
+    """Coloured pixels on either side of a depth step (OCCLUSION_JUMP) to a coloured
+    neighbour, along rows, columns and diagonals: where one thing stands in front of
+    another. Without them, an object before furniture is not one region with it (house_hard
+    2034: a yellow ball before an orange sofa 2 m behind, in the image one region with it,
+    was taken for a part of the sofa and not seen)."""
+    D = np.where(np.isfinite(depth), depth, np.inf)
+    step = np.zeros(coloured.shape, bool)
+    h, w = coloured.shape
+    for dy, dx in ((0, 1), (1, 0), (1, 1), (1, -1)):
+        a_sl = (slice(0, h - dy), slice(max(0, -dx), w - max(0, dx)))
+        b_sl = (slice(dy, h), slice(max(0, dx), w - max(0, -dx)))
+        a, b = D[a_sl], D[b_sl]
+        with np.errstate(invalid="ignore"):
+            jump = coloured[a_sl] & coloured[b_sl] & (np.abs(a - b) > np.maximum(OCCLUSION_JUMP, 0.04 * np.minimum(a, b)))
+        step[a_sl] |= jump
+        step[b_sl] |= jump
+    return step
+
+
+def _structure(coloured: np.ndarray, P: np.ndarray) -> np.ndarray:
+    """Pixels of regions of ``coloured`` (of any colours together) larger than
+    MAX_UNKNOWN_SIZE: furniture and walls. Light and noise break a brown bench into small
+    patches of two hues; none of them is an object."""
+    big = np.zeros(coloured.shape, bool)
+    for x0, y0, roi in _components(coloured):
         pts = P[y0:y0 + roi.shape[0], x0:x0 + roi.shape[1]][roi]
         pts = pts[np.isfinite(pts).all(axis=1)]
         if len(pts) < MIN_PIXELS:
@@ -381,7 +403,9 @@ def _segments(frame: RGBDFrame, P: np.ndarray, appearances=()) -> list[_Segment]
     hsv = cv2.cvtColor(frame.bgr, cv2.COLOR_BGR2HSV)
     lab, names = colour_labels(frame.bgr, appearances, hsv)
     cut = _occlusion_cuts(lab, frame.depth)
-    structure = _structure(lab, P)
+    coloured = lab > 0
+    flat = _structure(coloured, P)                       # patches of furniture: see continued
+    structure = _structure(coloured & ~_depth_steps(coloured, frame.depth), P)
     saturation = hsv[:, :, 1]
     out = []
     for i, name in enumerate(names, 1):
@@ -402,10 +426,13 @@ def _segments(frame: RGBDFrame, P: np.ndarray, appearances=()) -> list[_Segment]
                 roi = roi | (holes & (np.abs(d - dm) < 0.1))
             seg = _measure(name, roi, x0, y0, P, frame.depth, lab, frame)
             if seg is not None and seg.range <= MAX_RANGE:
+                # structure: what it is one region with where the depth goes on; the
+                # patch test looks at the regions of colour in the image (a patch of a
+                # bench may be cut from the rest of it by a step in its surface)
                 seg.in_structure = float(structure[y0:y0 + bh, x0:x0 + bw][roi].mean())
                 own = roi & (lab[y0:y0 + bh, x0:x0 + bw] == i)    # not a label it was bridged over
                 seg.saturation = float(np.median(saturation[y0:y0 + bh, x0:x0 + bw][own])) if own.any() else 0.0
-                if seg.in_structure > 0.5:
+                if float(flat[y0:y0 + bh, x0:x0 + bw][roi].mean()) > 0.5:
                     seg.continued = _continued_share(roi, x0, y0, lab, frame.depth)
                 out.append(seg)
     return out

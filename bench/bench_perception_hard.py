@@ -11,6 +11,12 @@ detection of its category within 6 cm of its body centre); the pose reported rig
 position error of the body centre (x, y) median / 95th percentile; and, over all views,
 false detections (a category reported where no object of it is).
 
+Distractors (objects of no registered category) are looked at the same way: seen as an
+object of no known category at their place (what lets the robot's close look reject a
+distractor taken for a category from afar), seen as a category (false), or not seen. And
+over all views: objects of no known category reported where no object is (parts of
+furniture taken for objects).
+
     .venv/bin/python bench/bench_perception_hard.py [--seeds 10] [--views 4] [--png DIR]
 """
 from __future__ import annotations
@@ -30,6 +36,8 @@ from sim._pybullet import pybullet as p
 
 MATCH = 0.06          # [m] a detection this close to the body centre is the object
 FALSE = 0.12          # [m] a category detection farther than this from any of its objects
+DECOY_MATCH = 0.08    # [m] a detection this close to a distractor's origin is of it
+STRAY = 0.15          # [m] an unknown object farther than this from every object is none
 
 
 def _pose_matrix(pos, orn) -> np.ndarray:
@@ -77,7 +85,8 @@ def main() -> int:
 
     apps = registered_appearances()
     rows = defaultdict(lambda: {"views": 0, "seen": 0, "pose": 0, "err": []})
-    false = views_total = 0
+    decoys = defaultdict(lambda: {"views": 0, "unknown": 0, "category": 0})
+    false = views_total = stray = 0
     for seed in range(args.first_seed, args.first_seed + args.seeds):
         sim = SimWorld(None, args.world, seed=seed)
         rng = np.random.default_rng(seed)
@@ -86,10 +95,12 @@ def main() -> int:
             truth = {n: (sim.object_category(n), placed_by_name[n]) for n in sim.object_names()}
             poses = sim.object_poses()
             for name, (cat, placed) in truth.items():
+                pose = poses[name]
                 if cat not in apps:
+                    ox, oy, oz = pose[:3]
+                    _look_at_decoy(sim, rng, args.views, apps, (ox, oy, oz), decoys[cat])
                     continue
                 # the point perception reports: the middle of the body (a bottle's, not its neck)
-                pose = poses[name]
                 R = np.array(p.getMatrixFromQuaternion(pose[3:])).reshape(3, 3)
                 app = apps[cat]
                 ox, oy, oz = np.array(pose[:3]) + R @ [0.0, 0.0, 0.5 * app.body_top - 0.5 * app.height]
@@ -125,6 +136,8 @@ def main() -> int:
                         print(f"  seed {seed} {name} {placed.pose_kind} on {placed.support} view {got}: "
                               f"missed; saw {[(dd['category'], round(dd['x'], 2), round(dd['y'], 2)) for dd in dets]}"
                               f" (object at {ox:.2f}, {oy:.2f})")
+                    stray += sum(1 for dd in dets if dd["category"] not in apps
+                                 and min(math.dist((dd["x"], dd["y"]), q[:2]) for q in poses.values()) > STRAY)
                     for dd in dets:
                         if dd["category"] in apps and not any(
                                 c == dd["category"] and math.dist((dd["x"], dd["y"]), poses[n][:2]) < FALSE
@@ -146,7 +159,40 @@ def main() -> int:
               f"{statistics.median(err) if err else float('nan'):8.1f} "
               f"{float(np.percentile(err, 95)) if err else float('nan'):8.1f}")
     print(f"false category detections: {false} in {views_total} views")
+    print(f"objects of no known category where no object is: {stray} in {views_total} views")
+    print(f"\n{'distractor':10s} {'views':>5s} {'unknown':>8s} {'category':>8s} {'unseen':>7s}")
+    total = {"views": 0, "unknown": 0, "category": 0}
+    for kind, row in sorted(decoys.items()) + [("all", total)]:
+        if kind != "all":
+            for k in total:
+                total[k] += row[k]
+        v = max(1, row["views"])
+        print(f"{kind:10s} {row['views']:5d} {row['unknown'] / v:8.0%} {row['category'] / v:8.0%} "
+              f"{(row['views'] - row['unknown'] - row['category']) / v:7.0%}")
     return 0
+
+
+def _look_at_decoy(sim: SimWorld, rng, views: int, apps: dict, at: tuple, row: dict) -> None:
+    """Views of a distractor at ``at`` (its x, y, z), as of a category object: seen as of no
+    known category there, as a category, or not at all."""
+    ox, oy, oz = at
+    near, far = (0.45, 0.9) if oz < 0.15 else (1.1, 1.8)
+    got = 0
+    for _ in range(200):
+        if got >= views:
+            break
+        a, d = rng.uniform(-math.pi, math.pi), rng.uniform(near, far)
+        x, y = ox - d * math.cos(a), oy - d * math.sin(a)
+        if not _free(sim, x, y):
+            continue
+        got += 1
+        _teleport(sim, x, y, a)
+        at_it = [dd for dd in detect(_frame(sim), apps) if math.dist((dd["x"], dd["y"]), (ox, oy)) < DECOY_MATCH]
+        row["views"] += 1
+        if any(dd["category"] in apps for dd in at_it):
+            row["category"] += 1
+        elif at_it:
+            row["unknown"] += 1
 
 
 if __name__ == "__main__":

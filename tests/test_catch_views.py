@@ -82,7 +82,8 @@ def test_the_base_drives_up_to_a_table_edge_to_reach_an_object_on_it(rt):
 
 class _Eyes(SubSystem):
     """The pose and perception actors the close look asks: from (1.0, 0.5) the robot sees,
-    per category, what ``sees`` says (a detection dict or None)."""
+    per category, what ``sees`` says (a detection dict, a list of them, nearest the robot
+    first, or None)."""
 
     def __init__(self, sees):
         super().__init__()
@@ -93,8 +94,13 @@ class _Eyes(SubSystem):
         return (1.0, 0.5, 0.0)
 
     @actor
-    def get_found(self, category: str | None = None, looks: int = 5) -> dict | None:
-        return self.sees.get(category)
+    def get_found(self, category: str | None = None, looks: int = 5, near: list | None = None,
+                  within: float = 0.3) -> dict | None:
+        seen = self.sees.get(category)
+        seen = [] if seen is None else seen if isinstance(seen, list) else [seen]
+        if near is not None:
+            seen = [d for d in seen if math.dist((d["x"], d["y"]), near) <= within]
+        return seen[0] if seen else None
 
 
 def test_a_close_look_at_a_distractor_rejects_the_target_and_the_search_passes_it_over(rt):
@@ -114,6 +120,19 @@ def test_a_close_look_at_a_distractor_rejects_the_target_and_the_search_passes_i
     assert search._rejected({"category": "carton", "x": 1.7, "y": 0.55})        # that one again
     assert not search._rejected({"category": "carton", "x": 2.5, "y": 0.5})     # another carton
     assert not search._rejected({"category": "can", "x": 1.6, "y": 0.5})        # not what was rejected
+
+
+def test_the_close_look_asks_what_is_at_the_targets_place_not_what_is_nearest(rt):
+    # house_hard 2034: a ball taken for a lying carton from afar; from the look pose a tube
+    # is nearer the robot, and the estimate of the nearest unknown object is the tube's
+    from bt_engine import ActorError
+    tube = {"category": "unknown", "x": 1.3, "y": 0.1, "z": 0.0}
+    ball = {"category": "unknown", "x": 1.61, "y": 0.5, "z": 0.0}
+    rt.add_subsystem("eyes", _Eyes, {"unknown": [tube, ball]})
+    catch = rt.add_subsystem("catch", Catcher)
+    target = {"category": "carton", "x": 1.6, "y": 0.5, "z": 0.0, "pose": "lying"}
+    with pytest.raises(ActorError, match=r"no carton at \(1\.60, 0\.50\)"):
+        run_in_actor(rt, lambda: catch._refine(target, "carton", confirm=True))
 
 
 def test_a_close_look_that_sees_nothing_keeps_the_target(rt):

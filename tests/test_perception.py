@@ -142,6 +142,28 @@ def test_combine_sightings_rejects_outliers_and_picks_the_most_seen_object():
     est = combine_sightings(s, looks=6)
     assert est["sightings"] == 4 and est["x"] == pytest.approx(1.0) and est["category"] == "can"
     assert combine_sightings([], 3) is None
+    # what is at a place: the object seen once there, not the one seen most elsewhere
+    there = combine_sightings(s, looks=6, near=(2.02, 1.0), within=0.12)
+    assert there["sightings"] == 1 and there["x"] == pytest.approx(2.0)
+    assert combine_sightings(s, looks=6, near=(3.0, 3.0), within=0.12) is None
+
+
+def test_an_object_before_furniture_of_a_colour_is_not_part_of_it():
+    # house_hard 2034: a yellow ball 0.8 m away, in the image touching an orange sofa 3 m
+    # behind it; both coloured, they were one region, of furniture size
+    from actors.perception_segments import _depth_steps, _structure
+    h, w, f = 60, 80, 100.0
+    depth = np.full((h, w), 3.0, np.float32)
+    coloured = np.zeros((h, w), bool)
+    coloured[10:40, :] = True                       # the sofa, 2.4 m wide
+    coloured[35:47, 30:42] = True                   # the ball, before it
+    depth[35:47, 30:42] = 0.8
+    v, u = np.mgrid[0:h, 0:w]
+    P = np.stack([(u - w / 2) / f * depth, (v - h / 2) / f * depth, depth], axis=-1)   # x, y across; z depth
+    ball = (slice(36, 46), slice(31, 41))
+    assert _structure(coloured, P)[ball].all()      # one region in the image
+    structure = _structure(coloured & ~_depth_steps(coloured, depth), P)
+    assert not structure[ball].any() and structure[15, 5]
 
 
 def test_the_base_of_an_object_on_a_table_is_told_by_the_looks_that_see_most_of_it():
