@@ -8,7 +8,8 @@ clearance from the world's grid), facing it. Each view renders one camera frame 
 
 Reported per category and pose: views where the object is in the image; recognised (a
 detection of its category within 6 cm of its body centre); the pose reported right;
-position error of the body centre (x, y) median / 95th percentile; and, over all views,
+position error of the body centre (x, y) and of the base's height (z, against the object's
+lowest point) median / 95th percentile; and, over all views,
 false detections (a category reported where no object of it is).
 
 Distractors (objects of no registered category) are looked at the same way: seen as an
@@ -88,7 +89,7 @@ def main() -> int:
     band = tuple(float(v) for v in args.band.split(","))
 
     apps = registered_appearances()
-    rows = defaultdict(lambda: {"views": 0, "seen": 0, "pose": 0, "err": []})
+    rows = defaultdict(lambda: {"views": 0, "seen": 0, "pose": 0, "err": [], "z_err": []})
     decoys = defaultdict(lambda: {"views": 0, "unknown": 0, "category": 0})
     false = views_total = stray = 0
     for seed in range(args.first_seed, args.first_seed + args.seeds):
@@ -132,6 +133,9 @@ def main() -> int:
                     if hit:
                         row["seen"] += 1
                         row["err"].append(1000 * math.dist((hit[0]["x"], hit[0]["y"]), (ox, oy)))
+                        # the base: the support's height, the lowest point of the object
+                        lowest = p.getAABB(sim.scene.objects[name], physicsClientId=sim.cid)[0][2]
+                        row["z_err"].append(1000 * abs(hit[0]["z"] - lowest))
                         if (hit[0].get("pose") or "upright") == placed.pose_kind:
                             row["pose"] += 1
                     elif args.png:
@@ -156,13 +160,15 @@ def main() -> int:
         print(f"seed {seed} done", file=sys.stderr)
 
     print(f"{'category':10s} {'pose':8s} {'views':>5s} {'recognised':>10s} {'pose ok':>8s} "
-          f"{'err med':>8s} {'err p95':>8s}  [mm]")
+          f"{'err med':>8s} {'err p95':>8s} {'z err med':>9s} {'z err p95':>9s}  [mm]")
     for (cat, kind), row in sorted(rows.items()):
-        err = row["err"]
+        err, z_err = row["err"], row["z_err"]
         print(f"{cat:10s} {kind:8s} {row['views']:5d} {row['seen'] / row['views']:10.0%} "
               f"{row['pose'] / max(1, row['seen']):8.0%} "
               f"{statistics.median(err) if err else float('nan'):8.1f} "
-              f"{float(np.percentile(err, 95)) if err else float('nan'):8.1f}")
+              f"{float(np.percentile(err, 95)) if err else float('nan'):8.1f} "
+              f"{statistics.median(z_err) if z_err else float('nan'):9.1f} "
+              f"{float(np.percentile(z_err, 95)) if z_err else float('nan'):9.1f}")
     print(f"false category detections: {false} in {views_total} views")
     print(f"objects of no known category where no object is: {stray} in {views_total} views")
     print(f"\n{'distractor':10s} {'views':>5s} {'unknown':>8s} {'category':>8s} {'unseen':>7s}")

@@ -166,6 +166,30 @@ def test_an_object_before_furniture_of_a_colour_is_not_part_of_it():
     assert not structure[ball].any() and structure[15, 5]
 
 
+def test_an_objects_foot_hidden_by_the_edge_of_its_table_is_at_the_edges_top():
+    # house_hard 2037: a bottle on the TV bench seen from 2 m, the camera 9 cm high: the
+    # bench's front edge, 0.9 m away, hides all of it below 0.43 m; its base is at 0.25 m
+    from actors.perception_segments import _support
+    h, w = 20, 5
+    depth = np.full((h, w), np.nan)
+    P = np.full((h, w, 3), np.nan)
+    lab = np.zeros((h, w), np.int32)
+    depth[2:9] = 2.0
+    P[2:9, :, 2] = np.linspace(0.50, 0.43, 7)[:, None]           # the bottle, green
+    lab[2:9] = 1
+    depth[11:] = 0.9                                              # the bench's front face
+    P[11:, :, 2] = (0.245 - 0.003 * np.arange(h - 11))[:, None]
+    lab[11:] = 2
+    low, cols = np.full(w, 8), np.arange(w)
+    assert _support(low, cols, P, lab, depth, 0.43) == pytest.approx((0.245, True))
+    # the floor in front of an object standing on it: its own height, nothing hidden
+    depth[9:] = np.linspace(1.95, 1.7, h - 9)[:, None]
+    P[9:, :, 2] = 0.0
+    lab[9:] = 0
+    P[2:9, :, 2] = np.linspace(0.07, 0.001, 7)[:, None]
+    assert _support(low, cols, P, lab, depth, 0.001) == pytest.approx((0.0, False))
+
+
 def test_the_base_of_an_object_on_a_table_is_told_by_the_looks_that_see_most_of_it():
     # a bottle on a 0.25 m bench: from afar its base is seen; from near only its top
     far = [{"z": z, "height": 0.21} for z in (0.252, 0.254, 0.251)]
