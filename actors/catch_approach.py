@@ -172,6 +172,7 @@ class Approaching:
         """
         strategy = self._strategy(target, category)
         cat = strategy.category
+        self.set_value("sighted_at", target_xy(target))
         target = self._where_now(target)
         xy = target_xy(target)
         for x, y, c in self.get_value("rejected"):

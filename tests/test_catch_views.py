@@ -232,6 +232,20 @@ def test_after_three_failed_grasps_of_one_object_the_search_passes_it_over(rt):
     assert not search._rejected({"category": "carton", "x": 3.0, "y": 0.5})
 
 
+def test_passing_an_object_over_passes_over_the_sighting_that_sent_the_robot_to_it(rt):
+    # house_hard 2037: the search's sighting (a green sliver) 0.28 m from the bottle the
+    # close look moved the target to; rejecting the bottle alone, the search came back
+    from actors.search import Search
+    rt.add_subsystem("eyes", _Eyes, {})
+    catch = rt.add_subsystem("catch", Catcher)
+    search = rt.add_subsystem("search", Search)
+    catch.set_value("sighted_at", (5.40, 3.02))
+    for _ in range(3):
+        run_in_actor(rt, lambda: catch._remember_failed_view((5.19, 2.84), "bottle"))
+    assert search._rejected({"category": "bottle", "x": 5.19, "y": 2.84})
+    assert search._rejected({"category": "bottle", "x": 5.40, "y": 3.02})
+
+
 class _Base(SubSystem):
     """A base at (1.0, 0.5) that turns on the spot and goes where it is sent at once."""
 
