@@ -206,8 +206,9 @@ def _support(low: np.ndarray, cols: np.ndarray, P: np.ndarray, lab: np.ndarray, 
     depth within FOOT_ROWS below it are nearer by an occlusion jump (in half the columns
     or more), something in front hides its foot: the base is taken at that occluder's top,
     the edge of the table it stands on seen from below (house_hard 2037: a bottle on the TV
-    bench seen across it from 2 m, the camera 9 cm high, its base put at 0.43 m, 0.18 m
-    too high, and grasped by the neck). Else ``zmin``, the lowest part in view."""
+    bench, 0.25 m high, seen over its edge by the camera 9 cm above the floor: its base put
+    at 0.39-0.43 m, and the first grasp closed on its neck). Else ``zmin``, the lowest part
+    in view."""
     h = lab.shape[0]
     sup = []
     for dy in (2, 3, 4):
