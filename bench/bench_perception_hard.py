@@ -104,26 +104,13 @@ def main() -> int:
                 pose = poses[name]
                 if cat not in apps:
                     ox, oy, oz = pose[:3]
-                    _look_at_decoy(sim, decoy_rng, args.views, apps, (ox, oy, oz), decoys[cat])
+                    _look_at_decoy(sim, decoy_rng, args.views, apps, (ox, oy, oz), band, decoys[cat])
                     continue
                 # the point perception reports: the middle of the body (a bottle's, not its neck)
                 R = np.array(p.getMatrixFromQuaternion(pose[3:])).reshape(3, 3)
                 app = apps[cat]
                 ox, oy, oz = np.array(pose[:3]) + R @ [0.0, 0.0, 0.5 * app.body_top - 0.5 * app.height]
-                # the camera (9 cm up) sees over a low table's edge only from farther away
-                near, far = band if oz < 0.15 else (1.1, 1.8)
-                got = 0
-                for _ in range(200):
-                    if got >= args.views:
-                        break
-                    a, d = rng.uniform(-math.pi, math.pi), rng.uniform(near, far)
-                    # the camera sits ahead of base_footprint: stand so that it sees the object
-                    x, y = ox - d * math.cos(a), oy - d * math.sin(a)
-                    if not _free(sim, x, y):
-                        continue
-                    got += 1
-                    _teleport(sim, x, y, a)
-                    frame = _frame(sim)
+                for got, frame in _views(sim, rng, args.views, (ox, oy, oz), band):
                     dets = detect(frame, apps)
                     views_total += 1
                     key = (cat, placed.pose_kind)
@@ -183,28 +170,37 @@ def main() -> int:
     return 0
 
 
-def _look_at_decoy(sim: SimWorld, rng, views: int, apps: dict, at: tuple, row: dict) -> None:
-    """Views of a distractor at ``at`` (its x, y, z), as of a category object: seen as of no
-    known category there, as a category, or not at all."""
+def _views(sim: SimWorld, rng, views: int, at: tuple, band: tuple[float, float]):
+    """(1, 2, ...; the camera frame) of ``views`` views of the object at ``at`` (x, y, z),
+    from free places at random directions, ``band`` [m] away (1.1-1.8 m for one on a low
+    table: the camera, 9 cm up, sees over its edge only from farther), facing it."""
     ox, oy, oz = at
-    near, far = (0.45, 0.9) if oz < 0.15 else (1.1, 1.8)
+    near, far = band if oz < 0.15 else (1.1, 1.8)
     got = 0
     for _ in range(200):
         if got >= views:
             break
         a, d = rng.uniform(-math.pi, math.pi), rng.uniform(near, far)
+        # the camera sits ahead of base_footprint: stand so that it sees the object
         x, y = ox - d * math.cos(a), oy - d * math.sin(a)
         if not _free(sim, x, y):
             continue
         got += 1
         _teleport(sim, x, y, a)
-        at_it = [dd for dd in detect(_frame(sim), apps) if math.dist((dd["x"], dd["y"]), (ox, oy)) < DECOY_MATCH]
+        yield got, _frame(sim)
+
+
+def _look_at_decoy(sim: SimWorld, rng, views: int, apps: dict, at: tuple, band: tuple[float, float],
+                   row: dict) -> None:
+    """Views of a distractor at ``at`` (its x, y, z), as of a category object: seen as of no
+    known category there, as a category, or not at all."""
+    for _, frame in _views(sim, rng, views, at, band):
+        at_it = [dd for dd in detect(frame, apps) if math.dist((dd["x"], dd["y"]), at[:2]) < DECOY_MATCH]
         row["views"] += 1
         if any(dd["category"] in apps for dd in at_it):
             row["category"] += 1
         elif at_it:
             row["unknown"] += 1
-
 
 if __name__ == "__main__":
     sys.exit(main())
