@@ -90,6 +90,22 @@ def _rectangle_fit(xy: np.ndarray, direction: float | None = None) -> _Rectangle
     return _Rectangle(o + m1 * e1 + m2 * e2, e1, e2, float(np.ptp(c1[:, k])), float(np.ptp(c2[:, k])), rms)
 
 
+def _densest(c: np.ndarray, noise: float) -> float:
+    """Where the values ``c`` [m] crowd most: a face seen squarely, from its points'
+    coordinate along its normal. Not their nearest: that is the depth noise's extreme,
+    nearer than the face (house_hard 2040 and 2044: upright cartons on tables seen from
+    1.0-1.3 m, their centres put 6 mm short, median of 34 views; 1 mm with this). The
+    peak of their density (smoothed over the noise ``noise``), then the mean of the values
+    within twice that of it: a few points of a face seen at a grazing angle, behind the
+    one seen squarely, hardly move it."""
+    if len(c) > FIT_POINTS:
+        c = c[np.linspace(0, len(c) - 1, FIT_POINTS).astype(int)]
+    grid = np.arange(c.min(), c.max() + 0.25 * noise, 0.25 * noise)
+    density = np.exp(-0.5 * ((c[None, :] - grid[:, None]) / noise) ** 2).sum(axis=1)
+    peak = float(grid[int(np.argmax(density))])
+    return float(c[np.abs(c - peak) <= 2 * noise].mean())
+
+
 def _box_centre(xy: np.ndarray, ray: np.ndarray) -> np.ndarray:
     """Centre of a box-like footprint of unknown size from its visible faces (top view):
     the fitted rectangle's; when only one face shows (a thin rectangle) it is pushed back
@@ -415,7 +431,7 @@ def _score_box_resting(seg: _Segment, sides: tuple[float, float], bz: float) -> 
         e = axes[i]
         if not seen[i]:                            # the face seen squarely has normal +-axes[i]
             away = 1.0 if float(seg.ray @ e) > 0 else -1.0
-            near = float(rect.c @ e) - away * 0.5 * ext[i]          # that face, nearest the camera
+            near = _densest(side @ e, seg.surface_tolerance)        # that face, nearest the camera
             centre = centre + (near + away * 0.5 * true[i] - float(rect.c @ e)) * e
         elif not whole[i]:
             # towards the cut (+e or -e): the side of the image that is cut off
