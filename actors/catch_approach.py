@@ -37,6 +37,12 @@ MAX_LOOK = 2.5              # [m] the farthest look distance
 RAISED_LOOK_STEPS = (0.0, -0.1, -0.2, 0.15, 0.3)  # [m] look distances tried around a
 #                             raised object's (perception found one on a table from 1.7 to
 #                             2.3 m, house_hard 2005 and 2008)
+RAISED_SQUARE = math.radians(5)  # a box on a table is grasped straight in from the look
+#                             pose, with no look nearer: the hand comes in this square to
+#                             one of its sides at most. Across its 70 mm side, 5 degrees off,
+#                             a carton spans 74 mm of the 85 mm opening: 5 mm either side for
+#                             the estimate's error (house_hard 2044: 11 degrees off, 77 mm,
+#                             a finger ran into its corner and pushed it off the grasp)
 
 
 class Approaching:
@@ -207,17 +213,11 @@ class Approaching:
                 # (nearer than the confirming look's range, it backs off to the look pose:
                 # house_hard 2045, a teddy taken for a lying can from 0.38 m by the search,
                 # was grasped and carried off; from there no look could reject it)
-                if raised and abs(here - look) <= 0.3 and self._corridor_clear(
-                        (rx, ry, math.atan2(xy[1] - ry, xy[0] - rx)), xy, plan.reach, others):
+                if raised and abs(here - look) <= 0.3 and self._off_sides(target, plan) <= RAISED_SQUARE \
+                        and self._corridor_clear((rx, ry, math.atan2(xy[1] - ry, xy[0] - rx)), xy, plan.reach, others):
                     direct = True
                     continue  # a look pose already, the way in clear
-                # a look needs no particular side (a box's grasp does): from the robot's
-                # side, or around it; a lying body, though, from aside: seen end on it is
-                # often missed, or its ends mistaken
-                # (where no aside view has room, any: from end on, a look still tells a
-                # distractor from the category, which a grasp without a look cannot)
-                aside = target.get("pose") == "lying"
-                looks = [replace(plan, sides=sides, one_way=False) for sides in ((ASIDE, ()) if aside else ((),))]
+                looks = _look_plans(target, plan, raised)
                 poses = []
                 # a raised object is seen from a band of distances only, and its grasp
                 # comes straight in from the look: where the look distance has no room
@@ -253,13 +253,16 @@ class Approaching:
         target = self._refine(target, cat)
         xy = target_xy(target)
         plan = self._plan(strategy, target)
-        if self._off_sides(target, plan) > plan.tolerance:
+        square = RAISED_SQUARE if direct and _upright_box(target, plan) else plan.tolerance
+        if self._off_sides(target, plan) > square:
             # seen from here, facing it would bring the hand too far off the side it must
             # come from (a lying body: across it): it is not where the standoff was
-            # chosen for (nudged, or seen better now). Line up with it again.
+            # chosen for (nudged, or seen better now). Line up with it again; from a
+            # raised object's look pose, at the same distance: the camera sees it there.
             rx, ry, _ = self.run_actor("get_pose")
+            extra = math.dist((rx, ry), xy) - plan.reach - strategy.approach.standoff if direct else 0.0
             try:
-                poses = self._free_standoff((rx, ry), xy, strategy, others=others,
+                poses = self._free_standoff((rx, ry), xy, strategy, extra, others=others,
                                             object_yaw=object_yaw(target, plan), plan=plan)
             except ApproachError:
                 poses = []
@@ -375,3 +378,24 @@ class Approaching:
                     self.run_actor("mark_obstacles", list(others))
         raise ApproachError(f"could not reach a standoff near ({xy[0]:.2f}, {xy[1]:.2f}): "
                             + "; ".join(errors))
+
+
+def _look_plans(target: dict, plan: GraspPlan, raised: bool) -> list[GraspPlan]:
+    """``plan`` with the sides the closer look may come from, best first (its standoffs
+    at the look distance are the look poses). A look needs no particular side (a box's
+    grasp does), but:
+    - a lying body is looked at from aside: seen end on it is often missed, or its ends
+      mistaken (where no aside view has room, from any side: from end on, a look still
+      tells a distractor from the category, which a grasp without a look cannot);
+    - a box on a table from the sides it is grasped from, where one has room: its grasp
+      comes straight in from the look pose (RAISED_SQUARE)."""
+    if target.get("pose") == "lying":
+        return [replace(plan, sides=sides, one_way=False) for sides in (ASIDE, ())]
+    if raised and _upright_box(target, plan):
+        return [plan, replace(plan, sides=())]
+    return [replace(plan, sides=(), one_way=False)]
+
+
+def _upright_box(target: dict, plan: GraspPlan) -> bool:
+    """Whether ``plan`` holds an upright object from some of its sides only (a box)."""
+    return bool(plan.sides) and target.get("pose") in (None, "upright")

@@ -311,3 +311,25 @@ def test_a_leaning_or_lying_target_whose_sides_have_no_room_is_approached_as_an_
     upright = {**target, "pose": "upright", "x": 2.3}       # in the table's middle: out of reach
     with pytest.raises(Exception, match="no free standoff"):
         run_in_actor(rt, lambda: standoffs(upright))
+
+
+def test_a_box_on_a_table_is_looked_at_from_a_side_it_is_grasped_from(rt):
+    """Its grasp comes straight in from the look pose (house_hard 2044: a carton on the
+    study table looked at 11 degrees off its face; a finger ran into its corner)."""
+    from actors.catch_approach import _look_plans
+    rt.add_subsystem("map", _Map, _room_with_a_table(2.0))
+    catch = rt.add_subsystem("catch", Catcher)
+    yaw = 0.2
+    box = {"category": "carton", "x": 2.05, "y": 1.5, "z": 0.25, "yaw": yaw, "pose": "upright"}
+    strategy = catch._strategy(box, None)
+    plan = catch._plan(strategy, box)
+    looks = _look_plans(box, plan, raised=True)
+    extra = 1.0 - plan.reach - strategy.approach.standoff           # 1 m away
+    poses = run_in_actor(rt, lambda: catch._free_standoff((0.5, 1.0), (2.05, 1.5), strategy, extra,
+                                                          object_yaw=yaw, plan=looks[0]))
+    assert poses and all(plan.off_sides(h, yaw) < 1e-6 for _, _, h in poses)
+    assert all(x < 2.0 for x, _, _ in poses)                         # from the room, not the table
+    assert looks[-1].sides == ()            # where no side has room: from any, as before
+    # on the floor, or lying, the look comes from any side or from aside
+    assert _look_plans({**box, "z": 0.0}, plan, raised=False)[0].sides == ()
+    assert _look_plans({**box, "pose": "lying"}, plan, raised=True)[0].sides != plan.sides
