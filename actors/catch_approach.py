@@ -147,8 +147,8 @@ class Approaching:
         if not near <= math.dist((rx, ry), xy) <= far:
             return                                  # too far to tell shapes apart, or too near
         # what is at its place: the object seen most, or nearest, may be another one
-        # (house_hard 2034: a ball taken for a lying carton from 1.5 m; from its look pose
-        # a tube 0.5 m beyond it was nearer the robot, the ball was not asked about)
+        # (house_hard 2034: a ball taken for a lying carton from 1.5 m; at its look pose
+        # the answer was a piece of furniture 0.9 m from it, the ball was not asked about)
         other = self.run_actor("get_found", "unknown", near=list(xy), within=SAME_OBJECT)
         if not other:
             return                                  # nothing else there: a missed look
