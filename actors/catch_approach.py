@@ -213,8 +213,10 @@ class Approaching:
                 # (nearer than the confirming look's range, it backs off to the look pose:
                 # house_hard 2045, a teddy taken for a lying can from 0.38 m by the search,
                 # was grasped and carried off; from there no look could reject it)
-                if raised and abs(here - look) <= 0.3 and self._off_sides(target, plan) <= RAISED_SQUARE \
-                        and self._corridor_clear((rx, ry, math.atan2(xy[1] - ry, xy[0] - rx)), xy, plan.reach, others):
+                # (a box only if square to a side: its grasp comes straight in from here)
+                square_enough = not _upright_box(target, plan) or self._off_sides(target, plan) <= RAISED_SQUARE
+                if raised and abs(here - look) <= 0.3 and square_enough and self._corridor_clear(
+                        (rx, ry, math.atan2(xy[1] - ry, xy[0] - rx)), xy, plan.reach, others):
                     direct = True
                     continue  # a look pose already, the way in clear
                 looks = _look_plans(target, plan, raised)

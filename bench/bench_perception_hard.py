@@ -202,5 +202,6 @@ def _look_at_decoy(sim: SimWorld, rng, views: int, apps: dict, at: tuple, band: 
         elif at_it:
             row["unknown"] += 1
 
+
 if __name__ == "__main__":
     sys.exit(main())
