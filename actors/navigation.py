@@ -5,7 +5,9 @@ navstack stands in for both):
 
 * where it is: the transform map -> base_footprint on ``/tf`` (the localiser's map -> odom
   composed with the odometry's odom -> base_footprint, the robot's fixed frames on
-  ``/tf_static``): ``get_pose``;
+  ``/tf_static``): ``get_pose``; where it starts, for the localiser: ``/initialpose``
+  (geometry_msgs/PoseWithCovarianceStamped, as RViz's "2D Pose Estimate" sends it):
+  ``set_initial_pose``;
 * getting somewhere: the ``/navigate_to_pose`` action (nav2_msgs/NavigateToPose), which
   plans on the map, drives around what the laser sees and turns to the goal's heading:
   ``goto`` sends a goal and waits for its end; cancelling the call cancels the goal, which
@@ -15,8 +17,9 @@ navstack stands in for both):
   costmap observation source) and onto this SubSystem's own copy of the map, which
   answers ``clearance`` and ``plan_path``;
 * short relative moves for grasping (``mini_walk``, ``mini_turn``, ``migrate``) on
-  ``/odom`` and ``/cmd_vel`` directly: over a few decimetres the odometry is precise and
-  never jumps, as a localiser's correction may.
+  ``/odom`` and the base's velocity command directly (``/diff_drive_controller/cmd_vel``,
+  geometry_msgs/TwistStamped, as ROS 2 Jazzy's diff_drive_controller takes it): over a
+  few decimetres the odometry is precise and never jumps, as a localiser's correction may.
 
 Cancelling any motion stops the base.
 """
@@ -26,7 +29,7 @@ import array
 import math
 
 import numpy as np
-from geometry_msgs.msg import PoseWithCovarianceStamped, Twist
+from geometry_msgs.msg import PoseWithCovarianceStamped, TwistStamped
 from nav2_msgs.action import NavigateToPose
 from nav_msgs.msg import OccupancyGrid as OccupancyGridMsg
 from nav_msgs.msg import Odometry
@@ -48,7 +51,12 @@ YAW_TOLERANCE = math.radians(0.5)   # mini_turn's
 POSE_WAIT = 5.0         # [s] how long get_pose waits for map -> base_footprint
 LOCALISED_STD_XY = 0.10     # [m] position std of /amcl_pose above which the robot is delocalised
 LOCALISED_STD_YAW = 0.10    # [rad] heading std likewise
+INITIAL_STD_XY = 0.5        # [m] set_initial_pose's position std: RViz's "2D Pose Estimate" default
+INITIAL_STD_YAW = 0.2618    # [rad] its heading std: RViz's, pi/12
 ACTION = "/navigate_to_pose"
+#: the base's velocity command: diff_drive_controller's ~/cmd_vel (ROS 2 Jazzy takes only
+#: TwistStamped there; ROBOTIS' bring-up leaves it unremapped)
+BASE_COMMAND = "/diff_drive_controller/cmd_vel"
 PERCEIVED = "/perceived_obstacles"
 MARK_SPACING = 0.025    # [m] between the points that mark a perceived object's disc
 
@@ -57,10 +65,12 @@ class NavigationError(ActorbtError):
     """A base motion could not be planned, was blocked, or timed out."""
 
 
-def _twist(v: float = 0.0, w: float = 0.0) -> Twist:
-    msg = Twist()
-    msg.linear.x = float(v)
-    msg.angular.z = float(w)
+def _twist(v: float = 0.0, w: float = 0.0) -> TwistStamped:
+    """A base command, stamped 0: diff_drive_controller takes a zero stamp as "now", so
+    the command does not depend on this process's clock agreeing with the robot's."""
+    msg = TwistStamped()
+    msg.twist.linear.x = float(v)
+    msg.twist.angular.z = float(w)
     return msg
 
 
@@ -92,6 +102,24 @@ def cloud_msg(points: np.ndarray, frame: str = MAP) -> PointCloud2:
     return msg
 
 
+def initial_pose_msg(x: float, y: float, yaw: float, std_xy: float,
+                     std_yaw: float) -> PoseWithCovarianceStamped:
+    """/initialpose as RViz sends it: (x, y, yaw) in the map frame, the covariance's
+    diagonal std_xy² for x and y and std_yaw² for yaw (row-major 6x6 over x, y, z, roll,
+    pitch, yaw). Unstamped, as this module's other messages: the runtime clock is no ROS
+    time, and time 0 asks tf for its latest transform (AMCL looks up odom at the stamp)."""
+    msg = PoseWithCovarianceStamped()
+    msg.header.frame_id = MAP
+    msg.pose.pose.position.x, msg.pose.pose.position.y = float(x), float(y)
+    msg.pose.pose.orientation.z = math.sin(yaw / 2)
+    msg.pose.pose.orientation.w = math.cos(yaw / 2)
+    cov = [0.0] * 36
+    cov[0] = cov[7] = float(std_xy) ** 2
+    cov[35] = float(std_yaw) ** 2
+    msg.pose.covariance = cov
+    return msg
+
+
 def _goal_msg(x: float, y: float, theta: float) -> NavigateToPose.Goal:
     goal = NavigateToPose.Goal()
     goal.pose.header.frame_id = MAP
@@ -107,12 +135,14 @@ class Navigation(SubSystem):
 
     def __init__(self) -> None:
         super().__init__()
-        self.register_publisher("cmd_vel", Twist, "/cmd_vel", moves=True)
+        self.register_publisher("cmd_vel", TwistStamped, BASE_COMMAND, moves=True)
         self.register_subscriber("odom", Odometry, "/odom", 1)
         self.register_subscriber("map", OccupancyGridMsg, "/map", "latched")   # map_server latches it
         self.register_action("navigate_to_pose", NavigateToPose, ACTION, moves=True)
         # the localiser's estimate and its covariance (AMCL latches it)
         self.register_subscriber("amcl_pose", PoseWithCovarianceStamped, "/amcl_pose", "latched")
+        # where the robot starts, for the localiser (RViz's "2D Pose Estimate"; reliable, volatile)
+        self.register_publisher("initialpose", PoseWithCovarianceStamped, "/initialpose", "reliable")
         self._perceived = self.runtime.bus.publisher(PERCEIVED, PointCloud2, "latched")
         self.tf = tf_listener(self)
         self.set_value("grid", None)        # the static map, once received
@@ -134,6 +164,26 @@ class Navigation(SubSystem):
                     raise NavigationError(f"the robot is not localised: no {MAP} -> {BASE} transform "
                                           f"on /tf after {POSE_WAIT:g} s (give /initialpose): {e}") from None
             self.run_actor("sleep", 0.05)
+
+    @actor(limits={"std_xy": (0.0, None), "std_yaw": (0.0, None)})
+    def set_initial_pose(self, x: float, y: float, yaw: float, std_xy: float = INITIAL_STD_XY,
+                         std_yaw: float = INITIAL_STD_YAW) -> tuple[float, float, float]:
+        """Tell the localiser where the robot is, as RViz's "2D Pose Estimate" does: one
+        /initialpose in the map frame, which the localiser (AMCL) starts from. The robot
+        does not move. Returns the pose given.
+
+        Args:
+            x: the robot's x in the map frame [m]
+            y: the robot's y in the map frame [m]
+            yaw: the robot's heading, counter-clockwise from the map's x axis [rad]
+            std_xy: the standard deviation of x and of y [m] (RViz's default 0.5)
+            std_yaw: the standard deviation of the heading [rad] (RViz's default pi/12)
+
+        Returns:
+            the pose given: x [m], y [m], yaw [rad] in the map frame
+        """
+        self.run_actor("initialpose", initial_pose_msg(x, y, yaw, std_xy, std_yaw))
+        return float(x), float(y), float(yaw)
 
     @actor(read_only=True)
     def require_localised(self, max_std_xy: float = LOCALISED_STD_XY,

@@ -13,12 +13,13 @@ import statistics
 import sys
 import time
 
-from geometry_msgs.msg import Twist
+from geometry_msgs.msg import TwistStamped
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import Image, JointState
 
 from bt_engine import Runtime
 from sim import SimWorld
+from sim.topics import CMD_VEL
 
 SIM_SECONDS = 10.0
 REPEATS = 3
@@ -28,7 +29,7 @@ TARGETS = {"camera off": 15.0, "camera 320x240 @ 5 Hz": 4.0}
 
 def run_case(size):
     rt = Runtime(clock="virtual")
-    sim = SimWorld(rt, "house", seed=0, camera_size=size or (320, 240), camera_hz=5.0)
+    sim = SimWorld(rt, "house", seed=0, camera_size=size or (320, 240), camera_hz=5.0, cmd_vel_timeout=0)
     try:
         sim.start()
         # a mission listens to odometry and joint states in every case
@@ -38,9 +39,9 @@ def run_case(size):
             frames = []
             subs.append(rt.bus.subscribe("/camera/color/image_raw", Image, frames.append))
             subs.append(rt.bus.subscribe("/camera/depth/image_raw", Image, lambda m: None))
-        tw = Twist()
-        tw.linear.x, tw.angular.z = 0.15, 0.1
-        rt.bus.publisher("/cmd_vel", Twist).publish(tw)
+        tw = TwistStamped()
+        tw.twist.linear.x, tw.twist.angular.z = 0.15, 0.1
+        rt.bus.publisher(CMD_VEL, TwistStamped).publish(tw)
         sim.set_arm_positions([0.5, 0.2, 0.3, 0.5], 4.0)
         t0 = time.perf_counter()
         rt.call("sleep", SIM_SECONDS)

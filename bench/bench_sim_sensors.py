@@ -21,7 +21,7 @@ import statistics
 import sys
 import time
 
-from geometry_msgs.msg import Twist
+from geometry_msgs.msg import TwistStamped
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import JointState, LaserScan
 
@@ -29,6 +29,7 @@ from bt_engine import Runtime
 from sim import SimWorld
 from sim._pybullet import pybullet as p
 from sim.odometry import OdomNoise, WheelOdometry, episode_rng
+from sim.topics import CMD_VEL
 
 SCANS = 300
 POSES = [(1.0, 1.0, 0.0), (3.0, 1.5, 1.2), (7.5, 2.5, -2.0), (5.0, 6.0, 0.5), (2.0, 6.0, 3.0)]
@@ -78,7 +79,7 @@ def bench_odom():
 
 def run_sim(with_scan: bool):
     rt = Runtime(clock="virtual")
-    sim = SimWorld(rt, "house", seed=0, camera=False)
+    sim = SimWorld(rt, "house", seed=0, camera=False, cmd_vel_timeout=0)
     try:
         sim.start()
         subs = [rt.bus.subscribe("/odom", Odometry, lambda m: None),
@@ -86,9 +87,9 @@ def run_sim(with_scan: bool):
         scans = []
         if with_scan:
             subs.append(rt.bus.subscribe("/scan", LaserScan, scans.append, "sensor"))
-        tw = Twist()
-        tw.linear.x, tw.angular.z = 0.15, 0.1
-        rt.bus.publisher("/cmd_vel", Twist).publish(tw)
+        tw = TwistStamped()
+        tw.twist.linear.x, tw.twist.angular.z = 0.15, 0.1
+        rt.bus.publisher(CMD_VEL, TwistStamped).publish(tw)
         sim.set_arm_positions([0.5, 0.2, 0.3, 0.5], 4.0)
         t0, c0 = time.perf_counter(), time.process_time()
         rt.call("sleep", SIM_SECONDS)

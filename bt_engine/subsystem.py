@@ -108,6 +108,16 @@ class SubSystem(CallApi):
 
     register_subsystem = add_subsystem  # ros_actor's name
 
+    def remove_subsystem(self, name: str) -> "SubSystem":
+        """Detach child subsystem ``name`` and return it (closing it is the caller's:
+        its ``close()``, if it has one). Calls under way keep running."""
+        try:
+            child = self._children.pop(name)
+        except KeyError:
+            raise ActorbtError(f"{self!r} has no subsystem named {name!r}") from None
+        self._rt._topology_changed()
+        return child
+
     def add_network(self, net_cls: type["SubNet"]) -> "SubNet":
         """Include the actors of a SubNet class in this subsystem."""
         if not (isinstance(net_cls, type) and issubclass(net_cls, SubNet)):

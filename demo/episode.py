@@ -1,9 +1,8 @@
 """One episode of a mission in a fresh simulated world, with its trace, its outcome
 checked against the simulator's truth, and pictures.
 
-The episode plays the user and the referee, never the robot: it tells the robot where it
-starts (``/initialpose`` from the world's start pose, as RViz's "2D Pose Estimate" does),
-and it reads the simulator's own state (``SimWorld.robot_pose()``, object poses) to score
+The episode plays the referee, never the robot (the simulator tells the localiser where
+the robot starts, as a user would with RViz's "2D Pose Estimate"): it reads the simulator's own state (``SimWorld.robot_pose()``, object poses) to score
 the outcome, draw the robot's true path and measure the localisation's error (the robot's
 map -> base_footprint on /tf against the true pose, every :data:`LOC_PERIOD` s).
 """
@@ -17,7 +16,6 @@ import time
 from dataclasses import dataclass, field
 from typing import Any, TextIO
 
-from geometry_msgs.msg import PoseWithCovarianceStamped
 from tf2_msgs.msg import TFMessage
 
 import categories
@@ -36,8 +34,6 @@ REPO_CONFIG = pathlib.Path(__file__).resolve().parents[1] / "actorbt.yaml"
 PUSHED = 0.05
 #: [s] between two samples of the localisation error, and of the true path
 LOC_PERIOD, PATH_PERIOD = 0.5, 0.1
-#: the /initialpose the user gives: the start pose, to within these standard deviations
-INITIAL_STD_XY, INITIAL_STD_YAW = 0.05, 0.03
 
 
 def without_map_server(setup: Any):
@@ -146,20 +142,6 @@ class TruthProbe:
         if errs:
             self.ep.loc_rmse_m = math.sqrt(sum(e * e for e in errs) / len(errs))
             self.ep.loc_max_m = max(errs)
-
-
-def initial_pose_msg(pose) -> PoseWithCovarianceStamped:
-    """/initialpose at ``pose`` (x, y, yaw), map frame, with the user's uncertainty."""
-    x, y, yaw = pose
-    msg = PoseWithCovarianceStamped()
-    msg.header.frame_id = "map"
-    msg.pose.pose.position.x, msg.pose.pose.position.y = float(x), float(y)
-    msg.pose.pose.orientation.z, msg.pose.pose.orientation.w = math.sin(yaw / 2), math.cos(yaw / 2)
-    cov = [0.0] * 36
-    cov[0] = cov[7] = INITIAL_STD_XY ** 2
-    cov[35] = INITIAL_STD_YAW ** 2
-    msg.pose.covariance = cov
-    return msg
 
 
 class DemoProgress(TreeObserver):
@@ -302,8 +284,6 @@ def run_episode(tree: str = "bt_pick_place", world: str = "house", seed: int = 0
         start = tuple(sim.spec.robot_start)   # the world's known start pose
         if "home" in params:
             args.setdefault("home", {"x": start[0], "y": start[1], "yaw": start[2]})
-        # the user tells the localiser where the robot starts (RViz's 2D Pose Estimate)
-        rt.bus.publisher("/initialpose", PoseWithCovarianceStamped).publish(initial_pose_msg(start))
         probe = TruthProbe(rt, sim, ep)
         recorder = None
         if out is not None:

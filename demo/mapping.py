@@ -19,8 +19,9 @@ from geometry_msgs.msg import PoseWithCovarianceStamped
 from bt_engine import ActorError, Runtime
 from bt_engine.cli.config import find_config, load_config
 from sim import SimWorld
+from sim.initial_pose import initial_pose_msg
 
-from .episode import REPO_CONFIG, Episode, TruthProbe, episode_app, initial_pose_msg, without_map_server
+from .episode import REPO_CONFIG, Episode, TruthProbe, episode_app, without_map_server
 
 
 @dataclass

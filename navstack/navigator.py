@@ -10,7 +10,7 @@ A goal is a pose in the map frame (or any frame tf can put into it). The server
    occupied (a PointCloud2 in the map frame, transient local: what the robot's other
    senses found that the map and the laser do not show, such as cans lower than the scan
    plane; in Nav2 an obstacle-layer observation source);
-3. **follows** the path on ``/cmd_vel`` with pure pursuit, a control step on the
+3. **follows** the path on the base's velocity command (:data:`BASE_COMMAND`) with pure pursuit, a control step on the
    odom -> base_footprint transforms on /tf at most ``controller_frequency`` (20 Hz: 15 Hz
    on the simulator's 30 Hz odometry), then turns in place to the goal's yaw; it succeeds
    within ``xy_goal_tolerance`` and ``yaw_goal_tolerance``;
@@ -31,11 +31,11 @@ second, and ends each goal once:
 * aborted with an ``error_msg`` and, as Jazzy's bt_navigator passes its nodes' codes on,
   an ``error_code`` of ComputePathToPose (start/goal outside the map or occupied, no
   valid path) or FollowPath (tf error, blocked: patience exceeded, no progress, timed out);
-* canceled on a client's request, after stopping the base (a zero /cmd_vel).
+* canceled on a client's request, after stopping the base (a zero velocity command).
 
 A newer goal preempts the running one, which is aborted. Only ``/scan``, ``/map``,
 ``/perceived_obstacles``, the depth camera (during a goal: a simulated camera renders only
-while someone subscribes) and tf are read; only ``/cmd_vel`` is commanded.
+while someone subscribes) and tf are read; only the base's velocity command (:data:`BASE_COMMAND`) is commanded.
 """
 from __future__ import annotations
 
@@ -45,7 +45,7 @@ from dataclasses import dataclass, field, fields, replace
 
 import numpy as np
 from builtin_interfaces.msg import Duration
-from geometry_msgs.msg import Twist
+from geometry_msgs.msg import TwistStamped
 from nav2_msgs.action import NavigateToPose
 from nav_msgs.msg import OccupancyGrid as OccupancyGridMsg
 from sensor_msgs.msg import CameraInfo, Image, LaserScan, PointCloud2
@@ -63,6 +63,10 @@ log = logging.getLogger("navstack.navigator")
 
 GLOBAL_FRAME, ODOM_FRAME, BASE_FRAME = "map", "odom", "base_footprint"
 ACTION = "/navigate_to_pose"
+#: the base's velocity command: diff_drive_controller's ~/cmd_vel, TwistStamped (Jazzy).
+#: Nav2 publishes cmd_vel, remapped there by the robot's launch file; this stand-in
+#: publishes straight to the controller.
+BASE_COMMAND = "/diff_drive_controller/cmd_vel"
 PERCEIVED = "/perceived_obstacles"
 
 # error codes: Jazzy's NavigateToPose defines only NONE; bt_navigator reports the code of
@@ -116,10 +120,12 @@ class NavigatorParams:
     feedback_period: float = 0.2
 
 
-def _twist(v: float = 0.0, w: float = 0.0) -> Twist:
-    msg = Twist()
-    msg.linear.x = float(v)
-    msg.angular.z = float(w)
+def _twist(v: float = 0.0, w: float = 0.0) -> TwistStamped:
+    """A base command, stamped 0: diff_drive_controller takes a zero stamp as "now", so
+    the command does not depend on this process's clock agreeing with the robot's."""
+    msg = TwistStamped()
+    msg.twist.linear.x = float(v)
+    msg.twist.angular.z = float(w)
     return msg
 
 
@@ -255,7 +261,7 @@ class Navigator(SubSystem):
             setattr(p, key, value)
         bus = self.runtime.bus
         self.tf = TfListener(bus, on_tf=self._on_tf)
-        self._cmd = bus.publisher("/cmd_vel", Twist)
+        self._cmd = bus.publisher(BASE_COMMAND, TwistStamped)
         self._grid: OccupancyGrid | None = None
         self._map_key = None
         self._perceived = np.zeros((0, 2))

@@ -115,13 +115,14 @@ def duration_to_sec(d) -> float:
 
 
 def trajectory_from_msg(msg, arm_names, now, start_positions, start_velocities=None, *,
-                        allow_partial=False):
+                        allow_partial=False, stamp_offset=0.0):
     """Build an ArmTrajectory from a trajectory_msgs/JointTrajectory, or raise
     :class:`TrajectoryError` for what joint_trajectory_controller refuses: no joint
     names, a joint named twice or not the arm's, only some of the arm's joints (unless
     ``allow_partial``), no points, a point whose sizes do not match the joints or that
     holds a NaN, times that do not increase, a last point with a velocity, a header stamp
-    so old that the whole trajectory lies in the past."""
+    so old that the whole trajectory lies in the past. ``now`` is on the runtime clock; a
+    header stamp is that plus ``stamp_offset`` (ROS time)."""
     names = list(msg.joint_names)
     if not names:
         raise TrajectoryError("empty joint names on incoming trajectory", INVALID_JOINTS)
@@ -160,10 +161,12 @@ def trajectory_from_msg(msg, arm_names, now, start_positions, start_velocities=N
     if any(v != 0.0 for v in last.velocities):
         raise TrajectoryError("the velocity of the last trajectory point is not zero")
     stamp = float(msg.header.stamp.sec) + float(msg.header.stamp.nanosec) * 1e-9
-    if stamp > 0.0 and stamp + last_t < now:
-        raise TrajectoryError(f"the trajectory (header stamp {stamp:.3f} s) ended "
+    stamped = stamp > 0.0              # a zero stamp means "start now"
+    stamp -= stamp_offset
+    if stamped and stamp + last_t < now:
+        raise TrajectoryError(f"the trajectory (header stamp {stamp + stamp_offset:.3f} s) ended "
                               f"{now - stamp - last_t:.3f} s ago", OLD_HEADER_TIMESTAMP)
-    start = stamp if stamp > now else now
+    start = stamp if stamped and stamp > now else now
     return ArmTrajectory(arm_names, start, start_positions, pts, start_velocities)
 
 

@@ -165,8 +165,14 @@ def cmd_interfaces(args, app) -> int:
     if args.json:
         print(json.dumps(offered, indent=2))
         return 0
-    print(f"World {offered['world']} (seed {offered['seed']}): what the simulated robot offers, "
-          "as its bus shows it")
+    print_interfaces(offered, f"World {offered['world']} (seed {offered['seed']}): what the "
+                              "simulated robot offers, as its bus shows it")
+    return 0
+
+
+def print_interfaces(offered: dict, heading: str) -> None:
+    """The topics, actions and services of :func:`world_interfaces` as a table."""
+    print(heading)
     sections = [
         ("Topics it publishes", [t for t in offered["topics"] if "publish" in t["direction"]]),
         ("Topics it subscribes to", [t for t in offered["topics"] if "subscribe" in t["direction"]]),
@@ -181,19 +187,22 @@ def cmd_interfaces(args, app) -> int:
         for r in items:
             qos = r.get("qos", "")
             print(f"  {r['name']:<{width}}{r['type']:<{type_width if qos else 0}}{qos}".rstrip())
-    return 0
 
 
-def world_interfaces(args, app) -> dict:
+def world_interfaces(args, app, subsystems: dict[str, str] | None = None) -> dict:
     """``{"world", "seed", "topics": [{"name", "type", "direction", "qos"}], "actions":
     [{"name", "type"}], "services": [...]}`` of the world ``args`` names, read from the bus
-    of that world started alone on the local bus. ``direction`` is the robot's:
-    ``publishes``, ``subscribes`` or both."""
+    of that world started alone on the local bus (with ``subsystems``, name: python path,
+    beside it: what ``actorbt robot`` runs). ``direction`` is the robot's: ``publishes``,
+    ``subscribes`` or both. What the simulator publishes as the user (``/initialpose``)
+    is not the robot's."""
     from bt_engine.errors import ActorbtError
+
+    from .topics import USER_TOPICS
     if args.world == "none":
         raise ActorbtError("sim interfaces needs a world, e.g. --world house")
     only = argparse.Namespace(**{**vars(args), "bus": "local", "clock": "virtual", "gui": False})
-    cfg = dataclasses.replace(app.cfg, subsystems={}, trees=None,
+    cfg = dataclasses.replace(app.cfg, subsystems=dict(subsystems or {}), trees=None,
                               simulator=app.cfg.simulator or "sim:start_world")
     world_only = type(app)(only, cfg)
     rt = world_only.runtime(clock="virtual", watchdog=None)
@@ -206,11 +215,12 @@ def world_interfaces(args, app) -> dict:
     spec = world_only.world_spec()
 
     def direction(t) -> str:
-        roles = (("publishes", t.publishers), ("subscribes", t.subscribers))
+        publishers = t.publishers - (t.name in USER_TOPICS)
+        roles = (("publishes", publishers), ("subscribes", t.subscribers))
         return " and ".join(role for role, count in roles if count)
+    rows = [{"name": t.name, "type": t.type, "direction": direction(t), "qos": t.qos} for t in topics]
     return {"world": spec["name"], "seed": int(spec.get("seed", 0)),
-            "topics": [{"name": t.name, "type": t.type, "direction": direction(t), "qos": t.qos}
-                       for t in topics],
+            "topics": [r for r in rows if r["direction"]],
             "actions": [{"name": a.name, "type": a.type} for a in actions],
             "services": [{"name": s.name, "type": s.type} for s in services]}
 

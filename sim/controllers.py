@@ -139,6 +139,7 @@ class _ArmGoal:
     path_position: list
     goal_time: float
     ticks: int = 0
+    number: int = 0       # 1 for the first goal this controller took
 
 
 class ArmController:
@@ -148,6 +149,9 @@ class ArmController:
         self.sim = sim
         self.config = config or ArmControllerConfig()
         self.active: _ArmGoal | None = None
+        self.goals = 0                        # goals taken so far
+        #: goal numbers to abort half way (a fault injected by ``actorbt robot --fault``)
+        self.abort_goals: set[int] = set()
         self._feedback_every = max(1, round(1.0 / (sim.dt * self.config.action_monitor_rate)))
         self.server = _serve(bus, ARM_ACTION, FollowJointTrajectory, self._on_goal)
         self.sub = bus.subscribe(ARM_TRAJECTORY, JointTrajectory, self.on_trajectory)
@@ -170,7 +174,8 @@ class ArmController:
     def _build(self, msg, now):
         pos, vel = self._start_state(now)
         return trajectory_from_msg(msg, ARM, now, pos, vel,
-                                   allow_partial=self.config.allow_partial_joints_goal)
+                                   allow_partial=self.config.allow_partial_joints_goal,
+                                   stamp_offset=self.sim.stamp_offset)
 
     def on_trajectory(self, msg: JointTrajectory) -> bool:
         """A trajectory on the topic: replaces the running one (and preempts a goal)."""
@@ -197,7 +202,8 @@ class ArmController:
             goal.abort(ArmResult(error_code=e.code, error_string=str(e)))
             return
         self._preempt()
-        active = self.active = _ArmGoal(goal, traj, *self._tolerances(req))
+        self.goals += 1
+        active = self.active = _ArmGoal(goal, traj, *self._tolerances(req), number=self.goals)
         self.sim.set_arm_trajectory(traj)
         goal.on_cancel(lambda: self._cancel(active))
 
@@ -259,13 +265,20 @@ class ArmController:
         error = [d - a for d, a in zip(desired, actual)]
         if g.ticks % self._feedback_every == 0:
             fb = FollowJointTrajectory.Feedback()
-            fb.header.stamp = _stamp(now)
+            fb.header.stamp = _stamp(self.sim.ros_time(now))
             fb.joint_names = list(ARM)
             fb.desired = _point(desired, desired_vel)
             fb.actual = _point(actual, actual_vel)
             fb.error = _point(error, [d - a for d, a in zip(desired_vel, actual_vel)])
             g.handle.publish_feedback(fb)
         g.ticks += 1
+        if g.number in self.abort_goals and now >= (g.traj.t0 + g.traj.end_time) / 2:
+            self.active = None
+            self._stop(now)
+            g.handle.abort(ArmResult(error_code=ArmResult.PATH_TOLERANCE_VIOLATED,
+                                     error_string="Aborted due to path tolerance violation "
+                                     "(a fault injected on the robot side)"))
+            return
         if now < g.traj.end_time:
             bad = [f"{n} {abs(e):.3f} rad (tolerance {t:g})" for n, e, t in zip(ARM, error, g.path_position)
                    if t > 0 and abs(e) > t]

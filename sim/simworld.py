@@ -6,6 +6,7 @@ import functools
 import logging
 import math
 import os
+import time
 
 import numpy as np
 from ._pybullet import pybullet as p
@@ -18,6 +19,8 @@ from .objects import CATEGORIES
 from .renderer import GLThread, Renderer
 from .lidar import SCAN_FRAME, Lidar, LidarModel
 from .lidar import episode_rng as lidar_rng
+from .imu import Gyro
+from .imu import episode_rng as gyro_rng
 from .odometry import OdomNoise, WheelOdometry
 from .odometry import episode_rng as odometry_rng
 from .robot import ARM, ROBOT_COLLISION_GROUP, Robot
@@ -31,6 +34,9 @@ log = logging.getLogger("sim")
 #: pose is a debugging aid (scoring and pictures read SimWorld.robot_pose() instead), and
 #: the actors localise from /scan and /odom without it (tests/test_ground_truth_guard.py).
 DEBUG_GROUND_TRUTH = False
+#: [s] diff_drive_controller brakes when no command came this long (ROBOTIS' Jazzy
+#: hardware_controller_manager.yaml: cmd_vel_timeout 0.5)
+CMD_VEL_TIMEOUT = 0.5
 
 
 def _on_hub(fn):
@@ -62,6 +68,12 @@ class SimWorld:
     pose on ``/ground_truth/pose`` (default: :data:`DEBUG_GROUND_TRUTH`).
     ``locations``: a locations YAML for a world built from a map_server map (see
     :mod:`sim.map_world`).
+
+    The base stops when no velocity command came for ``cmd_vel_timeout`` seconds, as
+    ``diff_drive_controller`` does (0: never). ``initial_pose``: tell the localiser where
+    the robot starts, as a user does with RViz's "2D Pose Estimate" (sim/topics.py);
+    False leaves it to find out by itself. On ROS 2 every stamp is ROS time (the wall
+    clock's epoch time, as on a real robot); on the local bus, the runtime clock.
     """
 
     #: publish the world's own map on /map (map_server's job); False while the robot maps
@@ -70,10 +82,10 @@ class SimWorld:
     def __init__(self, runtime=None, world: str | WorldSpec = "house", seed: int = 0, gui: bool = False,
                  *, physics_hz: int = 240, control_hz: int = 60, publish_hz: float = 30.0,
                  camera_hz: float = 5.0, camera_size=(320, 240), odom_noise: OdomNoise | None = None,
-                 prefer_egl: bool = True, camera: bool = True, cmd_vel_timeout: float = 0.0,
+                 prefer_egl: bool = True, camera: bool = True, cmd_vel_timeout: float = CMD_VEL_TIMEOUT,
                  map_resolution: float = RESOLUTION, lidar: LidarModel | None = None,
                  lidar_noise: bool = True, debug_ground_truth: bool | None = None,
-                 locations=None):
+                 locations=None, initial_pose: bool = True, faults=None):
         if physics_hz % control_hz:
             raise ValueError(f"physics_hz ({physics_hz}) must be a multiple of control_hz ({control_hz})")
         self.runtime = runtime
@@ -88,6 +100,8 @@ class SimWorld:
         self.debug_ground_truth = bool(DEBUG_GROUND_TRUTH if debug_ground_truth is None else debug_ground_truth)
         self.camera_hz = camera_hz
         self.cmd_vel_timeout = cmd_vel_timeout
+        self.give_initial_pose = initial_pose
+        self.faults = faults             # a sim.faults.Faults: what the robot side breaks
         self.prefer_egl = prefer_egl
         self.gui = False
         self.cid = None
@@ -147,6 +161,7 @@ class SimWorld:
         self.settle_steps = self.scene.settle(self.spec.settle_steps) if self.spec.settle_steps else 0
         self.robot = Robot(cid, self.spec.robot_start)
         self.odometry = WheelOdometry(self._odom_noise or OdomNoise(), odometry_rng(self.seed))
+        self.gyro = Gyro(self._odom_noise or OdomNoise(), gyro_rng(self.seed))
         self.lidar = Lidar(cid, self.lidar_model, lidar_rng(self.seed),
                            ray_mask=~ROBOT_COLLISION_GROUP, noise=self._lidar_noise)
         self.camera = CameraModel(*self._camera_size)
@@ -155,6 +170,7 @@ class SimWorld:
         self.grid = build_grid(self.spec, self._map_resolution)
         self.t = 0.0                 # simulated seconds since construction
         self._t_offset = 0.0         # runtime clock - self.t (set by start())
+        self.stamp_offset = 0.0      # ROS time - runtime clock (set by start() on ROS 2)
         self.ticks = 0
         self._traj = None
         self._last_cmd_vel = -math.inf
@@ -179,9 +195,29 @@ class SimWorld:
 
         rt = self.runtime
         self._t_offset = rt.now() - self.t
+        if rt.bus.name == "ros":         # stamps in ROS time: the wall clock's epoch time
+            self.stamp_offset = time.time() - rt.now()
         self.topics = SimTopics(self, rt)
         self._timers = [rt.call_every(self.dt, self._tick),
-                        rt.call_every(1.0 / self.camera_hz, self.topics.camera_tick)]
+                        rt.call_every(1.0 / self.camera_hz, self._camera_tick)]
+
+    def drivers_down(self):
+        """Hub code: the robot's drivers stop (a robot-side process that died): its topics,
+        controllers and actions go away; the physics goes on, the base brakes."""
+        if self.topics is not None:
+            self.topics.close()
+            self.topics = None
+        self.robot.set_base_velocity(0.0, 0.0)
+
+    def drivers_up(self):
+        """Hub code: the drivers start again, with no memory of goals or subscribers."""
+        from .topics import SimTopics
+        if self.topics is None:
+            self.topics = SimTopics(self, self.runtime)
+
+    def _camera_tick(self):
+        if self.topics is not None:
+            self.topics.camera_tick()
 
     def _stop_on_hub(self):
         for h in self._timers:
@@ -224,6 +260,10 @@ class SimWorld:
         """Time on the runtime clock that corresponds to the simulated state."""
         return self.t + self._t_offset
 
+    def ros_time(self, t: float | None = None) -> float:
+        """A runtime clock time (now when None) as the stamps carry it [s]."""
+        return (self.now() if t is None else t) + self.stamp_offset
+
     def _tick(self):
         self.step()
         if self.topics is not None:
@@ -243,8 +283,10 @@ class SimWorld:
         self.t = t_next
         self.ticks += 1
         q = self.robot.joint_states()[0]
-        # the encoders see the wheel joints; the gyro (heading) the body's true rotation
-        self.odometry.update(q[0], q[1], self.dt, self.robot.base_pose()[0][2])
+        yaw = self.robot.base_pose()[0][2]
+        # the encoders see the wheel joints; the gyro the body's true rotation
+        self.odometry.update(q[0], q[1], self.dt, yaw)
+        self.gyro.update(yaw, self.odometry.v, self.dt)
 
     @_on_hub
     def advance(self, seconds: float):
@@ -407,8 +449,6 @@ class SimWorld:
         return self._gl_call(self._render_camera)
 
     def _render_camera(self):
-        import time
-
         t0 = time.perf_counter()
         pos, orn = self.robot.link_pose("camera_optical_frame")
         cam = self.camera

@@ -1,9 +1,14 @@
 """The simulator's ROS interfaces on the runtime's bus (real ROS 2 message classes): what
-a TurtleBot3 Waffle Pi with an OpenManipulator-X offers (turtlebot3_node, the LDS-01 and
-camera drivers, ros2_control's controllers, robot_state_publisher).
+a TurtleBot3 Waffle Pi with an OpenManipulator-X offers under ROBOTIS' Jazzy ros2_control
+bring-up (turtlebot3_manipulation_bringup: diff_drive_controller, imu_broadcaster,
+arm_controller, gripper_controller, joint_state_broadcaster, robot_state_publisher), the
+LDS-01 driver and an RGB-D camera driver. docs/real-robot.md has the table with sources.
 
 Subscribed (actuators):
-  /cmd_vel                          geometry_msgs/Twist       linear.x, angular.z; TB3 limits
+  /diff_drive_controller/cmd_vel    geometry_msgs/TwistStamped  linear.x, angular.z; TB3 limits;
+                                    a zero stamp means now, a command older than
+                                    cmd_vel_timeout is ignored, and the base brakes when
+                                    none came for cmd_vel_timeout (diff_drive_controller)
   /arm_controller/joint_trajectory  trajectory_msgs/JointTrajectory  joint1..joint4
 Actions served (sim/controllers.py, ros2_control's controllers):
   /arm_controller/follow_joint_trajectory  control_msgs/FollowJointTrajectory  joint1..joint4
@@ -12,8 +17,9 @@ Actions served (sim/controllers.py, ros2_control's controllers):
 Published (sensors):
   /scan                             sensor_msgs/LaserScan     LDS-01, base_scan, 360 beams, 5 Hz;
                                                               sensor-data QoS (best effort)
-  /odom                             nav_msgs/Odometry         wheel odometry with a TurtleBot3's
-                                                              errors, odom -> base_footprint
+  /odom                             nav_msgs/Odometry         wheel-only odometry with a real
+                                                              robot's errors, odom -> base_footprint
+  /imu_broadcaster/imu              sensor_msgs/Imu           the OpenCR's IMU, frame imu_link
   /tf                               tf2_msgs/TFMessage        odom -> base_footprint (the same
                                                               odometry) and the movable joints
                                                               (wheels, arm, fingers), with /odom
@@ -26,31 +32,44 @@ Published (sensors):
   /camera/color/image_raw           sensor_msgs/Image         rgb8
   /camera/depth/image_raw           sensor_msgs/Image         32FC1, metres, NaN = no return
   /camera/camera_info               sensor_msgs/CameraInfo    (colour and depth share it)
-  /map                              nav_msgs/OccupancyGrid    5 cm; sent when the subscriber
-                                                              count grows and every 2 s while
-                                                              subscribed (a latched topic's stand-in)
+  /map                              nav_msgs/OccupancyGrid    5 cm; published once, latched
+                                                              (map_server's); not while the
+                                                              robot maps (SimWorld.serve_map)
 State topics go out only while subscribed; the lidar casts and the camera renders only
 while subscribed. map -> odom is never published here: that is the localiser's.
+
+As a user would (not the robot): ``/initialpose`` (geometry_msgs/PoseWithCovarianceStamped,
+RViz's "2D Pose Estimate") with the world's start pose, to each new subscriber while the
+robot has not moved yet (``SimWorld(initial_pose=False)``: never).
 """
 from __future__ import annotations
 
 import array
+import logging
 import math
+import random
 
 from builtin_interfaces.msg import Time
-from geometry_msgs.msg import PoseStamped, TransformStamped, Twist
+from geometry_msgs.msg import PoseStamped, PoseWithCovarianceStamped, TransformStamped, TwistStamped
 from nav_msgs.msg import OccupancyGrid, Odometry
-from sensor_msgs.msg import CameraInfo, Image, JointState, LaserScan
+from sensor_msgs.msg import CameraInfo, Image, Imu, JointState, LaserScan
 from tf2_msgs.msg import TFMessage
 
 from .controllers import ArmController, GripperController
+from .faults import faulty
 from .frames import joint_transforms, odom_transform, static_transforms
 from .gridmap import occupancy_grid_msg
+from .imu import GRAVITY, IMU_FRAME
+from .initial_pose import initial_pose_msg
 from .lidar import SCAN_FRAME
 from .robot import JOINT_STATE_NAMES
 
-CMD_VEL = "/cmd_vel"
+CMD_VEL = "/diff_drive_controller/cmd_vel"
 ODOM = "/odom"
+IMU = "/imu_broadcaster/imu"
+INITIAL_POSE = "/initialpose"
+#: topics the simulator publishes as the user, not as the robot (left out of its interfaces)
+USER_TOPICS = (INITIAL_POSE,)
 TF = "/tf"
 TF_STATIC = "/tf_static"
 LATCHED_QOS = "latched"   # reliable, transient local, keep last 1 (robot_state_publisher's /tf_static)
@@ -62,9 +81,12 @@ COLOR = "/camera/color/image_raw"
 DEPTH = "/camera/depth/image_raw"
 CAMERA_INFO = "/camera/camera_info"
 MAP = "/map"
-MAP_REPUBLISH = 2.0    # s
+#: [m, rad] a robot that moved this far has left its start: no initial pose any more
+MOVED = 0.01
 
 CAMERA_FRAME = "camera_optical_frame"
+
+log = logging.getLogger("sim")
 
 
 def stamp(t: float) -> Time:
@@ -89,6 +111,7 @@ class SimTopics:
         self.sim = sim
         self.bus = bus = rt.bus
         self.pub_odom = bus.publisher(ODOM, Odometry)
+        self.pub_imu = bus.publisher(IMU, Imu)
         self.pub_scan = bus.publisher(SCAN, LaserScan, SENSOR_QOS)
         # the exact pose only on request (SimWorld(debug_ground_truth=True))
         self.pub_gt = bus.publisher(GROUND_TRUTH, PoseStamped) if sim.debug_ground_truth else None
@@ -99,13 +122,22 @@ class SimTopics:
         self.pub_map = bus.publisher(MAP, OccupancyGrid, LATCHED_QOS)   # map_server latches it
         self.pub_tf = bus.publisher(TF, TFMessage)
         self.pub_tf_static = bus.publisher(TF_STATIC, TFMessage, LATCHED_QOS)
-        self.subs = [bus.subscribe(CMD_VEL, Twist, self._on_cmd_vel)]
+        faults = sim.faults
+        if faults is not None:                    # actorbt robot --fault: a real robot's losses
+            rng = random.Random(sim.seed * 1009 + 17)
+            self.pub_scan = faulty(self.pub_scan, rt, faults.scan_drop, faults.scan_delay, rng)
+            self.pub_rgb, self.pub_depth, self.pub_info = (
+                faulty(p, rt, faults.camera_drop, faults.camera_delay, rng)
+                for p in (self.pub_rgb, self.pub_depth, self.pub_info))
+        self.pub_initial = bus.publisher(INITIAL_POSE, PoseWithCovarianceStamped) if sim.give_initial_pose else None
+        self.subs = [bus.subscribe(CMD_VEL, TwistStamped, self._on_cmd_vel)]
         self.arm = ArmController(sim, bus)
         self.gripper = GripperController(sim, bus)
+        if faults is not None:
+            self.arm.abort_goals = set(faults.arm_abort)
         self._static_subs = 0
-        self._map_msg = None
-        self._map_subs = 0
-        self._map_sent = -math.inf
+        self._initial_subs = 0
+        self._map_sent = False
         self._ticks = 0
 
     def close(self):
@@ -116,8 +148,16 @@ class SimTopics:
         self.gripper.close()
 
     # ---------------- actuators ----------------
-    def _on_cmd_vel(self, msg: Twist):
-        self.sim.apply_cmd_vel(msg.linear.x, msg.angular.z)
+    def _on_cmd_vel(self, msg: TwistStamped):
+        """diff_drive_controller's rules: a zero stamp means now; a command older than
+        cmd_vel_timeout is ignored."""
+        sent = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
+        timeout = self.sim.cmd_vel_timeout
+        if sent and timeout > 0 and self.sim.ros_time() - sent > timeout:
+            log.warning("ignored %s stamped %.3f s ago (cmd_vel_timeout %g s)", CMD_VEL,
+                        self.sim.ros_time() - sent, timeout)
+            return
+        self.sim.apply_cmd_vel(msg.twist.linear.x, msg.twist.angular.z)
 
     # ---------------- sensors ----------------
     def after_step(self):
@@ -132,6 +172,8 @@ class SimTopics:
         if self._ticks % sim.publish_every == 0:
             if count(ODOM):
                 self.pub_odom.publish(self.odom_msg(now))
+            if count(IMU):
+                self.pub_imu.publish(self.imu_msg(now))
             if self.pub_gt is not None and count(GROUND_TRUTH):
                 self.pub_gt.publish(self.ground_truth_msg(now))
             if count(JOINT_STATES):
@@ -146,24 +188,36 @@ class SimTopics:
         self._static_subs = n
         if self._ticks % sim.scan_every == 0 and count(SCAN):
             self.pub_scan.publish(self.scan_msg(now, sim.scan_now()))
-        n = count(MAP) if sim.serve_map else 0
-        if n > self._map_subs or (n and now - self._map_sent >= MAP_REPUBLISH):
+        if sim.serve_map and not self._map_sent:
             self.publish_map(now)
-        self._map_subs = n
+        if self.pub_initial is not None:
+            self._give_initial_pose(now)
 
     def publish_map(self, now):
-        if self._map_msg is None:
-            self._map_msg = occupancy_grid_msg(self.sim.grid)
-        self._map_msg.header.stamp = stamp(now)
-        self._map_msg.info.map_load_time = self._map_msg.header.stamp
-        self.pub_map.publish(self._map_msg)
-        self._map_sent = now
+        """The map, once: the bus keeps it for later subscribers (transient local)."""
+        msg = occupancy_grid_msg(self.sim.grid)
+        msg.header.stamp = stamp(self.sim.ros_time(now))
+        msg.info.map_load_time = msg.header.stamp
+        self.pub_map.publish(msg)
+        self._map_sent = True
+
+    def _give_initial_pose(self, now):
+        """The start pose on /initialpose for each new subscriber (a localiser that came
+        up), as its user would give it, until the robot has moved."""
+        n = self.bus.subscription_count(INITIAL_POSE)
+        if n > self._initial_subs:
+            o = self.sim.odometry
+            if o.distance < MOVED and o.turned < MOVED:
+                msg = initial_pose_msg(self.sim.spec.robot_start)
+                msg.header.stamp = stamp(self.sim.ros_time(now))
+                self.pub_initial.publish(msg)
+        self._initial_subs = n
 
     def odom_msg(self, now) -> Odometry:
         o = self.sim.odometry
         tf = odom_transform(o)           # the same edge /tf will carry
         msg = Odometry()
-        msg.header.stamp = stamp(now)
+        msg.header.stamp = stamp(self.sim.ros_time(now))
         msg.header.frame_id = tf.parent
         msg.child_frame_id = tf.child
         pos, q = msg.pose.pose.position, msg.pose.pose.orientation
@@ -175,23 +229,37 @@ class SimTopics:
         msg.twist.covariance = o.twist_covariance()
         return msg
 
+    def imu_msg(self, now) -> Imu:
+        """imu_broadcaster's message: the board's orientation (flat floor: its heading),
+        yaw rate and acceleration (gravity and the base's forward acceleration)."""
+        g = self.sim.gyro
+        msg = Imu()
+        msg.header.stamp = stamp(self.sim.ros_time(now))
+        msg.header.frame_id = IMU_FRAME
+        msg.orientation.z, msg.orientation.w = math.sin(g.yaw / 2), math.cos(g.yaw / 2)
+        msg.angular_velocity.z = g.rate
+        msg.linear_acceleration.x = g.accel
+        msg.linear_acceleration.z = GRAVITY
+        msg.angular_velocity_covariance = [0.0] * 8 + [g.rate_variance()]
+        return msg
+
     def tf_msg(self, now, st) -> TFMessage:
         """odom -> base_footprint from the odometry (as /odom), and the movable joints at
         their positions in ``st`` (robot_state_publisher's share of /tf)."""
-        t = stamp(now)
+        t = stamp(self.sim.ros_time(now))
         edges = [odom_transform(self.sim.odometry)]
         edges += joint_transforms(dict(zip(JOINT_STATE_NAMES, st[0])))
         return TFMessage(transforms=[transform_stamped(e, t) for e in edges])
 
     def tf_static_msg(self, now) -> TFMessage:
         """Every fixed joint of the URDF (robot_state_publisher's /tf_static)."""
-        t = stamp(now)
+        t = stamp(self.sim.ros_time(now))
         return TFMessage(transforms=[transform_stamped(e, t) for e in static_transforms()])
 
     def scan_msg(self, now, ranges) -> LaserScan:
         m = self.sim.lidar_model
         msg = LaserScan()
-        msg.header.stamp = stamp(now)
+        msg.header.stamp = stamp(self.sim.ros_time(now))
         msg.header.frame_id = SCAN_FRAME
         msg.angle_min, msg.angle_max, msg.angle_increment = m.angle_min, m.angle_max, m.angle_increment
         msg.time_increment = 0.0          # every beam at the same instant (one ray cast)
@@ -203,7 +271,7 @@ class SimTopics:
     def ground_truth_msg(self, now) -> PoseStamped:
         _, pos, orn = self.sim.robot.base_pose()
         msg = PoseStamped()
-        msg.header.stamp = stamp(now)
+        msg.header.stamp = stamp(self.sim.ros_time(now))
         msg.header.frame_id = "map"
         msg.pose.position.x, msg.pose.position.y, msg.pose.position.z = pos
         q = msg.pose.orientation
@@ -213,7 +281,7 @@ class SimTopics:
     def joint_state_msg(self, now, st) -> JointState:
         q, v, e = st
         msg = JointState()
-        msg.header.stamp = stamp(now)
+        msg.header.stamp = stamp(self.sim.ros_time(now))
         msg.name = list(JOINT_STATE_NAMES)
         msg.position = [float(x) for x in q]
         msg.velocity = [float(x) for x in v]
@@ -239,7 +307,7 @@ class SimTopics:
         want_rgb, want_depth, want_info = count(COLOR) > 0, count(DEPTH) > 0, count(CAMERA_INFO) > 0
         if not (want_rgb or want_depth or want_info):
             return
-        st = stamp(self.sim.now())
+        st = stamp(self.sim.ros_time())
         if want_rgb or want_depth:
             rgb, depth = self.sim.render_camera()
             h, w = depth.shape

@@ -9,7 +9,8 @@ import pytest
 
 from actors.catch import STANDOFF_CLEARANCE, target_marks
 from categories import get as category
-from demo.episode import episode_app, initial_pose_msg
+from demo.episode import episode_app
+from sim.initial_pose import initial_pose_msg
 from geometry_msgs.msg import PoseWithCovarianceStamped
 
 from tests.conftest import place_robot

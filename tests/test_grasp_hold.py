@@ -7,7 +7,8 @@ import math
 
 import pytest
 
-from demo.episode import episode_app, initial_pose_msg
+from demo.episode import episode_app
+from sim.initial_pose import initial_pose_msg
 from geometry_msgs.msg import PoseWithCovarianceStamped
 
 from tests.conftest import place_robot

@@ -70,7 +70,7 @@ def test_a_demo_episode_puts_no_truth_on_the_bus(monkeypatch, tmp_path):
     monkeypatch.setattr(LocalBus, "publisher", spy_publisher)
     monkeypatch.setattr(LocalBus, "subscribe", spy_subscribe)
     ep = run_episode("bt_pick_place", "house", seed=0, category="any", out_dir=tmp_path)
-    assert {"/scan", "/odom", "/tf", "/tf_static", "/map", "/cmd_vel", "/initialpose"} <= topics
+    assert {"/scan", "/odom", "/tf", "/tf_static", "/map", "/diff_drive_controller/cmd_vel", "/initialpose"} <= topics
     assert not [t for t in topics if "ground_truth" in t], sorted(topics)
     assert ep.success, f"{ep.failed_node}: {ep.reason}"
     assert ep.loc_rmse_m < 0.05 and ep.loc_max_m < 0.15

@@ -17,7 +17,7 @@ def robot_on(rt, world):
     """The robot's actors and the navigation stack (as actorbt.yaml starts them), told
     where the robot starts (/initialpose, as a user does)."""
     from actors.robot import Robot
-    from demo.episode import initial_pose_msg
+    from sim.initial_pose import initial_pose_msg
     from geometry_msgs.msg import PoseWithCovarianceStamped
     from navstack import NavStack
     rt.add_subsystem("robot", Robot)

@@ -11,7 +11,7 @@ from nav_msgs.msg import Odometry
 from sensor_msgs.msg import PointCloud2
 
 from bt_engine import ActorError, Runtime
-from demo.episode import initial_pose_msg
+from sim.initial_pose import initial_pose_msg
 from tests.conftest import run_in_actor
 
 sim_mod = pytest.importorskip("sim")

@@ -10,7 +10,7 @@ import pytest
 from nav_msgs.msg import OccupancyGrid
 
 from bt_engine import Runtime
-from demo.episode import initial_pose_msg
+from sim.initial_pose import initial_pose_msg
 from navstack.map_io import read_map_yaml, read_trajectory_tum
 
 sim_mod = pytest.importorskip("sim")

@@ -13,7 +13,7 @@ from bt_engine import ActorError, Runtime
 from bt_engine.bus.actions import STATUS_ABORTED, ActionGoalError
 from navstack import NavStack
 from navstack.navigator import GOAL_OCCUPIED, GOAL_OUTSIDE_MAP, NO_VALID_PATH, lookahead_point
-from demo.episode import initial_pose_msg
+from sim.initial_pose import initial_pose_msg
 from tests.conftest import run_in_actor
 
 sim_mod = pytest.importorskip("sim")

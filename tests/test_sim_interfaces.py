@@ -36,13 +36,18 @@ def test_the_robots_sensors_and_actuators_with_ros_types(offered):
     assert topics["/scan"]["type"] == "sensor_msgs/msg/LaserScan"
     assert topics["/scan"]["direction"] == "publishes"
     assert topics["/scan"]["qos"] == "best effort"            # as the LDS driver offers it
-    assert topics["/cmd_vel"] == {"name": "/cmd_vel", "type": "geometry_msgs/msg/Twist",
-                                  "direction": "subscribes", "qos": ""}
+    # ROS 2 Jazzy's diff_drive_controller: ~/cmd_vel, stamped only
+    assert topics["/diff_drive_controller/cmd_vel"] == {
+        "name": "/diff_drive_controller/cmd_vel", "type": "geometry_msgs/msg/TwistStamped",
+        "direction": "subscribes", "qos": ""}
+    assert "/cmd_vel" not in topics
+    assert "/initialpose" not in topics, "the pose estimate is the user's, not the robot's"
     expected = {"/odom": "nav_msgs/msg/Odometry", "/tf": "tf2_msgs/msg/TFMessage",
                 "/tf_static": "tf2_msgs/msg/TFMessage", "/joint_states": "sensor_msgs/msg/JointState",
                 "/map": "nav_msgs/msg/OccupancyGrid", "/camera/color/image_raw": "sensor_msgs/msg/Image",
                 "/camera/depth/image_raw": "sensor_msgs/msg/Image",
-                "/camera/camera_info": "sensor_msgs/msg/CameraInfo"}
+                "/camera/camera_info": "sensor_msgs/msg/CameraInfo",
+                "/imu_broadcaster/imu": "sensor_msgs/msg/Imu"}
     for name, type_ in expected.items():
         assert topics[name]["type"] == type_ and topics[name]["direction"] == "publishes", name
     assert topics["/tf_static"]["qos"] == "reliable, transient local"
@@ -64,7 +69,7 @@ def test_the_text_form_is_a_table(capsys):
     subscribed = lines.index("Topics it subscribes to:")
     scan = next(line for line in lines[published:subscribed] if line.split()[0] == "/scan")
     assert scan.split()[1:] == ["sensor_msgs/msg/LaserScan", "best", "effort"]
-    assert any(line.split()[:2] == ["/cmd_vel", "geometry_msgs/msg/Twist"]
+    assert any(line.split()[:2] == ["/diff_drive_controller/cmd_vel", "geometry_msgs/msg/TwistStamped"]
                for line in lines[subscribed:])
     assert "Services it serves: none" in lines
 

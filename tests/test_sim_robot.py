@@ -8,7 +8,7 @@ import numpy as np
 import pybullet as p
 import pytest
 from builtin_interfaces.msg import Duration
-from geometry_msgs.msg import PoseStamped, Twist
+from geometry_msgs.msg import PoseStamped, TwistStamped
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import JointState
 from control_msgs.action import GripperCommand
@@ -18,6 +18,7 @@ from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 from bt_engine import Runtime
 from sim import SimWorld
 from sim.actuators import gripper_position
+from sim.topics import CMD_VEL
 
 ARM = ["joint1", "joint2", "joint3", "joint4"]
 
@@ -32,7 +33,7 @@ class Robot:
         self.subs = [bus.subscribe("/odom", Odometry, self._keep("odom")),
                      bus.subscribe("/ground_truth/pose", PoseStamped, self._keep("gt")),
                      bus.subscribe("/joint_states", JointState, self._keep("js"))]
-        self.cmd_vel = bus.publisher("/cmd_vel", Twist)
+        self.cmd_vel = bus.publisher(CMD_VEL, TwistStamped)
         self.traj = bus.publisher("/arm_controller/joint_trajectory", JointTrajectory)
         self.grip_goal = rt.run_on_hub(bus.register_action, rt.root, "_grip", GripperCommand,
                                        "/gripper_controller/gripper_cmd")
@@ -46,11 +47,13 @@ class Robot:
         self.rt.call("sleep", seconds)
 
     def drive(self, v, w, seconds):
-        tw = Twist()
-        tw.linear.x, tw.angular.z = float(v), float(w)
-        self.cmd_vel.publish(tw)
-        self.sleep(seconds)
-        self.cmd_vel.publish(Twist())
+        tw = TwistStamped()
+        tw.twist.linear.x, tw.twist.angular.z = float(v), float(w)
+        period = 0.1     # as a controller does: diff_drive_controller brakes after 0.5 s without
+        for _ in range(round(seconds / period)):
+            self.cmd_vel.publish(tw)
+            self.sleep(period)
+        self.cmd_vel.publish(TwistStamped())
         self.sleep(1.0)
 
     def move_arm(self, q, seconds):
@@ -172,11 +175,11 @@ def test_friction_grasp_holds_a_can(robot):
 
 def _scripted_run(seed):
     rt = Runtime(clock="virtual")
-    sim = SimWorld(rt, "open_floor", seed=seed, camera=False).start()
+    sim = SimWorld(rt, "open_floor", seed=seed, camera=False, cmd_vel_timeout=0).start()
     try:
         r = Robot(rt, sim)
-        tw = Twist()
-        tw.linear.x, tw.angular.z = 0.15, 0.3
+        tw = TwistStamped()
+        tw.twist.linear.x, tw.twist.angular.z = 0.15, 0.3
         r.cmd_vel.publish(tw)
         msg = JointTrajectory()
         msg.joint_names = ARM
@@ -206,7 +209,7 @@ def test_odometry_noise_model_is_configurable():
     from sim.sensors import OdomNoise
     ends = {}
     for name, noise in (("exact", OdomNoise.exact()), ("biased", OdomNoise.exact(radius_bias=0.05))):
-        sim = SimWorld(None, "open_floor", seed=0, camera=False, odom_noise=noise)
+        sim = SimWorld(None, "open_floor", seed=0, camera=False, odom_noise=noise, cmd_vel_timeout=0)
         try:
             sim.apply_cmd_vel(0.2, 0.0)
             sim.advance(5.0)

@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 import pytest
-from geometry_msgs.msg import PoseStamped, Twist
+from geometry_msgs.msg import PoseStamped, TwistStamped
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import LaserScan
 
@@ -17,6 +17,7 @@ from sim.frames import compose, joint_transforms, odom_transform, static_transfo
 from sim.lidar import Lidar, LidarModel
 from sim.odometry import OdomNoise, WheelOdometry
 from sim.odometry import episode_rng as odometry_rng
+from sim.topics import CMD_VEL
 
 SCAN_X = -0.150          # base_scan in base_footprint (URDF: scan_joint)
 SCAN_Z = 0.132
@@ -46,7 +47,7 @@ def _beam(deg):
 
 # ------------------------------------------------------------------------------ lidar
 def test_scan_geometry_against_a_known_wall():
-    sim = SimWorld(None, WALL, seed=0, camera=False, lidar_noise=False)
+    sim = SimWorld(None, WALL, seed=0, camera=False, lidar_noise=False, cmd_vel_timeout=0)
     try:
         r = sim.scan()
         assert r.dtype == np.float32 and r.shape == (360,)
@@ -65,7 +66,7 @@ def test_scan_geometry_against_a_known_wall():
 
 def test_scan_noise_is_a_few_centimetres_and_seeded():
     def scans(seed, n=40):
-        sim = SimWorld(None, WALL, seed=seed, camera=False)
+        sim = SimWorld(None, WALL, seed=seed, camera=False, cmd_vel_timeout=0)
         try:
             return np.array([sim.scan() for _ in range(n)])
         finally:
@@ -80,7 +81,7 @@ def test_scan_noise_is_a_few_centimetres_and_seeded():
 
 
 def test_scan_respects_range_min():
-    sim = SimWorld(None, WALL, seed=0, camera=False)
+    sim = SimWorld(None, WALL, seed=0, camera=False, cmd_vel_timeout=0)
     try:
         # a bottle right behind the robot, 0.075 m from base_scan (the chassis is under
         # the scan plane, the bottle reaches above it)
@@ -96,7 +97,7 @@ def test_scan_respects_range_min():
 
 
 def test_scan_sees_a_bottle_that_the_grid_does_not_have_and_not_a_can():
-    sim = SimWorld(None, FLOOR, seed=0, camera=False, lidar_noise=False)
+    sim = SimWorld(None, FLOOR, seed=0, camera=False, lidar_noise=False, cmd_vel_timeout=0)
     try:
         sim.add_object("bottle", 1.0, 0.0)
         sim.add_object("can", 1.0, 1.0)                  # 41 deg to the left of base_scan
@@ -180,7 +181,7 @@ def l_drive():
     """East 5 m, turn left, north 5 m (10 m, open loop), seed 0: the per-tick trace of
     (left wheel, right wheel, true yaw), the true poses, and the world's own odometry.
     Physics at 120 Hz (half the default) keeps it quick; the odometry does not mind."""
-    sim = SimWorld(None, FLOOR, seed=0, camera=False, physics_hz=120)
+    sim = SimWorld(None, FLOOR, seed=0, camera=False, physics_hz=120, cmd_vel_timeout=0)
     try:
         trace, truth = [], []
 
@@ -246,11 +247,12 @@ def test_exact_odometry_follows_the_wheels(l_drive):
     assert _error(l_drive, _replay(l_drive, 0, OdomNoise.exact())) < 0.002 * _distance(l_drive)
 
 
-def test_heading_from_the_wheels_bends_with_the_wheel_scale_errors(l_drive):
-    scale_only = dict(wheel_noise=0.0, gyro_bias=0.0, gyro_bias_walk=0.0, gyro_noise=0.0, gyro_scale=0.0)
+def test_heading_from_the_wheels_bends_with_the_wheels_mismatch(l_drive):
+    scale_only = dict(wheel_noise=0.0, wheel_scale=0.0, gyro_bias=0.0, gyro_bias_walk=0.0,
+                      gyro_noise=0.0, gyro_scale=0.0)
     for seed in range(3):
-        imu = _replay(l_drive, seed, OdomNoise(**scale_only))
-        wheels = _replay(l_drive, seed, OdomNoise(heading="wheels", **scale_only))
+        imu = _replay(l_drive, seed, OdomNoise(heading="imu", **scale_only))
+        wheels = _replay(l_drive, seed, OdomNoise(**scale_only))
         assert _error(l_drive, wheels) > _error(l_drive, imu)
 
 
@@ -265,7 +267,7 @@ def test_static_frames_come_from_the_urdf():
 
 
 def test_joint_frames_match_pybullet():
-    sim = SimWorld(None, WALL, seed=0, camera=False)
+    sim = SimWorld(None, WALL, seed=0, camera=False, cmd_vel_timeout=0)
     try:
         sim.set_arm_positions([0.4, 0.3, -0.2, 0.5], 0.5)
         sim.advance(1.5)
@@ -292,13 +294,14 @@ def test_joint_frames_match_pybullet():
 
 def test_odom_message_and_odom_transform_agree():
     rt = Runtime(clock="virtual")
-    sim = SimWorld(rt, FLOOR, seed=2, camera=False).start()
+    # one command, held: no controller timeout
+    sim = SimWorld(rt, FLOOR, seed=2, camera=False, cmd_vel_timeout=0).start()
     try:
         got = []
         sub = rt.bus.subscribe("/odom", Odometry, got.append)
-        tw = Twist()
-        tw.linear.x, tw.angular.z = 0.2, 0.4
-        rt.bus.publisher("/cmd_vel", Twist).publish(tw)
+        tw = TwistStamped()
+        tw.twist.linear.x, tw.twist.angular.z = 0.2, 0.4
+        rt.bus.publisher(CMD_VEL, TwistStamped).publish(tw)
         rt.call("sleep", 2.0)
         sub.close()
         msg = got[-1]

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pybullet as p
 import pytest
-from geometry_msgs.msg import Twist
+from geometry_msgs.msg import TwistStamped
 from nav_msgs.msg import Odometry
 from tf2_msgs.msg import TFMessage
 
@@ -14,6 +14,7 @@ from bt_engine import Runtime
 from planning.tf_buffer import TransformBuffer, transform_matrix
 from sim import SimWorld
 from sim.frames import compose, odom_transform, static_transforms
+from sim.topics import CMD_VEL
 
 
 def _matrix(t) -> np.ndarray:
@@ -37,17 +38,17 @@ def _chain(parent: str, child: str):
 def driven():
     """A robot that drove a curve and moved its arm, with /tf, /tf_static and /odom heard."""
     rt = Runtime(clock="virtual")
-    sim = SimWorld(rt, "open_floor", seed=3, camera=False).start()
+    sim = SimWorld(rt, "open_floor", seed=3, camera=False, cmd_vel_timeout=0).start()
     heard = {"tf": [], "static": [], "odom": []}
     subs = [rt.bus.subscribe("/tf", TFMessage, heard["tf"].append),
             rt.bus.subscribe("/tf_static", TFMessage, heard["static"].append),
             rt.bus.subscribe("/odom", Odometry, heard["odom"].append)]
-    tw = Twist()
-    tw.linear.x, tw.angular.z = 0.2, 0.3
-    rt.bus.publisher("/cmd_vel", Twist).publish(tw)
+    tw = TwistStamped()
+    tw.twist.linear.x, tw.twist.angular.z = 0.2, 0.3
+    rt.bus.publisher(CMD_VEL, TwistStamped).publish(tw)
     sim.set_arm_positions([0.5, 0.2, -0.1, 0.4], 1.0)
     rt.call("sleep", 3.0)
-    rt.bus.publisher("/cmd_vel", Twist).publish(Twist())
+    rt.bus.publisher(CMD_VEL, TwistStamped).publish(TwistStamped())
     rt.call("sleep", 1.0)
     yield rt, sim, heard
     for s in subs:

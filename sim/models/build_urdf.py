@@ -40,6 +40,7 @@ BASE_X = (-0.205, 0.076)  # chassis extent along x in base_link (281 mm)
 BASE_W = 0.306
 CHASSIS_Z = (0.005, 0.091)  # chassis box in base_link z (top plate 0.101 above the floor)
 LDS = dict(x=-0.150, r=0.035, h=0.040)   # lidar turret on the top plate -> 141 mm overall
+IMU_Z = 0.068             # base_link -> imu_link, as in turtlebot3_waffle_pi.urdf.xacro (Jazzy)
 SCAN_Z = 0.122            # base_link -> base_scan (the laser plane), as in turtlebot3_waffle_pi.urdf
 ARM_X = -0.035            # arm base (link1) origin on the top plate
 CASTER = dict(x=-0.177, y=0.064, r=0.010)
@@ -260,6 +261,9 @@ def build() -> str:
     # last in the file, so the other links keep their pybullet indices
     P(link("base_scan", **MASSLESS, comment="LDS-01 laser frame: x forward, beams counter-clockwise from x"))
     P(joint("scan_joint", "fixed", "base_link", "base_scan", o=(LDS["x"], 0, SCAN_Z)))
+    # the OpenCR's IMU, where turtlebot3_manipulation_description puts it (/imu's frame_id)
+    P(link("imu_link", **MASSLESS, comment="the OpenCR board's IMU"))
+    P(joint("imu_joint", "fixed", "base_link", "imu_link", o=(0, 0, IMU_Z)))
 
     parts.append("</robot>")
     return "\n".join(parts) + "\n"
