@@ -1,7 +1,8 @@
-"""`actorbt topic list | echo | hz` (issue [senses]): on the local bus in this process,
-where the virtual clock runs the simulated world fast and times are sim time, and over ROS
-against an `actorbt sim run --bus ros` in another process. Also what they stand on: the
-bus's topic listing and the message converter."""
+"""`actorbt topic list | echo | hz` (issue [senses]) and `actorbt action list` beside it
+(bt_engine/cli/action.py): on the local bus in this process, where the virtual clock runs
+the simulated world fast and times are sim time, and over ROS against an `actorbt sim run
+--bus ros` in another process. Also what they stand on: the bus's topic listing and the
+message converter."""
 from __future__ import annotations
 
 import array
@@ -82,6 +83,22 @@ def test_messages_become_plain_data_with_ros_field_names():
     json.dumps(to_plain(scan, finite=True), allow_nan=False)
 
 
+def test_no_arr_leaves_out_arrays_of_numbers_but_not_of_messages_or_strings():
+    from geometry_msgs.msg import PoseWithCovarianceStamped, TransformStamped
+    from sensor_msgs.msg import JointState
+    from tf2_msgs.msg import TFMessage
+    arm = TransformStamped(child_frame_id="link1")
+    arm.header.frame_id = "base_link"
+    plain = to_plain(TFMessage(transforms=[arm, TransformStamped()]), arrays=False)
+    assert [t["child_frame_id"] for t in plain["transforms"]] == ["link1", ""]
+    assert plain["transforms"][0]["header"]["frame_id"] == "base_link"
+    joints = to_plain(JointState(name=["joint1", "joint2"], position=[0.1, 0.2]), arrays=False)
+    assert joints["name"] == ["joint1", "joint2"]
+    assert joints["position"] == "<sequence<double>, length: 2>"
+    pose = to_plain(PoseWithCovarianceStamped(), arrays=False)  # a fixed-size array too
+    assert pose["pose"]["covariance"] == "<double[36], length: 36>"
+
+
 def test_yaml_prints_fields_on_lines_and_number_lists_on_one():
     from geometry_msgs.msg import PoseStamped
     text = format_yaml({"pose": to_plain(PoseStamped())["pose"], "k": [1.0, 2.0]})
@@ -130,7 +147,7 @@ def test_list_shows_names_and_with_t_types(capsys, world_config):
     assert rc == 0
     lines = out.splitlines()
     assert "/scan [sensor_msgs/msg/LaserScan]" in lines
-    assert "/cmd_vel [geometry_msgs/msg/Twist]" in lines
+    assert "/diff_drive_controller/cmd_vel [geometry_msgs/msg/TwistStamped]" in lines
     assert "/tf_static [tf2_msgs/msg/TFMessage]" in lines
     rc, out, _ = run(capsys, world_config, "list", "--json")
     scan = next(t for t in json.loads(out) if t["name"] == "/scan")
@@ -168,11 +185,21 @@ def test_echo_shortens_images(capsys, world_config):
     assert image["data"] == f"<sequence<uint8>, length: {image['step'] * image['height']}>"
 
 
+def test_echo_no_arr_shows_the_frames_of_tf_static(capsys, world_config):
+    rc, out, err = run(capsys, world_config, "echo", "/tf_static", "--once", "--no-arr")
+    assert rc == 0, err
+    msg = yaml.safe_load(out.split("---")[0])
+    frames = {(t["header"]["frame_id"], t["child_frame_id"]) for t in msg["transforms"]}
+    assert ("base_footprint", "base_link") in frames
+    assert any(child.startswith("camera") for _, child in frames)
+
+
 def test_echo_gives_up_after_its_timeout(capsys, world_config):
-    rc, out, err = run(capsys, world_config, "echo", "/cmd_vel", "--timeout", "0.3")
+    base = "/diff_drive_controller/cmd_vel"
+    rc, out, err = run(capsys, world_config, "echo", base, "--timeout", "0.3")
     assert rc == 1 and out == ""
-    assert "nothing publishes /cmd_vel yet" in err
-    assert "no message on /cmd_vel within 0.3 s" in err
+    assert f"nothing publishes {base} yet" in err
+    assert f"no message on {base} within 0.3 s" in err
 
 
 def test_hz_reports_the_rate_in_sim_time(capsys, world_config):
@@ -206,6 +233,26 @@ def test_an_unknown_topic_gets_close_matches_and_exit_2(capsys, world_config):
     assert "unknown topic /scna; did you mean /scan?" in err
     rc, _, err = run(capsys, world_config, "hz", "/odometry")
     assert rc == 2 and "did you mean /odom?" in err
+
+
+def test_action_list_shows_the_robots_actions_with_types(capsys):
+    # the default actorbt.yaml: the house world and the robot's subsystems (navstack
+    # serves /navigate_to_pose)
+    cfg = os.path.join(ROOT, "actorbt.yaml")
+    rc = main(["--config", cfg, "action", "list", "-t"])
+    out, err = capsys.readouterr()
+    assert rc == 0, err
+    lines = out.splitlines()
+    assert "/arm_controller/follow_joint_trajectory [control_msgs/action/FollowJointTrajectory]" in lines
+    assert "/gripper_controller/gripper_cmd [control_msgs/action/GripperCommand]" in lines
+    assert "/navigate_to_pose [nav2_msgs/action/NavigateToPose]" in lines
+    rc = main(["--config", cfg, "action", "list", "--json"])
+    out, err = capsys.readouterr()
+    assert rc == 0, err
+    assert {"name": "/navigate_to_pose", "type": "nav2_msgs/action/NavigateToPose"} in json.loads(out)
+    rc = main(["--config", cfg, "action", "list"])
+    out, _ = capsys.readouterr()
+    assert "/navigate_to_pose" in out.splitlines() and "[" not in out  # names only
 
 
 def test_ctrl_c_exits_130_cleanly(world_config):
@@ -280,3 +327,11 @@ def test_over_ros_echo_once_and_list(sim_over_ros):
                    "--timeout", "60")
     assert proc.returncode == 0, proc.stderr
     assert "(wall time)" in proc.stdout.splitlines()[-2]
+
+
+def test_over_ros_action_list_shows_the_simulated_controllers(sim_over_ros):
+    proc = actorbt("action", "list", "-t", "--bus", "ros", "--wait", "3")
+    assert proc.returncode == 0, proc.stderr
+    lines = proc.stdout.splitlines()
+    assert "/arm_controller/follow_joint_trajectory [control_msgs/action/FollowJointTrajectory]" in lines
+    assert "/gripper_controller/gripper_cmd [control_msgs/action/GripperCommand]" in lines

@@ -7,8 +7,11 @@
                           long arrays and strings shortened (what ``actorbt topic echo`` prints)
 
 ``to_plain`` is for looking at messages: it cuts sequences and strings as ``ros2 topic
-echo`` does (the first ``truncate`` items, then ``'...'``), or leaves arrays out
-(``arrays=False``: ``'<sequence<float>, length: 360>'``). Values that must survive whole
+echo`` does (the first ``truncate`` items, then ``'...'``), or leaves arrays of numbers,
+booleans and bytes out (``arrays=False``: ``'<sequence<float>, length: 360>'``). Arrays
+of messages and of strings stay (their items' own numeric arrays left out): they are what
+a reader looks for, the frames of /tf_static's ``transforms``, a JointState's names.
+``ros2 topic echo --no-arr`` leaves every array out, those too. Values that must survive whole
 (an actor's result sent over ROS) go through :func:`bt_engine.ros.yamlio.to_plain`.
 """
 from __future__ import annotations
@@ -70,7 +73,8 @@ def to_plain(msg: Any, *, truncate: int | None = TRUNCATE, arrays: bool = True,
     Args:
         truncate: keep this many items of each sequence and characters of each string,
             then ``'...'``; ``None`` keeps everything.
-        arrays: ``False`` leaves sequences out, as ``'<TYPE, length: N>'``.
+        arrays: ``False`` leaves sequences of numbers, booleans and bytes out, as
+            ``'<TYPE, length: N>'``; sequences of messages and strings stay.
         finite: NaN and infinities become ``None`` (for JSON, which has neither).
     """
     return _plain(msg, None, truncate, arrays, finite)
@@ -93,7 +97,7 @@ def _plain(value: Any, ros_type: str | None, truncate: int | None, arrays: bool,
         return {name: _plain(getattr(value, name), t, truncate, arrays, finite)
                 for name, t in fields.items()}
     if _is_sequence(value):
-        if not arrays:
+        if not arrays and _primitive_items(value, ros_type):
             return f"<{ros_type or 'sequence'}, length: {len(value)}>"
         items = value[:truncate] if truncate is not None and len(value) > truncate else value
         single = _is_float32(value, ros_type)
@@ -108,6 +112,29 @@ def _plain(value: Any, ros_type: str | None, truncate: int | None, arrays: bool,
     if callable(item) and type(value).__module__ == "numpy":
         return _plain(item(), ros_type, truncate, arrays, finite)
     return repr(value)
+
+
+def _primitive_items(seq: Any, ros_type: str | None) -> bool:
+    """Whether ``seq`` holds numbers, booleans or bytes (not messages, not strings): by
+    its field type (``sequence<double>``, ``double[9]``, ``sequence<pkg/Msg, 10>``), else
+    by its first item (a ROS sequence holds one type)."""
+    element = _element_type(ros_type)
+    if element is not None:
+        return "/" not in element and not element.startswith(("string", "wstring"))
+    if isinstance(seq, (list, tuple)):
+        return not seq or not (isinstance(seq[0], str) or _is_message(seq[0]))
+    return True  # array.array, numpy, bytes
+
+
+def _element_type(ros_type: str | None) -> str | None:
+    """The item type of a sequence or array field type; None if ``ros_type`` is neither."""
+    if not ros_type:
+        return None
+    if ros_type.startswith("sequence<") and ros_type.endswith(">"):
+        return ros_type[len("sequence<"):-1].split(",")[0].strip()
+    if ros_type.endswith("]") and "[" in ros_type:
+        return ros_type[:ros_type.rindex("[")]
+    return None
 
 
 def _is_float32(seq: Any, ros_type: str | None) -> bool:

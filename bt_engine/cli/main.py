@@ -1,7 +1,8 @@
 """The ``actorbt`` command.
 
 Core commands and the tree commands are declared here, ``topic`` in
-:mod:`bt_engine.cli.topic`; ``bt_engine.ros.cli`` and the
+:mod:`bt_engine.cli.topic`, ``action`` in :mod:`bt_engine.cli.action`;
+``bt_engine.ros.cli``, ``bt_engine.ros.pose_cli`` and the
 plugins named in actorbt.yaml add their own (each module has ``register(subparsers,
 common)`` and sets ``func(args, app) -> exit code``). Declaring a command imports nothing
 heavy: a command's implementation is imported when it runs, so ``actorbt --help`` and
@@ -21,12 +22,12 @@ from typing import Callable
 
 from ..errors import ActorbtError
 from ..ros.live_options import LiveOptions, add_live_options
-from . import topic
+from . import action, topic
 from .app import App
 from .config import Config, load_config
 
 #: command modules inside the engine that add sub-commands when importable
-BUILTIN_EXTENSIONS = ["bt_engine.ros.cli", "bt_engine.mcp.cli"]
+BUILTIN_EXTENSIONS = ["bt_engine.ros.cli", "bt_engine.ros.pose_cli", "bt_engine.mcp.cli"]
 
 Command = Callable[[argparse.Namespace, App], int]
 
@@ -201,6 +202,7 @@ def build_parser(plugins: list[str]) -> argparse.ArgumentParser:
 
     _tree_commands(sub)
     topic.register(sub, _common)
+    action.register(sub, _common)
     for mod_name in BUILTIN_EXTENSIONS + plugins:
         try:
             mod = importlib.import_module(mod_name)

@@ -85,7 +85,7 @@ def register(sub: Any, common: Callable[[argparse.ArgumentParser], None]) -> Non
         description="Print each message of a topic as it arrives: as YAML with the ROS field "
                     "names, followed by '---' (with --json, one JSON object per line). Long "
                     "arrays and strings are cut after 128 items, as ros2 does; --full prints "
-                    "them whole and --no-arr leaves arrays out.")
+                    "them whole and --no-arr leaves arrays of numbers out.")
     e.add_argument("topic", help="The topic's name, e.g. /odom (a name without the leading "
                                  "slash is taken from /).")
     e.add_argument("--once", action="store_true", help="Print one message, then exit.")
@@ -94,7 +94,10 @@ def register(sub: Any, common: Callable[[argparse.ArgumentParser], None]) -> Non
     e.add_argument("--json", action="store_true",
                    help="Print each message as one line of JSON (NaN and infinities become null).")
     e.add_argument("--no-arr", action="store_true",
-                   help="Leave arrays out: print only their type and length.")
+                   help="Leave arrays of numbers, booleans and bytes out, printing only their "
+                        "type and length (an image's pixels, a scan's ranges); arrays of "
+                        "messages and strings are printed (the transforms of /tf_static, a "
+                        "JointState's names), unlike ros2's --no-arr, which leaves them out too.")
     e.add_argument("--truncate", type=_positive_int, default=128, metavar="N",
                    help="Keep the first N items of each array and characters of each string "
                         "(default 128).")
