@@ -61,10 +61,11 @@ def snapshot(world="house", seed=0, out_png="world.png", camera=False, camera_si
     return _snapshot(world, seed, out_png, camera=camera, camera_size=camera_size)
 
 
-def start_world(runtime, world="house", seed=0, gui=False, locations=None):
+def start_world(runtime, world="house", seed=0, gui=False, locations=None, **options):
     """Build ``world`` with ``seed`` and put it on ``runtime`` (what actorbt.yaml's
     ``simulator: sim:start_world`` names); ``locations``: a locations YAML for a world
-    built from a map_server map. Returns the started SimWorld."""
+    built from a map_server map; ``options``: more of :class:`SimWorld`'s keywords
+    (``initial_pose``, ``faults``). Returns the started SimWorld."""
     from .simworld import SimWorld
 
-    return SimWorld(runtime, world=world, seed=seed, gui=gui, locations=locations).start()
+    return SimWorld(runtime, world=world, seed=seed, gui=gui, locations=locations, **options).start()

@@ -57,7 +57,7 @@ def loaded(cwd: Path, *args: str) -> set[str]:
 
 def heavy(modules: set[str]) -> list[str]:
     found = [m for m in modules if m.split(".")[0] in HEAVY]
-    found += [m for m in modules if m.startswith("sim.") and m != "sim.cli"]
+    found += [m for m in modules if m.startswith("sim.") and m not in ("sim.cli", "sim.robot_cli")]  # the plugins: argparse only
     return sorted(found)
 
 
