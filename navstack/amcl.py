@@ -24,7 +24,11 @@
   own estimate (``filter_map_to_odom``), so a real kidnap still converges and is adopted.
   A converged pose farther than ``adopt_near`` from the held one is adopted only if the
   scan fits it ``adopt_margin`` better: from a standstill by an unmapped object, one
-  scan's search may settle on a look-alike place metres away that fits no better.
+  scan's search may settle on a look-alike place metres away that fits no better;
+* a global localisation with no pose known (none given, none converged to yet) is declared
+  localised only where the scan fits no other place within ``unique_margin`` as well, and
+  from its pose refined on all the beams (:meth:`Amcl._confirm_unique`): in a symmetric
+  room it stays uncertain (``ambiguous``) rather than pick a look-alike pose.
 """
 from __future__ import annotations
 
@@ -94,6 +98,11 @@ class AmclParams:
     relocalise_grace: float = 6.0     # after a relocalisation, [s] before lost may be declared again
     adopt_near: float = 0.5           # a relocalised pose this near the held one is adopted [m] ...
     adopt_margin: float = 0.15        # ... one farther only if the scan fits it this much better
+    # a global localisation with no pose known converges only where the scan fits no other place
+    unique_margin: float = 0.1        # ... as well as the estimate, less this (share of beams)
+    unique_near: float = 0.5          # another place: this far from the estimate [m] ...
+    unique_near_yaw: float = 0.5      # ... or turned this far from it [rad]
+    unique_places: int = 6            # best places of a global search compared with it
     auto_recover: bool = True
     recovery: str = "informed"        # "informed" (scan-matched seeding) or "uniform"
 
@@ -111,6 +120,8 @@ class Status:
     recoveries: int = 0               # global relocalisations started because lost
     lost_count: int = 0               # times lost was declared
     kept_count: int = 0               # relocalisations that found no better pose than the held one
+    ambiguous: bool = False           # a global localisation's estimate fits no better than another place
+    rival_score: float = 0.0          # ... the scan's fit at the best other place (its last check)
     last_update_ms: float = 0.0
     last_lost: float | None = None    # when lost was last declared (clock time)
 
@@ -151,6 +162,7 @@ class Amcl:
         self._pending_global = None      # share of particles to keep, while an informed global localisation waits for a scan
         self._low_scans = 0
         self._grace_until = -math.inf
+        self._rivals = None              # the scan's best places (map -> odom), their fits, the odometry pose
         self.update_times: list[float] = []   # [s] per filter update
         self.search_times: list[float] = []   # [s] per scan-informed global localisation
 
@@ -205,7 +217,9 @@ class Amcl:
         self._force_update = True
         self._odom_at_update = odom
         self._low_scans = 0
+        self._rivals = None
         self.status.state = UNCERTAIN
+        self.status.ambiguous = False
         self._grace_until = self.clock() + self.params.relocalise_grace
 
     def beams(self, scan: Scan, k: int | None = None) -> np.ndarray:
@@ -316,10 +330,52 @@ class Amcl:
             converged = est is not None and st.score >= p.ok_score \
                 and est.std_xy <= p.converged_std_xy and est.std_yaw <= p.converged_std_yaw \
                 and est.weight >= p.converged_weight
+            if converged and not self._trusted:
+                self._confirm_unique(scan, odom)     # uncertain still, or restarted round the pose
+                return
             st.state = LOCALISED if converged else UNCERTAIN
             self._trusted = self._trusted or converged
             if converged and self.holding:
                 self._adopt_or_keep(scan, odom)
+
+    def _confirm_unique(self, scan: Scan, odom) -> None:
+        """A global localisation with no pose known has converged: believe it only if the
+        scan fits no other place nearly as well, and then from its pose refined on all the
+        beams. The filter's weights cannot tell: its likelihood treats the beams as
+        independent, so after one update the cluster that happened to be seeded nearer its
+        optimum holds nearly all the weight, and at a standstill the same view repeated
+        settles any tie by chance (a symmetric room, a corridor, a view of one wall). So
+        the estimate and the best places of a global search on the scan are refined alike
+        and compared by the share of beams that fit: unless it beats every other place by
+        ``unique_margin``, the state stays uncertain (``ambiguous``) until the robot has
+        moved enough for a new view. Otherwise the filter restarts round the refined pose
+        (the particles sampled the pose only as densely as they were seeded, some
+        centimetres off) and is trusted, as if the pose had been given."""
+        p, st = self.params, self.status
+        odom = tuple(odom)
+        beams = self.beams(scan, None)
+        pose = tuple(self.pf.refine(compose(self.filter_map_to_odom, odom), beams, scan.range_max))
+        fit = self.match_score(scan, pose)
+        r = self._rivals
+        if r is None or math.hypot(odom[0] - r[2][0], odom[1] - r[2][1]) > p.update_min_d \
+                or abs(wrap1(odom[2] - r[2][2])) > p.update_min_a:
+            places = self.pf.best_places(beams, scan.range_max, p.unique_places, p.unique_near,
+                                         p.unique_near_yaw)
+            # kept as map -> odom, so that they follow the odometry until the view changes
+            r = self._rivals = ([compose(tuple(q), inverse(odom)) for q in places],
+                                [self.match_score(scan, tuple(q)) for q in places], odom)
+        rivals = [0.0]
+        for m2o, f in zip(r[0], r[1]):
+            q = compose(m2o, odom)
+            if math.hypot(q[0] - pose[0], q[1] - pose[1]) > p.unique_near \
+                    or abs(wrap1(q[2] - pose[2])) > p.unique_near_yaw:
+                rivals.append(f)
+        st.rival_score = max(rivals)
+        st.ambiguous = st.rival_score > fit - p.unique_margin
+        if st.ambiguous:
+            st.state = UNCERTAIN
+            return
+        self.initialise(pose, KEPT_POSE_COV, odom=odom)    # converges on the next update
 
     def _adopt_or_keep(self, scan: Scan, odom) -> None:
         """The relocalisation after a lost has converged: adopt its pose, unless it lies

@@ -31,13 +31,18 @@ then see one rigid map frame, moving with the odometry alone; the corrections ma
 meanwhile are applied once the robot has left (this is not AMCL's behaviour; on a robot
 with AMCL, the mission has to cope with such jumps by measuring the object again).
 
-Nothing is on /tf before the localiser knows where the robot is: from an ``/initialpose``
-(RViz's "2D Pose Estimate"; or ``initial_pose``, AMCL's ``set_initial_pose``) at once, or
-from a global localisation once it has converged. Without either, ``global_after``
-seconds (odometry time) after the first scan with a map the localiser localises globally
-from the scan (None: wait for /initialpose for ever, as AMCL does), and runs a filter
-update on every scan (AMCL's no-motion update) until it has converged, since nothing
-moves the robot before it knows where it is.
+Nothing is on /tf or /amcl_pose before the localiser knows where the robot is (AMCL
+publishes no pose before it has an initial one): from an ``/initialpose`` (RViz's "2D
+Pose Estimate"; or ``initial_pose``, AMCL's ``set_initial_pose``) at once, or from a
+global localisation once it has converged. Without either, ``global_after`` seconds
+(odometry time) after the first scan with a map the localiser localises globally from
+the scan (None: wait for /initialpose for ever, as AMCL does), and runs a filter update
+on every scan (AMCL's no-motion update) until it has converged, since nothing moves the
+robot before it knows where it is. Such a global localisation converges only where the
+scan fits no other place nearly as well (:meth:`navstack.amcl.Amcl._confirm_unique`):
+in a symmetric room the localiser stays uncertain, and says so, rather than pick one of
+the look-alike poses. Its pose is taken at once, neither smoothed nor held. A
+``localise_globally`` forgets the pose the same way until the search has converged.
 
 The laser's pose on the base (``laser_pose``) is read from /tf_static (base_footprint ->
 the scan's frame) once it is there, and is the URDF's base_footprint -> base_scan
@@ -53,6 +58,7 @@ import zlib
 from dataclasses import fields
 
 import numpy as np
+from builtin_interfaces.msg import Time
 from geometry_msgs.msg import PoseWithCovarianceStamped
 from nav_msgs.msg import OccupancyGrid, Odometry
 from sensor_msgs.msg import LaserScan
@@ -68,14 +74,16 @@ from .smoothing import LocalHold, PoseSmoother, SmootherParams
 from .odometry import OdomHistory
 from .odometry import seconds as _seconds
 from .odometry import yaw_of as _yaw
-from .tf import TF, TfListener, TransformError, planar_transform
+from .tf import TF, TfListener, TransformError, planar_transform, to_stamp
 
 #: base_footprint -> base_scan in sim/models/mobile_manipulator.urdf (x, y, yaw)
 LASER_POSE = (-0.15, 0.0, 0.0)
-#: AMCL's default initial covariance (0.5 m, 0.5 m, pi/12 rad standard deviations)
 #: the pose handed over by the mapper: as sure as its scan matching
 RESUME_COV = np.diag([0.05 ** 2, 0.05 ** 2, 0.03 ** 2])
+#: AMCL's default initial covariance (0.5 m, 0.5 m, pi/12 rad standard deviations)
 INITIAL_COV = np.diag([0.5 ** 2, 0.5 ** 2, (math.pi / 12) ** 2])
+#: the covariance /amcl_pose carries when the pose is forgotten (10 m, pi rad)
+UNKNOWN_COV = np.diag([10.0 ** 2, 10.0 ** 2, math.pi ** 2])
 #: [s] how far map -> odom is stamped into the future (AMCL's transform_tolerance)
 TRANSFORM_TOLERANCE = 0.2
 #: [Hz] at most this often map -> odom goes out between filter updates
@@ -202,14 +210,16 @@ class Localiser(SubSystem):
         """map -> odom from the filter's new estimate at odometry pose ``odom``: smoothed
         while localised, as it is otherwise (converging, relocalising); held while the
         robot manoeuvres near where it stood still, unless the correction is one that
-        drift cannot explain."""
+        drift cannot explain. Until map -> odom is known (a global localisation before it
+        first converges), the estimate is taken as it is: the transform there is nothing
+        the robot has used, so there is nothing to hold or to smooth towards."""
         localised = self.amcl.status.state == LOCALISED
-        big = not localised
+        big = not localised or not self._tf_valid
         if self.smoother is None:
             target = self.amcl.map_to_odom
         else:
             resets = self.smoother.resets
-            if localised:
+            if localised and self._tf_valid:
                 self.smoother.update(self.amcl.pose(odom), odom)
             else:
                 self.smoother.reset(self.amcl.pose(odom), odom)
@@ -246,7 +256,7 @@ class Localiser(SubSystem):
                     self._send_tf()
             if self._tf_valid and t - self._tf_sent >= self._tf_period - 1e-9:
                 self._send_tf()
-            if self.amcl.status.state == LOCALISED or self.amcl.status.updates:
+            if self._tf_valid:
                 if t - self._last_pub >= self._pose_period - 1e-9:
                     self._publish(msg.header.stamp, self.pose(pose))
 
@@ -279,19 +289,19 @@ class Localiser(SubSystem):
             self._laser_pose(msg.header.frame_id)
             if self._first_scan is None:
                 self._first_scan = t
-            if not self._tf_valid and self._global_after is not None:
-                if self.amcl.status.state == UNINITIALISED and t - self._first_scan >= self._global_after:
-                    self.amcl.global_localisation()     # nobody said where the robot is
-                elif self.amcl.status.state != UNINITIALISED:
+            if not self._tf_valid:
+                if self.amcl.status.state != UNINITIALISED:
                     # converge while standing still: the robot waits for its pose
                     self.amcl.request_nomotion_update()
+                elif self._global_after is not None and t - self._first_scan >= self._global_after:
+                    self.amcl.global_localisation()     # nobody said where the robot is
             if self.amcl.on_scan(Scan.from_msg(msg), odom):
                 self._estimate(odom)
                 if not self._tf_valid and self.amcl.status.state == LOCALISED:
                     self._tf_valid = True           # a global localisation converged
-                if self._tf_valid:
+                if self._tf_valid:                  # else the pose is unknown: nothing to say
                     self._send_tf()
-                self._publish(msg.header.stamp, self.pose(odom))
+                    self._publish(msg.header.stamp, self.pose(odom))
 
     def _on_initial_pose(self, msg: PoseWithCovarianceStamped) -> None:
         p = msg.pose.pose
@@ -316,7 +326,7 @@ class Localiser(SubSystem):
             planar_transform(GLOBAL_FRAME, ODOM_FRAME, self.map_to_odom, stamp)]))
         self._tf_sent, self._tf_stamp = self._now, stamp
 
-    def _publish(self, stamp, pose) -> None:
+    def _publish(self, stamp, pose, cov3=None) -> None:
         msg = PoseWithCovarianceStamped()
         msg.header.stamp = stamp
         msg.header.frame_id = GLOBAL_FRAME
@@ -324,7 +334,7 @@ class Localiser(SubSystem):
         msg.pose.pose.orientation.z = math.sin(pose[2] / 2)
         msg.pose.pose.orientation.w = math.cos(pose[2] / 2)
         cov = np.zeros((6, 6))
-        cov[np.ix_([0, 1, 5], [0, 1, 5])] = self.amcl.covariance()
+        cov[np.ix_([0, 1, 5], [0, 1, 5])] = self.amcl.covariance() if cov3 is None else cov3
         msg.pose.covariance = cov.ravel().tolist()
         self._pub.publish(msg)
         self._last_pub = _seconds(stamp)
@@ -355,7 +365,9 @@ class Localiser(SubSystem):
     @actor
     def localise_globally(self, wait: float = 0.0) -> dict:
         """Forget the pose and find the robot on the whole map from the next scan (the
-        reinitialize_global_localization service). Returns the localisation status.
+        reinitialize_global_localization service): until that has converged, map -> odom
+        is off /tf and /amcl_pose says the pose is unknown (AMCL goes on publishing its
+        estimate as it converges). Returns the localisation status.
 
         Args:
             wait: wait up to this long for the robot to be localised [s]; 0: return at once
@@ -364,6 +376,11 @@ class Localiser(SubSystem):
             if self.amcl is None:
                 raise RuntimeError("no map received on /map yet")
             self.amcl.global_localisation()
+            if self._tf_valid:
+                # the pose is forgotten: no map -> odom until the search has converged, and
+                # the latched /amcl_pose, sure of the old pose, is replaced by one that is not
+                self._tf_valid = False
+                self._publish(to_stamp(self._now, Time()), self.pose(), UNKNOWN_COV)
         if wait > 0:
             end = self.runtime.now() + wait
             while self.runtime.now() < end:
@@ -379,7 +396,11 @@ class Localiser(SubSystem):
 
         Returns:
             state (uninitialised, uncertain, localised or lost), pose [x m, y m, yaw rad]
-            in the map frame now, score (share of beams that fit the map, smoothed),
+            in the map frame now (None while the localiser does not know it: no initial
+            pose yet, or a global localisation that has not converged), score (share of
+            beams that fit the map, smoothed), ambiguous and rival_score (a global
+            localisation whose estimate the scan fits no better than another place, whose
+            fit is rival_score: it stays uncertain until the robot has moved),
             std_xy [m] and std_yaw [rad] of the estimate, particles, clusters, updates,
             recoveries (times lost was declared), kept_count (relocalisations after a
             lost that found no better pose than the one held: false alarms),
@@ -390,6 +411,6 @@ class Localiser(SubSystem):
                 return {"state": "uninitialised", "pose": None, "map": False}
             st = self.amcl.status.as_dict()
             st.pop("last_lost", None)
-            st["pose"] = [round(float(v), 4) for v in self.pose()]
+            st["pose"] = [round(float(v), 4) for v in self.pose()] if self._tf_valid else None
             st["map"] = True
             return {k: (float(v) if isinstance(v, (np.floating,)) else v) for k, v in st.items()}

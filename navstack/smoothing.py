@@ -97,6 +97,8 @@ class LocalHold:
     odometry alone, whose error over half a metre is a few millimetres. Turning on the
     spot also ends the hold, after ``max_turn`` [rad] in all: the gyro's scale error (about
     1 % of the angle) is what the localiser corrects there (looking around in steps).
+    Only a correction the robot has had is worth keeping: until the localiser knows
+    map -> odom (a global localisation converging), it does not hold.
     """
 
     def __init__(self, radius: float = 0.75, max_turn: float = 0.6, still_speed: float = 0.01,

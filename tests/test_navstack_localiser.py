@@ -120,7 +120,9 @@ def test_localiser_subsystem_tracks_and_relocalises(rt):
     assert mo != (0.0, 0.0, 0.0)
     # forget it: global localisation from the next scan
     st = rt.call("localise_globally")
-    assert st["state"] == "uncertain"
+    assert st["state"] == "uncertain" and st["pose"] is None
+    unknown = np.asarray(feed.poses[-1].pose.covariance).reshape(6, 6)   # replaces the latched sure one
+    assert unknown[0, 0] > 1 and unknown[5, 5] > 1
     s = feed.run(6)
     st = rt.call("localisation_status")
     assert st["state"] == "localised"
@@ -161,6 +163,72 @@ def test_without_an_initial_pose_the_localiser_localises_globally(rt):
     assert st["state"] == "localised"
     assert math.hypot(st["pose"][0] - s.truth[0], st["pose"][1] - s.truth[1]) < 0.1
     assert feed.tf, "map -> odom goes out once the global localisation converged"
+
+
+def _transform_error(feed, s):
+    """Position and heading error of map -> base_footprint from the newest map -> odom on
+    /tf and the odometry of sample s."""
+    buf = TransformBuffer()
+    buf.add_message(feed.tf[-1][1].transforms[0])
+    buf.set("odom", "base_footprint", planar(*s.odom), s.t)
+    x, y, yaw = pose2d(buf.lookup("map", "base_footprint"))
+    return math.hypot(x - s.truth[0], y - s.truth[1]), abs(math.remainder(yaw - s.truth[2], 2 * math.pi))
+
+
+@pytest.mark.parametrize("start", [0, 6])
+def test_a_robot_standing_away_from_the_origin_is_localised_where_it_stands(rt, start):
+    """Rehearsal on the real robot, started with no /initialpose at (1, 1, 0): the
+    localiser said "localised" (std 4 cm) at (0.00, 0.00, -0.15), the odometry's origin,
+    and put that on /tf. The global localisation had converged to (1.04, 1.00), but the
+    local hold (LocalHold: keep map -> odom while the robot stands still) kept the
+    identity map -> odom it had before anything was known. Here the robot stands at a
+    tour point of the house, its odometry at (0, 0, 0): every sample that says localised
+    must be right, on localisation_status and on /tf, and it must say so in the end."""
+    occ = read_map_yaml(FIXTURES / "house.yaml")
+    world = SyntheticWorld(occ, world_boxes(FIXTURES / "house_world.yaml"), seed=start, start=start,
+                           reverse=False, speed=0.0, turn=0.0)
+    assert math.hypot(*world.truth[:2]) > 1.0
+    rt.add_subsystem("localiser", Localiser, seed=start, global_after=1.0)
+    feed = Feed(rt, world)
+    feed.map.publish(occ.to_msg())
+    unknown = []                                  # (pose, /amcl_pose count) while not localised
+    for _ in range(40):
+        s = feed.run(0.2)
+        st = rt.call("localisation_status")
+        if st["state"] != "localised":
+            assert not feed.tf
+            unknown.append((st["pose"], len(feed.poses)))
+            continue
+        assert math.hypot(st["pose"][0] - s.truth[0], st["pose"][1] - s.truth[1]) < 0.1
+        assert abs(math.remainder(st["pose"][2] - s.truth[2], 2 * math.pi)) < 0.1
+        e, eyaw = _transform_error(feed, s)
+        assert e < 0.1 and eyaw < 0.1
+    assert st["state"] == "localised" and feed.poses
+    assert unknown and all(u == (None, 0) for u in unknown)   # until then it said it did not know
+
+
+def test_in_a_symmetric_room_the_localiser_says_it_does_not_know(rt):
+    """An empty rectangular room: the robot's pose and the pose turned half round about
+    the centre fit every scan alike. Not localised, nothing on /tf or /amcl_pose, and
+    require_localised refuses."""
+    from actors.navigation import Navigation
+    from bt_engine import ActorError
+    from tests.test_navstack_localisation import rectangular_room
+    room, walls = rectangular_room()
+    world = SyntheticWorld(room, walls, [(0.0, 0.0), (1.0, 0.0)], seed=1, unmapped=0, speed=0.0, turn=0.0)
+    world.teleport((1.1, 0.6, 0.4))
+    rt.add_subsystem("localiser", Localiser, seed=1, global_after=1.0)
+    rt.add_subsystem("navigation", Navigation)
+    feed = Feed(rt, world)
+    feed.map.publish(room.to_msg())
+    for _ in range(40):
+        feed.run(0.2)
+        assert rt.call("localisation_status")["state"] != "localised"
+    st = rt.call("localisation_status")
+    assert st["state"] == "uncertain" and st["ambiguous"] and st["pose"] is None
+    assert not feed.tf and not feed.poses
+    with pytest.raises(ActorError, match="delocalised: no /amcl_pose received"):
+        rt.call("require_localised", wait=0.5)
 
 
 def test_the_smoother_removes_the_estimates_jitter_and_follows_a_relocalisation():
