@@ -59,6 +59,7 @@ from .perception_segments import (DEPTH_NOISE, LABEL_GAP, MAX_RANGE, MAX_UNKNOWN
 
 # ----------------------------------------------------------------------------- subsystem
 GLANCE_TIMEOUT = 3.0    # [s] how long one look may wait for a frame
+ANY = "any"             # the category that means any known one (the trees' default)
 
 
 def _targets(dets: list[dict], category: str | None, apps: dict) -> list[dict]:
@@ -86,10 +87,15 @@ class Perception(SubSystem):
         fixed = self.get_value("appearances")
         return registered_appearances() if fixed is None else fixed
 
-    def _check_category(self, category: str | None) -> None:
-        if category is not None and category != UNKNOWN and category not in self._apps():
+    def _check_category(self, category: str | None) -> str | None:
+        """``category`` as the looks take it: None for any known category ("any", as the
+        search and the trees say it, or None); an error for a category nobody knows."""
+        if category in (None, ANY):
+            return None
+        if category != UNKNOWN and category not in self._apps():
             raise PerceptionError(f"unknown category {category!r}; known: "
-                                  f"{', '.join(sorted(self._apps()))}, {UNKNOWN}")
+                                  f"{', '.join(sorted(self._apps()))}, {UNKNOWN}, or {ANY}")
+        return category
 
     def _frame(self) -> RGBDFrame:
         return self.run_actor_mode("rgbd", "timed", GLANCE_TIMEOUT)
@@ -108,9 +114,9 @@ class Perception(SubSystem):
 
         Args:
             category: the object category to look for (can, bottle, or unknown: an
-                object of no known category); None: any known category
+                object of no known category); "any" or None: any known category
         """
-        self._check_category(category)
+        category = self._check_category(category)
         found = _targets(detect(self._frame(), self._apps()), category, self._apps())
         return found[0] if found else None
 
@@ -121,10 +127,10 @@ class Perception(SubSystem):
 
         Args:
             category: the object category to look for (can, bottle, or unknown: an
-                object of no known category); None: any known category
+                object of no known category); "any" or None: any known category
             seconds: how long to watch at most [s]
         """
-        self._check_category(category)
+        category = self._check_category(category)
         ret = None
         with self.run_actor_mode("rgbd", "timed_iterator", seconds) as frames:
             for frame in frames:
@@ -143,13 +149,13 @@ class Perception(SubSystem):
 
         Args:
             category: the object category to look for (can, bottle, or unknown: an
-                object of no known category); None: any known category
+                object of no known category); "any" or None: any known category
             looks: how many consecutive camera frames to combine
             near: [x, y] in the map frame [m]: only objects seen within ``within`` of it
                 (what is at that place); None: the object seen most often, then nearest
             within: see ``near`` [m]
         """
-        self._check_category(category)
+        category = self._check_category(category)
         if near is not None and (not isinstance(near, (list, tuple)) or len(near) != 2):
             raise PerceptionError(f"near must be [x, y] in the map frame, got {near!r}")
         looks = max(1, int(looks))
@@ -174,9 +180,9 @@ class Perception(SubSystem):
 
         Args:
             category: the object category to look for (can, bottle, or unknown: an
-                object of no known category); None: any known category
+                object of no known category); "any" or None: any known category
         """
-        self._check_category(category)
+        category = self._check_category(category)
         with self.run_actor_mode("rgbd", "iterator") as frames:
             for frame in frames:
                 found = _targets(detect(frame, self._apps()), category, self._apps())
@@ -195,9 +201,9 @@ class Perception(SubSystem):
 
         Args:
             category: the object category to look for (can, bottle, or unknown: an
-                object of no known category); None: any known category
+                object of no known category); "any" or None: any known category
         """
-        self._check_category(category)
+        category = self._check_category(category)
         with self.run_actor_mode("rgbd", "iterator") as frames:
             for frame in frames:
                 found = _targets(detect(frame, self._apps()), category, self._apps())

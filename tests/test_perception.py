@@ -329,6 +329,7 @@ def test_find_object_pic_find_and_timeout(world):
                           "confidence", "pixel"}
     assert rt.call("find_object", "bottle") is None
     assert rt.call("find_object")["category"] == "can"
+    assert rt.call("find_object", "any")["category"] == "can"    # as the docs and trees say it
     _place(sim, names, [("box", 0.6, -0.2, 0.5)])
     t0 = rt.now()
     assert rt.call("pic_find", None, 1.5) is None
