@@ -1,8 +1,11 @@
 """The localiser on the runtime's bus: AMCL's topics and two actors.
 
-Subscribed: ``/map`` (nav_msgs/OccupancyGrid), ``/odom`` (nav_msgs/Odometry), ``/scan``
-(sensor_msgs/LaserScan, sensor-data QoS), ``/initialpose``
-(geometry_msgs/PoseWithCovarianceStamped), ``/tf_static`` (the laser's mounting).
+Subscribed: ``/map`` (nav_msgs/OccupancyGrid), ``/odom`` (nav_msgs/Odometry), the IMU
+(``/imu_broadcaster/imu``, sensor_msgs/Imu: the heading between odometry poses, see
+:mod:`navstack.gyro_odometry`), ``/scan`` (sensor_msgs/LaserScan, sensor-data QoS),
+``/initialpose`` (geometry_msgs/PoseWithCovarianceStamped), ``/tf_static`` (the laser's
+mounting). The filter runs on the wheel odometry turned by the gyro; what goes on /tf is
+map -> the wheels' odom frame.
 
 Published:
 
@@ -61,7 +64,7 @@ import numpy as np
 from builtin_interfaces.msg import Time
 from geometry_msgs.msg import PoseWithCovarianceStamped
 from nav_msgs.msg import OccupancyGrid, Odometry
-from sensor_msgs.msg import LaserScan
+from sensor_msgs.msg import Imu, LaserScan
 from tf2_msgs.msg import TFMessage
 
 from bt_engine import SubSystem, actor
@@ -71,6 +74,7 @@ from .likelihood_field import LaserModelParams
 from .map_io import OccupancyMap
 from .particle_filter import FilterParams
 from .smoothing import LocalHold, PoseSmoother, SmootherParams
+from .gyro_odometry import GyroOdometry
 from .odometry import OdomHistory
 from .odometry import seconds as _seconds
 from .odometry import yaw_of as _yaw
@@ -89,6 +93,8 @@ TRANSFORM_TOLERANCE = 0.2
 #: [Hz] at most this often map -> odom goes out between filter updates
 TF_RATE = 20.0
 GLOBAL_FRAME, ODOM_FRAME, BASE_FRAME = "map", "odom", "base_footprint"
+#: the OpenCR's IMU as ROBOTIS' ros2_control bring-up publishes it (imu_broadcaster's ~/imu)
+IMU_TOPIC = "/imu_broadcaster/imu"
 
 
 def split_params(params: dict | None):
@@ -122,13 +128,14 @@ class Localiser(SubSystem):
             SmootherParams); False: publish each filter update's estimate as it is (AMCL)
         hold_radius: [m] keep map -> odom while the robot manoeuvres this near where it
             last stood still (:class:`navstack.smoothing.LocalHold`); 0: never
+        imu_topic: the IMU whose heading turns the odometry; None: the wheels' alone
     """
 
     def __init__(self, params: dict | None = None, seed: int = 0,
                  initial_pose: tuple | None = None, pose_rate: float = 0.0,
                  tf_rate: float = TF_RATE, transform_tolerance: float = TRANSFORM_TOLERANCE,
                  global_after: float | None = None, smoothing: bool | dict = True,
-                 hold_radius: float = 0.75) -> None:
+                 hold_radius: float = 0.75, imu_topic: str | None = IMU_TOPIC) -> None:
         super().__init__()
         self.hold = LocalHold(hold_radius) if hold_radius > 0 else None
         self._target = None                     # the newest map -> odom, held or not
@@ -145,7 +152,8 @@ class Localiser(SubSystem):
         self.amcl: Amcl | None = None
         self._map_key = None
         self._now = 0.0
-        self._odom = OdomHistory()              # (t, (x, y, yaw)), by stamp
+        self._odom = OdomHistory()              # (t, fused (x, y, yaw)), by stamp
+        self.odometry = GyroOdometry()          # the wheels' poses turned by the gyro
         self._last_pub = -math.inf
         self._pending_initial = None            # an /initialpose before the map
         self._first_scan = None                 # odometry time of the first scan with a map
@@ -165,6 +173,8 @@ class Localiser(SubSystem):
             bus.subscribe("/scan", LaserScan, self._on_scan, "sensor"),
             bus.subscribe("/initialpose", PoseWithCovarianceStamped, self._on_initial_pose, 10),
         ]
+        if imu_topic:
+            self._subs.append(bus.subscribe(imu_topic, Imu, self._on_imu, 100))
 
     def close(self) -> None:
         """Unsubscribe (the runtime's bus closes them too)."""
@@ -238,11 +248,15 @@ class Localiser(SubSystem):
             odom = self._odom.latest() or (0.0, 0.0, 0.0)
         return compose(self.map_to_odom, tuple(odom))
 
+    def _on_imu(self, msg: Imu) -> None:
+        with self._lock:
+            self.odometry.on_imu(_seconds(msg.header.stamp), _yaw(msg.orientation))
+
     def _on_odom(self, msg: Odometry) -> None:
         p = msg.pose.pose
-        pose = (p.position.x, p.position.y, _yaw(p.orientation))
         t = _seconds(msg.header.stamp)
         with self._lock:
+            pose = self.odometry.fuse(t, (p.position.x, p.position.y, _yaw(p.orientation)))
             if self._odom.add(t, pose):    # time went backwards (a new episode)
                 self._tf_sent = self._tf_stamp = -math.inf
             self._now = max(self._now, t)
@@ -322,8 +336,8 @@ class Localiser(SubSystem):
         """map -> odom on /tf, stamped transform_tolerance ahead of the odometry's time
         (and after the last one sent)."""
         stamp = max(self._now + self._tolerance, self._tf_stamp + 1e-3)
-        self._tf_pub.publish(TFMessage(transforms=[
-            planar_transform(GLOBAL_FRAME, ODOM_FRAME, self.map_to_odom, stamp)]))
+        self._tf_pub.publish(TFMessage(transforms=[planar_transform(
+            GLOBAL_FRAME, ODOM_FRAME, self.odometry.map_to_wheel_odom(self.map_to_odom), stamp)]))
         self._tf_sent, self._tf_stamp = self._now, stamp
 
     def _publish(self, stamp, pose, cov3=None) -> None:

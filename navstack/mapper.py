@@ -1,7 +1,8 @@
 """Mapping on the bus (slam_toolbox's stand-in): ``/scan`` and ``/odom`` in, ``/map`` and
 map -> odom out.
 
-Inputs: ``/scan`` (sensor QoS), ``/odom``, ``/tf_static`` (the laser's mounting), and
+Inputs: ``/scan`` (sensor QoS), ``/odom`` turned by the IMU's heading
+(:mod:`navstack.gyro_odometry`), ``/tf_static`` (the laser's mounting), and
 ``/initialpose`` before the first scan (where the map frame puts the robot at the start;
 slam_toolbox's ``map_start_pose``; default the origin).
 
@@ -21,11 +22,13 @@ from pathlib import Path
 import numpy as np
 from geometry_msgs.msg import PoseWithCovarianceStamped
 from nav_msgs.msg import OccupancyGrid, Odometry
-from sensor_msgs.msg import LaserScan
+from sensor_msgs.msg import Imu, LaserScan
 from tf2_msgs.msg import TFMessage
 
 from bt_engine import ActorbtError, SubSystem
 
+from .gyro_odometry import GyroOdometry
+from .localiser import IMU_TOPIC
 from .map_io import write_map_yaml, write_trajectory_tum
 from .odometry import OdomHistory, seconds, yaw_of
 from .slam import Slam, SlamParams
@@ -48,17 +51,19 @@ class Mapper(SubSystem):
             /initialpose before it overrides this)
         map_period: [s] of scan time between /map messages
         slam: overrides of :class:`navstack.slam.SlamParams` by name
+        imu_topic: the IMU whose heading turns the odometry; None: the wheels' alone
     """
 
     def __init__(self, start_pose: tuple = (0.0, 0.0, 0.0), map_period: float = MAP_PERIOD,
-                 slam: dict | None = None) -> None:
+                 slam: dict | None = None, imu_topic: str | None = IMU_TOPIC) -> None:
         super().__init__()
         self._start = tuple(float(v) for v in start_pose)
         self._period = float(map_period)
         self._slam_args = dict(slam or {})
         self._lock = threading.RLock()
         self.slam: Slam | None = None
-        self._odom = OdomHistory()
+        self._odom = OdomHistory()              # fused poses (see GyroOdometry)
+        self.odometry = GyroOdometry()
         self._map_sent = -math.inf
         self._frozen = False
         self.scans = 0
@@ -71,6 +76,8 @@ class Mapper(SubSystem):
             bus.subscribe("/scan", LaserScan, self._on_scan, "sensor"),
             bus.subscribe("/initialpose", PoseWithCovarianceStamped, self._on_initial_pose, 10),
         ]
+        if imu_topic:
+            self._subs.append(bus.subscribe(imu_topic, Imu, self._on_imu, 100))
 
     def close(self) -> None:
         for s in self._subs:
@@ -79,10 +86,15 @@ class Mapper(SubSystem):
         self.tf.close()
 
     # -- bus callbacks --------------------------------------------------------------------
+    def _on_imu(self, msg: Imu) -> None:
+        with self._lock:
+            self.odometry.on_imu(seconds(msg.header.stamp), yaw_of(msg.orientation))
+
     def _on_odom(self, msg: Odometry) -> None:
         p = msg.pose.pose
+        t = seconds(msg.header.stamp)
         with self._lock:
-            self._odom.add(seconds(msg.header.stamp), (p.position.x, p.position.y, yaw_of(p.orientation)))
+            self._odom.add(t, self.odometry.fuse(t, (p.position.x, p.position.y, yaw_of(p.orientation))))
 
     def _on_initial_pose(self, msg: PoseWithCovarianceStamped) -> None:
         p = msg.pose.pose
@@ -117,7 +129,8 @@ class Mapper(SubSystem):
 
     def _send_tf(self, t: float) -> None:
         self._tf_pub.publish(TFMessage(transforms=[
-            planar_transform("map", "odom", self.slam.map_to_odom(), t + TRANSFORM_TOLERANCE)]))
+            planar_transform("map", "odom", self.odometry.map_to_wheel_odom(self.slam.map_to_odom()),
+                             t + TRANSFORM_TOLERANCE)]))
 
     def map_msg(self) -> OccupancyGrid | None:
         """The map so far as a nav_msgs/OccupancyGrid (None before the first scan)."""

@@ -1,0 +1,132 @@
+"""Wheel odometry with its heading from the IMU, as the navstack's nodes keep it.
+
+A TurtleBot3 with the manipulator publishes ``/odom`` from ``diff_drive_controller``:
+distance and heading from the wheels alone, so a wheel radius a few per cent off turns
+every rotation by as much. The OpenCR's gyro (``/imu_broadcaster/imu``) measures the
+rotation itself. :class:`GyroOdometry` keeps a second odometry frame ("fused") that
+advances by the wheels' distance along the gyro's heading change, as robot_localization
+would fuse the two; the localiser and the mapper run on it.
+
+What goes on ``/tf`` must still be map -> odom for the robot's own odom frame (the wheels'),
+since odom -> base_footprint is the controller's: :meth:`GyroOdometry.map_to_wheel_odom`
+turns a map -> fused transform into that, at the newest odometry pose. Without IMU
+messages (or with ones too old) the heading change is the wheels', and the fused frame
+is the wheel frame.
+"""
+from __future__ import annotations
+
+import bisect
+import math
+from collections import deque
+
+from .amcl import compose, inverse
+
+#: [s] an IMU reading this much older than the odometry's stamp is too old to use
+IMU_STALE = 0.1
+
+
+def _wrap(a: float) -> float:
+    return math.remainder(a, 2 * math.pi)
+
+
+class GyroOdometry:
+    """The fused odometry pose (x, y, yaw) [m, rad] from /odom poses and IMU headings.
+
+    The fused heading is the IMU's at its newest reading plus what the wheels turned since
+    (the IMU's message for a stamp may come after the odometry's), plus a constant offset
+    that keeps the heading continuous whenever the IMU (re)appears."""
+
+    def __init__(self, maxlen: int = 400) -> None:
+        self._imu: deque = deque(maxlen=maxlen)     # (t, unwrapped yaw), by stamp
+        self._wheel_yaw: deque = deque(maxlen=maxlen)   # (t, unwrapped wheel yaw)
+        self._last = None                           # (t, wheel pose) of the last fuse
+        self._offset = None                         # fused yaw - the IMU's (None: not anchored)
+        self.fused = None                           # the newest fused pose
+        self.wheel = None                           # the newest wheel pose
+        self.imu_used = 0                           # odometry steps turned by the gyro
+
+    def reset(self) -> None:
+        """Forget everything (a new run: time went backwards)."""
+        self._imu.clear()
+        self._wheel_yaw.clear()
+        self._last = self._offset = self.fused = self.wheel = None
+
+    def on_imu(self, t: float, yaw: float) -> None:
+        """The IMU's heading [rad] at stamp ``t`` [s] (its orientation's yaw)."""
+        _append_unwrapped(self._imu, t, yaw)
+
+    def _heading(self, t: float, wheel_yaw: float, fallback: float) -> float:
+        """The fused heading at ``t``; ``fallback`` (the wheels' alone) without the IMU."""
+        reading = _at_or_before(self._imu, t)
+        if reading is None or t - reading[0] > IMU_STALE:
+            self._offset = None                       # re-anchor when it comes back
+            return fallback
+        t_k, imu_yaw = reading
+        since = wheel_yaw - _interpolate(self._wheel_yaw, t_k, wheel_yaw)   # turned since t_k
+        if self._offset is None:
+            self._offset = fallback - (imu_yaw + since)
+        self.imu_used += 1
+        return self._offset + imu_yaw + since
+
+    def fuse(self, t: float, wheel) -> tuple:
+        """The fused pose at stamp ``t`` from the wheel pose there (x, y, yaw)."""
+        wheel = tuple(float(v) for v in wheel)
+        if self._last is not None and t < self._last[0]:
+            self.reset()
+        _append_unwrapped(self._wheel_yaw, t, wheel[2])
+        wheel_yaw = self._wheel_yaw[-1][1]
+        if self._last is None:
+            self.fused, self._offset = wheel, None
+            self._heading(t, wheel_yaw, wheel[2])     # anchor to the IMU if it is there
+        else:
+            _, w0 = self._last
+            dth_wheels = _wrap(wheel[2] - w0[2])
+            mid = w0[2] + dth_wheels / 2
+            ds = (wheel[0] - w0[0]) * math.cos(mid) + (wheel[1] - w0[1]) * math.sin(mid)
+            x, y, yaw = self.fused
+            new_yaw = self._heading(t, wheel_yaw, yaw + dth_wheels)
+            mid = (yaw + new_yaw) / 2
+            self.fused = (x + ds * math.cos(mid), y + ds * math.sin(mid), new_yaw)
+        self._last = (t, wheel)
+        self.wheel = wheel
+        return (self.fused[0], self.fused[1], _wrap(self.fused[2]))
+
+    def map_to_wheel_odom(self, map_to_fused) -> tuple:
+        """map -> the wheels' odom frame, from map -> the fused frame, at the newest pose."""
+        if self.fused is None:
+            return tuple(map_to_fused)
+        return compose(compose(tuple(map_to_fused), self.fused), inverse(self.wheel))
+
+
+def _append_unwrapped(history: deque, t: float, yaw: float) -> None:
+    """Add (t, yaw) with yaw unwrapped against the newest entry (a stamp going back
+    starts the history again)."""
+    if history:
+        t_prev, prev = history[-1]
+        if t < t_prev:
+            history.clear()
+        else:
+            yaw = prev + _wrap(yaw - prev)
+    history.append((t, yaw))
+
+
+def _at_or_before(history: deque, t: float):
+    """The newest entry stamped at or before ``t`` (a hair after counts), or None."""
+    for entry in reversed(history):
+        if entry[0] <= t + 1e-6:
+            return entry
+    return None
+
+
+def _interpolate(history: deque, t: float, default: float) -> float:
+    """The value interpolated at ``t`` (the nearest end outside the history)."""
+    if not history:
+        return default
+    times = [s for s, _ in history]
+    i = bisect.bisect_left(times, t)
+    if i <= 0:
+        return history[0][1]
+    if i >= len(history):
+        return history[-1][1]
+    (t0, a), (t1, b) = history[i - 1], history[i]
+    return a + (b - a) * ((t - t0) / (t1 - t0) if t1 > t0 else 1.0)
