@@ -273,6 +273,8 @@ class ArmController:
             g.handle.publish_feedback(fb)
         g.ticks += 1
         if g.number in self.abort_goals and now >= (g.traj.t0 + g.traj.end_time) / 2:
+            log.warning("%s: goal %d aborted half way (a fault injected on the robot side)",
+                        ARM_ACTION, g.number)
             self.active = None
             self._stop(now)
             g.handle.abort(ArmResult(error_code=ArmResult.PATH_TOLERANCE_VIOLATED,

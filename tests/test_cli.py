@@ -281,3 +281,16 @@ def test_demo_and_eval_build_their_runtime_from_actorbt_yaml(project_with_a_brok
     project.write_text(project.read_text() + "plugins: [demo.cli]\n")
     assert main(["--config", str(project), "demo", "--world", "none"]) == 2
     assert "an episode needs a simulated world" in capsys.readouterr().err
+
+
+def test_the_readmes_commands_start_localised_where_the_robot_stands(capsys):
+    """The simulator tells the localiser where the robot starts, as a user would with
+    RViz's "2D Pose Estimate", in every command: `actorbt call get_pose` in the house
+    is the start pose (1, 1, 0), and `call goto` leaves from there."""
+    repo = pathlib.Path(__file__).resolve().parents[1] / "actorbt.yaml"
+    assert main(["--config", str(repo), "call", "get_pose", "--json"]) == 0
+    x, y, yaw = json.loads(capsys.readouterr().out)
+    assert (x, y) == pytest.approx((1.0, 1.0), abs=0.05) and yaw == pytest.approx(0.0, abs=0.05)
+    assert main(["--config", str(repo), "call", "goto", "2.0", "2.0", "0.0", "--json"]) == 0
+    x, y, _ = json.loads(capsys.readouterr().out)
+    assert (x, y) == pytest.approx((2.0, 2.0), abs=0.1)
