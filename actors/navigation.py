@@ -33,14 +33,14 @@ from geometry_msgs.msg import PoseWithCovarianceStamped, TwistStamped
 from nav2_msgs.action import NavigateToPose
 from nav_msgs.msg import OccupancyGrid as OccupancyGridMsg
 from nav_msgs.msg import Odometry
-from sensor_msgs.msg import PointCloud2, PointField
+from sensor_msgs.msg import Imu, PointCloud2, PointField
 
 from bt_engine import ActorbtError, ActorError, ActorTimeout, SubSystem, actor
 from bt_engine.bus.actions import ActionGoalError
 from planning import BasePath, GridPlanner, OccupancyGrid, inflate, with_obstacles
 from planning.viewpoints import viewpoints
 
-from .ros_conv import pose2d, wrap
+from .ros_conv import pose2d, wrap, yaw_of
 from .tf_listener import BASE, MAP, TransformError, tf_listener
 
 MAX_TURN = 1.2          # [rad/s] (TurtleBot3 Waffle: 1.82)
@@ -57,6 +57,9 @@ ACTION = "/navigate_to_pose"
 #: the base's velocity command: diff_drive_controller's ~/cmd_vel (ROS 2 Jazzy takes only
 #: TwistStamped there; ROBOTIS' bring-up leaves it unremapped)
 BASE_COMMAND = "/diff_drive_controller/cmd_vel"
+#: the OpenCR's IMU (imu_broadcaster's ~/imu): turns are measured on its heading, which a
+#: wheel radius off by a few per cent does not scale as it scales the wheels'
+IMU = "/imu_broadcaster/imu"
 PERCEIVED = "/perceived_obstacles"
 MARK_SPACING = 0.025    # [m] between the points that mark a perceived object's disc
 
@@ -137,6 +140,7 @@ class Navigation(SubSystem):
         super().__init__()
         self.register_publisher("cmd_vel", TwistStamped, BASE_COMMAND, moves=True)
         self.register_subscriber("odom", Odometry, "/odom", 1)
+        self.register_subscriber("imu", Imu, IMU, 1)
         self.register_subscriber("map", OccupancyGridMsg, "/map", "latched")   # map_server latches it
         self.register_action("navigate_to_pose", NavigateToPose, ACTION, moves=True)
         # the localiser's estimate and its covariance (AMCL latches it)
@@ -220,6 +224,12 @@ class Navigation(SubSystem):
 
     def _odometry(self) -> tuple[float, float, float]:
         return pose2d(self.run_actor_mode("odom", "timed", 5.0))
+
+    def _heading_source(self):
+        """(stream actor, heading of its message): the IMU when something publishes it."""
+        if self.runtime.bus.publisher_count(IMU):
+            return "imu", lambda msg: yaw_of(msg.orientation)
+        return "odom", lambda msg: pose2d(msg)[2]
 
     def _planner(self) -> GridPlanner:
         planner = self.get_value("planner")
@@ -402,19 +412,20 @@ class Navigation(SubSystem):
 
     @actor(moves=True, limits={"angle": (-2 * math.pi, 2 * math.pi)})
     def mini_turn(self, angle: float) -> float:
-        """Turn in place by ``angle`` [rad] on the odometry; returns the yaw reached in
-        the map frame [rad].
+        """Turn in place by ``angle`` [rad] on the IMU's heading (the odometry's where no
+        IMU publishes); returns the yaw reached in the map frame [rad].
 
         Args:
             angle: turn, counter-clockwise positive [rad]
         """
-        _, _, yaw0 = self._odometry()
+        source, heading = self._heading_source()
+        yaw0 = heading(self.run_actor_mode(source, "timed", 5.0))
         target = wrap(yaw0 + angle)
         deadline = self.runtime.now() + 10.0 + abs(angle) / 0.3
         with self._stopping():
-            with self.run_actor_mode("odom", "iterator") as odoms:
-                for msg in odoms:
-                    err = wrap(target - pose2d(msg)[2])
+            with self.run_actor_mode(source, "iterator") as messages:
+                for msg in messages:
+                    err = wrap(target - heading(msg))
                     if abs(err) < YAW_TOLERANCE:
                         break
                     if self.runtime.now() > deadline:

@@ -34,7 +34,9 @@ class GyroOdometry:
 
     The fused heading is the IMU's at its newest reading plus what the wheels turned since
     (the IMU's message for a stamp may come after the odometry's), plus a constant offset
-    that keeps the heading continuous whenever the IMU (re)appears."""
+    that keeps the heading continuous whenever the IMU (re)appears. While the wheels
+    stand still the heading does not change: the gyro's bias would turn a robot that
+    waits for a look or a grasp."""
 
     def __init__(self, maxlen: int = 400) -> None:
         self._imu: deque = deque(maxlen=maxlen)     # (t, unwrapped yaw), by stamp
@@ -84,7 +86,13 @@ class GyroOdometry:
             mid = w0[2] + dth_wheels / 2
             ds = (wheel[0] - w0[0]) * math.cos(mid) + (wheel[1] - w0[1]) * math.sin(mid)
             x, y, yaw = self.fused
-            new_yaw = self._heading(t, wheel_yaw, yaw + dth_wheels)
+            if ds == 0.0 and dth_wheels == 0.0:
+                # the wheels stand still: so does the robot, whatever the gyro's bias says
+                # (a zero-velocity update); the heading re-anchors to the IMU when it moves
+                self._offset = None
+                new_yaw = yaw
+            else:
+                new_yaw = self._heading(t, wheel_yaw, yaw + dth_wheels)
             mid = (yaw + new_yaw) / 2
             self.fused = (x + ds * math.cos(mid), y + ds * math.sin(mid), new_yaw)
         self._last = (t, wheel)

@@ -46,6 +46,11 @@ class Gyro:
         self._true_yaw = None
         self._speed = 0.0
 
+    def reset(self) -> None:
+        """Take the body's next yaw as the reference (the robot was put somewhere by hand:
+        a teleport is no rotation the gyro feels)."""
+        self._true_yaw = None
+
     def update(self, true_yaw: float, speed: float, dt: float) -> None:
         """One control tick: ``true_yaw`` [rad] the body's yaw, ``speed`` [m/s] forward."""
         if self._true_yaw is None or dt <= 0:

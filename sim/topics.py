@@ -39,8 +39,9 @@ State topics go out only while subscribed; the lidar casts and the camera render
 while subscribed. map -> odom is never published here: that is the localiser's.
 
 As a user would (not the robot): ``/initialpose`` (geometry_msgs/PoseWithCovarianceStamped,
-RViz's "2D Pose Estimate") with the world's start pose, to each new subscriber while the
-robot has not moved yet (``SimWorld(initial_pose=False)``: never).
+RViz's "2D Pose Estimate") with the pose the robot stands at once it has come to rest
+(``SETTLED`` s), to each new subscriber while it has not driven yet
+(``SimWorld(initial_pose=False)``: never).
 """
 from __future__ import annotations
 
@@ -83,6 +84,8 @@ CAMERA_INFO = "/camera/camera_info"
 MAP = "/map"
 #: [m, rad] a robot that moved this far has left its start: no initial pose any more
 MOVED = 0.01
+#: [s] the user gives the pose of a robot that has come to rest after it was put down
+SETTLED = 0.5
 
 CAMERA_FRAME = "camera_optical_frame"
 
@@ -204,11 +207,13 @@ class SimTopics:
     def _give_initial_pose(self, now):
         """The start pose on /initialpose for each new subscriber (a localiser that came
         up), as its user would give it, until the robot has moved."""
+        if self.sim.t < SETTLED:
+            return
         n = self.bus.subscription_count(INITIAL_POSE)
         if n > self._initial_subs:
             o = self.sim.odometry
             if o.distance < MOVED and o.turned < MOVED:
-                msg = initial_pose_msg(self.sim.spec.robot_start)
+                msg = initial_pose_msg(self.sim.robot_pose())  # where it stands, seen by the user
                 msg.header.stamp = stamp(self.sim.ros_time(now))
                 self.pub_initial.publish(msg)
         self._initial_subs = n

@@ -97,7 +97,7 @@ def live_threads() -> set[str]:
 
 def place_robot(sim, start: tuple) -> None:
     """Before a runtime's episode starts: put the simulated robot at ``start`` (x, y, yaw),
-    its odometry reset there, and make it the world's start pose (where the episode tells
+    its odometry and gyro reset there, and make it the world's start pose (where the episode tells
     the localiser the robot is)."""
     from sim._pybullet import pybullet as p
 
@@ -105,7 +105,9 @@ def place_robot(sim, start: tuple) -> None:
         p.resetBasePositionAndOrientation(sim.robot.body, [start[0], start[1], 0.0],
                                           p.getQuaternionFromEuler([0, 0, start[2]]),
                                           physicsClientId=sim.cid)
+        p.resetBaseVelocity(sim.robot.body, [0, 0, 0], [0, 0, 0], physicsClientId=sim.cid)
         js = sim.robot.joint_states()[0]
         sim.odometry.reset(js[0], js[1], start[2])
+        sim.gyro.reset()
     sim._on_hub_call(place)
     sim.spec.robot_start = start

@@ -81,3 +81,18 @@ def test_map_to_odom_for_tf_is_in_the_wheels_frame():
     map_to_fused = (1.0, 2.0, 0.3)
     on_tf = compose(odo.map_to_wheel_odom(map_to_fused), odo.wheel)
     assert on_tf == pytest.approx(compose(map_to_fused, odo.fused), abs=1e-9)
+
+
+def test_standing_still_the_gyros_bias_turns_nothing():
+    odo = GyroOdometry()
+    bias = math.radians(0.05)                  # [rad/s]: after start-up calibration
+    for k in range(301):                       # 10 s still
+        t = k * DT
+        odo.on_imu(t, bias * t)
+        odo.fuse(t, (1.0, 2.0, 0.5))
+    assert odo.fused == pytest.approx((1.0, 2.0, 0.5))
+    for k in range(1, 31):                     # then 1 s turning at 0.5 rad/s: by the gyro
+        t = 10.0 + k * DT
+        odo.on_imu(t, bias * t + 0.5 * k * DT)
+        odo.fuse(t, (1.0, 2.0, 0.5 + 1.03 * 0.5 * k * DT))
+    assert odo.fused[2] == pytest.approx(0.5 + 0.5 + bias, abs=1e-3)   # the first step: the wheels
