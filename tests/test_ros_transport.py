@@ -210,3 +210,45 @@ def test_shutdown_leaves_no_threads_and_no_shared_memory():
     assert wait_until(lambda: os_threads() <= os_before, 2.0), (os_threads(), os_before)
     assert shm_mapped() & segments == set()
     assert shm_leaks(segments) == set()
+
+
+def test_a_goal_whose_server_dies_fails_instead_of_waiting_for_ever():
+    """The server's process dies while it runs our goal (a robot-side restart): no result
+    will ever come, so the goal fails once the server has been gone for LOST_GRACE."""
+    import rclpy
+    from rclpy.action import ActionServer
+    from rclpy.executors import SingleThreadedExecutor
+
+    from bt_engine.ros.client import LOST_GRACE
+
+    ctx = rclpy.Context()
+    rclpy.init(context=ctx)
+    node = rclpy.create_node("doomed_server", context=ctx)
+    started, release = threading.Event(), threading.Event()
+
+    def execute(goal):               # accepts, then never finishes until released
+        started.set()
+        release.wait(30)
+        goal.abort()
+        return CallActor.Result()
+    server = ActionServer(node, CallActor, "/ros_test/doomed", execute)
+    executor = SingleThreadedExecutor(context=ctx)
+    executor.add_node(node)
+    spin = threading.Thread(target=executor.spin, daemon=True)
+    spin.start()
+    client = Runtime(clock="wall", bus=RosTransport)
+    try:
+        client.run_on_hub(client.bus.register_action, client.root, "doomed", CallActor, "/ros_test/doomed")
+        txn = client.start("doomed", actor="x")
+        assert started.wait(10), "the goal never reached the server"
+        server.destroy()                 # the server goes away with the goal under way
+        node.destroy_node()
+        t0 = time.monotonic()
+        assert wait_until(lambda: txn.done, LOST_GRACE + 5.0), "the goal still waits for its server"
+        assert LOST_GRACE - 0.6 <= time.monotonic() - t0 <= LOST_GRACE + 3.0
+        assert "went away while it ran the goal" in str(txn.error)
+    finally:
+        release.set()
+        client.close()
+        executor.shutdown()
+        rclpy.shutdown(context=ctx)

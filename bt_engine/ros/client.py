@@ -15,11 +15,15 @@ from ..bus.actions import (STATUS_NAMES, STATUS_SUCCEEDED, ActionGoalError, Goal
 from ..errors import ActorbtError
 
 __all__ = ["STATUS_NAMES", "ActionGoalError", "GoalCall", "GoalNotSentError", "GoalRejectedError",
-           "ServerUnavailableError", "ServerWait", "ServiceCall", "build_message"]
+           "ServerLostError", "ServerUnavailableError", "ServerWait", "ServiceCall", "build_message"]
 
 #: why a ROS server may not be found (the hint of ServerUnavailableError)
 DISCOVERY_HINT = ("is it running? ROS_AUTOMATIC_DISCOVERY_RANGE and ROS_DOMAIN_ID must match "
                   "on both sides")
+
+
+#: [s] an action server missing from the graph this long has lost the goals it ran
+LOST_GRACE = 3.0
 
 
 class GoalNotSentError(ActorbtError):
@@ -30,15 +34,30 @@ class GoalNotSentError(ActorbtError):
         super().__init__(f"goal for {server} cancelled before it was sent")
 
 
+class ServerLostError(ActorbtError):
+    """The action server went away while it ran our goal (its process died or restarted):
+    no result will come."""
+
+    def __init__(self, server: str, grace: float) -> None:
+        self.server = server
+        super().__init__(f"the action server {server} went away while it ran the goal (gone for "
+                         f"{grace:g} s): the goal is lost; is the robot's process running?")
+
+
 class ServerWait:
-    """Waits for servers to be discovered, by polling from a node timer (executor thread)."""
+    """Waits for servers to be discovered, and watches the servers of goals under way,
+    by polling from a node timer (executor thread)."""
 
     PERIOD = 0.01
+    #: [s] between two looks at a running goal's server
+    WATCH_PERIOD = 0.5
 
     def __init__(self, node: Any) -> None:
         self._node = node
         self._waiting: list[list] = []
         self._timer: Any = None
+        self._watched: list[list] = []
+        self._watch_timer: Any = None
 
     def when_ready(self, is_ready: Callable[[], bool], timeout: float,
                    on_ready: Callable[[], None], on_timeout: Callable[[], None]) -> list:
@@ -55,6 +74,30 @@ class ServerWait:
     def forget(self, entry: list) -> None:
         if entry in self._waiting:
             self._waiting.remove(entry)
+        if entry in self._watched:
+            self._watched.remove(entry)
+
+    def watch(self, is_ready: Callable[[], bool], grace: float, on_lost: Callable[[], None]) -> list:
+        """Call ``on_lost`` once ``is_ready()`` has been false for ``grace`` s (until
+        ``forget``)."""
+        entry = [is_ready, grace, on_lost, time.monotonic()]
+        self._watched.append(entry)
+        if self._watch_timer is None:
+            self._watch_timer = self._node.create_timer(self.WATCH_PERIOD, self._look)
+        return entry
+
+    def _look(self) -> None:
+        now = time.monotonic()
+        for entry in list(self._watched):
+            is_ready, grace, on_lost, seen = entry
+            if is_ready():
+                entry[3] = now
+            elif now - seen >= grace:
+                self._watched.remove(entry)
+                on_lost()
+        if not self._watched and self._watch_timer is not None:
+            self._node.destroy_timer(self._watch_timer)
+            self._watch_timer = None
 
     def _poll(self) -> None:
         now = time.monotonic()
@@ -100,6 +143,9 @@ class GoalCall:
         self._on_error = on_error
         self._on_accepted = on_accepted
         self._on_status = on_status
+        self._watch_entry: list | None = None
+        #: [s] a server gone this long while it runs our goal has lost it
+        self._lost_grace = min(server_timeout, LOST_GRACE)
 
     def start(self) -> None:
         self._wait_entry = self._waiter.when_ready(
@@ -129,7 +175,12 @@ class GoalCall:
             self._on_accepted(gh)
         if self.cancelled:
             gh.cancel_goal_async()
+        # a server that dies with our goal never answers: give up when it is gone
+        self._watch_entry = self._waiter.watch(self.client.server_is_ready, self._lost_grace, self._lost)
         gh.get_result_async().add_done_callback(self._on_result_response)
+
+    def _lost(self) -> None:
+        self._finish_error(ServerLostError(self.server, self._lost_grace))
 
     def _on_result_response(self, fut: Any) -> None:
         try:
@@ -140,6 +191,7 @@ class GoalCall:
         if self._on_status is not None:
             self._on_status(resp.status, resp.result)
         if resp.status == STATUS_SUCCEEDED:
+            self._stop_watching()
             if not self.finished:
                 self.finished = True
                 self._on_result(resp.result)
@@ -150,6 +202,12 @@ class GoalCall:
         if not self.finished:
             self.finished = True
             self._on_error(exc)
+        self._stop_watching()
+
+    def _stop_watching(self) -> None:
+        if self._watch_entry:
+            self._waiter.forget(self._watch_entry)
+            self._watch_entry = None
 
     def cancel(self) -> Any:
         """Ask the server to cancel the goal (now, or as soon as it is accepted); a goal
