@@ -2,10 +2,11 @@
 from __future__ import annotations
 
 import inspect
+import math
 from dataclasses import dataclass, field
 from typing import Any, Callable, Mapping
 
-from .errors import BadArgumentsError
+from .errors import ActorbtError, BadArgumentsError
 from .modes import Kind
 
 #: Default depth of a stream's buffer; the oldest value is dropped when it is full.
@@ -128,6 +129,12 @@ class ActorRef:
 
     ``signature`` describes what a caller passes (no ``self``, and no ``done``/``emit``
     for async and stream implementations). ``hub_only``: see :func:`actor`.
+
+    ``wait`` (an emit-style stream only): the longest a caller waits for its next value
+    [s, runtime clock] before the call fails with ActorTimeout, whose message is
+    ``wait_detail(seconds)``; None waits forever. It bounds each wait (the first value,
+    or the gap before the next one while iterating), not the stream's life, and a
+    deadline the caller gives (``timeout=``, the timed modes) replaces it.
     """
 
     path: str
@@ -142,6 +149,8 @@ class ActorRef:
     buffer: int = DEFAULT_STREAM_BUFFER
     hub_only: bool = False
     safety: Safety = NO_SAFETY
+    wait: float | None = None
+    wait_detail: Callable[[float], str] | None = None
 
     @property
     def moves(self) -> bool:
@@ -155,14 +164,24 @@ class ActorRef:
     def build(cls, path: str, name: str, fn: Callable, kind: Kind, owner: Any = None,
               doc: str | None = None, signature: inspect.Signature | None = None,
               is_tree: bool = False, buffer: int = DEFAULT_STREAM_BUFFER,
-              hub_only: bool = False, safety: Safety | None = None) -> "ActorRef":
+              hub_only: bool = False, safety: Safety | None = None, wait: float | None = None,
+              wait_detail: Callable[[float], str] | None = None) -> "ActorRef":
         is_gen = inspect.isgeneratorfunction(fn)
         if signature is None:
             signature = _caller_signature(fn, kind, is_gen)
+        if wait is not None:
+            if kind is not Kind.STREAM or is_gen:
+                raise ActorbtError(f"{path}: wait= bounds the wait for a value of an emit-style "
+                                   f"stream, and it is {'a generator' if is_gen else kind.value}")
+            if isinstance(wait, bool) or not isinstance(wait, (int, float)) \
+                    or not 0 < wait < math.inf:
+                raise ActorbtError(f"{path}: wait must be a positive number of seconds or None, "
+                                   f"got {wait!r}")
         return cls(path=path, name=name, fn=fn, kind=kind, signature=signature,
                    doc=inspect.cleandoc(doc if doc is not None else (fn.__doc__ or "")),
                    owner=owner, is_tree=is_tree, is_generator=is_gen, buffer=buffer,
-                   hub_only=hub_only, safety=safety or NO_SAFETY)
+                   hub_only=hub_only, safety=safety or NO_SAFETY, wait=wait,
+                   wait_detail=wait_detail)
 
     def check_args(self, args: tuple, kwargs: dict) -> None:
         """Raise BadArgumentsError when the arguments do not fit the signature."""

@@ -91,12 +91,16 @@ class ActorError(ActorbtError):
 
 
 class ActorTimeout(ActorbtError, TimeoutError):
-    """A call with a deadline did not finish before it."""
+    """A call with a deadline did not finish before it, or a stream's caller waited
+    longer than the stream's ``wait`` for its next value (a subscriber whose topic is
+    silent); ``detail`` then says what was waited for."""
 
-    def __init__(self, path: str, seconds: float) -> None:
+    def __init__(self, path: str, seconds: float, detail: str = "") -> None:
         self.path = path
         self.seconds = seconds
-        super().__init__(f"actor {path} did not finish within {seconds:g} s")
+        self.detail = detail
+        super().__init__(f"actor {path}: {detail}" if detail
+                         else f"actor {path} did not finish within {seconds:g} s")
 
 
 class ActorCancelled(ActorbtError):

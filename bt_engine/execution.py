@@ -13,9 +13,9 @@ import logging
 from typing import Any, Callable
 
 from .actor import ActorRef
-from .errors import BadArgumentsError, Cancelled
+from .errors import ActorTimeout, BadArgumentsError, Cancelled
 from .handles import Done, Emitter
-from .hub import Task
+from .hub import Task, TimerHandle
 from .modes import Mode
 from .outcome import caller_error, is_failure
 from .transaction import Transaction, TransactionTable, TxnState
@@ -222,3 +222,80 @@ def call_quietly(fn: Callable[[], Any]) -> None:
         fn()
     except Exception:
         log.exception("closer %r raised", fn)
+
+
+# -- a stream's wait for its next value (ActorRef.wait) ----------------------------------------
+class StreamWait:
+    """Fails ``txn`` (a call of stream ``ref``) with :class:`ActorTimeout` when no value
+    has come for ``ref.wait`` seconds [runtime clock] since it was made or since the last
+    :meth:`heard`: the sync and async modes (the first value) and the multi mode (the
+    gap between values). One timer, moved on lazily, whatever the message rate.
+    ``on_expired()`` runs after the transaction failed (the multi mode's callback)."""
+
+    __slots__ = ("ref", "txn", "last", "timer", "on_expired")
+
+    def __init__(self, ref: ActorRef, txn: Transaction,
+                 on_expired: Callable[[], None] | None = None) -> None:
+        self.ref = ref
+        self.txn = txn
+        self.on_expired = on_expired
+        self.last = txn.table.clock.now()
+        repace(ref, txn)
+        self.timer: TimerHandle = txn.table.hub.call_at(self.last + ref.wait, self._check)  # type: ignore[operator]
+        txn.add_done_callback(lambda t: self.timer.cancel())
+
+    def heard(self) -> None:
+        """A value came: the wait starts again."""
+        self.last = self.txn.table.clock.now()
+
+    def _check(self) -> None:
+        txn = self.txn
+        if txn.done:
+            return
+        due = self.last + self.ref.wait  # type: ignore[operator]
+        if due > txn.table.clock.now():
+            self.timer = txn.table.hub.call_at(due, self._check)
+            return
+        wait_expired(self.ref, txn)
+        if self.on_expired is not None:
+            self.on_expired()
+
+
+def arm_wait(ref: ActorRef, txn: Transaction) -> TimerHandle | None:
+    """A timer failing ``txn`` when ``ref.wait`` seconds pass from now (one wait of an
+    iterator for its next item; cancel it when the item comes), or None when ``ref``
+    waits forever."""
+    if ref.wait is None or txn.done:
+        return None
+    repace(ref, txn)
+    return txn.table.hub.call_at(txn.table.clock.now() + ref.wait, wait_expired, ref, txn)
+
+
+def repace(ref: ActorRef, txn: Transaction) -> None:
+    """Before a wait for a value another thread delivers (a ROS subscriber): anchor the
+    virtual clock's wall pacing now, so the wait lasts ``ref.wait`` seconds of wall time
+    even when virtual time fell behind wall time earlier (an offload holds it still)."""
+    if not ref.hub_only:
+        hub = txn.table.hub
+        hub.foreign_work_started()
+        hub.foreign_work_ended()
+
+
+def wait_expired(ref: ActorRef, txn: Transaction) -> None:
+    """The caller of ``txn`` waited ``ref.wait`` seconds for a value in vain: close the
+    stream and fail the call with an ActorTimeout saying what it waited for."""
+    if txn.done:
+        return
+    seconds = float(ref.wait or 0.0)
+    detail = ""
+    if ref.wait_detail is not None:
+        try:
+            detail = ref.wait_detail(seconds)
+        except Exception:
+            log.exception("describing the wait of %s failed", ref.path)
+    err = ActorTimeout(ref.path, seconds, detail or f"no value within {seconds:g} s")
+    err.transaction_id = txn.id  # type: ignore[attr-defined]  # this call's own error
+    closer, txn.closer = txn.closer, None
+    if closer is not None:
+        call_quietly(closer)
+    txn.finish(TxnState.FAILED, error=err)

@@ -10,8 +10,8 @@ from typing import Any, Callable
 
 from .actor import ActorRef
 from .errors import ActorbtError, Cancelled, Failure
-from .execution import (current_txn, drop_pending, run_body, spawn, start_async_impl,
-                        start_stream_impl, sync_body)
+from .execution import (StreamWait, current_txn, drop_pending, run_body, spawn,
+                        start_async_impl, start_stream_impl, sync_body)
 from .hub import Task, Waiter
 from .iterator import ActorIterator
 from .modes import Kind, Mode
@@ -50,7 +50,9 @@ def call_sync(table: TransactionTable, ref: ActorRef, args: tuple, kwargs: dict,
     w = Waiter(task)
     txn.add_done_callback(lambda t: w.wake())
     if seconds is not None:
-        txn.set_deadline(seconds)
+        txn.set_deadline(seconds)   # the caller's deadline replaces a stream's wait
+    elif ref.wait is not None:
+        StreamWait(ref, txn)        # a silent stream fails the call (a topic nobody publishes)
     _start_impl_once(ref, txn, args, kwargs)
     try:
         w.wait()
@@ -86,6 +88,8 @@ def start_async(table: TransactionTable, ref: ActorRef, args: tuple, kwargs: dic
     ref.check_args(args, kwargs)
     txn = Transaction(table, ref.path, current_txn(table), Mode.ASYNC, ref.owner, None, args)
     _notify(cb, txn)
+    if ref.wait is not None:
+        StreamWait(ref, txn)
     _start_impl_once(ref, txn, args, kwargs)
     return txn
 
@@ -105,7 +109,11 @@ def start_multi(table: TransactionTable, ref: ActorRef, args: tuple, kwargs: dic
     ref.check_args(args, kwargs)
     txn = Transaction(table, ref.path, current_txn(table), Mode.MULTI, ref.owner, None, args)
     if ref.kind is Kind.STREAM:
-        start_stream_impl(ref, txn, args, kwargs, first_only=False, on_value=emit)
+        on_value = emit
+        if ref.wait is not None:   # the gap between values is bounded
+            on_value = _resetting(StreamWait(ref, txn, on_expired=lambda: emit(failure_of(txn))),
+                                  emit)
+        start_stream_impl(ref, txn, args, kwargs, first_only=False, on_value=on_value)
         if txn.state is TxnState.FAILED and cb is not None:
             cb(failure_of(txn))
         return txn
@@ -122,6 +130,14 @@ def start_multi(table: TransactionTable, ref: ActorRef, args: tuple, kwargs: dic
                 cb(failure_of(txn))
     restart()
     return txn
+
+
+def _resetting(gap: StreamWait, emit: Callable[[Any], Any]) -> Callable[[Any], None]:
+    """``emit`` that starts the wait for the next value again."""
+    def on_value(value: Any) -> None:
+        gap.heard()
+        emit(value)
+    return on_value
 
 
 def _repeat_sync(table: TransactionTable, ref: ActorRef, task: Task, txn: Transaction,

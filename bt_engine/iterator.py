@@ -6,7 +6,7 @@ from typing import Any
 
 from .actor import ActorRef
 from .errors import ActorCancelled, ActorTimeout, Cancelled
-from .execution import (current_txn, drop_pending, run_body, start_async_impl,
+from .execution import (arm_wait, current_txn, drop_pending, run_body, start_async_impl,
                         start_stream_impl)
 from .hub import Task, Waiter
 from .modes import Kind, Mode
@@ -19,7 +19,9 @@ class ActorIterator:
 
     Sync and async actors are invoked again with the same arguments for every item; a
     stream's emitted values are buffered (the latest ``ref.buffer`` are kept). A deadline
-    ends the iteration. Use it as a context manager: leaving the block closes the source.
+    ends the iteration. Without one, a stream's ``wait`` bounds each wait for the next
+    item (ActorTimeout), however long the stream goes on. Use it as a context manager:
+    leaving the block closes the source.
     """
 
     def __init__(self, table: TransactionTable, ref: ActorRef, args: tuple, kwargs: dict,
@@ -98,10 +100,15 @@ class ActorIterator:
                 if txn.done:
                     return self._stopped()
                 self._waiter = w = Waiter(task)
+                # the stream's wait bounds each wait for an item; a timed iterator's own
+                # deadline replaces it
+                timer = arm_wait(self.ref, txn) if self.seconds is None else None
                 try:
                     w.wait()
                 finally:
                     self._waiter = None
+                    if timer is not None:
+                        timer.cancel()
             return self._buffer.popleft()
         try:
             if self._gen is not None:

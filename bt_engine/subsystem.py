@@ -17,11 +17,20 @@ from typing import Any, Callable
 from .actor import ActorRef, ActorSpec, Safety
 from .api import CallApi
 from .bus.qos import qos_depth
+from .bus.transport import silence
 from .errors import ActorbtError, AmbiguousActorError, UnknownActorError
 from .modes import Kind
 from .transaction import TransactionTable
 
 _MISSING = object()
+
+#: How long a call of a subscriber actor waits for a message [s, runtime clock] before it
+#: fails with ActorTimeout naming the topic (``register_subscriber(wait=)``). A 1 Hz topic
+#: sends one within 1 s; over ROS the publisher must first be discovered (about 2.3 s
+#: between processes on one machine, a latched message comes right after), so 10 s is
+#: several times the slowest healthy case and still an answer a person at the terminal
+#: waits for. It matches how long an action or service actor waits for its server.
+SUBSCRIBER_WAIT = 10.0
 
 
 class SubSystem(CallApi):
@@ -131,9 +140,13 @@ class SubSystem(CallApi):
     def add_actor(self, name: str, fn: Callable, kind: "str | Kind" = Kind.SYNC, *,
                   doc: str | None = None, signature: inspect.Signature | None = None,
                   is_tree: bool = False, buffer: int | None = None, replace: bool = False,
-                  hub_only: bool = False, safety: Safety | None = None) -> ActorRef:
+                  hub_only: bool = False, safety: Safety | None = None,
+                  wait: float | None = None,
+                  wait_detail: Callable[[float], str] | None = None) -> ActorRef:
         """Register a plain callable as an actor of this subsystem (trees, bus edges);
-        ``safety``: whether it moves the robot, is read-only, its limits (see @actor)."""
+        ``safety``: whether it moves the robot, is read-only, its limits (see @actor);
+        ``wait`` / ``wait_detail`` (an emit-style stream): how long a caller waits for a
+        value and what the ActorTimeout then says (see :class:`~bt_engine.actor.ActorRef`)."""
         k = Kind.parse(kind)
         if inspect.isgeneratorfunction(fn):
             k = Kind.STREAM
@@ -141,6 +154,7 @@ class SubSystem(CallApi):
             raise ActorbtError(f"{self._actor_path(name)} is already defined")
         ref = ActorRef.build(self._actor_path(name), name, fn, k, owner=self, doc=doc,
                              signature=signature, is_tree=is_tree, hub_only=hub_only, safety=safety,
+                             wait=wait, wait_detail=wait_detail,
                              **({"buffer": buffer} if buffer else {}))
         self._actors[name] = ref
         self._rt._topology_changed()
@@ -269,20 +283,31 @@ class SubSystem(CallApi):
             [inspect.Parameter("msg", inspect.Parameter.POSITIONAL_OR_KEYWORD, annotation=msg_type)]),
             safety=Safety(moves=moves))
 
-    def register_subscriber(self, name: str, msg_type: type, topic: str, qos: Any = 10) -> ActorRef:
+    def register_subscriber(self, name: str, msg_type: type, topic: str, qos: Any = 10, *,
+                            wait: float | None = SUBSCRIBER_WAIT) -> ActorRef:
         """Make stream actor ``name`` that emits each message arriving on ``topic``;
         its buffer keeps as many of the latest messages as the ``qos`` depth. On a
-        transport that delivers on the hub (the local bus) it is ``hub_only``."""
+        transport that delivers on the hub (the local bus) it is ``hub_only``.
+
+        ``wait`` [s, runtime clock]: a caller waiting longer for a message (a sync call,
+        the next item of an iterator, the gap between values of the multi mode) fails
+        with ActorTimeout naming the topic, its type and whether anything publishes it;
+        None waits forever. The stream itself may go on for as long as messages come,
+        and a caller's own deadline (``timeout=``, the timed modes) replaces ``wait``."""
         bus = self._rt.bus
         t = _topic(topic)
 
         def subscribe(emit: Callable[[Any], None]) -> Callable[[], None]:
             return bus.subscribe(t, msg_type, emit, qos).close
-        subscribe.__doc__ = f"Messages ({msg_type.__module__}.{msg_type.__name__}) arriving on {t}."
+        subscribe.__doc__ = (f"Messages ({msg_type.__module__}.{msg_type.__name__}) arriving on {t}."
+                             + (f"\n\nWaiting more than {wait:g} s for one fails (ActorTimeout)."
+                                if wait is not None else ""))
         return self.add_actor(name, subscribe, Kind.STREAM, buffer=qos_depth(qos),
                               signature=inspect.Signature([]),
                               hub_only=bus.delivers_on_hub,
-                              safety=Safety(read_only=True))  # listening changes nothing
+                              safety=Safety(read_only=True),  # listening changes nothing
+                              wait=wait,
+                              wait_detail=lambda seconds: silence(bus, t, msg_type, seconds))
 
     def register_action(self, name: str, action_type: type, server: str, *,
                         moves: bool = False) -> ActorRef:

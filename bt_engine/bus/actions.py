@@ -35,8 +35,8 @@ class ServerUnavailableError(ActorbtError, TimeoutError):
     def __init__(self, server: str, seconds: float, hint: str = "") -> None:
         self.server = server
         self.seconds = seconds
-        super().__init__(f"no server for {server} within {seconds:g} s"
-                         + (f" ({hint})" if hint else ""))
+        within = f" within {seconds:g} s" if seconds > 0 else ""  # 0: it cannot come (local)
+        super().__init__(f"no server for {server}{within}" + (f" ({hint})" if hint else ""))
 
 
 class GoalRejectedError(ActorbtError):

@@ -120,6 +120,11 @@ class LocalBus(Transport):
         t = self._topics.get(topic)
         return len(t.subs) if t is not None else 0
 
+    def publisher_count(self, topic: str) -> int:
+        """Publishers made for ``topic`` in this process (a local publisher is never closed)."""
+        t = self._topics.get(topic)
+        return t.publishers if t is not None else 0
+
     def topics(self) -> list[TopicInfo]:
         """Every topic used in this process: its type, publishers made, live subscribers,
         and the QoS its first publisher asked for (the local bus delivers every message

@@ -80,6 +80,17 @@ class Transport:
     def subscription_count(self, topic: str) -> int:
         raise NotImplementedError
 
+    def publisher_count(self, topic: str) -> int | None:
+        """Publishers of ``topic`` (None when the transport cannot tell). Safe on the hub."""
+        return None
+
+    def silence_hint(self, publishers: int) -> str:
+        """Why a topic with ``publishers`` publishers may have sent nothing (the end of
+        a subscriber's ActorTimeout)."""
+        if publishers == 0:
+            return "is the robot or the simulator running?"
+        return "does it publish that seldom?"
+
     def register_action(self, scope: Any, name: str, action_type: type, server: str) -> Any:
         raise ActorbtError(f"the {self.name} transport has no action clients; "
                            "use the ros transport (transport: ros in actorbt.yaml)")
@@ -108,3 +119,20 @@ class Transport:
 
     def close(self) -> None:
         pass
+
+
+def silence(bus: Transport, topic: str, msg_type: type, seconds: float) -> str:
+    """What a subscriber that waited ``seconds`` for a message on ``topic`` in vain says:
+    the topic, its type, and whether anything publishes it."""
+    from .messages import type_name
+    what = f"no message on {topic} ({type_name(msg_type)}) within {seconds:g} s"
+    try:
+        n = bus.publisher_count(topic)
+    except Exception:  # a closed transport: say what is known
+        n = None
+    if n is None:
+        return what
+    if n == 0:
+        return f"{what}: nothing publishes it ({bus.silence_hint(0)})"
+    return f"{what}, though {n} publisher{'s' if n > 1 else ''} {'have' if n > 1 else 'has'} it " \
+           f"({bus.silence_hint(n)})"

@@ -32,6 +32,10 @@ if TYPE_CHECKING:
 
 log = logging.getLogger("actorbt.ros")
 
+#: why a topic's publisher may not be found (in a subscriber's ActorTimeout)
+DISCOVERY_RANGE_HINT = ("ROS_DOMAIN_ID and ROS_AUTOMATIC_DISCOVERY_RANGE must match on both "
+                        "sides")
+
 __all__ = ["RosPublisher", "RosSubscription", "RosTransport"]
 
 
@@ -129,6 +133,19 @@ class RosTransport(Transport):
         if self.host.closed:
             return 0
         return self.node.count_subscribers(topic)
+
+    def publisher_count(self, topic: str) -> int | None:
+        """Publishers of ``topic`` discovered in the ROS graph (this process included);
+        None once the transport is closed."""
+        if self.host.closed:
+            return None
+        return self.node.count_publishers(topic)
+
+    def silence_hint(self, publishers: int) -> str:
+        if publishers == 0:
+            return f"is the robot or the simulator running? {DISCOVERY_RANGE_HINT}"
+        return ("does it publish that seldom, or do its QoS and the subscriber's not match? "
+                "`actorbt topic list --json --bus ros` shows what it offers")
 
     # -- the graph (not from the hub: these wait for the executor thread) ----------------
     def topics(self) -> list[TopicInfo]:
