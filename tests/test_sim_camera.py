@@ -80,24 +80,25 @@ def test_can_in_front_is_seen_at_the_right_place_and_depth(world):
     assert d < pc[2]
 
 
-def test_map_goes_to_each_new_subscriber(world):
+def test_the_map_is_published_once_and_latched(world):
     rt, sim = world
-    got = _collect(rt, [("/map", OccupancyGrid)], 0.5)
-    maps = got["/map"]
+    maps = []
+    sub = rt.bus.subscribe("/map", OccupancyGrid, maps.append, "latched")   # as map_server's are
+    rt.call("sleep", 0.5)
+    sub.close()
     assert len(maps) == 1
     m = maps[0]
     assert m.info.resolution == pytest.approx(0.05)
     assert (m.info.width, m.info.height) == (sim.grid.width, sim.grid.height)
     data = np.array(m.data, dtype=np.int8).reshape(m.info.height, m.info.width)
     assert np.array_equal(data, sim.grid.data)
-    # a new subscriber gets it at the next tick, a second one too, and it comes every 2 s
-    rt.call("sleep", 0.1)        # (subscriber counts are sampled per tick)
-    first = []
-    sub = rt.bus.subscribe("/map", OccupancyGrid, first.append)
+    # published once, as map_server does: a late subscriber asking for transient local
+    # durability ("latched") gets it from the bus at once; it is not sent again
     rt.call("sleep", 0.1)
-    assert len(first) == 1
-    second = _collect(rt, [("/map", OccupancyGrid)], 0.1)["/map"]
-    assert len(second) == 1 and len(first) == 2
-    rt.call("sleep", 2.0)
-    assert len(first) == 3
+    late = []
+    sub = rt.bus.subscribe("/map", OccupancyGrid, late.append, "latched")
+    rt.call("sleep", 0.1)
+    assert len(late) == 1 and np.array_equal(np.array(late[0].data, dtype=np.int8), np.array(m.data, dtype=np.int8))
+    rt.call("sleep", 3.0)
+    assert len(late) == 1
     sub.close()
