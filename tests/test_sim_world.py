@@ -159,7 +159,7 @@ def test_urdf_has_the_contracted_names_and_physics():
     links = {l.get("name"): l for l in root.findall("link")}
     joints = {j.get("name"): j for j in root.findall("joint")}
     for n in ("base_footprint", "base_link", "end_effector_link", "camera_link", "camera_optical_frame",
-              "base_scan"):
+              "base_scan", "imu_link"):
         assert n in links
     for n in ("wheel_left_joint", "wheel_right_joint"):
         assert joints[n].get("type") == "continuous"
@@ -168,7 +168,7 @@ def test_urdf_has_the_contracted_names_and_physics():
     for n in ("gripper_left_joint", "gripper_right_joint"):
         assert joints[n].get("type") == "prismatic"
         assert 2 * float(joints[n].find("limit").get("upper")) > 0.066 + 0.01
-    frames = {"base_footprint", "end_effector_link", "camera_optical_frame", "base_scan"}
+    frames = {"base_footprint", "end_effector_link", "camera_optical_frame", "base_scan", "imu_link"}
     for name, link in links.items():
         assert link.find("inertial") is not None, name
         if name not in frames:
