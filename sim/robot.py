@@ -26,8 +26,15 @@ JOINT_STATE_NAMES = WHEELS + ARM + GRIPPER
 ROBOT_COLLISION_GROUP = 1 << 6
 # OpenManipulator-X "home": folded up, out of the camera's view
 ARM_HOME = (0.0, -1.0, 0.3, 0.7)
-GRIPPER_FORCE = 10.0      # N per finger
-GRIPPER_SPEED = 0.05      # m/s per finger
+# The gripper: one XM430-W350 in current-based position control (operating mode 5) drives
+# both fingers through a rack and pinion. It moves toward the goal at the profile velocity
+# and pushes with at most the goal current: a speed-limited, force-limited position servo.
+# ROBOTIS' TurtleBot3 manipulation bring-up (Jazzy, turtlebot3_manipulation_system.ros2_control
+# .xacro) sets dxl_gripper_profile_velocity 200 (x 0.229 rpm = 0.76 rev/s; the finger moves
+# 0.0722 m per revolution, 1.76e-5 m per tick: 0.055 m/s).
+GRIPPER_FORCE = 10.0      # N per finger: what the current limit pushes with at the fingertips
+GRIPPER_SPEED = 0.05      # m/s per finger: the profile velocity above
+GRIPPER_GAIN = 0.3        # the servo's position gain (pybullet's positionGain)
 GRIPPER_MAX_OPENING = 0.09
 
 
@@ -103,21 +110,15 @@ class Robot:
                                     forces=[self.limits[n][2] for n in ARM],
                                     positionGains=[0.3] * 4, velocityGains=[1.0] * 4,
                                     physicsClientId=cid)
+        # pybullet's position motor is that servo, solved with the contacts every substep:
+        # the fingers approach at GRIPPER_SPEED and stop on what they close on, pushing with
+        # at most GRIPPER_FORCE (a torque held for a whole control period would push them
+        # into it first)
         target = self.gripper_width / 2
-        for j in self.grip_idx:
-            if p.getJointState(b, j, physicsClientId=cid)[0] > target + 1e-3:
-                # Closing: a constant closing force, like a current-limited servo. Measured
-                # on a held can: ~2.9 N of contact force in all (less than GRIPPER_FORCE per
-                # finger, for reasons not understood), where position control squeezes
-                # ~6.7 N and, releasing, tipped placed cans over in 2 of 3 trials.
-                p.setJointMotorControl2(b, j, p.VELOCITY_CONTROL, targetVelocity=0.0, force=0.0,
-                                        physicsClientId=cid)
-                p.setJointMotorControl2(b, j, p.TORQUE_CONTROL, force=-GRIPPER_FORCE,
-                                        physicsClientId=cid)
-            else:
-                p.setJointMotorControl2(b, j, p.POSITION_CONTROL, targetPosition=target,
-                                        force=GRIPPER_FORCE, maxVelocity=GRIPPER_SPEED,
-                                        positionGain=0.3, physicsClientId=cid)
+        for j in self.grip_idx:      # (setJointMotorControlArray takes no speed limit)
+            p.setJointMotorControl2(b, j, p.POSITION_CONTROL, targetPosition=target,
+                                    force=GRIPPER_FORCE, maxVelocity=GRIPPER_SPEED,
+                                    positionGain=GRIPPER_GAIN, physicsClientId=cid)
 
     # ---------------- state ----------------
     def joint_states(self):

@@ -1,13 +1,13 @@
 """The simulated gripper's close (sim/robot.py), in the bare world: the open hand around an
 upright carton, then the fingers close.
 
-A known defect, kept visible here: the close is a torque with no speed limit, held for a
-whole control period (1/60 s, four physics substeps), so after the first period the
-fingers are already 1-2 cm inside the carton, and the solver pushes them apart again. On
-the floor that settles into a grip; on a table it throws the carton off, depending on a
-few millimetres (house_hard 2044 and 2040: upright cartons on tables, misses at 0 mm with
-the hand around them). A close limited in speed per physics substep should make the test
-pass; then drop the xfail."""
+The close was a torque with no speed limit, held for a whole control period (1/60 s, four
+physics substeps): after the first period the fingers were already 1-2 cm inside the
+carton, and the solver pushed them apart again. On the floor that settled into a grip; on
+a table it threw the carton off (house_hard 2044 and 2040: upright cartons on tables,
+misses at 0 mm with the hand around them). The gripper is now a speed- and force-limited
+position servo, as the real one in current-based position control: no finger sinks more
+than a few millimetres."""
 from __future__ import annotations
 
 import math
@@ -22,7 +22,6 @@ REACH = 0.27
 PENETRATION = 0.003     # [m] how far a finger may sink into what it closes on
 
 
-@pytest.mark.xfail(strict=True, reason="the close is an unlimited-speed torque (see the module docstring)")
 @pytest.mark.parametrize("off", [0.0, 0.007])
 def test_closing_fingers_do_not_sink_into_the_object(off):
     sim = SimWorld(None, "house_hard", seed=2044)

@@ -250,7 +250,7 @@ def build() -> str:
         m_f = 0.02
         P(link(f"gripper_{side}_link", m_f, (fl / 2, s * 0.005, 0), box_inertia(m_f, fl, 0.010, 0.030),
                [(("box", (fl, 0.010, 0.030)), (fl / 2, s * 0.005, 0), (0, 0, 0))], color="pad",
-               friction=(2.0, 0.0, 0.01),  # spinning: the rubber pad's contact patch resists twisting
+               friction=(2.0, 0.0, 0.02),  # spinning: the pad's contact patch (~15 mm across) resists twisting
                comment=f"{side} finger; inner face at y=0 when the joint is 0 (opening = left + right)"))
         P(joint(f"gripper_{side}_joint", "prismatic", "link5", f"gripper_{side}_link",
                 o=(FINGER_X, 0, 0), axis=(0, s, 0), limit=(0.0, FINGER_STROKE, 15.0, 0.1), damping=1.0))
