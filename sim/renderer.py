@@ -1,4 +1,10 @@
-"""Camera rendering: pybullet's EGL plugin (headless OpenGL) when it loads, TinyRenderer otherwise."""
+"""Camera rendering: the sim's own OpenGL renderer (sim/gl_renderer.py, moderngl on a
+headless EGL context) when it runs, pybullet's EGL plugin when that loads, the TinyRenderer
+otherwise.
+
+``ACTORBT_SIM_RENDERER=gl|egl|tiny`` asks for one (it falls back as above when that one
+cannot run); ``ACTORBT_SIM_NO_EGL=1`` means ``tiny`` (no EGL at all).
+"""
 from __future__ import annotations
 
 import contextlib
@@ -13,6 +19,22 @@ import numpy as np
 from ._pybullet import pybullet as p
 
 log = logging.getLogger("sim.renderer")
+
+#: the renderers, best first
+RENDERERS = ("gl", "egl", "tiny")
+_warned: set[str] = set()
+
+
+def requested_renderer() -> str | None:
+    """The renderer the environment asks for (``ACTORBT_SIM_RENDERER``), None: the best."""
+    name = os.environ.get("ACTORBT_SIM_RENDERER", "").strip().lower()
+    if name:
+        if name not in RENDERERS:
+            raise ValueError(f"ACTORBT_SIM_RENDERER={name!r}: one of {', '.join(RENDERERS)}")
+        return name
+    if os.environ.get("ACTORBT_SIM_NO_EGL") == "1":
+        return "tiny"
+    return None
 
 
 @contextlib.contextmanager
@@ -40,19 +62,72 @@ def _quiet_stdout():
 class Renderer:
     """Renders RGB + depth buffer for one pybullet client.
 
-    ``name`` is "egl" (hardware OpenGL path through the EGL plugin, Mesa llvmpipe when there
-    is no GPU) or "tiny" (pybullet's software TinyRenderer)."""
+    ``name`` is "gl" (sim/gl_renderer.py: the world's visual shapes drawn with moderngl on a
+    headless EGL context, Mesa llvmpipe when there is no GPU; about a millisecond a frame),
+    "egl" (pybullet's EGL plugin: some 25 ms a frame, most of it a shadow map it draws
+    whatever the image) or "tiny" (pybullet's software TinyRenderer, as slow). ``why``
+    says why a better one was not taken ("" when the best runs).
 
-    def __init__(self, cid: int, prefer_egl: bool = True):
+    Made before the world's bodies: the EGL plugin only sees shapes created after it loads
+    (the GL renderer reads them at each frame and has no such need)."""
+
+    def __init__(self, cid: int, prefer_egl: bool = True, prefer: str | None = None):
         self.cid = cid
         self.name = "tiny"
         self.plugin = -1
+        self.gl = None
         self.why_not_egl = "not requested"
         self._sizes_seen = set()
-        if prefer_egl and os.environ.get("ACTORBT_SIM_NO_EGL") != "1":
-            self._try_egl()
+        wanted = prefer or requested_renderer()
+        if wanted is not None and wanted not in RENDERERS:
+            raise ValueError(f"renderer {wanted!r}: one of {', '.join(RENDERERS)}")
+        order = list(RENDERERS[RENDERERS.index(wanted):]) if wanted else list(RENDERERS)
+        if not prefer_egl and "egl" in order:
+            order.remove("egl")
+        reasons = []
+        if wanted and wanted != "gl":
+            reasons.append(f"{wanted} asked for")
+        for name in order:
+            if name == "gl":
+                why = self._try_gl()
+            elif name == "egl":
+                self._try_egl()
+                why = self.why_not_egl
+            else:
+                self.name, why = "tiny", ""
+            if not why:
+                break
+            reasons.append(f"{name}: {why}")
+        self.why = "; ".join(reasons)
+        if self.name != (wanted or "gl") and self.why not in _warned:
+            _warned.add(self.why)
+            log.warning("camera renderer: %s (%s)", self.name, self.why)
+        else:
+            log.info("camera renderer: %s%s", self.name, f" ({self.why})" if self.why else "")
+
+    def _try_gl(self) -> str:
+        """"" when the GL renderer runs here (it draws a frame to prove it), else why not."""
+        try:
+            from .gl_renderer import GLRenderer
+            gl = GLRenderer(self.cid)
+        except Exception as e:          # no moderngl, no EGL, no OpenGL 3.3
+            return str(e) or type(e).__name__
+        try:
+            view = p.computeViewMatrix([0, 0, 1], [1, 0, 1], [0, 0, 1])
+            proj = p.computeProjectionMatrixFOV(60, 1.0, 0.05, 10.0)
+            rgb, depth = gl.render(4, 4, view, proj)
+            ok = rgb.shape == (4, 4, 3) and depth.shape == (4, 4)
+        except Exception as e:          # pragma: no cover - depends on the machine
+            gl.close()
+            return f"GL render failed: {e}"
+        if not ok:                      # pragma: no cover
+            gl.close()
+            return "GL render returned nothing"
+        self.gl, self.name = gl, "gl"
+        return ""
 
     def _try_egl(self):
+        self.why_not_egl = ""
         spec = importlib.util.find_spec("eglRenderer")
         if spec is None or not spec.origin:
             self.why_not_egl = "pybullet's eglRenderer module is not installed"
@@ -84,6 +159,15 @@ class Renderer:
     def render(self, width, height, view, projection, light_direction=None):
         """-> (rgb uint8 [h, w, 3], depth buffer float32 [h, w] in 0..1). ``light_direction``
         (towards the light, world frame): None leaves pybullet's default light."""
+        if self.gl is not None:
+            try:
+                return self.gl.render(width, height, view, projection, light_direction=light_direction)
+            except Exception:
+                # the EGL plugin cannot come now (it misses the shapes made before it)
+                log.exception("camera renderer: gl failed; the TinyRenderer from now on")
+                self._close_gl()
+                self.name = "tiny"
+                self.why = "gl failed while rendering"
         renderer = p.ER_BULLET_HARDWARE_OPENGL if self.name == "egl" else p.ER_TINY_RENDERER
         first = (width, height) not in self._sizes_seen     # the plugin chats on a new size
         self._sizes_seen.add((width, height))
@@ -96,7 +180,16 @@ class Renderer:
         depth = np.asarray(depth, dtype=np.float32).reshape(height, width)
         return np.ascontiguousarray(rgba[:, :, :3]), depth
 
+    def _close_gl(self):
+        gl, self.gl = self.gl, None
+        if gl is not None:
+            try:
+                gl.close()
+            except Exception:            # pragma: no cover - a context already gone
+                log.debug("closing the GL renderer", exc_info=True)
+
     def close(self):
+        self._close_gl()
         if self.plugin >= 0:
             try:
                 with _quiet_stdout():
