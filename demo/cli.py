@@ -4,6 +4,7 @@ from __future__ import annotations
 import pathlib
 import sys
 
+from bt_engine.errors import ActorbtError
 from bt_engine.ros.live_options import LiveOptions, add_live_options
 
 
@@ -51,9 +52,22 @@ def register(sub, common) -> None:
                         "or one from actorbt.yaml's imports), or mixed: every registered category "
                         "in turn (default: mixed).")
     e.add_argument("--jobs", type=int, default=1, metavar="N",
-                   help="How many episodes run at once, each in its own process (default: 1).")
+                   help="How many episodes run at once on this machine, each in its own process "
+                        "(default: 1).")
     e.add_argument("--out", default="out/eval", metavar="DIR",
-                   help="The folder for the traces and episodes.csv (default: out/eval).")
+                   help="The folder for the traces and episodes.csv, which is rewritten after every "
+                        "episode (default: out/eval).")
+    e.add_argument("--resume", action="store_true",
+                   help="Keep the episodes --out's episodes.csv already has (same tree and world) and "
+                        "run only the missing ones; the CSV gets both.")
+    e.add_argument("--ray", nargs="?", const=True, default=None, metavar="ADDRESS",
+                   help="Run the episodes as Ray tasks, one CPU each, instead of --jobs: on the cluster "
+                        "at ADDRESS (auto, HOST:6379, ray://HOST:10001), else ray.init()'s own choice "
+                        "(RAY_ADDRESS, a cluster `ray start` started here, or a new local instance). "
+                        "Needs pip install 'actorbt[cluster]'; see docs/evaluation.md.")
+    e.add_argument("--ray-runtime-env", metavar="JSON",
+                   help="Ray's runtime_env for the tasks, as JSON, e.g. "
+                        "'{\"env_vars\": {\"ROS_AUTOMATIC_DISCOVERY_RANGE\": \"LOCALHOST\"}}'.")
     e.set_defaults(func=cmd_eval)
 
 
@@ -98,9 +112,21 @@ def cmd_eval(args, app) -> int:
     from .evaluate import evaluate, print_table
     _check_category(args.category, "mixed")
     _check_world(args.world, args.first_seed, args.locations)
+    runtime_env = None
+    if args.ray_runtime_env:
+        import json
+        try:
+            runtime_env = json.loads(args.ray_runtime_env)
+        except ValueError as exc:
+            raise ActorbtError(f"--ray-runtime-env is not JSON: {exc}") from None
+        if args.ray is None:
+            raise ActorbtError("--ray-runtime-env needs --ray")
+    if args.ray is not None and args.jobs > 1:
+        print("--jobs is for one machine: with --ray every CPU of the cluster runs an episode")
     episodes = evaluate(args.tree, args.seeds, args.world, args.category, args.jobs, args.out,
                         first_seed=args.first_seed, config=app.cfg, locations=args.locations,
-                        mapping=args.no_map)
+                        mapping=args.no_map, resume=args.resume, ray=args.ray,
+                        ray_runtime_env=runtime_env)
     print_table(episodes)
     print(f"\nCSV: {pathlib.Path(args.out) / 'episodes.csv'}")
     return 0 if all(e.success for e in episodes) else 1
