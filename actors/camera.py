@@ -41,6 +41,9 @@ MAP_FRAME = "map"
 BASE_FRAME = "base_footprint"
 MAX_POSE_GAP = 0.25                     # [s] how long a frame may wait for tf to pose it
 TF_POLL = 0.02                          # [s] between two tries meanwhile
+#: [s] frames that tf cannot pose for this long end the stream with the reason: the
+#: robot is not localised (a look's own deadline, 3 s, would only say "timed out")
+UNPOSED_LIMIT = 2.0
 
 
 class CameraError(ActorbtError):
@@ -140,17 +143,17 @@ class Camera(SubSystem):
         self.set_value("camera_map_frame", map_frame)
         self.set_value("camera_base_frame", base_frame)
 
-    def _poses(self, frame_id: str, t: float) -> tuple[np.ndarray, np.ndarray] | None:
+    def _poses(self, frame_id: str, t: float) -> tuple[np.ndarray, np.ndarray] | TransformError:
         """(T_map_cam, T_map_base) at stamp ``t`` from tf, waiting up to MAX_POSE_GAP for
-        the transforms to reach it; None when they do not."""
+        the transforms to reach it; the lookup's error when they do not."""
         map_frame, base_frame = self.get_value("camera_map_frame"), self.get_value("camera_base_frame")
         end = self.runtime.now() + MAX_POSE_GAP
         while True:
             try:
                 return (self.tf.lookup(map_frame, frame_id, t), self.tf.lookup(map_frame, base_frame, t))
-            except TransformError:
+            except TransformError as e:
                 if self.runtime.now() >= end:
-                    return None
+                    return e
             self.run_actor("sleep", TF_POLL)
 
     @actor(read_only=True)
@@ -181,6 +184,7 @@ class Camera(SubSystem):
                 self.run_actor_mode("color_raw", "iterator") as colors, \
                 self.run_actor_mode("depth_raw", "iterator") as depths:
             dmsg = None
+            unposed_since = None
             for cmsg in colors:
                 t = stamp_seconds(cmsg.header)
                 while dmsg is None or stamp_seconds(dmsg.header) < t - 1e-6:
@@ -191,8 +195,15 @@ class Camera(SubSystem):
                     info = Intrinsics.from_msg(next(infos))   # sent with the images
                 frame_id = cmsg.header.frame_id or info.frame_id
                 poses = self._poses(frame_id, t)
-                if poses is None:
-                    continue                      # tf cannot pose it: not localised
+                if isinstance(poses, TransformError):     # tf cannot pose it: not localised
+                    now = self.runtime.now()
+                    unposed_since = now if unposed_since is None else unposed_since
+                    if now - unposed_since >= UNPOSED_LIMIT:
+                        raise CameraError(f"no camera pose for {now - unposed_since:.1f} s of frames: "
+                                          f"{poses} (is the robot localised? the localiser publishes "
+                                          "map -> odom on /tf)")
+                    continue
+                unposed_since = None
                 T_map_cam, T_map_base = poses
                 yield RGBDFrame(stamp=t, bgr=image_to_array(cmsg), depth=image_to_array(dmsg),
                                 intrinsics=info, T_map_cam=T_map_cam, T_map_base=T_map_base,

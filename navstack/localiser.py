@@ -68,6 +68,7 @@ from sensor_msgs.msg import Imu, LaserScan
 from tf2_msgs.msg import TFMessage
 
 from bt_engine import SubSystem, actor
+from bt_engine.bus import close_publishers
 
 from .amcl import LOCALISED, UNINITIALISED, Amcl, AmclParams, Scan, compose
 from .likelihood_field import LaserModelParams
@@ -177,11 +178,12 @@ class Localiser(SubSystem):
             self._subs.append(bus.subscribe(imu_topic, Imu, self._on_imu, 100))
 
     def close(self) -> None:
-        """Unsubscribe (the runtime's bus closes them too)."""
+        """Unsubscribe and stop publishing (the runtime's bus closes them too)."""
         for s in self._subs:
             s.close()
         self._subs = []
         self.tf.close()
+        close_publishers(self._pub, self._tf_pub)
 
     # -- bus callbacks --------------------------------------------------------------------
     def _on_map(self, msg: OccupancyGrid) -> None:

@@ -51,6 +51,7 @@ from nav_msgs.msg import OccupancyGrid as OccupancyGridMsg
 from sensor_msgs.msg import CameraInfo, Image, LaserScan, PointCloud2
 
 from bt_engine import SubSystem, actor
+from bt_engine.bus import close_publishers
 from planning.base_planner import BasePath, GridPlanner
 from planning.failure import FailureReason
 from planning.grid import OccupancyGrid, inflate
@@ -288,6 +289,7 @@ class Navigator(SubSystem):
         for s in self._subs:
             s.close()
         self._subs = []
+        close_publishers(self._cmd)
         self._goal = None
         self._watch_depth(False)
         self.tf.close()

@@ -93,6 +93,11 @@ class FaultyPublisher:
         self._drop, self._delay, self._rng = drop, delay, rng
         self.dropped = self.sent = 0
 
+    def close(self) -> None:
+        close = getattr(self._pub, "close", None)
+        if close is not None:
+            close()
+
     def publish(self, msg) -> None:
         if self._drop and self._rng.random() < self._drop:
             self.dropped += 1

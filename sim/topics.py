@@ -56,6 +56,8 @@ from nav_msgs.msg import OccupancyGrid, Odometry
 from sensor_msgs.msg import CameraInfo, Image, Imu, JointState, LaserScan
 from tf2_msgs.msg import TFMessage
 
+from bt_engine.bus import close_publishers
+
 from .controllers import ArmController, GripperController
 from .faults import faulty
 from .frames import joint_transforms, odom_transform, static_transforms
@@ -144,11 +146,15 @@ class SimTopics:
         self._ticks = 0
 
     def close(self):
+        """Off the bus: subscriptions, actions and publishers (a driver that stopped)."""
         for s in self.subs:
             s.close()
         self.subs = []
         self.arm.close()
         self.gripper.close()
+        close_publishers(self.pub_odom, self.pub_imu, self.pub_scan, self.pub_gt, self.pub_js,
+                         self.pub_rgb, self.pub_depth, self.pub_info, self.pub_map, self.pub_tf,
+                         self.pub_tf_static, self.pub_initial)
 
     # ---------------- actuators ----------------
     def _on_cmd_vel(self, msg: TwistStamped):

@@ -383,3 +383,17 @@ def test_positions_stay_right_while_the_robot_turns(world):
     bearings = [m["bearing"] for m in seen]
     assert max(bearings) - min(bearings) > 0.1           # the robot did turn
     assert all(math.hypot(m["x"] - truth[0], m["y"] - truth[1]) <= 0.01 for m in seen)
+
+
+def test_a_look_while_the_robot_is_not_localised_says_so():
+    """No map -> odom on /tf (no localiser, or one that does not know where the robot is):
+    the camera's frames cannot be posed, and a look ends with that reason, not a timeout."""
+    rt = Runtime(clock="virtual")
+    sim = SimWorld(rt, "open_floor", seed=0).start()
+    try:
+        rt.add_subsystem("perception", Perception)
+        with pytest.raises(ActorError, match="no camera pose .*is the robot localised"):
+            rt.call("find_object", "any")
+    finally:
+        sim.close()
+        rt.close()

@@ -12,6 +12,6 @@ rclpy transport, :class:`bt_engine.ros.transport.RosTransport`, lives in the ``r
 package, which sits above this one.
 """
 from .local import LocalBus
-from .transport import Transport
+from .transport import Transport, close_publishers
 
-__all__ = ["LocalBus", "Transport"]
+__all__ = ["LocalBus", "Transport", "close_publishers"]

@@ -32,7 +32,7 @@ class _Topic:
         self.name = name
         self.msg_type = msg_type
         self.subs: list[LocalSubscription] = []
-        #: publishers made for it (a local publisher is never closed)
+        #: its live publishers (made, not closed)
         self.publishers = 0
         #: the QoS setting of its first publisher (what a ROS robot would offer)
         self.qos: Any = None
@@ -41,12 +41,19 @@ class _Topic:
 
 
 class LocalPublisher:
-    __slots__ = ("topic", "_t", "_bus")
+    __slots__ = ("topic", "_t", "_bus", "closed")
 
     def __init__(self, bus: "LocalBus", t: _Topic) -> None:
         self.topic = t.name
         self._t = t
         self._bus = bus
+        self.closed = False
+
+    def close(self) -> None:
+        """No longer a publisher of the topic (its count drops)."""
+        if not self.closed:
+            self.closed = True
+            self._t.publishers -= 1
 
     def publish(self, msg: Any) -> None:
         """Deliver ``msg`` to every current subscriber. Safe from any thread."""
@@ -121,7 +128,7 @@ class LocalBus(Transport):
         return len(t.subs) if t is not None else 0
 
     def publisher_count(self, topic: str) -> int:
-        """Publishers made for ``topic`` in this process (a local publisher is never closed)."""
+        """Live publishers of ``topic`` in this process."""
         t = self._topics.get(topic)
         return t.publishers if t is not None else 0
 

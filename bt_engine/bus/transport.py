@@ -54,6 +54,14 @@ class Publisher(Protocol):
     def publish(self, msg: Any) -> None: ...
 
 
+def close_publishers(*publishers: Any) -> None:
+    """Take publishers off the bus (a node that stops): each that can be closed is."""
+    for pub in publishers:
+        close = getattr(pub, "close", None)
+        if close is not None:
+            close()
+
+
 class Subscription(Protocol):
     topic: str
 

@@ -40,19 +40,28 @@ __all__ = ["RosPublisher", "RosSubscription", "RosTransport"]
 
 
 class RosPublisher:
-    """``publish(msg)`` on a ROS topic; safe from any thread."""
+    """``publish(msg)`` on a ROS topic; safe from any thread. ``close()`` takes it off
+    the graph."""
 
-    __slots__ = ("topic", "_pub", "_host")
+    __slots__ = ("topic", "_pub", "_host", "_node")
 
-    def __init__(self, host: RosHost, pub: Any, topic: str) -> None:
+    def __init__(self, host: RosHost, pub: Any, topic: str, node: Any = None) -> None:
         self.topic = topic
         self._pub = pub
         self._host = host
+        self._node = node
 
     def publish(self, msg: Any) -> None:
         if self._host.closed:
             raise RosClosedError(f"cannot publish on {self.topic}: the ROS transport is closed")
+        if self._pub is None:
+            raise RosClosedError(f"cannot publish on {self.topic}: the publisher is closed")
         self._pub.publish(msg)
+
+    def close(self) -> None:
+        pub, self._pub = self._pub, None
+        if pub is not None and self._node is not None and not self._host.closed:
+            _destroy_later(self._host, self._node.destroy_publisher, pub, self.topic)
 
 
 class RosSubscription:
@@ -82,10 +91,22 @@ class RosSubscription:
         self._transport._subs.discard(self)
         t = self._transport
         if not t.host.closed and self._sub is not None:
-            try:
-                t.node.destroy_subscription(self._sub)
-            except Exception:
-                log.exception("destroying the subscription to %s failed", self.topic)
+            _destroy_later(t.host, t.node.destroy_subscription, self._sub, self.topic)
+
+
+def _destroy_later(host: RosHost, destroy: Callable[[Any], Any], entity: Any, topic: str) -> None:
+    """Destroy a publisher or subscription on the executor thread: destroyed from another
+    thread while the executor waits on it, rclpy fails in the executor ("cannot use
+    Destroyable because destruction was requested")."""
+    def run() -> None:
+        try:
+            destroy(entity)
+        except Exception:
+            log.exception("destroying an endpoint of %s failed", topic)
+    try:
+        host.post(run)
+    except RosClosedError:
+        pass                          # the node goes with the host
 
 
 class RosTransport(Transport):
@@ -118,7 +139,7 @@ class RosTransport(Transport):
     # -- topics --------------------------------------------------------------------------
     def publisher(self, topic: str, msg_type: type, qos: Any = 10) -> RosPublisher:
         pub = self.node.create_publisher(msg_type, topic, qos_profile(qos))
-        return RosPublisher(self.host, pub, topic)
+        return RosPublisher(self.host, pub, topic, self.node)
 
     def subscribe(self, topic: str, msg_type: type, callback: Callable[[Any], None],
                   qos: Any = 10) -> RosSubscription:
