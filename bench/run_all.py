@@ -6,6 +6,8 @@ import subprocess
 import sys
 
 HERE = pathlib.Path(__file__).resolve().parent
+#: hours, not minutes: run only when named (`python bench/run_all.py acceptance`)
+LONG = {"bench_acceptance"}
 
 
 def main() -> int:
@@ -13,6 +15,9 @@ def main() -> int:
     failed = []
     for script in sorted(HERE.glob("bench_*.py")):
         if only and not any(o in script.stem for o in only):
+            continue
+        if not only and script.stem in LONG:
+            print(f"\n=== {script.stem}: skipped (hours; `python bench/run_all.py {script.stem}`) ===")
             continue
         print(f"\n=== {script.stem} ===", flush=True)
         rc = subprocess.call([sys.executable, str(script)], cwd=HERE.parent)
