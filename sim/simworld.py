@@ -37,6 +37,10 @@ DEBUG_GROUND_TRUTH = False
 #: [s] diff_drive_controller brakes when no command came this long (ROBOTIS' Jazzy
 #: hardware_controller_manager.yaml: cmd_vel_timeout 0.5)
 CMD_VEL_TIMEOUT = 0.5
+#: the contact solver: at most this many iterations a substep, fewer once the residual is
+#: below SOLVER_RESIDUAL (0, Bullet's default: every iteration runs; bench/bench_physics.py)
+SOLVER_ITERATIONS = 50
+SOLVER_RESIDUAL = 0.0
 
 
 def _on_hub(fn):
@@ -85,7 +89,8 @@ class SimWorld:
                  prefer_egl: bool = True, camera: bool = True, cmd_vel_timeout: float = CMD_VEL_TIMEOUT,
                  map_resolution: float = RESOLUTION, lidar: LidarModel | None = None,
                  lidar_noise: bool = True, debug_ground_truth: bool | None = None,
-                 locations=None, initial_pose: bool = True, faults=None):
+                 locations=None, initial_pose: bool = True, faults=None,
+                 solver_iterations: int = SOLVER_ITERATIONS, solver_residual: float = SOLVER_RESIDUAL):
         if physics_hz % control_hz:
             raise ValueError(f"physics_hz ({physics_hz}) must be a multiple of control_hz ({control_hz})")
         self.runtime = runtime
@@ -93,6 +98,7 @@ class SimWorld:
         self.spec = load_world(world, self.seed, locations)
         self.dt = 1.0 / control_hz
         self.substeps = physics_hz // control_hz
+        self.solver_iterations, self.solver_residual = int(solver_iterations), float(solver_residual)
         self.publish_every = max(1, round(control_hz / publish_hz))
         self.lidar_model = lidar or LidarModel()
         self.scan_every = max(1, round(control_hz / self.lidar_model.rate_hz))
@@ -149,7 +155,9 @@ class SimWorld:
         p.resetSimulation(physicsClientId=cid)
         p.setGravity(0, 0, -9.81, physicsClientId=cid)
         p.setPhysicsEngineParameter(fixedTimeStep=self.dt, numSubSteps=self.substeps,
-                                    numSolverIterations=50, deterministicOverlappingPairs=1,
+                                    numSolverIterations=self.solver_iterations,
+                                    solverResidualThreshold=self.solver_residual,
+                                    deterministicOverlappingPairs=1,
                                     physicsClientId=cid)
         if self.gui:
             p.configureDebugVisualizer(p.COV_ENABLE_GUI, 0, physicsClientId=cid)
