@@ -38,9 +38,9 @@ DEBUG_GROUND_TRUTH = False
 #: hardware_controller_manager.yaml: cmd_vel_timeout 0.5)
 CMD_VEL_TIMEOUT = 0.5
 #: the contact solver: at most this many iterations a substep, fewer once the residual is
-#: below SOLVER_RESIDUAL (0, Bullet's default: every iteration runs; bench/bench_physics.py)
+#: below the threshold (None: pybullet's own, which is not 0; bench/bench_physics.py)
 SOLVER_ITERATIONS = 50
-SOLVER_RESIDUAL = 0.0
+SOLVER_RESIDUAL = None
 
 
 def _on_hub(fn):
@@ -90,7 +90,7 @@ class SimWorld:
                  map_resolution: float = RESOLUTION, lidar: LidarModel | None = None,
                  lidar_noise: bool = True, debug_ground_truth: bool | None = None,
                  locations=None, initial_pose: bool = True, faults=None,
-                 solver_iterations: int = SOLVER_ITERATIONS, solver_residual: float = SOLVER_RESIDUAL):
+                 solver_iterations: int = SOLVER_ITERATIONS, solver_residual: float | None = SOLVER_RESIDUAL):
         if physics_hz % control_hz:
             raise ValueError(f"physics_hz ({physics_hz}) must be a multiple of control_hz ({control_hz})")
         self.runtime = runtime
@@ -98,7 +98,7 @@ class SimWorld:
         self.spec = load_world(world, self.seed, locations)
         self.dt = 1.0 / control_hz
         self.substeps = physics_hz // control_hz
-        self.solver_iterations, self.solver_residual = int(solver_iterations), float(solver_residual)
+        self.solver_iterations, self.solver_residual = int(solver_iterations), solver_residual
         self.publish_every = max(1, round(control_hz / publish_hz))
         self.lidar_model = lidar or LidarModel()
         self.scan_every = max(1, round(control_hz / self.lidar_model.rate_hz))
@@ -154,10 +154,10 @@ class SimWorld:
         cid = self.cid
         p.resetSimulation(physicsClientId=cid)
         p.setGravity(0, 0, -9.81, physicsClientId=cid)
+        residual = {} if self.solver_residual is None else {"solverResidualThreshold": self.solver_residual}
         p.setPhysicsEngineParameter(fixedTimeStep=self.dt, numSubSteps=self.substeps,
                                     numSolverIterations=self.solver_iterations,
-                                    solverResidualThreshold=self.solver_residual,
-                                    deterministicOverlappingPairs=1,
+                                    deterministicOverlappingPairs=1, **residual,
                                     physicsClientId=cid)
         if self.gui:
             p.configureDebugVisualizer(p.COV_ENABLE_GUI, 0, physicsClientId=cid)
