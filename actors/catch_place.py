@@ -80,8 +80,10 @@ class Placing:
                 raise
         self.run_actor("move_to_pose", g.reach, 0.0, release_z, g.pitch)
         # Let go gently: just past the object first, so the fingers' squeeze is released
-        # without kicking it over, then wide enough to back out.
-        self.run_actor("open", min(g.open_width, held["width"] + GENTLE_RELEASE))
+        # without kicking it over, then wide enough to back out. Past it as the fingers
+        # hold it now: an object that turned a little in them over the carry holds them
+        # wider than after the pick, and opening to less would squeeze it again.
+        self.run_actor("open", min(g.open_width, self._held_width(held) + GENTLE_RELEASE))
         self.run_actor("open", g.open_width)
         self.set_value("holding", None)
         self.set_value("held_plan", None)
@@ -97,6 +99,12 @@ class Placing:
         self.run_actor("mini_walk", -max(0.1, driven))
         self.run_actor("home")
         return {"x": x, "y": y, "z": release_z}
+
+    def _held_width(self, held: dict) -> float:
+        """The fingers' opening on the held object now [m] (a grip check: they stall on
+        it), or as the pick held it when they do not stall."""
+        grip = self.run_actor("grip_check")
+        return float(grip["width"]) if grip.get("stalled") else float(held["width"])
 
     def _place_reach(self, plan: GraspPlan, release_z: float) -> float:
         """How far ahead of the base the hand puts the object down [m]: the plan's reach,

@@ -1,6 +1,7 @@
 """The mobile manipulator in a pybullet client: loading, joint maps, low-level actuation."""
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import numpy as np
@@ -32,9 +33,24 @@ ARM_HOME = (0.0, -1.0, 0.3, 0.7)
 # ROBOTIS' TurtleBot3 manipulation bring-up (Jazzy, turtlebot3_manipulation_system.ros2_control
 # .xacro) sets dxl_gripper_profile_velocity 200 (x 0.229 rpm = 0.76 rev/s; the finger moves
 # 0.0722 m per revolution, 1.76e-5 m per tick: 0.055 m/s).
+# As on the servo, the profile moves the setpoint, not the finger: a finger stopped by what
+# it closes on falls behind its setpoint, and the position error drives the push up to the
+# current limit, which then holds the object with that force.
 GRIPPER_FORCE = 10.0      # N per finger: what the current limit pushes with at the fingertips
 GRIPPER_SPEED = 0.05      # m/s per finger: the profile velocity above
 GRIPPER_GAIN = 0.3        # the servo's position gain (pybullet's positionGain)
+# pybullet's position motor pushes a blocked joint only in proportion to the velocity it
+# asks for (about 55 N per m/s on a stalled finger at 50 solver iterations): capped at
+# GRIPPER_SPEED it squeezed 2.8 N, whatever the force limit. The cap is the speed a finger
+# may catch up with its setpoint after what it pushed on gave way; high enough that a
+# stalled finger asks for more than GRIPPER_FORCE.
+GRIPPER_CATCH_UP = 0.5    # m/s
+# The pads' contact is a spring and damper (pybullet's contactStiffness and contactDamping):
+# with the solver's default, an edge of a box that stands askew between the pads sank
+# 6.5 mm under the full squeeze (2.5 mm under 2.8 N), and a sunk finger holds by interlock.
+# A rubber pad against a carton's wall yields about 0.2 mm under GRIPPER_FORCE.
+PAD_STIFFNESS = 5.0e4     # N/m
+PAD_DAMPING = 200.0       # N s/m: no bounce when a pad meets a 60 g carton
 GRIPPER_MAX_OPENING = 0.09
 
 
@@ -73,6 +89,10 @@ class Robot:
         self.gripper_width = GRIPPER_MAX_OPENING
         for j in self.grip_idx:
             p.resetJointState(b, j, self.gripper_width / 2, physicsClientId=cid)
+        self.grip_setpoint = [self.gripper_width / 2] * 2   # per finger, the profile's [m]
+        for j in self.grip_idx:
+            p.changeDynamics(b, j, contactStiffness=PAD_STIFFNESS, contactDamping=PAD_DAMPING,
+                             physicsClientId=cid)
         self.wheel_target = [0.0, 0.0]
         self.wheel_setpoint = [0.0, 0.0]
         self.apply(0.0)
@@ -92,7 +112,13 @@ class Robot:
         self.arm_target_vel = list(velocities) if velocities is not None else [0.0] * 4
 
     def set_gripper(self, width: float):
-        self.gripper_width = float(np.clip(width, 0.0, GRIPPER_MAX_OPENING))
+        """A new goal opening [m]: the fingers' profile starts from where they are (a goal
+        repeated while they squeeze leaves it be, and the squeeze with it)."""
+        width = float(np.clip(width, 0.0, GRIPPER_MAX_OPENING))
+        if width != self.gripper_width:
+            self.grip_setpoint = [s[0] for s in p.getJointStates(self.body, self.grip_idx,
+                                                                  physicsClientId=self.cid)]
+        self.gripper_width = width
 
     def apply(self, dt: float):
         """Push the current targets into pybullet's joint motors (they run every substep).
@@ -110,14 +136,19 @@ class Robot:
                                     forces=[self.limits[n][2] for n in ARM],
                                     positionGains=[0.3] * 4, velocityGains=[1.0] * 4,
                                     physicsClientId=cid)
-        # pybullet's position motor is that servo, solved with the contacts every substep:
-        # the fingers approach at GRIPPER_SPEED and stop on what they close on, pushing with
-        # at most GRIPPER_FORCE (a torque held for a whole control period would push them
-        # into it first)
-        target = self.gripper_width / 2
-        for j in self.grip_idx:      # (setJointMotorControlArray takes no speed limit)
-            p.setJointMotorControl2(b, j, p.POSITION_CONTROL, targetPosition=target,
-                                    force=GRIPPER_FORCE, maxVelocity=GRIPPER_SPEED,
+        # pybullet's position motor is that servo, solved with the contacts every substep,
+        # its setpoint moving to the goal at GRIPPER_SPEED: the fingers approach at that
+        # speed and stop on what they close on, then push harder as the setpoint runs on,
+        # up to GRIPPER_FORCE (a torque held for a whole control period would push them
+        # into it first). The setpoint moves once a control period, the motor runs every
+        # substep: it is where the profile is at the period's end.
+        goal, step = self.gripper_width / 2, GRIPPER_SPEED * dt
+        for i, j in enumerate(self.grip_idx):   # (setJointMotorControlArray takes no speed limit)
+            sp = self.grip_setpoint[i]
+            sp = self.grip_setpoint[i] = sp + float(np.clip(goal - sp, -step, step))
+            speed = 0.0 if sp == goal else math.copysign(GRIPPER_SPEED, goal - sp)
+            p.setJointMotorControl2(b, j, p.POSITION_CONTROL, targetPosition=sp, targetVelocity=speed,
+                                    force=GRIPPER_FORCE, maxVelocity=GRIPPER_CATCH_UP,
                                     positionGain=GRIPPER_GAIN, physicsClientId=cid)
 
     # ---------------- state ----------------

@@ -187,3 +187,40 @@ def test_a_pick_that_cannot_lift_puts_the_bottle_back_and_lets_go(monkeypatch):
         assert not sim.in_gripper(name)
         assert abs(pose[2] - 0.1525) < 0.005 and math.dist(pose[:2], bottle) < 0.03   # upright, in place
         assert rt.call("get_status")["gripper"]["width"] > 0.08
+
+
+def _in_hand(sim, name: str) -> tuple[tuple, tuple]:
+    """Where object ``name`` is in the hand's frame: its position [m] and the direction of
+    its z axis (a carton's length), from the simulator's truth."""
+    import pybullet as p
+    hand = sim.link_pose("end_effector_link")
+    pose = sim.object_pose(name)
+    inv = p.invertTransform(*hand)
+    pos, quat = p.multiplyTransforms(inv[0], inv[1], pose[:3], pose[3:])
+    return pos, tuple(p.getMatrixFromQuaternion(quat)[2::3])
+
+
+def test_a_lying_carton_stays_where_the_fingers_hold_it_through_the_carry():
+    """house_hard 2004 and 2006: a carton lying on the floor, picked from above and
+    carried to the pallet 2 m away. The fingers squeezed it with 2.8 N (the servo model's
+    stall push, not its 10 N): over the drive it slid 25 mm towards the fingertips,
+    turning 27 degrees, and fell out there (2004), or hung from the fingertips on end and
+    was put down against the pallet's side (2006). Squeezed with the servo's force, it
+    stays where the pick held it up to the pallet, the hand pointing down to put it there."""
+    start = (9.0, 6.3, -math.pi / 2)
+    sighting = {"category": "carton", "x": 9.031, "y": 5.4016, "z": 0.0, "height": 0.045,
+                "width": 0.07, "distance": 0.9, "confidence": 0.78, "colour": "yellow",
+                "truncated": [], "frame": "map", "yaw": -1.499, "pose": "lying"}
+    with _localised_rig(2004, start, lambda sim: place_robot(sim, start)) as (rt, sim):
+        close = rt.call("approach_object", target=dict(sighting))
+        held = rt.call("pick", target=close)
+        assert held["pose"] == "lying"
+        picked, _ = _in_hand(sim, "carton_1")
+        rt.call("carry_pose")
+        rt.call("goto", 7.621, 6.2, math.pi)        # the pallet's east standoff
+        rt.call("move_to_pose", 0.17, 0.0, 0.1955, math.pi / 2)
+        now, length = _in_hand(sim, "carton_1")
+        assert sim.in_gripper("carton_1") and rt.call("verify_grasp")
+        assert math.dist(picked, now) < 0.008, f"it moved {math.dist(picked, now) * 1000:.0f} mm in the hand"
+        # its length across the hand's pointing axis, as it lay on the floor
+        assert abs(length[0]) < math.sin(math.radians(10))
