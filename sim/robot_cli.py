@@ -8,9 +8,9 @@ named in actorbt.yaml).
     actorbt robot --interfaces [--json]                # what it offers, then exit
 
 One process runs the simulated robot (its drivers and ros2_control controllers) and the
-navstack (AMCL's and Nav2's stand-in) on the wall clock, over DDS, on a node named
-``actorbt_robot_<pid>``. The simulator gives the localiser the start pose on
-``/initialpose`` as a user would (``--no-initial-pose``: nobody does). ``--truth FILE``
+navstack (AMCL's and Nav2's stand-in) on the wall clock, over DDS, on one node (its name
+is printed when it is ready). The simulator gives the localiser the pose the robot stands
+at on ``/initialpose``, as a user would (``--no-initial-pose``: nobody does). ``--truth FILE``
 writes the world's ground truth (the robot's and objects' poses) to a JSON file every
 second and at the end: for a referee, never for the robot's loop.
 
