@@ -37,6 +37,7 @@ from sensor_msgs.msg import Imu, PointCloud2, PointField
 
 from bt_engine import ActorbtError, ActorError, ActorTimeout, SubSystem, actor
 from bt_engine.bus.actions import ActionGoalError
+from bt_engine.ros.pose_cli import initial_pose_msg
 from planning import BasePath, GridPlanner, OccupancyGrid, inflate, with_obstacles
 from planning.viewpoints import viewpoints
 
@@ -105,24 +106,6 @@ def cloud_msg(points: np.ndarray, frame: str = MAP) -> PointCloud2:
     return msg
 
 
-def initial_pose_msg(x: float, y: float, yaw: float, std_xy: float,
-                     std_yaw: float) -> PoseWithCovarianceStamped:
-    """/initialpose as RViz sends it: (x, y, yaw) in the map frame, the covariance's
-    diagonal std_xy² for x and y and std_yaw² for yaw (row-major 6x6 over x, y, z, roll,
-    pitch, yaw). Unstamped, as this module's other messages: the runtime clock is no ROS
-    time, and time 0 asks tf for its latest transform (AMCL looks up odom at the stamp)."""
-    msg = PoseWithCovarianceStamped()
-    msg.header.frame_id = MAP
-    msg.pose.pose.position.x, msg.pose.pose.position.y = float(x), float(y)
-    msg.pose.pose.orientation.z = math.sin(yaw / 2)
-    msg.pose.pose.orientation.w = math.cos(yaw / 2)
-    cov = [0.0] * 36
-    cov[0] = cov[7] = float(std_xy) ** 2
-    cov[35] = float(std_yaw) ** 2
-    msg.pose.covariance = cov
-    return msg
-
-
 def _goal_msg(x: float, y: float, theta: float) -> NavigateToPose.Goal:
     goal = NavigateToPose.Goal()
     goal.pose.header.frame_id = MAP
@@ -186,7 +169,7 @@ class Navigation(SubSystem):
         Returns:
             the pose given: x [m], y [m], yaw [rad] in the map frame
         """
-        self.run_actor("initialpose", initial_pose_msg(x, y, yaw, std_xy, std_yaw))
+        self.run_actor("initialpose", initial_pose_msg(x, y, yaw, std_xy, std_yaw, MAP))
         return float(x), float(y), float(yaw)
 
     @actor(read_only=True)
