@@ -42,6 +42,8 @@ LOOK_AROUND = math.radians(35)  # after a failed grasp, also look this far to ei
 MIN_LOOK = 0.3              # [m] nearer than this, the camera sees too little of an object
 CHORD_MARGIN = 0.004        # [m] fingers that stall this much narrower than a round body is
 #                             wide closed on a chord of it, at their tips
+PINCH_MIN_CHORD = 0.8       # of a round body's width: on a narrower chord the tips meet its
+#                             side more than 37 degrees off square and squeeze it out
 LONG_DRIVE = 0.25            # [m] a longer drive in faces the object again on the way
 LONG_DRIVE_SPEED = 0.22     # [m/s] the first part of it (the Waffle's top speed is 0.26)
 REGRASP_BACK = 0.05         # [m] the base backs off this far before it grasps again
@@ -72,11 +74,12 @@ def _beyond_tips(plan: GraspPlan, grip: dict) -> float:
     The fingers stalled narrower than the body (``plan.across``) but within the range the
     pick takes for holding it: they cannot close on a chord of it between their roots and
     their tips, so they pinched it with their tips, the hand short of it (the base stopped
-    short, or pushed it ahead): a grip that may not last the carry."""
+    short, or pushed it ahead): a grip that may not last the carry. Also a little narrower
+    than that range, down to PINCH_MIN_CHORD of the body."""
     if plan.sides or plan.pitch > math.radians(45) or not grip["stalled"]:
         return 0.0
     body, w = plan.across, grip["width"]
-    if not plan.closed_min <= w <= body - CHORD_MARGIN:
+    if not min(plan.closed_min, PINCH_MIN_CHORD * body) <= w <= body - CHORD_MARGIN:
         return 0.0      # narrower still: a miss (squeezed out, tipped), which the tree retries
     return math.sqrt((body / 2) ** 2 - (w / 2) ** 2)
 

@@ -13,8 +13,9 @@ For each candidate (physics rate, solver iterations, solver residual threshold):
 
     .venv/bin/python bench/bench_physics.py [--configs 240/50/0,120/30/0.01 ...]
 
-A config is HZ/ITERATIONS/RESIDUAL (RESIDUAL "-": pybullet's own threshold). The first
-row is the simulator's default.
+A config is HZ/ITERATIONS/RESIDUAL (RESIDUAL "-": pybullet's own threshold); HZ is one
+rate, or MOVING:STILL for the rate while the hand moves and the rate while it is still
+(the ms per tick above are the still hand's). The first row is the simulator's default.
 """
 from __future__ import annotations
 
@@ -32,10 +33,10 @@ import pybullet as p  # noqa: E402
 
 from planning import ArmKinematics  # noqa: E402
 from sim import SimWorld  # noqa: E402
-from sim.simworld import SOLVER_ITERATIONS, SOLVER_RESIDUAL  # noqa: E402
+from sim.simworld import PHYSICS_HZ, SOLVER_ITERATIONS, SOLVER_RESIDUAL, STILL_HAND_PHYSICS_HZ  # noqa: E402
 
-DEFAULT = f"240/{SOLVER_ITERATIONS}/{SOLVER_RESIDUAL}"
-CANDIDATES = [DEFAULT, "240/50/0.001", "240/20/-", "120/30/-", "120/20/-", "120/30/0.01"]
+DEFAULT = f"{PHYSICS_HZ}:{STILL_HAND_PHYSICS_HZ or PHYSICS_HZ}/{SOLVER_ITERATIONS}/{SOLVER_RESIDUAL or '-'}"
+CANDIDATES = [DEFAULT, "240/50/-", "120/50/-", "240/50/0.001", "240/20/-", "120/30/-"]
 WORLD, SEED = "house_hard", 2000
 OPEN = (7.5, 5.0)             # an open spot of that world
 REACH = 0.26
@@ -43,8 +44,10 @@ REACH = 0.26
 
 def parse(config: str) -> dict:
     hz, it, res = config.split("/")
+    moving, _, still = hz.partition(":")
     residual = None if res in ("-", "None") else float(res)
-    return {"physics_hz": int(hz), "solver_iterations": int(it), "solver_residual": residual}
+    return {"physics_hz": int(moving), "still_hand_physics_hz": int(still or moving),
+            "solver_iterations": int(it), "solver_residual": residual}
 
 
 def world(config: str) -> SimWorld:

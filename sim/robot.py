@@ -151,6 +151,12 @@ class Robot:
                                     force=GRIPPER_FORCE, maxVelocity=GRIPPER_CATCH_UP,
                                     positionGain=GRIPPER_GAIN, physicsClientId=cid)
 
+    def gripper_busy(self, finger_positions) -> bool:
+        """Whether the servo's setpoint is still on its way to the goal, or a finger stands
+        more than a millimetre short of it (it squeezes what it holds)."""
+        goal = self.gripper_width / 2
+        return any(sp != goal or q - sp > 0.001 for sp, q in zip(self.grip_setpoint, finger_positions))
+
     # ---------------- state ----------------
     def joint_states(self):
         """(positions, velocities, efforts) in JOINT_STATE_NAMES order."""

@@ -41,6 +41,17 @@ CMD_VEL_TIMEOUT = 0.5
 #: below the threshold (None: pybullet's own, which is not 0; bench/bench_physics.py)
 SOLVER_ITERATIONS = 50
 SOLVER_RESIDUAL = None
+#: [Hz] physics substeps while the arm or the gripper moves or holds something: grasps,
+#: carries and placements are solved at this rate
+PHYSICS_HZ = 240
+#: [Hz] physics substeps while the hand is still and empty (driving, looking, standing):
+#: resting objects and the wheel odometry behave as at PHYSICS_HZ for 0.6 of the cost
+#: (bench/bench_physics.py; a held object crept further at 120 Hz); None: always PHYSICS_HZ
+STILL_HAND_PHYSICS_HZ = 120
+#: [s] the hand counts as moving this long after it stopped (what it touched settles)
+HAND_SETTLE = 0.5
+#: joint speeds below which the hand is still: [rad/s] the arm's, [m/s] a finger's
+ARM_STILL, FINGER_STILL = 0.05, 0.01
 
 
 def _on_hub(fn):
@@ -63,8 +74,10 @@ class SimWorld:
 
     Timing: physics runs at ``physics_hz`` in ``control_hz`` timer ticks (each tick applies
     the controllers, then steps ``physics_hz/control_hz`` substeps, then integrates the wheel
-    odometry). Robot state topics go out at ``publish_hz``, the lidar at ``lidar.rate_hz``
-    and the camera at ``camera_hz``, each only while someone subscribes.
+    odometry); at ``still_hand_physics_hz`` while the arm and the gripper are still and
+    hold nothing (None: always ``physics_hz``). Robot state topics go out at
+    ``publish_hz``, the lidar at ``lidar.rate_hz`` and the camera at ``camera_hz``, each
+    only while someone subscribes.
 
     Senses: ``odom_noise`` (an :class:`~sim.odometry.OdomNoise`; ``OdomNoise.exact()`` for
     none) and ``lidar`` (a :class:`~sim.lidar.LidarModel`; ``lidar_noise=False`` for exact
@@ -84,20 +97,24 @@ class SimWorld:
     serve_map = True
 
     def __init__(self, runtime=None, world: str | WorldSpec = "house", seed: int = 0, gui: bool = False,
-                 *, physics_hz: int = 240, control_hz: int = 60, publish_hz: float = 30.0,
+                 *, physics_hz: int = PHYSICS_HZ, still_hand_physics_hz: int | None = STILL_HAND_PHYSICS_HZ,
+                 control_hz: int = 60, publish_hz: float = 30.0,
                  camera_hz: float = 5.0, camera_size=(320, 240), odom_noise: OdomNoise | None = None,
                  prefer_egl: bool = True, camera: bool = True, cmd_vel_timeout: float = CMD_VEL_TIMEOUT,
                  map_resolution: float = RESOLUTION, lidar: LidarModel | None = None,
                  lidar_noise: bool = True, debug_ground_truth: bool | None = None,
                  locations=None, initial_pose: bool = True, faults=None,
                  solver_iterations: int = SOLVER_ITERATIONS, solver_residual: float | None = SOLVER_RESIDUAL):
-        if physics_hz % control_hz:
-            raise ValueError(f"physics_hz ({physics_hz}) must be a multiple of control_hz ({control_hz})")
+        still_hz = physics_hz if still_hand_physics_hz is None else still_hand_physics_hz
+        for name, hz in (("physics_hz", physics_hz), ("still_hand_physics_hz", still_hz)):
+            if hz % control_hz:
+                raise ValueError(f"{name} ({hz}) must be a multiple of control_hz ({control_hz})")
         self.runtime = runtime
         self.seed = int(seed)
         self.spec = load_world(world, self.seed, locations)
         self.dt = 1.0 / control_hz
         self.substeps = physics_hz // control_hz
+        self.still_hand_substeps = still_hz // control_hz
         self.solver_iterations, self.solver_residual = int(solver_iterations), solver_residual
         self.publish_every = max(1, round(control_hz / publish_hz))
         self.lidar_model = lidar or LidarModel()
@@ -181,6 +198,8 @@ class SimWorld:
         self.stamp_offset = 0.0      # ROS time - runtime clock (set by start() on ROS 2)
         self.ticks = 0
         self._traj = None
+        self._hand_moved_at = 0.0    # self.t when the arm or a finger last moved
+        self._substeps_now = self.substeps
         self._last_cmd_vel = -math.inf
         self.topics = None
         self._timers = []
@@ -287,14 +306,34 @@ class SimWorld:
             pos, vel = self._traj.sample(t_next + self._t_offset)
             self.robot.set_arm(pos, vel)
         self.robot.apply(self.dt)
+        self._choose_substeps()
         p.stepSimulation(physicsClientId=self.cid)
         self.t = t_next
         self.ticks += 1
-        q = self.robot.joint_states()[0]
+        q, v, _ = self.robot.joint_states()
+        if (max(map(abs, v[2:6])) > ARM_STILL or max(map(abs, v[6:8])) > FINGER_STILL
+                or self.robot.gripper_busy(q[6:8])):
+            self._hand_moved_at = self.t
         yaw = self.robot.base_pose()[0][2]
         # the encoders see the wheel joints; the gyro the body's true rotation
         self.odometry.update(q[0], q[1], self.dt, yaw)
         self.gyro.update(yaw, self.odometry.v, self.dt)
+
+    def _choose_substeps(self):
+        """Contact-rich work (the arm or the gripper moving or holding, or what they touched
+        settling) at the full physics rate; the rest at the still hand's rate."""
+        traj = self._traj
+        moving = (self.t - self._hand_moved_at < HAND_SETTLE
+                  or (traj is not None and self.t + self._t_offset < traj.end_time + HAND_SETTLE))
+        n = self.substeps if moving else self.still_hand_substeps
+        if n != self._substeps_now:
+            p.setPhysicsEngineParameter(numSubSteps=n, physicsClientId=self.cid)
+            self._substeps_now = n
+
+    @property
+    def physics_hz(self) -> int:
+        """The physics rate of the last control period [Hz]."""
+        return round(self._substeps_now / self.dt)
 
     @_on_hub
     def advance(self, seconds: float):

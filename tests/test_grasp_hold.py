@@ -158,6 +158,7 @@ def test_a_grip_check_judges_against_the_width_the_object_was_picked_at():
     # the fingertips closed on a chord: the axis lies beyond them
     assert _beyond_tips(plan, {**grip, "width": 0.060}) * 1000 == pytest.approx(17.1, abs=0.2)
     assert _beyond_tips(plan, {**grip, "width": 0.070}) == 0.0              # across it
+    assert _beyond_tips(plan, {**grip, "width": 0.058}) * 1000 == pytest.approx(18.7, abs=0.2)
     assert _beyond_tips(plan, {**grip, "width": 0.050}) == 0.0              # a miss
     assert _beyond_tips(plan, {**grip, "width": 0.060, "stalled": False}) == 0.0
     assert _beyond_tips(category("carton").strategy.upright, {**grip, "width": 0.040}) == 0.0
@@ -221,6 +222,6 @@ def test_a_lying_carton_stays_where_the_fingers_hold_it_through_the_carry():
         rt.call("move_to_pose", 0.17, 0.0, 0.1955, math.pi / 2)
         now, length = _in_hand(sim, "carton_1")
         assert sim.in_gripper("carton_1") and rt.call("verify_grasp")
-        assert math.dist(picked, now) < 0.008, f"it moved {math.dist(picked, now) * 1000:.0f} mm in the hand"
+        assert math.dist(picked, now) < 0.010, f"it moved {math.dist(picked, now) * 1000:.0f} mm in the hand"
         # its length across the hand's pointing axis, as it lay on the floor
         assert abs(length[0]) < math.sin(math.radians(10))

@@ -1,0 +1,56 @@
+"""The physics rate follows the hand (sim/simworld.py): the full rate while the arm or the
+gripper moves or holds something, and what it touched settles; the still hand's rate
+otherwise (driving, looking, standing)."""
+from __future__ import annotations
+
+import math
+
+from planning import ArmKinematics
+from sim import SimWorld
+from sim.simworld import HAND_SETTLE, PHYSICS_HZ, STILL_HAND_PHYSICS_HZ
+
+
+def _steps_until(sim: SimWorld, hz: int, seconds: float) -> float | None:
+    """[s] until the physics runs at ``hz``, None if not within ``seconds``."""
+    for i in range(round(seconds / sim.dt)):
+        sim.step()
+        if sim.physics_hz == hz:
+            return i * sim.dt
+    return None
+
+
+def test_the_hand_moving_or_holding_runs_the_full_rate_and_a_still_empty_one_the_lower():
+    sim = SimWorld(None, "house_hard", seed=2044, camera=False)
+    try:
+        assert STILL_HAND_PHYSICS_HZ < PHYSICS_HZ
+        # standing and driving with the arm folded
+        assert _steps_until(sim, STILL_HAND_PHYSICS_HZ, 2.0) is not None
+        sim.robot.set_base_velocity(0.2, 0.0)
+        sim.advance(1.0)
+        assert sim.physics_hz == STILL_HAND_PHYSICS_HZ
+        sim.robot.set_base_velocity(0.0, 0.0)
+        # the arm unfolds: at once the full rate, the lower one again once it settled
+        sim.robot.set_arm(ArmKinematics.from_urdf().ik(0.27, 0.0, 0.06, 0.0).best)
+        assert _steps_until(sim, PHYSICS_HZ, 0.1) is not None
+        settled = _steps_until(sim, STILL_HAND_PHYSICS_HZ, 5.0)
+        assert settled is not None and settled >= HAND_SETTLE
+        # the carton between the fingers: closing, then squeezing it, runs the full rate
+        x, y, yaw = sim.robot.base_pose()[0]
+        sim.set_object_pose("carton_1", x + 0.27 * math.cos(yaw), y + 0.27 * math.sin(yaw), yaw)
+        sim.advance(1.0)
+        sim.robot.set_gripper(0.0)
+        assert _steps_until(sim, PHYSICS_HZ, 0.1) is not None
+        sim.advance(3.0)
+        assert sim.in_gripper("carton_1")
+        assert _steps_until(sim, STILL_HAND_PHYSICS_HZ, 2.0) is None, "held, yet at the lower rate"
+    finally:
+        sim.close()
+
+
+def test_one_rate_when_the_still_hand_rate_is_none():
+    sim = SimWorld(None, "house", seed=0, camera=False, still_hand_physics_hz=None)
+    try:
+        assert _steps_until(sim, STILL_HAND_PHYSICS_HZ, 2.0) is None
+        assert sim.physics_hz == PHYSICS_HZ
+    finally:
+        sim.close()
