@@ -222,6 +222,6 @@ def test_a_lying_carton_stays_where_the_fingers_hold_it_through_the_carry():
         rt.call("move_to_pose", 0.17, 0.0, 0.1955, math.pi / 2)
         now, length = _in_hand(sim, "carton_1")
         assert sim.in_gripper("carton_1") and rt.call("verify_grasp")
-        assert math.dist(picked, now) < 0.010, f"it moved {math.dist(picked, now) * 1000:.0f} mm in the hand"
+        assert math.dist(picked, now) < 0.008, f"it moved {math.dist(picked, now) * 1000:.0f} mm in the hand"
         # its length across the hand's pointing axis, as it lay on the floor
         assert abs(length[0]) < math.sin(math.radians(10))

@@ -5,9 +5,13 @@ from __future__ import annotations
 
 import math
 
+import pytest
+
 from planning import ArmKinematics
 from sim import SimWorld
-from sim.simworld import HAND_SETTLE, PHYSICS_HZ, STILL_HAND_PHYSICS_HZ
+from sim.simworld import HAND_SETTLE, PHYSICS_HZ
+
+STILL_HAND_PHYSICS_HZ = 120
 
 
 def _steps_until(sim: SimWorld, hz: int, seconds: float) -> float | None:
@@ -19,10 +23,18 @@ def _steps_until(sim: SimWorld, hz: int, seconds: float) -> float | None:
     return None
 
 
-def test_the_hand_moving_or_holding_runs_the_full_rate_and_a_still_empty_one_the_lower():
-    sim = SimWorld(None, "house_hard", seed=2044, camera=False)
+def test_the_rate_from_the_environment_reaches_every_world(monkeypatch):
+    monkeypatch.setenv("ACTORBT_SIM_STILL_HAND_HZ", "120")
+    sim = SimWorld(None, "house", seed=0, camera=False)
     try:
-        assert STILL_HAND_PHYSICS_HZ < PHYSICS_HZ
+        assert _steps_until(sim, STILL_HAND_PHYSICS_HZ, 2.0) is not None
+    finally:
+        sim.close()
+
+
+def test_the_hand_moving_or_holding_runs_the_full_rate_and_a_still_empty_one_the_lower():
+    sim = SimWorld(None, "house_hard", seed=2044, camera=False, still_hand_physics_hz=STILL_HAND_PHYSICS_HZ)
+    try:
         # standing and driving with the arm folded
         assert _steps_until(sim, STILL_HAND_PHYSICS_HZ, 2.0) is not None
         sim.robot.set_base_velocity(0.2, 0.0)
@@ -47,10 +59,25 @@ def test_the_hand_moving_or_holding_runs_the_full_rate_and_a_still_empty_one_the
         sim.close()
 
 
-def test_one_rate_when_the_still_hand_rate_is_none():
-    sim = SimWorld(None, "house", seed=0, camera=False, still_hand_physics_hz=None)
+@pytest.mark.parametrize("how", ["argument", "environment"])
+def test_one_rate_when_the_still_hand_rate_is_none(how, monkeypatch):
+    if how == "environment":
+        monkeypatch.setenv("ACTORBT_SIM_STILL_HAND_HZ", "none")
+        sim = SimWorld(None, "house", seed=0, camera=False)
+    else:
+        monkeypatch.setenv("ACTORBT_SIM_STILL_HAND_HZ", "120")
+        sim = SimWorld(None, "house", seed=0, camera=False, still_hand_physics_hz=None)
     try:
         assert _steps_until(sim, STILL_HAND_PHYSICS_HZ, 2.0) is None
         assert sim.physics_hz == PHYSICS_HZ
     finally:
         sim.close()
+
+
+def test_a_bad_still_hand_rate_in_the_environment_is_a_clear_error(monkeypatch):
+    monkeypatch.setenv("ACTORBT_SIM_STILL_HAND_HZ", "fast")
+    with pytest.raises(ValueError, match="ACTORBT_SIM_STILL_HAND_HZ='fast': a rate in Hz or none"):
+        SimWorld(None, "house", seed=0, camera=False)
+    monkeypatch.setenv("ACTORBT_SIM_STILL_HAND_HZ", "100")
+    with pytest.raises(ValueError, match=r"still_hand_physics_hz \(100\) must be a multiple of control_hz"):
+        SimWorld(None, "house", seed=0, camera=False)
