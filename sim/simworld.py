@@ -46,16 +46,19 @@ SOLVER_RESIDUAL = None
 PHYSICS_HZ = 240
 #: [Hz] physics substeps while the hand is still and empty (driving, looking, standing);
 #: None: always PHYSICS_HZ. At 120 Hz resting objects and the wheel odometry behave as at
-#: 240 Hz for 0.6 of the cost (bench/bench_physics.py), and house_hard 2000-2011 all
-#: succeeded, but the house's seed 0 episode failed: a bottle held by its two fingertip
-#: contacts turned 19 degrees in the hand over the carry (at 240 Hz, since it was held:
-#: the run took another course) and fell off the pallet. Off until held objects stop
-#: turning in the hand. ``ACTORBT_SIM_STILL_HAND_HZ=120`` (or none) sets it for every world
-#: of a run, also in an evaluation's worker processes.
+#: 240 Hz for 0.6 of the cost (bench/bench_physics.py). Off by default: a round body held
+#: between the pads can still turn in the hand, and the other course a run takes at 120 Hz
+#: made that drop the house demo's bottle. ``ACTORBT_SIM_STILL_HAND_HZ=120`` (or none) sets
+#: it for every world of a run, also in an evaluation's worker processes.
 STILL_HAND_PHYSICS_HZ: int | None = None
+#: [s] the hand counts as moving this long after it stopped (what it touched settles)
+HAND_SETTLE = 0.5
+#: joint speeds below which the hand is still: [rad/s] the arm's, [m/s] a finger's
+ARM_STILL, FINGER_STILL = 0.05, 0.01
 
 
 def _still_hand_hz() -> int | None:
+    """STILL_HAND_PHYSICS_HZ, or what ACTORBT_SIM_STILL_HAND_HZ asks for."""
     value = os.environ.get("ACTORBT_SIM_STILL_HAND_HZ", "").strip().lower()
     if not value:
         return STILL_HAND_PHYSICS_HZ
@@ -64,10 +67,6 @@ def _still_hand_hz() -> int | None:
     if not value.isdigit():
         raise ValueError(f"ACTORBT_SIM_STILL_HAND_HZ={value!r}: a rate in Hz or none")
     return int(value)
-#: [s] the hand counts as moving this long after it stopped (what it touched settles)
-HAND_SETTLE = 0.5
-#: joint speeds below which the hand is still: [rad/s] the arm's, [m/s] a finger's
-ARM_STILL, FINGER_STILL = 0.05, 0.01
 
 
 def _on_hub(fn):
