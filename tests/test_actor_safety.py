@@ -3,6 +3,7 @@ catalog exports it, and how a tree's flags follow from the actors it calls."""
 from __future__ import annotations
 
 import inspect
+from typing import Literal
 
 import pytest
 
@@ -37,6 +38,10 @@ class Base(SubSystem):
     @actor
     def remember(self, x: float) -> None:
         """Store x (neither moving nor read-only)."""
+
+    @actor
+    def light(self, colour: Literal["red", "green"] = "red") -> None:
+        """Switch the light on."""
 
 
 def test_declarations_reach_the_ref_and_the_catalog(rt):
@@ -95,8 +100,40 @@ def test_the_actor_index_keeps_the_flags_for_trees_checked_without_a_runtime(rt,
     index.save(tmp_path / "actors.json", {"base": "x:Base"}, {})
     loaded = ActorIndex.load(tmp_path / "actors.json", {"base": "x:Base"})
     assert loaded is not None
-    assert loaded.resolve("base.roll").safety == Safety(moves=True)
+    assert loaded.resolve("base.roll").safety == Safety(
+        moves=True, limits={"distance": (-1.0, 1.0), "speed": (0.0, 0.26)})
     library = TreeLibrary(loaded.resolve)
     mission = parse_mission(TREES["drive_and_look.yaml"])
     library.add(mission)
     assert mission_safety(mission, library.resolve).moves is True
+
+
+def _problems(resolver, text: str) -> list[str]:
+    library = TreeLibrary(resolver)
+    library.add(parse_mission(text, "m.yaml"), strict=False)
+    return [str(e) for e in library.validate()]
+
+
+@pytest.mark.parametrize("source", ["runtime", "index"])
+def test_a_mission_outside_an_actors_declared_range_fails_at_load_where_it_is_written(rt, tmp_path, source):
+    """As MCP refuses such a call, `check`, `run` and serve refuse the mission."""
+    rt.add_subsystem("base", Base)
+    resolver = rt.root.resolve
+    if source == "index":
+        ActorIndex.of(rt.root.all_actors()).save(tmp_path / "a.json", {"base": "x:Base"}, {})
+        resolver = ActorIndex.load(tmp_path / "a.json", {"base": "x:Base"}).resolve
+    bad = ("name: m\nroot:\n  sequence:\n    - do: base.roll\n      with: {distance: 0.5, speed: 0.3}\n"
+           "    - do: base.joints\n      with: [0.0, 3.5]\n"
+           "    - do: base.light\n      with: {colour: blue}\n")
+    assert _problems(resolver, bad) == [
+        "m.yaml:5:36: argument 'speed' of actor 'base.roll' is 0.3, expected a value within 0.0..0.26 "
+        "(the actor's declared range)",
+        "m.yaml:7:19: argument 'q' of actor 'base.joints' is 3.5, expected a value within -3.0..3.0 "
+        "(the actor's declared range)",
+        "m.yaml:9:22: argument 'colour' of actor 'base.light' is 'blue', expected one of 'red', 'green'",
+    ]
+    good = ("name: m\ninputs: {s: {type: float, default: 0.5}}\nroot:\n  sequence:\n"
+            "    - do: base.roll\n      with: {distance: -1.0, speed: 0.26}\n"
+            "    - do: base.roll\n      with: {distance: \"{s}\"}\n"      # a reference: its value is known when the tree runs
+            "    - do: base.light\n      with: {colour: green}\n")
+    assert _problems(resolver, good) == []

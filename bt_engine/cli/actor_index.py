@@ -64,8 +64,15 @@ class ActorEntry:
 
     @property
     def safety(self) -> Safety:
-        """What the actor declared about motion (limits are in the tool's parameters)."""
-        return Safety(moves=bool(self.tool.get("moves")), read_only=bool(self.tool.get("read_only")))
+        """What the actor declared: motion, and its limits (read back from the tool's
+        parameters' minimum / maximum, of their items for ``*args``)."""
+        limits = {}
+        for name, schema in self.tool.get("parameters", {}).get("properties", {}).items():
+            bounds = schema if "minimum" in schema or "maximum" in schema else schema.get("items", {})
+            if "minimum" in bounds or "maximum" in bounds:
+                limits[name] = (bounds.get("minimum"), bounds.get("maximum"))
+        return Safety(moves=bool(self.tool.get("moves")), read_only=bool(self.tool.get("read_only")),
+                      limits=limits)
 
     def text_lines(self) -> list[str]:
         """What ``actorbt catalog`` prints below the signature: the docstring without

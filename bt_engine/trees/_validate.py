@@ -68,6 +68,17 @@ _TYPE_NAMES = {"str": ValueType.STR, "int": ValueType.INT, "float": ValueType.FL
                "list": ValueType.LIST, "dict": ValueType.DICT}
 
 
+def _choices(info: Any, name: str) -> list | None:
+    """The values a ``Literal[...]`` parameter allows, from the actor's tool schema
+    (the actor index keeps it; an actor reference has its catalog entry made)."""
+    tool = getattr(info, "tool", None)
+    if tool is None:
+        from ..catalog import tool_schema
+        tool = tool_schema(info)
+    schema = tool.get("parameters", {}).get("properties", {}).get(name, {})
+    return schema.get("enum") or schema.get("items", {}).get("enum")
+
+
 def annotation_type(annotation: Any) -> ValueType | None:
     """The :class:`ValueType` a parameter annotation demands, or ``None`` if it cannot
     be checked statically (no annotation, unions, classes of our own...)."""
@@ -239,18 +250,52 @@ class _Validator:
                 f"arguments do not fit actor {node.actor!r}: {exc}, expected {shown}",
             ))
             return
+        limits = getattr(getattr(info, "safety", None), "limits", None) or {}
         for name, value in bound.arguments.items():
             param = params[name]
+            pos = node.arg_pos.get(name)
+            if pos is None:
+                index = list(params).index(name)
+                pos = node.arg_pos.get(str(index), node.at("with"))
+            what = f"argument {name!r} of actor {node.actor!r}"
+            if param.kind is param.VAR_POSITIONAL:    # each value where it is written
+                first = list(params).index(name)
+                placed = [(v, node.arg_pos.get(str(first + k), pos)) for k, v in enumerate(value)]
+            else:
+                placed = [(value, pos)]
+            if name in limits:
+                self.check_limit(placed, limits[name], what)
+            if "Literal" in str(param.annotation) and param.kind is not param.VAR_KEYWORD:
+                self.check_choice(placed, _choices(info, name), what)
             if param.kind in (param.VAR_POSITIONAL, param.VAR_KEYWORD):
                 continue
             expected = annotation_type(param.annotation)
             if expected is None:
                 continue
-            pos = node.arg_pos.get(name)
-            if pos is None:
-                index = list(params).index(name)
-                pos = node.arg_pos.get(str(index), node.at("with"))
             self.check_type(value, expected, pos, f"argument {name!r} of actor {node.actor!r}")
+
+    def check_limit(self, placed: list[tuple[Any, Pos]], limit: tuple, what: str) -> None:
+        """A literal number outside the range the actor declares (``@actor(limits=...)``,
+        the catalog's minimum/maximum) is an error, as MCP refuses it; a reference is
+        checked when the call is made."""
+        low, high = limit
+        for value, pos in placed:
+            if isinstance(value, bool) or not isinstance(value, (int, float)):
+                continue
+            if (low is not None and value < low) or (high is not None and value > high):
+                span = f"{'-inf' if low is None else low}..{'inf' if high is None else high}"
+                self.errors.append(ArgumentMismatchError(
+                    pos, f"{what} is {shorten(value)}, expected a value within {span} (the actor's declared range)"))
+
+    def check_choice(self, placed: list[tuple[Any, Pos]], choices: list | None, what: str) -> None:
+        """A literal value that is not one of a ``Literal[...]`` parameter's choices."""
+        if not choices:
+            return
+        for value, pos in placed:
+            if not any(refs_in(value)) and value not in choices:
+                self.errors.append(ArgumentMismatchError(
+                    pos, f"{what} is {shorten(value)}, expected one of {', '.join(repr(c) for c in choices)}"
+                         f"{suggest(str(value), [str(c) for c in choices])}"))
 
     def check_type(self, value: Any, expected: ValueType, pos: Pos, what: str) -> None:
         if isinstance(value, Ref):
