@@ -7,10 +7,10 @@ robot approaches and grasps it with ``approach`` and ``grasp``. See docs/categor
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from .shapes import Box, Label, Revolution, Shape
-from .strategy import LYING_OFFSETS, Approach, Grasp, GraspPlan, Strategy, TopGrasp
+from .strategy import LYING_OFFSETS, Approach, Grasp, GraspPlan, Strategy, TopGrasp, derived_window
 
 #: room the open fingers need around the held part [m]
 FINGER_MARGIN = 0.01
@@ -65,6 +65,19 @@ class Category:
         if not 0 < self.grasp.height < self.shape.height:
             raise ValueError(f"{self.name}: grasp height {self.grasp.height} m is not on the object "
                              f"(0..{self.shape.height} m)")
+        g = self.grasp
+        if g.closed_min is None or g.closed_max is None:
+            low, high = derived_window(self.held_width(), g.open_width)
+            object.__setattr__(self, "grasp", replace(
+                g, closed_min=low if g.closed_min is None else g.closed_min,
+                closed_max=high if g.closed_max is None else g.closed_max))
+
+    def held_width(self) -> float:
+        """The width [m] the fingers close on, upright, at the grasp height (a box: across
+        its narrowest side that fits the hand)."""
+        if isinstance(self.shape, Revolution):
+            return 2 * self.shape.radius_at(self.grasp.height)
+        return self.shape.width_across(self.sides()[0])
 
     @property
     def height(self) -> float:

@@ -8,6 +8,7 @@ from __future__ import annotations
 import difflib
 import importlib
 import pathlib
+import sys
 import threading
 
 from bt_engine.errors import ActorbtError
@@ -29,9 +30,21 @@ class CategoryError(ActorbtError):
 
 def register(category: Category, replace: bool = False) -> Category:
     """Make ``category`` known by its name; returns it. Registering an equal declaration
-    again is harmless; a different one under a taken name needs ``replace=True``."""
+    again is harmless; a different one under a taken name needs ``replace=True``.
+
+    Raises:
+        CategoryError: the category cannot work on this robot (a grasp out of the arm's
+            reach, a stall window that misses the object: :mod:`categories.check`), named
+            with the file and line of this call and what to change.
+    """
     if not isinstance(category, Category):
         raise CategoryError(f"register() takes a Category, got {type(category).__name__}")
+    from .check import category_problems
+    problems = category_problems(category)
+    if problems:
+        caller = sys._getframe(1)
+        raise CategoryError(f"{caller.f_code.co_filename}:{caller.f_lineno}: category {category.name!r} "
+                            f"cannot work on this robot: {'; '.join(problems)}")
     with _LOCK:
         old = _REGISTRY.get(category.name)
         if old is not None and old != category and not replace:
@@ -76,10 +89,24 @@ def load(ref: str | pathlib.Path, base: pathlib.Path | None = None) -> list[Cate
             path = base / path
         if not path.is_file():
             raise CategoryError(f"category file {text!r} not found (looked at {path.resolve()})")
-        import_file(path)
+        try:
+            import_file(path)
+        except (ValueError, TypeError) as e:      # a Category's own checks: where it is declared
+            raise CategoryError(f"{_where(e, path)}: {e}") from e
     else:
         try:
             importlib.import_module(text)
         except ImportError as e:
             raise CategoryError(f"cannot import category module {text!r}: {e}") from None
     return [c for n, c in _REGISTRY.items() if before.get(n) is not c]
+
+
+def _where(exc: BaseException, path: pathlib.Path) -> str:
+    """``file:line`` of the deepest frame of ``exc``'s traceback in ``path`` (else the file)."""
+    where, tb = str(path), exc.__traceback__
+    target = str(path.resolve())
+    while tb is not None:
+        if tb.tb_frame.f_code.co_filename == target:
+            where = f"{path}:{tb.tb_lineno}"
+        tb = tb.tb_next
+    return where

@@ -41,15 +41,16 @@ class Grasp:
         pitch: tool angle below the horizontal [rad] while grasping.
         open_width: finger opening before closing [m].
         closed_min, closed_max: finger opening that means "holding it" [m]; less is a
-            miss (the fingers closed on nothing), more is a jam.
+            miss (the fingers closed on nothing), more is a jam. None (the default): derived
+            from the width the fingers close on at ``height`` (:func:`derived_window`).
         lift: how far to lift after closing [m].
     """
 
     height: float
     pitch: float = 0.0
     open_width: float = 0.085
-    closed_min: float = 0.050
-    closed_max: float = 0.080
+    closed_min: float | None = None
+    closed_max: float | None = None
     lift: float = 0.12
 
 
@@ -153,6 +154,13 @@ TILTED_OFFSETS = tuple(math.radians(a) for a in (0, 15, -15, 30, -30))
 LYING_OFFSETS = tuple(math.radians(a) for a in (0, 8, -8))
 #: the fingers stalled this much short of the opening still mean holding (no jam) [m]
 CLOSED_BELOW_OPEN = 0.002
+
+
+def derived_window(width: float, open_width: float) -> tuple[float, float]:
+    """(closed_min, closed_max) [m] for a body ``width`` [m] across: the fingers stall up
+    to 10 mm narrower (the pads press in, or close on a chord near the fingertips) and up
+    to 8 mm wider (a body met a little off square), short of the opening."""
+    return round(width - 0.010, 4), round(min(width + 0.008, open_width - CLOSED_BELOW_OPEN), 4)
 #: a box upright (held across its narrow side) or a leaning body: the hand may come this
 #: far beyond its offsets (a 45 x 70 mm carton 15 degrees off spans 62 mm)
 SIDE_TOLERANCE = math.radians(15)

@@ -1,0 +1,101 @@
+"""Can a category work on this robot? Checked when it registers, and by hand with
+``actorbt category check FILE``.
+
+Every grasp the category declares is put to the arm's kinematics (the robot's URDF):
+upright, its test lift and its full lift at ``approach.reach``; lying, from above at
+``top_grasp.reach``. The fingers' stall window must bracket the width the fingers close
+on at the grasp height, and the open hand must fit around it. Each problem says what to
+change.
+"""
+from __future__ import annotations
+
+import functools
+import math
+
+from .category import Category
+from .strategy import CLOSED_BELOW_OPEN, GraspPlan
+
+#: the first, short lift that checks the grip (actors/catch.py TEST_LIFT) [m]
+TEST_LIFT = 0.02
+#: the gripper's largest opening (OpenManipulator-X) [m]
+GRIPPER_MAX_OPENING = 0.09
+#: the heights scanned for the arm's reachable band [m]
+_BAND = [i / 1000 for i in range(0, 601)]
+
+
+@functools.lru_cache(maxsize=1)
+def _arm():
+    from planning import ArmKinematics
+    return ArmKinematics.from_urdf()
+
+
+def reachable(reach: float, z: float, pitch: float) -> bool:
+    """Whether the hand gets to ``z`` [m] above the floor, ``reach`` [m] ahead of the
+    base, its pitch ``pitch`` [rad] below the horizontal."""
+    return _arm().ik(reach, 0.0, z, pitch).ok
+
+
+def reach_band(reach: float, pitch: float) -> tuple[float, float] | None:
+    """(lowest, highest) z [m] the hand reaches at ``reach`` and ``pitch``, None if none."""
+    ok = [z for z in _BAND if reachable(reach, z, pitch)]
+    return (ok[0], ok[-1]) if ok else None
+
+
+def _band_text(reach: float, pitch: float) -> str:
+    band = reach_band(reach, pitch)
+    where = f"at reach {reach:.3f} m and pitch {math.degrees(pitch):.0f} deg"
+    if band is None:
+        return f"{where} the hand reaches no height"
+    return f"{where} the hand reaches {band[0]:.3f}..{band[1]:.3f} m above the floor"
+
+
+def _upright(category: Category) -> list[str]:
+    g, a = category.grasp, category.approach
+    problems = []
+    for what, z, fix in (("grasp.height", g.height, "grasp.height or approach.reach"),
+                         ("the test lift (grasp.height + 0.02)", g.height + TEST_LIFT, "grasp.height"),
+                         ("the lift (grasp.height + grasp.lift)", g.height + g.lift, "grasp.lift")):
+        if not reachable(a.reach, z, g.pitch):
+            problems.append(f"{what} {z:.3f} m is out of the arm's reach: {_band_text(a.reach, g.pitch)}; "
+                            f"change {fix}")
+    return problems
+
+
+def _window(category: Category) -> list[str]:
+    g = category.grasp
+    problems = []
+    if g.open_width > GRIPPER_MAX_OPENING:
+        problems.append(f"grasp.open_width {g.open_width * 1000:.0f} mm is wider than the gripper opens "
+                        f"({GRIPPER_MAX_OPENING * 1000:.0f} mm)")
+    if g.closed_max > g.open_width - CLOSED_BELOW_OPEN + 1e-9:
+        problems.append(f"grasp.closed_max {g.closed_max * 1000:.0f} mm reaches the opening "
+                        f"({g.open_width * 1000:.0f} mm): a jammed hand would count as holding")
+    # a box's other side has the window moved by its width (GraspPlan.side_plans)
+    w = category.held_width()
+    if not g.closed_min <= w <= g.closed_max:
+        problems.append(f"at grasp.height {g.height:.3f} m the fingers close on {w * 1000:.0f} mm, outside "
+                        f"closed_min..closed_max {g.closed_min * 1000:.0f}..{g.closed_max * 1000:.0f} mm; "
+                        "leave both out to have them derived from the shape")
+    return problems
+
+
+def _lying(category: Category) -> list[str]:
+    problems = []
+    t = category.top_grasp
+    for plan in category.lying_plans():
+        for what, z in (("lying, the grasp", plan.height), ("lying, the lift", plan.height + plan.lift)):
+            if not reachable(plan.reach, z, plan.pitch):
+                problems.append(f"{what} at {z:.3f} m is out of the arm's reach: "
+                                f"{_band_text(plan.reach, plan.pitch)}; change top_grasp (reach "
+                                f"{t.reach:.3f} m, above_axis {t.above_axis:.3f} m, lift {t.lift:.3f} m)")
+    return problems
+
+
+def category_problems(category: Category) -> list[str]:
+    """What stops ``category`` working on this robot, each with what to change; empty: it can."""
+    return _upright(category) + _window(category) + _lying(category)
+
+
+def plan_text(plan: GraspPlan) -> str:
+    return (f"reach {plan.reach:.3f} m, height {plan.height:.3f} m, pitch {math.degrees(plan.pitch):.0f} deg, "
+            f"held at {plan.closed_min * 1000:.0f}..{plan.closed_max * 1000:.0f} mm")
