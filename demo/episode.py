@@ -26,6 +26,7 @@ from bt_engine.trees import TraceRecorder, TreeObserver, tree_host
 from planning.tf_buffer import TransformBuffer, TransformError, pose2d
 from sim import SimWorld
 
+from .first_failure import FirstFailure
 from .grasp_probe import GraspProbe
 
 #: the reference application's own actorbt.yaml, used when none is found from here
@@ -69,8 +70,9 @@ class Episode:
     category: str
     success: bool = False
     tree_status: str = ""
-    failed_node: str = ""
-    reason: str = ""
+    failed_node: str = ""              # the first step that went wrong (tree:path), or where
+    reason: str = ""                   # the referee found it wrong ("ground truth"); why
+    tree_failure: str = ""             # where and why the tree itself failed, at the end
     found: dict | None = None
     placed_object: str = ""
     sim_time: float = 0.0
@@ -79,8 +81,11 @@ class Episode:
     loc_rmse_m: float = float("nan")   # localisation error (position) over the episode
     loc_max_m: float = float("nan")
     grasp_tilt_deg: float = float("nan")  # largest tilt of the held object in the fingers
-    pose: str = ""                     # pose kind (upright, lying, tilted) of the object
-    support: str = ""                  # placed, else last picked at; and what it stood on
+    pose: str = ""                     # pose kind (upright, lying, tilted) the world gave
+    support: str = ""                  # the object placed, else the last pick's; what it stood on
+    target: str = ""                   # that object
+    end_pose: str = ""                 # its pose kind at the end of the episode
+    end_support: str = ""              # and what it ended on: place location, floor, a surface
     pushed: list = field(default_factory=list)   # objects moved > PUSHED m that no pick went for
     objects: int | None = None         # a tidy-up: objects of a known category in the world,
     placed: int | None = None          # and how many ended where they belong
@@ -269,6 +274,8 @@ def run_episode(tree: str = "bt_pick_place", world: str = "house", seed: int = 0
             host.observers.append(DemoProgress(progress, rt))
         grasp = GraspProbe(sim, tuple(categories.names()))
         host.observers.append(grasp)
+        first = FirstFailure()
+        host.observers.append(first)
         host.observers.extend(observers or ())
         args = dict(inputs or {})
         params = rt.resolve(tree).signature.parameters
@@ -304,8 +311,11 @@ def run_episode(tree: str = "bt_pick_place", world: str = "house", seed: int = 0
         except ActorError as exc:
             cause = exc.__cause__
             ep.tree_status = "FAILURE"
-            ep.reason = str(cause if cause is not None else exc)
-            ep.failed_node = getattr(cause, "path", "") or _failed_node(str(ep.reason))
+            ep.tree_failure = str(cause if cause is not None else exc)
+            ep.failed_node = getattr(cause, "path", "") or _failed_node(ep.tree_failure)
+            ep.reason = ep.tree_failure
+            if first.node:
+                ep.failed_node, ep.reason = first.node, first.reason
         finally:
             ep.sim_time = rt.now() - sim0
             ep.grasp_tilt_deg = grasp.worst
@@ -327,7 +337,10 @@ def run_episode(tree: str = "bt_pick_place", world: str = "house", seed: int = 0
                 ep.success = False
                 ep.failed_node = "ground truth"
                 ep.reason = "the tree succeeded but no object of the category is on the place location"
-        ep.pose, ep.support = _start_pose(sim, ep.placed_object or (grasp.picked or [""])[-1])
+        ep.target = ep.placed_object or (grasp.picked or [""])[-1]
+        ep.pose, ep.support = _start_pose(sim, ep.target)
+        if ep.target:
+            ep.end_pose, ep.end_support = _end_state(sim, ep.target)
         ep.pushed = sorted(n for n in sim.object_names() if n not in grasp.picked
                            and math.dist(before[n][:2], sim.object_pose(n)[:2]) > PUSHED)
         if "belongs" in params:                 # a tidy-up: every object where it belongs
@@ -353,6 +366,23 @@ def _start_pose(sim: SimWorld, name: str) -> tuple[str, str]:
         if o.name == name:
             return o.pose_kind, o.support
     return "", ""
+
+
+#: [deg] from the vertical: an object's axis within this is upright, beyond LYING lying
+UPRIGHT, LYING = 15.0, 75.0
+
+
+def _end_state(sim: SimWorld, name: str) -> tuple[str, str]:
+    """(pose kind, support) of object ``name`` now: upright, tilted or lying; on the place
+    location, the floor, or a surface that high."""
+    pose = sim.object_pose(name)
+    qx, qy = pose[3], pose[4]
+    tilt = math.degrees(math.acos(max(-1.0, min(1.0, 1 - 2 * (qx * qx + qy * qy)))))
+    kind = "upright" if tilt <= UPRIGHT else "lying" if tilt >= LYING else "tilted"
+    if sim.place_location is not None and _on_surface(pose, sim.place_location):
+        return kind, "the place location"
+    bottom = sim.object_bottom(name)
+    return kind, "the floor" if bottom < 0.02 else f"a surface {bottom:.2f} m high"
 
 
 def _failed_node(reason: str) -> str:
@@ -390,11 +420,14 @@ def print_outcome(ep: Episode, out: TextIO = sys.stdout) -> None:
         out.write(f"SUCCESS{where}\n")
     else:
         out.write(f"FAILURE at {ep.failed_node or '?'}: {ep.reason}\n")
+        if ep.tree_failure and ep.tree_failure != ep.reason:
+            out.write(f"  then the tree gave up: {ep.tree_failure}\n")
     out.write(f"sim time {ep.sim_time:.1f} s, wall time {ep.wall_time:.1f} s "
               f"({ep.realtime_factor:.1f}x real time)\n")
-    if ep.pose:
-        out.write(f"the object {'placed' if ep.success else 'picked at last'}: {ep.pose}, "
-                  f"support: {ep.support}\n")
+    if ep.target:
+        what = "placed" if ep.placed_object else "the last pick went for"
+        start = f"{ep.pose} on the {ep.support}" if ep.pose else "?"
+        out.write(f"{what} {ep.target}: it stood {start}, it ended {ep.end_pose} on {ep.end_support}\n")
     if ep.pushed:
         out.write(f"objects the robot pushed more than {PUSHED * 100:.0f} cm: {', '.join(ep.pushed)}\n")
     if ep.objects is not None:

@@ -23,7 +23,7 @@ from .episode import Episode, episode_app, run_episode
 
 CSV_FIELDS = ["tree", "world", "seed", "category", "success", "tree_status", "failed_node",
               "reason", "placed_object", "pose", "support", "sim_time", "wall_time", "loc_rmse_m", "loc_max_m",
-              "grasp_tilt_deg", "pushed", "objects", "placed", "trace"]
+              "grasp_tilt_deg", "pushed", "objects", "placed", "trace", "target", "end_pose", "end_support", "tree_failure"]
 
 #: this process's App (one per worker, so each skipped tree is reported once per process)
 _app: App | None = None
@@ -286,7 +286,9 @@ def read_csv(path: str | pathlib.Path) -> list[Episode]:
                     sim_time=num(r.get("sim_time")), wall_time=num(r.get("wall_time")),
                     loc_rmse_m=num(r.get("loc_rmse_m")), loc_max_m=num(r.get("loc_max_m")),
                     grasp_tilt_deg=num(r.get("grasp_tilt_deg")), pushed=(r.get("pushed") or "").split(),
-                    objects=count(r.get("objects")), placed=count(r.get("placed")), trace=r.get("trace", ""))
+                    objects=count(r.get("objects")), placed=count(r.get("placed")), trace=r.get("trace", ""),
+                    target=r.get("target", ""), end_pose=r.get("end_pose", ""), end_support=r.get("end_support", ""),
+                    tree_failure=r.get("tree_failure", ""))
         episodes[e.tree, e.world, e.seed, e.category] = e    # a row given twice: the last
     return list(episodes.values())
 

@@ -434,6 +434,11 @@ class SimWorld:
         return self.scene.object_pose(name)
 
     @_on_hub
+    def object_bottom(self, name) -> float:
+        """[m] the height of the lowest point of an object's body (its bounding box's)."""
+        return p.getAABB(self.scene.objects[name], physicsClientId=self.cid)[0][2]
+
+    @_on_hub
     def object_poses(self):
         return {n: self.scene.object_pose(n) for n in self.scene.objects}
 
