@@ -8,12 +8,10 @@ This package is a plain library: the simulator and the robot's actors both read 
 from __future__ import annotations
 
 from .category import Category
-from .registry import (CategoryError, UnknownCategoryError, all_categories, get, load, names,
+from .registry import (BUILT_IN, CategoryError, UnknownCategoryError, all_categories, get, load, names,
                        register, unregister)
 from .shapes import Box, Cylinder, Label, Revolution, Shape
 from .strategy import Approach, Grasp, GraspPlan, Strategy, TopGrasp
-
-BUILT_IN = ("categories.can", "categories.bottle", "categories.carton")
 
 for _module in BUILT_IN:
     load(_module)

@@ -21,7 +21,9 @@ def register(sub, common) -> None:
                                    "against the robot: reach, stall window, opening.")
     catsub = p.add_subparsers(dest="category_command", metavar="CATEGORY_COMMAND")
     catsub.required = True
-    ls = catsub.add_parser("list", help="the registered categories, one line each")
+    ls = catsub.add_parser("list", help="the registered categories, one line each",
+                           description="The categories registered now: the built-ins and the ones "
+                                       "actorbt.yaml's imports add, with their descriptions.")
     ls.set_defaults(func=cmd_list)
     c = catsub.add_parser(
         "check", help="check category files against the robot (exit 1 when one cannot work)",
@@ -31,6 +33,16 @@ def register(sub, common) -> None:
                     "the fingers close on. Prints the grasps, or what to change.")
     c.add_argument("files", nargs="+", metavar="FILE.py", help="Category files (as actorbt.yaml's imports names them).")
     c.set_defaults(func=cmd_check)
+
+
+def _declared(file: str) -> list:
+    """The categories a category file's module holds (it was imported before)."""
+    from bt_engine.modules import import_file, is_file_reference
+    from categories import Category
+    if not is_file_reference(file):
+        return []
+    module = import_file(file)
+    return [v for v in vars(module).values() if isinstance(v, Category)]
 
 
 def cmd_list(args: argparse.Namespace, app) -> int:
@@ -51,6 +63,8 @@ def cmd_check(args: argparse.Namespace, app) -> int:
             print(f"error: {e}", file=sys.stderr)
             failed += 1
             continue
+        if not loaded:      # imported already (actorbt.yaml's imports): what it declares
+            loaded = _declared(file)
         if not loaded:
             print(f"error: {file}: registers no category (expected CATEGORY = register(Category(...)))",
                   file=sys.stderr)

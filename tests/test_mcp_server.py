@@ -97,8 +97,8 @@ def test_a_tree_reports_every_node_transition_and_returns_its_outputs(project):
     progress, result, trace = with_server(project, scenario)
     assert [m for _, m in progress] == [
         "hello:sequence running", "hello:sequence/wait 0.2s running", "hello:sequence/wait 0.2s success",
-        "hello:sequence/tutorial.greet running", "hello:sequence success",
-        "hello:sequence/tutorial.greet success"]
+        "hello:sequence/tutorial.greet running", "hello:sequence/tutorial.greet success",
+        "hello:sequence success"]
     assert [v for v, _ in progress] == list(range(1, len(progress) + 1))
     assert not result.is_error
     assert result.structured_content["status"] == "SUCCESS"

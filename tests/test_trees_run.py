@@ -335,9 +335,10 @@ def test_observers_see_ticks_status_changes_and_writes(rt: Runtime, tmp_path: Pa
         ("status", "small", "sequence/get", "INVALID", "RUNNING"),
         ("tick", "small", 2, 0.0),
         ("write", "small", "y", 7),
-        ("status", "small", "sequence", "RUNNING", "SUCCESS"),
+        # as it happened: the children end before the sequence does
         ("status", "small", "sequence/get", "RUNNING", "SUCCESS"),
         ("status", "small", "sequence/check", "INVALID", "SUCCESS"),
+        ("status", "small", "sequence", "RUNNING", "SUCCESS"),
         ("end", "small", "SUCCESS"),
     ]
 

@@ -323,13 +323,27 @@ class TreeRun:
         return self.status
 
     def _report_changes(self) -> None:
+        """The status changes of the last tick in the order they happened: a node that
+        started before its children, one that ended after them."""
         last = self._last
-        for behaviour, path in self.paths.items():
+        changes = {}
+        for behaviour in self.paths:
             new = behaviour.status
-            old = last[behaviour]
-            if new is not old:
+            if new is not last[behaviour]:
+                changes[behaviour] = (last[behaviour], new)
                 last[behaviour] = new
-                self._notify("status_changed", path, old, new)
+        if changes:
+            self._report_in_order(self.root, changes)
+
+    def _report_in_order(self, b: py_trees.behaviour.Behaviour, changes: dict) -> None:
+        change = changes.get(b)
+        started = change is not None and change[1] is Status.RUNNING
+        if started:
+            self._notify("status_changed", self.paths[b], *change)
+        for child in b.children:
+            self._report_in_order(child, changes)
+        if change is not None and not started:
+            self._notify("status_changed", self.paths[b], *change)
 
     def statuses(self) -> dict[str, Status]:
         """Every node's status by path, in tree order."""
