@@ -150,16 +150,40 @@ class TruthProbe:
 
 
 class DemoProgress(TreeObserver):
-    """Compact live progress: the active node of the top mission, and what was found where."""
+    """Compact live progress: the active node of the top mission, and what was found where;
+    and, when nothing was said for HEARTBEAT seconds of wall time, what is running now
+    (the deepest running node of the innermost tree)."""
+
+    #: [s] of wall time without a line after which the running node is told
+    HEARTBEAT = 10.0
 
     def __init__(self, out: TextIO, rt: Runtime) -> None:
         self.out = out
         self.rt = rt
         self._last = ""
+        self._said = time.monotonic()
+        self._runs: dict[int, Any] = {}
+        # a long actor (a patrol) ticks no tree: look once a simulated second
+        self._beat = rt.call_every(1.0, self._heartbeat)
 
     def _say(self, text: str) -> None:
         self.out.write(f"[{self.rt.now():7.1f}s] {text}\n")
         self.out.flush()
+        self._said = time.monotonic()
+
+    def run_started(self, run) -> None:
+        self._runs[run.id] = run
+
+    def run_finished(self, run, status, outcome) -> None:
+        self._runs.pop(run.id, None)
+
+    def _heartbeat(self) -> None:
+        if time.monotonic() - self._said < self.HEARTBEAT or not self._runs:
+            return
+        inner = max(self._runs.values(), key=lambda r: r.depth)
+        tip = inner.tip_path()
+        if tip is not None:
+            self._say(f"  ... {inner.mission.name}: {tip}")
 
     def status_changed(self, run, path, old, new) -> None:
         if run.depth > 1 or new.name != "RUNNING":

@@ -10,6 +10,7 @@ import pathlib
 import pickle
 import statistics
 import sys
+import threading
 import time
 from dataclasses import asdict
 from typing import TextIO
@@ -25,6 +26,9 @@ CSV_FIELDS = ["tree", "world", "seed", "category", "success", "tree_status", "fa
               "reason", "placed_object", "pose", "support", "sim_time", "wall_time", "loc_rmse_m", "loc_max_m",
               "grasp_tilt_deg", "pushed", "objects", "placed", "trace", "target", "end_pose", "end_support", "tree_failure"]
 
+#: each episode's live progress, in its folder
+PROGRESS_LOG = "progress.log"
+
 #: this process's App (one per worker, so each skipped tree is reported once per process)
 _app: App | None = None
 
@@ -34,8 +38,12 @@ def _one(job: tuple) -> Episode:
     tree, world, seed, category, out, config, locations, mapping = job
     if _app is None or _app.cfg != config:
         _app = episode_app(world, seed, config=config)
-    return run_episode(tree, world, seed, category, out_dir=out, app=_app, locations=locations,
-                       mapping=mapping)
+    out = pathlib.Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    # the episode's progress, which the evaluation's heartbeat reads (Progress.watch)
+    with open(out / PROGRESS_LOG, "w", encoding="utf-8") as log:
+        return run_episode(tree, world, seed, category, out_dir=out, app=_app, locations=locations,
+                           mapping=mapping, progress=log)
 
 
 def _run_job(job: tuple) -> Episode:
@@ -119,6 +127,7 @@ def evaluate(tree: str, seeds: int, world: str = "house", category: str = "mixed
         note = f"{csv_path} is rewritten (--resume keeps its episodes)"
     episodes: list[Episode] = list(kept)
     bar = Progress(progress, total)
+    bar.watch(work, episodes)
 
     def save() -> None:   # the CSV so far: a run cut off keeps the episodes it finished
         write_csv(sorted(episodes + others, key=_order), csv_path)
@@ -126,7 +135,8 @@ def evaluate(tree: str, seeds: int, world: str = "house", category: str = "mixed
                                         "mapping": mapping}, indent=1) + "\n")
 
     def finished(ep: Episode) -> None:
-        episodes.append(ep)
+        with bar.lock:
+            episodes.append(ep)
         save()
         bar.episode(ep, episodes)
 
@@ -166,6 +176,9 @@ class Progress:
     left (the median wall time of an episode, times the rounds of ``slots`` episodes still to
     run). On a terminal one line that updates; otherwise (a CI log, a file) a line per episode."""
 
+    #: [s] of wall time without a line after which the running episodes are told
+    HEARTBEAT = 10.0
+
     def __init__(self, out: TextIO | None, total: int) -> None:
         self.out, self.total = out, total
         isatty = getattr(out, "isatty", None)
@@ -174,6 +187,44 @@ class Progress:
         self.t0 = time.perf_counter()
         self._width = 0
         self._walls: list[float] = []
+        self.lock = threading.Lock()
+        self._said = time.monotonic()
+        self._stop = threading.Event()
+        self._watcher: threading.Thread | None = None
+
+    def watch(self, work: list[tuple], episodes: list[Episode]) -> None:
+        """Every HEARTBEAT seconds without a line, tell what the running episodes of ``work``
+        (the jobs) are doing: the last line of each one's progress log."""
+        if self.out is None or not work:
+            return
+        folders = {pathlib.Path(job[4]): f"seed {job[2]} {job[3]}" for job in work}
+
+        def loop() -> None:
+            while not self._stop.wait(1.0):
+                if time.monotonic() - self._said >= self.HEARTBEAT:
+                    with self.lock:
+                        done = {(e.seed, e.category) for e in episodes}
+                        self._heartbeat(folders, done, episodes)
+
+        self._watcher = threading.Thread(target=loop, name="eval-heartbeat", daemon=True)
+        self._watcher.start()
+
+    def _heartbeat(self, folders: dict[pathlib.Path, str], done: set, episodes: list[Episode]) -> None:
+        running = []
+        for folder, label in folders.items():
+            seed, category = label.split()[1:3]
+            if (int(seed), category) in done:
+                continue
+            last = _last_line(folder / PROGRESS_LOG)
+            if last is not None:
+                running.append(f"{label}: {last or 'starting'}")
+        if self.tty:
+            self._line(episodes)
+        else:
+            self.out.write(f"[{len(episodes)}/{self.total}] {self.summary(episodes)}; running: "
+                           f"{' | '.join(running) or 'starting'}\n")
+        self.out.flush()
+        self._said = time.monotonic()
 
     def start(self, slots: int, note: str, episodes: list[Episode]) -> None:
         self.slots = max(1, slots)
@@ -188,17 +239,22 @@ class Progress:
 
     def episode(self, ep: Episode, episodes: list[Episode]) -> None:
         self._walls.append(ep.wall_time)
+        self._said = time.monotonic()
         if self.out is None:
             return
-        if self.tty:
-            self._line(episodes)
-        else:
-            verdict = "success" if ep.success else f"FAILURE at {ep.failed_node or '?'}"
-            self.out.write(f"[{len(episodes)}/{self.total}] seed {ep.seed} {ep.category}: {verdict} "
-                           f"({ep.sim_time:.0f} s sim, {ep.wall_time:.0f} s wall); {self.summary(episodes)}\n")
-        self.out.flush()
+        with self.lock:
+            if self.tty:
+                self._line(episodes)
+            else:
+                verdict = "success" if ep.success else f"FAILURE at {ep.failed_node or '?'}"
+                self.out.write(f"[{len(episodes)}/{self.total}] seed {ep.seed} {ep.category}: {verdict} "
+                               f"({ep.sim_time:.0f} s sim, {ep.wall_time:.0f} s wall); {self.summary(episodes)}\n")
+            self.out.flush()
 
     def end(self) -> None:
+        self._stop.set()
+        if self._watcher is not None:
+            self._watcher.join()
         if self.out is not None and self.tty:
             self.out.write("\n")
             self.out.flush()
@@ -224,6 +280,18 @@ class Progress:
         text = f"\r[{bar:<30}] {n}/{self.total} episodes, {self.summary(episodes)}"
         self.out.write(text.ljust(self._width))   # blanks what a longer line left
         self._width = len(text)
+
+
+def _last_line(path: pathlib.Path) -> str | None:
+    """The last line of a text file ("" when empty), None when there is none."""
+    try:
+        with open(path, "rb") as f:
+            f.seek(0, 2)
+            f.seek(max(0, f.tell() - 400))
+            lines = f.read().decode("utf-8", "replace").splitlines()
+    except OSError:
+        return None
+    return lines[-1].strip() if lines else ""
 
 
 def _duration(s: float) -> str:

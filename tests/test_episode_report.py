@@ -88,3 +88,33 @@ def test_the_end_state_is_read_from_the_world():
         assert _end_state(sim, name) == ("lying", "the floor")
     finally:
         sim.close()
+
+
+def test_a_long_step_is_told_every_heartbeat(rt, tmp_path, monkeypatch):
+    """The demo is not silent through a long step: the running node is told."""
+    from demo.episode import DemoProgress
+    (tmp_path / "patrol_test.yaml").write_text("name: patrol_test\nroot:\n  sequence:\n    - name: long drive\n      wait: 5\n")
+    register_tree_folder(rt, tmp_path)
+    monkeypatch.setattr(DemoProgress, "HEARTBEAT", 0.0)
+    out = io.StringIO()
+    tree_host(rt).observers.append(DemoProgress(out, rt))
+    rt.call("patrol_test")
+    assert "  ... patrol_test: sequence/long drive" in out.getvalue()
+
+
+def test_the_evaluation_tells_what_its_running_episodes_do(tmp_path, monkeypatch):
+    import time as _time
+    from demo.evaluate import PROGRESS_LOG, Progress
+    monkeypatch.setattr(Progress, "HEARTBEAT", 0.2)
+    folder = tmp_path / "can_seed3"
+    folder.mkdir()
+    (folder / PROGRESS_LOG).write_text("[   12.0s] bt_search: search/patrol\n[   80.0s]   ... bt_catch: catch/attempts/attempt\n")
+    out = io.StringIO()
+    bar = Progress(out, 2)
+    bar.start(2, "", [])
+    jobs = [("bt_pick_place", "house", seed, "can", tmp_path / f"can_seed{seed}") for seed in (3, 4)]
+    bar.watch(jobs, [])
+    _time.sleep(1.5)
+    bar.end()
+    assert "[0/2] 0 succeeded, " in out.getvalue()
+    assert "running: seed 3 can: [   80.0s]   ... bt_catch: catch/attempts/attempt\n" in out.getvalue()
