@@ -43,6 +43,8 @@ def syntax_hint(exc: yaml.MarkedYAMLError) -> str:
     if "flow mapping" in context:
         return (f"the {{mapping}} opened at line {start} is not closed, or two of its entries lack a ',' "
                 "between them: check its braces and commas")
+    if "another document" in problem:
+        return "the file holds one document: remove this '---' line, or put the second part in a file of its own"
     if "alias" in context or "undefined alias" in problem:
         return "'*' starts an alias in YAML: put the value in quotes"
     if "<stream end>" in problem or "end of stream" in problem:
@@ -70,13 +72,45 @@ def syntax_hint(exc: yaml.MarkedYAMLError) -> str:
     return GENERAL_HINT
 
 
+#: the parser's names of what it met, in words
+_TOKENS = {
+    "'?'": "a key", "<block mapping start>": "a key", "'-'": "a '-' item", "<block sequence start>": "a '-' item",
+    "<scalar>": "a value", "<stream end>": "the end of the text", "<block end>": "the end of the block above",
+    "<document start>": "a new document", "<anchor>": "an '&' anchor", "<alias>": "a '*' alias", "<tag>": "a '!' tag",
+}
+
+
+def _words(token: str) -> str:
+    token = token.strip()
+    if token.startswith("'<") and token.endswith(">'"):
+        token = token[1:-1]
+    return _TOKENS.get(token, token if token.startswith("'") else f"'{token}'")
+
+
+def syntax_problem(exc: yaml.MarkedYAMLError) -> str:
+    """What the parser met, in words rather than its token names (``found '?'`` is a key)."""
+    problem = exc.problem or "invalid YAML"
+    met = re.match(r"(?:did not find )?expected (.+?), but (?:found|got) (.+)$", problem)
+    if met:
+        wanted = " or ".join(_words(t) for t in re.split(r" or ", met.group(1)))
+        return f"{_words(met.group(2))} where {wanted} was expected"
+    for raw, words in (("mapping values are not allowed here", "a ':' after a value"),
+                       ("could not find expected ':'", "a line with no ': ' after its key"),
+                       ("found unexpected end of stream", "the text ends inside a quoted value"),
+                       ("found undefined alias", "a '*' alias that names no anchor"),
+                       ("but found another document", "a second document ('---') in one file")):
+        if problem.startswith(raw):
+            return words
+    char = re.search(r"found character '(.+?)' that cannot start any token", problem)
+    if char:
+        return f"'{char.group(1)}' cannot start a value" if char.group(1) != "\\t" else "a tab character"
+    return problem
+
+
 def syntax_message(exc: yaml.MarkedYAMLError) -> str:
-    """``YAML syntax error: <what the parser says>; <the likely fix>`` (no position: the
-    caller puts ``file:line:column`` in front)."""
-    what = exc.problem or "invalid YAML"
-    if exc.context:
-        what = f"{exc.context}, {what}"
-    return f"YAML syntax error: {what}; {syntax_hint(exc)}"
+    """``YAML syntax error: <what the parser met, in words>; <the likely fix>`` (no
+    position: the caller puts ``file:line:column`` in front)."""
+    return f"YAML syntax error: {syntax_problem(exc)}; {syntax_hint(exc)}"
 
 
 def syntax_mark(exc: yaml.MarkedYAMLError) -> yaml.Mark | None:

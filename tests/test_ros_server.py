@@ -143,7 +143,7 @@ def test_call_actor_results_and_failures(served):
 
 
 @pytest.mark.parametrize("actor, args_yaml, reason", [
-    ("work.echo", "[1, 2", "not valid YAML at line 1, column 6: YAML syntax error: while parsing a flow sequence"),
+    ("work.echo", "[1, 2", "not valid YAML at line 1, column 6: YAML syntax error: the end of the text where"),
     ("no_such_actor", "", "unknown actor"),
     ("work.slow", "{steps: 1, speed: 2}", "bad arguments"),
     ("work.slow", "{args: 3}", "'args' must be a list"),
