@@ -217,6 +217,22 @@ class DemoProgress(TreeObserver):
             self._say(f"  the {r['category']} from ({r['x']:.2f}, {r['y']:.2f}): {how}")
 
 
+class Sightings(TreeObserver):
+    """Every object the robot reported seeing (``watch``, ``approach_object``, ``survey``)
+    into ``detections``, for the top view: a failed run shows what it saw, too."""
+
+    def __init__(self, detections: list) -> None:
+        self.detections = detections
+
+    def actor_finished(self, run, leaf, txn) -> None:
+        if txn.state.value != "done" or leaf.node.actor not in ("watch", "approach_object", "survey"):
+            return
+        r = txn.result
+        for d in (r if isinstance(r, list) else [r]):
+            if isinstance(d, dict) and {"category", "x", "y"} <= d.keys():
+                self.detections.append(d)
+
+
 def _on_surface(pose, place) -> bool:
     x, y, z = pose[:3]
     return (abs(x - place.x) <= place.sx / 2 and abs(y - place.y) <= place.sy / 2
@@ -300,6 +316,7 @@ def run_episode(tree: str = "bt_pick_place", world: str = "house", seed: int = 0
         host.observers.append(grasp)
         first = FirstFailure()
         host.observers.append(first)
+        host.observers.append(Sightings(ep.detections))
         host.observers.extend(observers or ())
         args = dict(inputs or {})
         params = rt.resolve(tree).signature.parameters
@@ -374,8 +391,6 @@ def run_episode(tree: str = "bt_pick_place", world: str = "house", seed: int = 0
                 ep.success = False
                 ep.failed_node = "ground truth"
                 ep.reason = f"{ep.objects - ep.placed} of {ep.objects} objects are not where they belong"
-        if ep.found:
-            ep.detections.append(ep.found)
         if out is not None:
             _draw(sim, ep, out / "top_view.png")
     finally:
@@ -425,9 +440,12 @@ def _draw(sim: SimWorld, ep: Episode, png: pathlib.Path) -> None:
             xs, ys = zip(*ep.path)
             ax.plot(xs, ys, "-", color=(0.1, 0.35, 0.8), lw=1.2, alpha=0.8, zorder=5, label="robot path")
             ax.plot(xs[0], ys[0], "o", color=(0.1, 0.35, 0.8), ms=6, zorder=6)
+        labelled = set()
         for d in ep.detections:
+            label = f"detected {d['category']}"
             ax.plot(d["x"], d["y"], "x", color="magenta", ms=10, mew=2, zorder=9,
-                    label=f"detected {d['category']}")
+                    label=None if label in labelled else label)
+            labelled.add(label)
         if ep.placed_object:
             x, y = sim.object_pose(ep.placed_object)[:2]
             ax.plot(x, y, "*", color="gold", mec="k", ms=16, zorder=9, label=f"placed {ep.placed_object}")

@@ -32,6 +32,11 @@ class Steps(SubSystem):
     def fine(self) -> None:
         """Succeeds."""
 
+    @actor
+    def watch(self) -> dict:
+        """Sees a cup."""
+        return {"category": "cup", "x": 1.0, "y": 2.0}
+
 
 TREE = """name: fetch_test
 root:
@@ -118,3 +123,15 @@ def test_the_evaluation_tells_what_its_running_episodes_do(tmp_path, monkeypatch
     bar.end()
     assert "[0/2] 0 succeeded, " in out.getvalue()
     assert "running: seed 3 can: [   80.0s]   ... bt_catch: catch/attempts/attempt\n" in out.getvalue()
+
+
+def test_what_the_robot_saw_is_kept_for_the_top_view_also_when_the_run_fails(rt, tmp_path):
+    from demo.episode import Sightings
+    rt.add_subsystem("steps", Steps)
+    (tmp_path / "saw_test.yaml").write_text("name: saw_test\nroot:\n  sequence:\n    - do: watch\n    - do: steps.search\n")
+    register_tree_folder(rt, tmp_path)
+    seen: list = []
+    tree_host(rt).observers.append(Sightings(seen))
+    with pytest.raises(ActorError):
+        rt.call("saw_test")
+    assert seen == [{"category": "cup", "x": 1.0, "y": 2.0}]
