@@ -30,6 +30,7 @@ from .catch_geometry import (BASE_MARGIN, BASE_OUTLINE, FINGERTIPS, MARK_MARGIN,
                              target_xy)
 from .catch_place import (GENTLE_RELEASE, MIN_PLACE_REACH, PLACE_ABOVE, PLACE_INSET, PLACE_SHORT,  # noqa: F401
                           PLACE_STANDOFF, RELEASE_CLEARANCE, Placing)
+from .category_check import check_registered
 from .ros_conv import wrap
 from .strategies import GraspPlan, Strategy, strategy_for
 
@@ -103,6 +104,7 @@ class Catcher(Approaching, Placing, SubSystem):
 
     def __init__(self) -> None:
         super().__init__()
+        check_registered()     # a category that cannot work fails now, not at the object
         self.set_value("holding", None)
         self.set_value("held_plan", None)       # the GraspPlan the held object was picked with
         self.set_value("failed_views", [])   # (x, y, heading) of grasps that failed

@@ -17,6 +17,7 @@ from bt_engine.modules import import_file, is_file_reference
 from .category import Category
 
 _REGISTRY: dict[str, Category] = {}
+_WHERE: dict[str, str] = {}          # name -> "file:line" of its register() call
 #: the categories that come with actorbt (categories/__init__.py loads them)
 BUILT_IN = ("categories.can", "categories.bottle", "categories.carton")
 _LOCK = threading.Lock()
@@ -35,33 +36,38 @@ def register(category: Category, replace: bool = False) -> Category:
     again is harmless; a different one under a taken name needs ``replace=True``.
 
     Raises:
-        CategoryError: the category cannot work on this robot (a grasp out of the arm's
-            reach, a stall window that misses the object: :mod:`categories.check`), named
-            with the file and line of this call and what to change.
+        CategoryError: the category cannot fit the gripper (a stall window that misses
+            the object, an opening wider than the gripper's: :mod:`categories.check`),
+            named with the file and line of this call and what to change. The arm's reach
+            is checked by the robot's side when it starts (actors/category_check.py).
     """
     if not isinstance(category, Category):
         raise CategoryError(f"register() takes a Category, got {type(category).__name__}")
     caller = sys._getframe(1)
-    # the built-ins are checked by the tests: checking them at every start would import
-    # the arm's kinematics (planning, pybullet) into every command
-    if caller.f_globals.get("__name__") not in BUILT_IN:
-        from .check import category_problems
-        problems = category_problems(category)
-        if problems:
-            raise CategoryError(f"{caller.f_code.co_filename}:{caller.f_lineno}: category {category.name!r} "
-                                f"cannot work on this robot: {'; '.join(problems)}")
+    where = f"{caller.f_code.co_filename}:{caller.f_lineno}"
+    from .check import gripper_problems
+    problems = gripper_problems(category)
+    if problems:
+        raise CategoryError(f"{where}: category {category.name!r} cannot work: {'; '.join(problems)}")
     with _LOCK:
         old = _REGISTRY.get(category.name)
         if old is not None and old != category and not replace:
             raise CategoryError(f"a different category {category.name!r} is registered already; "
                                 "pick another name or pass replace=True")
         _REGISTRY[category.name] = category
+        _WHERE.setdefault(category.name, where)
     return category
+
+
+def declared_at(name: str) -> str:
+    """``file:line`` where category ``name`` was registered ("" if unknown)."""
+    return _WHERE.get(name, "")
 
 
 def unregister(name: str) -> None:
     with _LOCK:
         _REGISTRY.pop(name, None)
+        _WHERE.pop(name, None)
 
 
 def get(name: str) -> Category:

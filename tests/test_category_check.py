@@ -1,5 +1,7 @@
-"""A category is checked against the robot when it registers (categories/check.py), and by
-hand with `actorbt category check FILE`: each rule fails with where and what to change."""
+"""A category is checked against the robot (categories/check.py's rules, the arm's reach
+from actors/category_check.py): the gripper's rules when it registers, the arm's when the
+robot starts, and all by hand with `actorbt category check FILE`; each problem says where
+and what to change."""
 from __future__ import annotations
 
 import math
@@ -11,7 +13,8 @@ import pytest
 
 import categories
 from categories import Box, Category, Grasp, Revolution, TopGrasp
-from categories.check import category_problems, reach_band
+from actors.category_check import check_registered, problems_of, reachable
+from categories.check import reach_band
 
 #: the cone of a plastic cup, 50 mm at the foot and 72 mm at the rim, 95 mm tall, as
 #: stacked sections (a user's category of a shape the built-ins do not have)
@@ -25,11 +28,12 @@ def _cup(**grasp) -> Category:
 
 def test_the_built_ins_can_work():
     for cat in categories.all_categories():
-        assert category_problems(cat) == [], cat.name
+        assert problems_of(cat) == [], cat.name
+    check_registered()
 
 
 def test_the_arm_reaches_the_floor_band_the_docs_name():
-    low, high = reach_band(0.27, 0.0)
+    low, high = reach_band(reachable, 0.27, 0.0)
     assert low == pytest.approx(0.045, abs=0.002) and high > 0.3
 
 
@@ -37,7 +41,7 @@ def test_the_stall_window_is_derived_from_the_width_at_the_grasp_height():
     cup = _cup(height=0.05)                       # on the section 61 mm across
     assert cup.held_width() == pytest.approx(0.061)
     assert (cup.grasp.closed_min, cup.grasp.closed_max) == pytest.approx((0.051, 0.069))
-    assert category_problems(cup) == []
+    assert problems_of(cup) == []
     wide = _cup(height=0.085, open_width=0.080)   # near the rim, 71 mm: short of the opening
     assert wide.grasp.closed_max == pytest.approx(0.078)
     box = Category(name="box_test", shape=Box(0.07, 0.045, 0.12), mass=0.05, rgba=(1, 1, 0, 1),
@@ -61,11 +65,29 @@ def test_each_rule_names_what_to_change(grasp, top, expected):
     extra = {} if top is None else {"top_grasp": top}
     cup = Category(name="cup_test", shape=CUP, mass=0.012, rgba=(0.1, 0.3, 0.9, 1.0),
                    grasp=Grasp(**{"height": 0.05, **grasp}), **extra)
-    problems = category_problems(cup)
+    problems = problems_of(cup)
     assert any(p.startswith(expected) for p in problems), problems
 
 
-def test_a_category_that_cannot_work_fails_where_it_registers(tmp_path):
+def test_a_category_the_gripper_cannot_hold_fails_where_it_registers(tmp_path):
+    path = tmp_path / "cup.py"
+    path.write_text(textwrap.dedent('''\
+        """A cup whose stall window misses it."""
+        from categories import Category, Grasp, Revolution, register
+
+        CATEGORY = register(Category(
+            name="cup_window_test",
+            shape=Revolution(((0.095, 0.03),)), mass=0.012, rgba=(0.1, 0.3, 0.9, 1.0),
+            grasp=Grasp(height=0.05, closed_min=0.040, closed_max=0.050)))
+    '''))
+    with pytest.raises(categories.CategoryError) as e:
+        categories.load(path)
+    assert str(e.value).startswith(f"{path}:4: category 'cup_window_test' cannot work: at grasp.height 0.050 m "
+                                   "the fingers close on 60 mm, outside closed_min..closed_max 40..50 mm")
+    assert "cup_window_test" not in categories.names()
+
+
+def test_a_category_out_of_the_arms_reach_fails_when_the_robot_starts(tmp_path):
     path = tmp_path / "cup.py"
     path.write_text(textwrap.dedent('''\
         """A cup held too low."""
@@ -76,11 +98,19 @@ def test_a_category_that_cannot_work_fails_where_it_registers(tmp_path):
             shape=Revolution(((0.095, 0.03),)), mass=0.012, rgba=(0.1, 0.3, 0.9, 1.0),
             grasp=Grasp(height=0.035)))
     '''))
+    categories.load(path)
     with pytest.raises(categories.CategoryError) as e:
-        categories.load(path)
+        check_registered()
     assert str(e.value).startswith(f"{path}:4: category 'cup_low_test' cannot work on this robot: "
                                    "grasp.height 0.035 m is out of the arm's reach")
-    assert "cup_low_test" not in categories.names()
+    from bt_engine import Runtime
+    from actors.catch import Catcher
+    rt = Runtime(clock="virtual")
+    try:
+        with pytest.raises(categories.CategoryError, match="cup_low_test"):
+            rt.add_subsystem("catch", Catcher)
+    finally:
+        rt.close()
 
 
 def test_a_declaration_error_names_its_line(tmp_path):
@@ -115,4 +145,4 @@ def _forget_test_categories():
 
 
 def test_reach_band_is_empty_where_the_arm_cannot_point():
-    assert reach_band(0.5, math.pi / 2) is None
+    assert reach_band(reachable, 0.5, math.pi / 2) is None

@@ -1,11 +1,13 @@
-"""`actorbt category ...`: the object categories (a plugin named in actorbt.yaml).
+"""`actorbt category ...`: the object categories against this robot (a plugin named in
+actorbt.yaml).
 
     actorbt category list
     actorbt category check FILE.py [FILE.py ...]
 
 ``check`` loads each category file as ``imports`` would and says whether it can work on
 this robot: every grasp within the arm's reach, the stall window around the object
-(categories/check.py); what was derived; and, when it cannot, what to change.
+(categories/check.py, actors/category_check.py); what was derived; and, when it cannot,
+what to change.
 """
 from __future__ import annotations
 
@@ -55,6 +57,8 @@ def cmd_list(args: argparse.Namespace, app) -> int:
 def cmd_check(args: argparse.Namespace, app) -> int:
     import categories
     from categories.check import plan_text
+
+    from .category_check import problems_of
     failed = 0
     for file in args.files:
         try:
@@ -71,6 +75,13 @@ def cmd_check(args: argparse.Namespace, app) -> int:
             failed += 1
             continue
         for cat in loaded:
+            problems = problems_of(cat)
+            if problems:
+                where = categories.declared_at(cat.name) or file
+                print(f"error: {where}: category {cat.name!r} cannot work on this robot: {'; '.join(problems)}",
+                      file=sys.stderr)
+                failed += 1
+                continue
             s = cat.strategy
             print(f"{file}: category {cat.name!r} can work on this robot")
             print(f"  upright: {plan_text(s.upright)}, lift {cat.grasp.lift:.3f} m")
