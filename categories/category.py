@@ -14,6 +14,8 @@ from .strategy import LYING_OFFSETS, Approach, Grasp, GraspPlan, Strategy, TopGr
 
 #: room the open fingers need around the held part [m]
 FINGER_MARGIN = 0.01
+#: half the height of a finger pad [m] (the OpenManipulator-X's pads are 30 mm tall)
+PAD_HALF_HEIGHT = 0.015
 
 
 @dataclass(frozen=True)
@@ -73,10 +75,13 @@ class Category:
                 closed_max=high if g.closed_max is None else g.closed_max))
 
     def held_width(self) -> float:
-        """The width [m] the fingers close on, upright, at the grasp height (a box: across
-        its narrowest side that fits the hand)."""
+        """The width [m] the fingers close on, upright, at the grasp height: a body of
+        revolution's widest section within the pads' height around it (a cone is held by
+        its wider end), a box across its narrowest side that fits the hand."""
         if isinstance(self.shape, Revolution):
-            return 2 * self.shape.radius_at(self.grasp.height)
+            h = self.grasp.height
+            return 2 * max(self.shape.radius_at(z) for z in (h - PAD_HALF_HEIGHT, h, h + PAD_HALF_HEIGHT)
+                           if 0.0 <= z <= self.shape.height)
         return self.shape.width_across(self.sides()[0])
 
     @property

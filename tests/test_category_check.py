@@ -38,9 +38,9 @@ def test_the_arm_reaches_the_floor_band_the_docs_name():
 
 
 def test_the_stall_window_is_derived_from_the_width_at_the_grasp_height():
-    cup = _cup(height=0.05)                       # on the section 61 mm across
-    assert cup.held_width() == pytest.approx(0.061)
-    assert (cup.grasp.closed_min, cup.grasp.closed_max) == pytest.approx((0.051, 0.069))
+    cup = _cup(height=0.05)     # the pads (30 mm tall) reach up to the section 65 mm across
+    assert cup.held_width() == pytest.approx(0.065)
+    assert (cup.grasp.closed_min, cup.grasp.closed_max) == pytest.approx((0.055, 0.073))
     assert problems_of(cup) == []
     wide = _cup(height=0.085, open_width=0.080)   # near the rim, 71 mm: short of the opening
     assert wide.grasp.closed_max == pytest.approx(0.078)
@@ -54,7 +54,7 @@ def test_the_stall_window_is_derived_from_the_width_at_the_grasp_height():
                                "the hand reaches 0.045..0.369 m above the floor; change grasp.height or approach.reach"),
     (dict(lift=0.40), None, "the lift (grasp.height + grasp.lift) 0.450 m is out of the arm's reach"),
     (dict(closed_min=0.050, closed_max=0.058), None,
-     "at grasp.height 0.050 m the fingers close on 61 mm, outside closed_min..closed_max 50..58 mm; "
+     "at grasp.height 0.050 m the fingers close on 65 mm, outside closed_min..closed_max 50..58 mm; "
      "leave both out to have them derived from the shape"),
     (dict(open_width=0.095), None, "grasp.open_width 95 mm is wider than the gripper opens (90 mm)"),
     (dict(closed_min=0.05, closed_max=0.085), None, "grasp.closed_max 85 mm reaches the opening (85 mm)"),
@@ -132,7 +132,7 @@ def test_category_check_by_hand(tmp_path):
                          capture_output=True, text=True, timeout=120)
     assert run.returncode == 1, run.stderr
     assert f"{good}: category 'cup_cli_test' can work on this robot" in run.stdout
-    assert "upright: reach 0.270 m, height 0.050 m, pitch 0 deg, held at 51..69 mm, lift 0.100 m" in run.stdout
+    assert "upright: reach 0.270 m, height 0.050 m, pitch 0 deg, held at 55..73 mm, lift 0.100 m" in run.stdout
     assert f"error: {bad}:2: category 'low_cli_test' cannot work on this robot: grasp.height 0.035 m" in run.stderr
 
 
