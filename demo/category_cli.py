@@ -58,7 +58,7 @@ def cmd_check(args: argparse.Namespace, app) -> int:
     import categories
     from categories.check import plan_text
 
-    from .category_check import problems_of
+    from actors.category_check import problems_of
     failed = 0
     for file in args.files:
         try:
