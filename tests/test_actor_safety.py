@@ -137,3 +137,14 @@ def test_a_mission_outside_an_actors_declared_range_fails_at_load_where_it_is_wr
             "    - do: base.roll\n      with: {distance: \"{s}\"}\n"      # a reference: its value is known when the tree runs
             "    - do: base.light\n      with: {colour: green}\n")
     assert _problems(resolver, good) == []
+
+
+def test_a_value_read_from_the_blackboard_outside_the_range_fails_its_node_when_called(rt, tmp_path):
+    rt.add_subsystem("base", Base)
+    (tmp_path / "far.yaml").write_text(
+        "name: far\ninputs: {d: {type: float, default: 0.5}}\nroot:\n  do: base.roll\n  with: {distance: \"{d}\"}\n")
+    register_tree_folder(rt, tmp_path)
+    assert rt.call("far") == {}
+    with pytest.raises(Exception, match=r"argument 'distance' of actor 'base.roll' is 2.0, expected a value "
+                                         r"within -1.0..1.0 \(the actor's declared range\)"):
+        rt.call("far", d=2.0)

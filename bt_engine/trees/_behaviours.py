@@ -18,7 +18,7 @@ from ..signal import Signal
 from ..transaction import TxnState
 from ._errors import CheckEvaluationError
 from ._expr import evaluate
-from ._model import Check, Do, Ref, SetValues, resolve_value
+from ._model import Check, Do, Ref, SetValues, refs_in, resolve_value
 from ._blackboard import RunBlackboard
 
 __all__ = [
@@ -46,6 +46,32 @@ def _read(value: Any, ctx: RunContext) -> Any:
     return resolve_value(value, ctx.bb.get)
 
 
+def _outside_limits(ctx: RunContext, path: str, name: str, args: tuple, kwargs: dict) -> str | None:
+    """Why the values an actor is called with break the limits it declares
+    (``@actor(limits=...)``), or None; None also where the actor is not known here (a
+    replay answers calls from its recording)."""
+    try:
+        ref = ctx.rt.resolve(path)
+        limits = ref.safety.limits
+        bound = ref.signature.bind(*args, **kwargs) if limits else None
+    except (ActorbtError, LookupError, AttributeError, TypeError):
+        return None
+    if bound is None:
+        return None
+    for pname, value in bound.arguments.items():
+        if pname not in limits:
+            continue
+        low, high = limits[pname]
+        kind = ref.signature.parameters[pname].kind
+        for v in (value if kind is kind.VAR_POSITIONAL else (value,)):
+            if isinstance(v, (int, float)) and not isinstance(v, bool) and (
+                    (low is not None and v < low) or (high is not None and v > high)):
+                return (f"argument {pname!r} of actor {name!r} is {v!r}, expected a value within "
+                        f"{'-inf' if low is None else low}..{'inf' if high is None else high} "
+                        "(the actor's declared range)")
+    return None
+
+
 class ActorLeaf(py_trees.behaviour.Behaviour):
     """``do: actor``: start the actor in ``initialise``, poll it in ``update``, cancel it
     in ``terminate`` when halted.
@@ -68,6 +94,7 @@ class ActorLeaf(py_trees.behaviour.Behaviour):
         self.txn: Any = None
         self.error: str | None = None
         self._token: object | None = None
+        self._reads_blackboard = any(any(refs_in(v)) for v in (*node.args, *node.kwargs.values()))
 
     def initialise(self) -> None:
         self.txn = None
@@ -80,6 +107,11 @@ class ActorLeaf(py_trees.behaviour.Behaviour):
         except KeyError as exc:
             self.error = f"cannot call {node.actor}: {exc.args[0]}"
             return
+        if self._reads_blackboard:
+            # literals were checked against the actor's limits at load; values read now, here
+            self.error = _outside_limits(self.ctx, self.actor_path, node.actor, args, kwargs)
+            if self.error is not None:
+                return
         token = self._token = object()
 
         def done(_outcome: Any) -> None:
