@@ -17,6 +17,7 @@ import math
 from typing import Any
 
 from bt_engine import ActorbtError, SubSystem, actor
+from categories.check import TEST_LIFT   # the first, short lift that checks the grip [m]
 
 # Everything the modules define, importable from actors.catch as before the split
 from .catch_approach import (ASIDE, CONFIRM_RANGE, FINGER_SPAN, FINGER_THICKNESS,  # noqa: F401
@@ -35,7 +36,6 @@ from .ros_conv import wrap
 from .strategies import GraspPlan, Strategy, strategy_for
 
 GIVE_UP = 3                 # failed grasps of one object after which the search passes it over
-TEST_LIFT = 0.02            # first, short lift that checks the grip [m]
 DRIVE_IN_TOLERANCE = 0.015  # how close the drive around an object must end [m]: the
 #                             fingers are 70 mm long
 PUSHED = 0.45               # a failed grasp may push the object this far [m]

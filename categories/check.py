@@ -21,7 +21,7 @@ from .strategy import CLOSED_BELOW_OPEN, GraspPlan
 #: pitch [rad] below the horizontal: ``reachable(reach, z, pitch)``
 Reachable = Callable[[float, float, float], bool]
 
-#: the first, short lift that checks the grip (actors/catch.py TEST_LIFT) [m]
+#: the first, short lift that checks the grip [m] (the pick does it: actors/catch.py)
 TEST_LIFT = 0.02
 #: the gripper's largest opening (OpenManipulator-X) [m]
 GRIPPER_MAX_OPENING = 0.09
