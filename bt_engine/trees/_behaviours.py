@@ -16,7 +16,7 @@ from py_trees.common import Status
 from ..errors import ActorbtError
 from ..signal import Signal
 from ..transaction import TxnState
-from ._errors import CheckEvaluationError
+from ._errors import CheckEvaluationError, out_of_range
 from ._expr import evaluate
 from ._model import Check, Do, Ref, SetValues, refs_in, resolve_value
 from ._blackboard import RunBlackboard
@@ -61,14 +61,11 @@ def _outside_limits(ctx: RunContext, path: str, name: str, args: tuple, kwargs: 
     for pname, value in bound.arguments.items():
         if pname not in limits:
             continue
-        low, high = limits[pname]
         kind = ref.signature.parameters[pname].kind
         for v in (value if kind is kind.VAR_POSITIONAL else (value,)):
-            if isinstance(v, (int, float)) and not isinstance(v, bool) and (
-                    (low is not None and v < low) or (high is not None and v > high)):
-                return (f"argument {pname!r} of actor {name!r} is {v!r}, expected a value within "
-                        f"{'-inf' if low is None else low}..{'inf' if high is None else high} "
-                        "(the actor's declared range)")
+            problem = out_of_range(f"argument {pname!r} of actor {name!r}", v, limits[pname])
+            if problem is not None:
+                return problem
     return None
 
 

@@ -8,6 +8,7 @@ PyYAML's marks use. Lines and columns are 1-based.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 from ..errors import ActorbtError
 
@@ -45,6 +46,18 @@ def shorten(value: object, limit: int = 60) -> str:
     that quote what the user wrote (a value may be thousands of characters long)."""
     text = repr(value)
     return text if len(text) <= limit else text[: limit - 4] + "..." + text[-1]
+
+
+def out_of_range(what: str, value: Any, limit: tuple) -> str | None:
+    """Why ``value`` breaks an actor's declared range ``limit`` (low, high; None: open),
+    None when it is inside it or no number (a reference, a string)."""
+    low, high = limit
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return None
+    if (low is None or value >= low) and (high is None or value <= high):
+        return None
+    span = f"{'-inf' if low is None else low}..{'inf' if high is None else high}"
+    return f"{what} is {shorten(value)}, expected a value within {span} (the actor's declared range)"
 
 
 def _printable(text: str) -> str:

@@ -23,6 +23,7 @@ from ._errors import (
     UnknownBehaviourError,
     UnknownBlackboardKeyError,
     UnresolvedActorError,
+    out_of_range,
     shorten,
 )
 from ._model import (
@@ -277,15 +278,11 @@ class _Validator:
     def check_limit(self, placed: list[tuple[Any, Pos]], limit: tuple, what: str) -> None:
         """A literal number outside the range the actor declares (``@actor(limits=...)``,
         the catalog's minimum/maximum) is an error, as MCP refuses it; a reference is
-        checked when the call is made."""
-        low, high = limit
+        checked when its node runs (``_behaviours``)."""
         for value, pos in placed:
-            if isinstance(value, bool) or not isinstance(value, (int, float)):
-                continue
-            if (low is not None and value < low) or (high is not None and value > high):
-                span = f"{'-inf' if low is None else low}..{'inf' if high is None else high}"
-                self.errors.append(ArgumentMismatchError(
-                    pos, f"{what} is {shorten(value)}, expected a value within {span} (the actor's declared range)"))
+            problem = out_of_range(what, value, limit)
+            if problem is not None:
+                self.errors.append(ArgumentMismatchError(pos, problem))
 
     def check_choice(self, placed: list[tuple[Any, Pos]], choices: list | None, what: str) -> None:
         """A literal value that is not one of a ``Literal[...]`` parameter's choices."""
