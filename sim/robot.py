@@ -51,11 +51,6 @@ GRIPPER_CATCH_UP = 0.5    # m/s
 # A rubber pad against a carton's wall yields about 0.2 mm under GRIPPER_FORCE.
 PAD_STIFFNESS = 5.0e4     # N/m
 PAD_DAMPING = 200.0       # N s/m: no bounce when a pad meets a 60 g carton
-# A pad's static friction holds the object where it touches: pybullet's friction is a
-# velocity constraint, and without its positional anchor a held body creeps about the
-# line between the pads (a bottle 9.5 degrees over a 42 s carry, 3.4 with the anchor:
-# tests/test_sim_grip_hold.py).
-PAD_FRICTION_ANCHOR = True
 GRIPPER_MAX_OPENING = 0.09
 
 
@@ -97,7 +92,6 @@ class Robot:
         self.grip_setpoint = [self.gripper_width / 2] * 2   # per finger, the profile's [m]
         for j in self.grip_idx:
             p.changeDynamics(b, j, contactStiffness=PAD_STIFFNESS, contactDamping=PAD_DAMPING,
-                             frictionAnchor=int(PAD_FRICTION_ANCHOR),
                              physicsClientId=cid)
         self.wheel_target = [0.0, 0.0]
         self.wheel_setpoint = [0.0, 0.0]
