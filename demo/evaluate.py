@@ -200,7 +200,7 @@ class Progress:
         folders = {pathlib.Path(job[4]): f"seed {job[2]} {job[3]}" for job in work}
 
         def loop() -> None:
-            while not self._stop.wait(1.0):
+            while not self._stop.wait(min(1.0, self.HEARTBEAT)):
                 if time.monotonic() - self._said >= self.HEARTBEAT:
                     with self.lock:
                         done = {(e.seed, e.category) for e in episodes}
