@@ -324,13 +324,15 @@ class SimWorld:
             pos, vel = self._traj.sample(t_next + self._t_offset)
             self.robot.set_arm(pos, vel)
         self.robot.apply(self.dt)
-        self._choose_substeps()
+        follows_hand = self.still_hand_substeps != self.substeps   # else one rate: no watching
+        if follows_hand:
+            self._choose_substeps()
         p.stepSimulation(physicsClientId=self.cid)
         self.t = t_next
         self.ticks += 1
         q, v, _ = self.robot.joint_states()
-        if (max(map(abs, v[2:6])) > ARM_STILL or max(map(abs, v[6:8])) > FINGER_STILL
-                or self.robot.gripper_busy(q[6:8])):
+        if follows_hand and (max(map(abs, v[2:6])) > ARM_STILL or max(map(abs, v[6:8])) > FINGER_STILL
+                             or self.robot.gripper_busy(q[6:8])):
             self._hand_moved_at = self.t
         yaw = self.robot.base_pose()[0][2]
         # the encoders see the wheel joints; the gyro the body's true rotation
