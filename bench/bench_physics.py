@@ -8,7 +8,8 @@ For each candidate (physics rate, solver iterations, solver residual threshold):
   (a placed object must stay where it was put);
 * grasp: the can, the bottle and the carton picked from the floor by a scripted arm
   (straddle, close, lift 10 cm), then the base drives and turns at the TurtleBot3's
-  limits: held or not, and how far the object slid in the hand [mm];
+  limits: held or not, how far the object slid in the hand [mm] and how far its axis
+  turned there [deg];
 * odometry: an L-shaped 10 m drive, the raw wheel odometry's error [% of the distance].
 
     .venv/bin/python bench/bench_physics.py [--configs 240/50/0,120/30/0.01 ...]
@@ -117,8 +118,8 @@ def _radius(sim, name) -> float:
     return min(hi[0] - lo[0], hi[1] - lo[1]) / 2
 
 
-def grasp(config: str, category: str) -> tuple[bool, float]:
-    """(held after the drive, slide in the hand [mm])."""
+def grasp(config: str, category: str) -> tuple[bool, float, float]:
+    """(held after the drive, slide in the hand [mm], turn in the hand [deg])."""
     sim = world(config)
     try:
         name = next(n for n in sim.object_names() if sim.object_category(n) == category)
@@ -140,13 +141,14 @@ def grasp(config: str, category: str) -> tuple[bool, float]:
         sim.advance(1.5)
         sim.robot.set_arm(kin.ik(REACH, 0.0, grip_z + 0.10, 0.0).best)
         sim.advance(1.5)
-        rel0 = _in_hand(sim, name)
+        rel0, axis0 = _in_hand(sim, name), _axis_in_hand(sim, name)
         for v, w in ((0.26, 0.0), (0.0, 1.0), (-0.2, 0.0), (0.0, -1.0)):
             sim.robot.set_base_velocity(v, w)
             sim.advance(1.5)
         sim.robot.set_base_velocity(0.0, 0.0)
         sim.advance(1.0)
-        return sim.in_gripper(name), 1000 * float(np.linalg.norm(_in_hand(sim, name) - rel0))
+        turned = math.degrees(math.acos(min(1.0, float(axis0 @ _axis_in_hand(sim, name)))))
+        return sim.in_gripper(name), 1000 * float(np.linalg.norm(_in_hand(sim, name) - rel0)), turned
     finally:
         sim.close()
 
@@ -157,6 +159,14 @@ def _in_hand(sim, name) -> np.ndarray:
     pos, _ = p.getBasePositionAndOrientation(sim.scene.objects[name], physicsClientId=sim.cid)
     inv = p.invertTransform(ee_pos, ee_orn)
     return np.array(p.multiplyTransforms(inv[0], inv[1], pos, [0, 0, 0, 1])[0])
+
+
+def _axis_in_hand(sim, name) -> np.ndarray:
+    """The object's z axis in the end effector's frame."""
+    _, ee_orn = sim.link_pose("end_effector_link")
+    _, orn = p.getBasePositionAndOrientation(sim.scene.objects[name], physicsClientId=sim.cid)
+    up = np.array(p.getMatrixFromQuaternion(orn)).reshape(3, 3)[:, 2]
+    return np.array(p.getMatrixFromQuaternion(ee_orn)).reshape(3, 3).T @ up
 
 
 def odometry(config: str) -> float:
@@ -184,7 +194,7 @@ def main() -> int:
     ap.add_argument("--configs", default=",".join(CANDIDATES), help="HZ/ITERATIONS/RESIDUAL, comma-separated")
     a = ap.parse_args()
     print(f"{'config':>14} {'ms/tick':>8} {'worst placed: drift mm':>23} {'tilt deg':>9} "
-          f"{'can held/slid':>14} {'bottle':>12} {'carton':>12} {'odom %':>7}")
+          f"{'can held/slid mm/turned deg':>28} {'bottle':>18} {'carton':>18} {'odom %':>7}")
     for config in a.configs.split(","):
         cost = step_cost(config)
         placed = place(config)
@@ -192,9 +202,9 @@ def main() -> int:
         drift, tilts = placed[worst]
         grasps = [grasp(config, c) for c in ("can", "bottle", "carton")]
         odo = odometry(config)
-        cells = [f"{'held' if held else 'LOST'} {slid:5.1f}" for held, slid in grasps]
-        print(f"{config:>14} {cost:>8.2f} {drift:>23.1f} {tilts:>9.1f} {cells[0]:>14} {cells[1]:>12} "
-              f"{cells[2]:>12} {odo:>7.2f}  ({worst})", flush=True)
+        cells = [f"{'held' if held else 'LOST'} {slid:5.1f} {turn:5.1f}" for held, slid, turn in grasps]
+        print(f"{config:>14} {cost:>8.2f} {drift:>23.1f} {tilts:>9.1f} {cells[0]:>28} {cells[1]:>18} "
+              f"{cells[2]:>18} {odo:>7.2f}  ({worst})", flush=True)
     return 0
 
 
