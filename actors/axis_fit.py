@@ -138,3 +138,33 @@ def refine_axis(points: np.ndarray, radius: float, point: np.ndarray, direction:
     e = residual(res.x)
     return AxisFit(point=point + res.x[2] * u + res.x[3] * v, direction=d if d[2] >= 0 else -d,
                    rms=float(np.sqrt(np.mean(e * e))), side=points)
+
+
+def refine_profile_axis(points: np.ndarray, radii, point: np.ndarray, direction: np.ndarray,
+                        base_low: bool) -> AxisFit:
+    """The body of revolution whose radius at ``h`` above its base is ``radii(h)`` (an
+    array function) that ``points`` lie on, from a first guess of its axis; its base is
+    the end of the points along ``direction`` that is lowest (``base_low``) or highest.
+    A tapered body (a cup) fits no cylinder; its whole profile fixes its axis."""
+    if len(points) > MAX_POINTS:
+        points = points[np.linspace(0, len(points) - 1, MAX_POINTS).astype(int)]
+    u, v = _basis(direction)
+
+    def unit(theta, phi):
+        return np.array([math.sin(theta) * math.cos(phi), math.sin(theta) * math.sin(phi), math.cos(theta)])
+
+    def residual(x):
+        d = unit(x[0], x[1])
+        r = points - (point + x[2] * u + x[3] * v)
+        s = r @ d
+        lo, hi = np.percentile(s, (0.5, 99.5))
+        h = s - lo if base_low else hi - s
+        return np.linalg.norm(r - np.outer(s, d), axis=1) - radii(np.clip(h, 0.0, None))
+
+    theta0 = math.acos(min(1.0, max(-1.0, float(direction[2]))))
+    phi0 = math.atan2(direction[1], direction[0])
+    res = least_squares(residual, [theta0, phi0, 0.0, 0.0], loss="huber", f_scale=0.002, max_nfev=60)
+    d = unit(res.x[0], res.x[1])
+    e = residual(res.x)
+    return AxisFit(point=point + res.x[2] * u + res.x[3] * v, direction=d if d[2] >= 0 else -d,
+                   rms=float(np.sqrt(np.mean(e * e))), side=points)

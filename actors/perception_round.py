@@ -103,18 +103,40 @@ def _score_posed(seg: _Segment, app: Appearance, direction: np.ndarray) -> tuple
     base, _profile_fit), and the visible
     length against the height. Evidence: ``pose`` (upright, tilted, lying), ``axis`` (x, y
     of the body's centre), ``yaw`` (lying: the axis's direction modulo pi; tilted: the
-    direction it leans to), ``axis_base`` and ``axis_dir`` (3-D)."""
+    direction it leans to), ``axis_base`` and ``axis_dir`` (3-D).
+
+    The axis is fitted as a cylinder of the body's radius, then on the body alone. A
+    tapered body (a cup) fits no cylinder: when that fit is poor, the axis is fitted again
+    to the whole profile, with the base at either end, and the best of the fits counts."""
     cam = seg.frame.T_map_cam[:3, 3]
     fit = axis_fit.fit_axis(*seg.normals(), app.body_radius, cam, direction)
     if fit is None:
         return 0.0, {"reason": "body not visible"}
-    tol_r = seg.surface_tolerance
-    tol_h = max(0.01, 2.0 * seg.m_per_px)
-    cut = seg.cut("left") or seg.cut("right") or seg.cut("top") or seg.cut("bottom")
+    side = fit.side
     best = _profile_fit(seg, app, fit)
     if best is not None and len(best[4]) >= 15:      # refit on the body alone (not a neck)
         fit = axis_fit.refine_axis(best[4], app.body_radius, fit.point, fit.direction)
         best = _profile_fit(seg, app, fit)
+    conf, evidence = _posed(seg, app, fit, best)
+    if conf < PROFILE_REFIT_BELOW and len(app.sections) > 1:
+        for base_low in (True, False):
+            refit = axis_fit.refine_profile_axis(side, app.radii_at, fit.point, fit.direction, base_low)
+            c, e = _posed(seg, app, refit, _profile_fit(seg, app, refit))
+            if c > conf:
+                conf, evidence = c, e
+    return conf, evidence
+
+
+#: a posed body of revolution scoring less than this on its cylinder fit is fitted again
+#: to its whole radius profile
+PROFILE_REFIT_BELOW = 0.5
+
+
+def _posed(seg: _Segment, app: Appearance, fit: axis_fit.AxisFit, best) -> tuple[float, dict]:
+    """_score_posed's score and evidence for one fitted axis and its _profile_fit."""
+    tol_r = seg.surface_tolerance
+    tol_h = max(0.01, 2.0 * seg.m_per_px)
+    cut = seg.cut("left") or seg.cut("right") or seg.cut("top") or seg.cut("bottom")
     if best is not None:
         d = fit.direction
         tilt = math.acos(min(1.0, abs(float(d[2]))))
