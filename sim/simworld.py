@@ -23,7 +23,6 @@ from .imu import Gyro
 from .imu import episode_rng as gyro_rng
 from .odometry import OdomNoise, WheelOdometry
 from .odometry import episode_rng as odometry_rng
-from .pad_torsion import PadTorsion
 from .robot import ARM, ROBOT_COLLISION_GROUP, Robot
 from .scene import Scene
 from .sensors import CameraModel
@@ -204,7 +203,6 @@ class SimWorld:
         # varied poses: the objects come to rest before the robot is there and time starts
         self.settle_steps = self.scene.settle(self.spec.settle_steps) if self.spec.settle_steps else 0
         self.robot = Robot(cid, self.spec.robot_start)
-        self.pad_torsion = PadTorsion(cid, self.robot.body, tuple(self.robot.grip_idx), self.scene.objects)
         self.odometry = WheelOdometry(self._odom_noise or OdomNoise(), odometry_rng(self.seed))
         self.gyro = Gyro(self._odom_noise or OdomNoise(), gyro_rng(self.seed))
         self.lidar = Lidar(cid, self.lidar_model, lidar_rng(self.seed),
@@ -330,7 +328,6 @@ class SimWorld:
         if follows_hand:
             self._choose_substeps()
         p.stepSimulation(physicsClientId=self.cid)
-        self.pad_torsion.apply(self.dt)
         self.t = t_next
         self.ticks += 1
         q, v, _ = self.robot.joint_states()
