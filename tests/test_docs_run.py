@@ -20,6 +20,7 @@ from __future__ import annotations
 import os
 import re
 import shutil
+import signal
 import subprocess
 import sys
 from dataclasses import dataclass
@@ -104,20 +105,20 @@ def _run(block: Block, project: Path, env: dict) -> None:
     # `set -e` as a user would expect the block to stop at its first failure; the trap
     # stops the commands started with `&` (a robot, a serve) when the block ends.
     script = ("set -e\ntrap 'kill $(jobs -p) 2>/dev/null || true; wait' EXIT\n" + block.text)
+    shell = subprocess.Popen(["bash", "-c", script], cwd=project, env=env, stdin=subprocess.DEVNULL,
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                             start_new_session=True)
     try:
-        done = subprocess.run(["bash", "-c", script], cwd=project, env=env, capture_output=True,
-                              text=True, timeout=block.timeout(), start_new_session=True,
-                              stdin=subprocess.DEVNULL)
-    except subprocess.TimeoutExpired as e:
-        pytest.fail(f"{block.where}: still running after {block.timeout():.0f} s\n"
-                    f"{_tail(e.stdout)}\n{_tail(e.stderr)}")
-    if done.returncode != 0:
-        pytest.fail(f"{block.where}: exit {done.returncode}\n{_tail(done.stdout)}\n{_tail(done.stderr)}")
+        out, err = shell.communicate(timeout=block.timeout())
+    except subprocess.TimeoutExpired:
+        os.killpg(shell.pid, signal.SIGKILL)        # the block and everything it started
+        out, err = shell.communicate()
+        pytest.fail(f"{block.where}: still running after {block.timeout():.0f} s\n{_tail(out)}\n{_tail(err)}")
+    if shell.returncode != 0:
+        pytest.fail(f"{block.where}: exit {shell.returncode}\n{_tail(out)}\n{_tail(err)}")
 
 
-def _tail(out, lines: int = 40) -> str:
-    if isinstance(out, bytes):
-        out = out.decode(errors="replace")
+def _tail(out: str | None, lines: int = 40) -> str:
     return "\n".join((out or "").splitlines()[-lines:])
 
 
