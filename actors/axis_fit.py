@@ -118,26 +118,7 @@ def fit_axis(pts: np.ndarray, normals: np.ndarray, radius: float, view_from: np.
 def refine_axis(points: np.ndarray, radius: float, point: np.ndarray, direction: np.ndarray) -> AxisFit:
     """The cylinder of ``radius`` that ``points`` lie on, from a first guess of a point on
     its axis and its direction (Huber-weighted least squares over both)."""
-    if len(points) > MAX_POINTS:
-        points = points[np.linspace(0, len(points) - 1, MAX_POINTS).astype(int)]
-    u, v = _basis(direction)
-
-    def unit(theta, phi):
-        return np.array([math.sin(theta) * math.cos(phi), math.sin(theta) * math.sin(phi), math.cos(theta)])
-
-    def residual(x):
-        d = unit(x[0], x[1])
-        r = points - (point + x[2] * u + x[3] * v)
-        r = r - np.outer(r @ d, d)
-        return np.linalg.norm(r, axis=1) - radius
-
-    theta0 = math.acos(min(1.0, max(-1.0, float(direction[2]))))
-    phi0 = math.atan2(direction[1], direction[0])
-    res = least_squares(residual, [theta0, phi0, 0.0, 0.0], loss="huber", f_scale=0.002, max_nfev=60)
-    d = unit(res.x[0], res.x[1])
-    e = residual(res.x)
-    return AxisFit(point=point + res.x[2] * u + res.x[3] * v, direction=d if d[2] >= 0 else -d,
-                   rms=float(np.sqrt(np.mean(e * e))), side=points)
+    return _fit_surface(points, point, direction, lambda s: radius)
 
 
 def refine_profile_axis(points: np.ndarray, radii, point: np.ndarray, direction: np.ndarray,
@@ -146,6 +127,17 @@ def refine_profile_axis(points: np.ndarray, radii, point: np.ndarray, direction:
     array function) that ``points`` lie on, from a first guess of its axis; its base is
     the end of the points along ``direction`` that is lowest (``base_low``) or highest.
     A tapered body (a cup) fits no cylinder; its whole profile fixes its axis."""
+    def radius_along(s):
+        lo, hi = np.percentile(s, (0.5, 99.5))
+        return radii(np.clip(s - lo if base_low else hi - s, 0.0, None))
+
+    return _fit_surface(points, point, direction, radius_along)
+
+
+def _fit_surface(points: np.ndarray, point: np.ndarray, direction: np.ndarray, radius_along) -> AxisFit:
+    """The axis (direction and point, Huber-weighted least squares) of the body of
+    revolution ``points`` lie on, whose radius at a point's position ``s`` along the axis
+    is ``radius_along(s)`` (arrays)."""
     if len(points) > MAX_POINTS:
         points = points[np.linspace(0, len(points) - 1, MAX_POINTS).astype(int)]
     u, v = _basis(direction)
@@ -157,9 +149,7 @@ def refine_profile_axis(points: np.ndarray, radii, point: np.ndarray, direction:
         d = unit(x[0], x[1])
         r = points - (point + x[2] * u + x[3] * v)
         s = r @ d
-        lo, hi = np.percentile(s, (0.5, 99.5))
-        h = s - lo if base_low else hi - s
-        return np.linalg.norm(r - np.outer(s, d), axis=1) - radii(np.clip(h, 0.0, None))
+        return np.linalg.norm(r - np.outer(s, d), axis=1) - radius_along(s)
 
     theta0 = math.acos(min(1.0, max(-1.0, float(direction[2]))))
     phi0 = math.atan2(direction[1], direction[0])
