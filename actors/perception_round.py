@@ -106,8 +106,10 @@ def _score_posed(seg: _Segment, app: Appearance, direction: np.ndarray) -> tuple
     direction it leans to), ``axis_base`` and ``axis_dir`` (3-D).
 
     The axis is fitted as a cylinder of the body's radius, then on the body alone. A
-    tapered body (a cup) fits no cylinder: when that fit is poor, the axis is fitted again
-    to the whole profile, with the base at either end, and the best of the fits counts."""
+    tapered body (a cup) fits no cylinder, and its first section is too little of it for
+    the body-only fit: when the first section is under half the height and that fit is
+    poor, the axis is fitted again to the whole profile, with the base at either end, and
+    the best of the fits counts. (A can or a bottle, mostly body, never pays for it.)"""
     cam = seg.frame.T_map_cam[:3, 3]
     fit = axis_fit.fit_axis(*seg.normals(), app.body_radius, cam, direction)
     if fit is None:
@@ -118,7 +120,7 @@ def _score_posed(seg: _Segment, app: Appearance, direction: np.ndarray) -> tuple
         fit = axis_fit.refine_axis(best[4], app.body_radius, fit.point, fit.direction)
         best = _profile_fit(seg, app, fit)
     conf, evidence = _posed(seg, app, fit, best)
-    if conf < PROFILE_REFIT_BELOW and len(app.sections) > 1:
+    if conf < PROFILE_REFIT_BELOW and app.body_top < 0.5 * app.height:
         for base_low in (True, False):
             refit = axis_fit.refine_profile_axis(side, app.radii_at, fit.point, fit.direction, base_low)
             c, e = _posed(seg, app, refit, _profile_fit(seg, app, refit))
@@ -127,8 +129,8 @@ def _score_posed(seg: _Segment, app: Appearance, direction: np.ndarray) -> tuple
     return conf, evidence
 
 
-#: a posed body of revolution scoring less than this on its cylinder fit is fitted again
-#: to its whole radius profile
+#: a posed body of revolution whose first section is under half its height, scoring less
+#: than this on its cylinder fit, is fitted again to its whole radius profile
 PROFILE_REFIT_BELOW = 0.5
 
 
