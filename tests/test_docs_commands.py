@@ -10,34 +10,28 @@ import re
 import shlex
 import subprocess
 import sys
-from pathlib import Path
 
 import pytest
 
 from bt_engine.cli.main import _config, build_parser
-
-ROOT = Path(__file__).resolve().parents[1]
-DOCS = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+from tests.doc_blocks import DOCS, ROOT, blocks_of
 
 
 def _command_lines() -> list[tuple[str, str]]:
     """(where, the command line) of every `actorbt` line in a ```sh block."""
     out = []
-    for doc in DOCS:
-        text = doc.read_text(encoding="utf-8")
-        for block in re.finditer(r"^```sh\n(.*?)^```", text, flags=re.S | re.M):
-            start = text[:block.start()].count("\n") + 2
-            lines = block.group(1).splitlines()
-            i = 0
-            while i < len(lines):
-                line, number = lines[i], start + i
-                while line.rstrip().endswith("\\") and i + 1 < len(lines):   # continued lines
-                    i += 1
-                    line = line.rstrip()[:-1] + " " + lines[i].strip()
+    for block in (b for doc in DOCS for b in blocks_of(doc) if b.lang == "sh"):
+        lines = block.text.splitlines()
+        i = 0
+        while i < len(lines):
+            line, number = lines[i], block.line + 1 + i
+            while line.rstrip().endswith("\\") and i + 1 < len(lines):   # continued lines
                 i += 1
-                command = re.sub(r"^\.venv/bin/", "", line.strip())
-                if command.startswith("actorbt ") or command == "actorbt":
-                    out.append((f"{doc.relative_to(ROOT)}:{number}", command))
+                line = line.rstrip()[:-1] + " " + lines[i].strip()
+            i += 1
+            command = re.sub(r"^\.venv/bin/", "", line.strip())
+            if command.startswith("actorbt ") or command == "actorbt":
+                out.append((f"{block.doc.relative_to(ROOT)}:{number}", command))
     return out
 
 

@@ -23,45 +23,18 @@ import shutil
 import signal
 import subprocess
 import sys
-from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
-DOCS = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+from tests.doc_blocks import DOCS, ROOT, Block, blocks_of
+
 DEFAULT_TIMEOUT = 300.0
 
-_FENCE = re.compile(r"^```(\w*)[^\n]*\n(.*?)^```", re.S | re.M)
-_MARK = re.compile(r"<!--\s*doc-test:\s*(.*?)\s*-->\s*$")
 
-
-@dataclass(frozen=True)
-class Block:
-    doc: Path
-    line: int          # the fence's line, 1-based
-    lang: str
-    text: str
-    mark: str          # what the comment above it says; "" when there is none
-
-    @property
-    def where(self) -> str:
-        return f"{self.doc.relative_to(ROOT)}:{self.line}"
-
-    def timeout(self) -> float:
-        found = re.search(r"timeout\s+(\d+)", self.mark)
-        return float(found.group(1)) if found else DEFAULT_TIMEOUT
-
-
-def blocks_of(doc: Path) -> list[Block]:
-    text = doc.read_text(encoding="utf-8")
-    out = []
-    for fence in _FENCE.finditer(text):
-        line = text.count("\n", 0, fence.start()) + 1
-        above = text[:fence.start()].rstrip("\n").rsplit("\n", 1)[-1]
-        mark = _MARK.search(above)
-        out.append(Block(doc, line, fence.group(1), fence.group(2), mark.group(1) if mark else ""))
-    return out
+def _timeout(block: Block) -> float:
+    found = re.search(r"timeout\s+(\d+)", block.mark)
+    return float(found.group(1)) if found else DEFAULT_TIMEOUT
 
 
 def _shows_actorbt(block: Block) -> bool:
@@ -109,11 +82,11 @@ def _run(block: Block, project: Path, env: dict) -> None:
                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                              start_new_session=True)
     try:
-        out, err = shell.communicate(timeout=block.timeout())
+        out, err = shell.communicate(timeout=_timeout(block))
     except subprocess.TimeoutExpired:
         os.killpg(shell.pid, signal.SIGKILL)        # the block and everything it started
         out, err = shell.communicate()
-        pytest.fail(f"{block.where}: still running after {block.timeout():.0f} s\n{_tail(out)}\n{_tail(err)}")
+        pytest.fail(f"{block.where}: still running after {_timeout(block):.0f} s\n{_tail(out)}\n{_tail(err)}")
     if shell.returncode != 0:
         pytest.fail(f"{block.where}: exit {shell.returncode}\n{_tail(out)}\n{_tail(err)}")
 
