@@ -140,16 +140,18 @@ def seen_again(target: dict, seen: dict) -> dict:
 
 
 def surface_spots(surface: tuple[float, float, float, float], inset: float, standoff: float,
-                  taken: list, robot: tuple[float, float]) -> list[tuple[float, ...]]:
-    """Where an object may be put down on a box-shaped surface (x, y, size_x, size_y) [m]:
-    ``inset`` inside an edge, along it PLACE_SPACING apart (the middle first), at least
-    PLACE_SPACING from the ``taken`` spots. Each (x, y, heading of the base facing the
-    surface across that edge, and the standoff x, y ``standoff`` back from it), nearest
-    the ``robot`` (x, y) first."""
+                  taken: list, robot: tuple[float, float], yaw: float = 0.0) -> list[tuple[float, ...]]:
+    """Where an object may be put down on a box-shaped surface (x, y, size_x, size_y) [m]
+    turned ``yaw`` [rad] (its sizes along its own axes): ``inset`` inside an edge, along it
+    PLACE_SPACING apart (the middle first), at least PLACE_SPACING from the ``taken``
+    spots. Each (x, y, heading of the base facing the surface across that edge, and the
+    standoff x, y ``standoff`` back from it), nearest the ``robot`` (x, y) first."""
     x, y, size_x, size_y = surface
+    c, s = math.cos(yaw), math.sin(yaw)
     spots = []
     for nx, ny, half, along in ((1, 0, size_x / 2, size_y / 2), (-1, 0, size_x / 2, size_y / 2),
                                 (0, 1, size_y / 2, size_x / 2), (0, -1, size_y / 2, size_x / 2)):
+        nx, ny = c * nx - s * ny, s * nx + c * ny       # the edge's outward normal, map frame
         heading = math.atan2(-ny, -nx)
         for k in (0, 1, -1, 2, -2):
             t = k * PLACE_SPACING

@@ -23,6 +23,10 @@ MIN_PLACE_REACH = 0.10      # [m] nearer the base, the object would be on it
 PLACE_STANDOFF = 0.39       # the base stops at least this far from where it puts an
 #                             object down before driving in [m]: room to turn (the
 #                             upright grasp's standoff; a grasp from above reaches less)
+STANDOFF_FARTHER = 0.30     # [m] how much farther back a standoff may move to find room:
+#                             the nearest one is often a few cm short (a surface's edge on
+#                             the map is rounded out to whole cells), the drive in makes up
+STANDOFF_STEP = 0.02        # [m] the steps it moves back in
 
 
 class Placing:
@@ -35,7 +39,8 @@ class Placing:
         self.run_actor("home")
 
     @actor(moves=True)
-    def place(self, x: float, y: float, surface: float = 0.0, heading: float | None = None) -> dict:
+    def place(self, x: float, y: float, surface: float = 0.0, heading: float | None = None,
+              standoff: float | None = None) -> dict:
         """Put the held object down with its axis at (x, y) [m] on a surface ``surface`` [m]
         high, the base facing ``heading`` [rad] (default: from where it is).
 
@@ -45,6 +50,8 @@ class Placing:
             surface: height of the surface it is put on [m]; 0: the floor
             heading: the base's heading while placing [rad]; None: facing (x, y) from
                 the robot's side, or the nearest side with room for the base
+            standoff: with ``heading``, how far back from (x, y) the base stops before
+                it drives in [m]; None: the grasp's standoff (at least PLACE_STANDOFF)
 
         Returns:
             where the hand released it: x, y, z [m] in the map frame
@@ -63,7 +70,7 @@ class Placing:
             sx, sy, syaw = self._free_standoff((rx, ry), (x, y), strategy, corridor=False,
                                                plan=replace(g, sides=()))[0]
         else:
-            d = max(g.reach + a.standoff, PLACE_STANDOFF)
+            d = standoff if standoff is not None else max(g.reach + a.standoff, PLACE_STANDOFF)
             sx, sy, syaw = x - d * math.cos(heading), y - d * math.sin(heading), heading
         self.run_actor("goto", sx, sy, syaw)
         self.run_actor("move_to_pose", g.reach, 0.0, release_z + PLACE_ABOVE, g.pitch)
@@ -119,19 +126,21 @@ class Placing:
         return reach
 
     @actor(moves=True)
-    def place_on(self, x: float, y: float, size_x: float, size_y: float, height: float) -> dict:
+    def place_on(self, x: float, y: float, size_x: float, size_y: float, height: float,
+                 yaw: float = 0.0) -> dict:
         """Place the held object on a box-shaped surface (a pallet) centred at (x, y) [m],
-        ``size_x`` by ``size_y`` [m], ``height`` [m] high: near the edge the robot can reach
-        best, since the base cannot drive over the surface, and PLACE_SPACING away from
-        the objects it put down before (a tidy-up brings several to one pallet: put on the
-        same spot, one knocks the other off).
+        ``size_x`` by ``size_y`` [m] along its own axes, turned ``yaw`` [rad], ``height``
+        [m] high: near the edge the robot can reach best, since the base cannot drive over
+        the surface, and PLACE_SPACING away from the objects it put down before (a tidy-up
+        brings several to one pallet: put on the same spot, one knocks the other off).
 
         Args:
             x: the surface's centre, map frame x [m]
             y: the surface's centre, map frame y [m]
-            size_x: the surface's extent along the map's x axis [m]
-            size_y: the surface's extent along the map's y axis [m]
+            size_x: the surface's extent along its x axis [m]
+            size_y: the surface's extent along its y axis [m]
             height: the surface's height above the floor [m]
+            yaw: the surface's x axis from the map's [rad]
 
         Returns:
             where the hand released the object: x, y, z [m] in the map frame
@@ -146,24 +155,52 @@ class Placing:
         inset = min(PLACE_INSET, reach - BASE_OUTLINE[1] - BASE_MARGIN)
         rx, ry, _ = self.run_actor("get_pose")
         taken = self.get_value("put_down")
-        spots = surface_spots((x, y, size_x, size_y), inset, standoff, taken, (rx, ry))
+        spots = surface_spots((x, y, size_x, size_y), inset, standoff, taken, (rx, ry), yaw)
         if not spots:
             raise ApproachError(f"the surface at ({x:.2f}, {y:.2f}) has no free spot left: "
                                 f"{len(taken)} objects were put down on it")
         failed = None
-        for px, py, heading, sx, sy in spots:
-            if self.run_actor("clearance", sx, sy) >= STANDOFF_CLEARANCE:
-                try:
-                    released = self.run_actor("place", px, py, height, heading)
-                except ActorbtError as e:
-                    if not self.get_value("holding"):
-                        raise
-                    # still held: the next spot (house_hard 2003: a standoff free on the
-                    # map was "blocked: 0.125 m from an obstacle" for the navigation)
-                    failed = e
-                    continue
-                self.set_value("put_down", taken + [(px, py)])
-                return released
+        room: dict[float, float] = {}      # each side's heading -> the most room found [m]
+        for px, py, heading, _, _ in spots:
+            d, clear = self._roomy_standoff((px, py), heading, standoff)
+            side = round(heading, 3)
+            room[side] = max(room.get(side, 0.0), clear)
+            if d is None:
+                continue
+            try:
+                released = self.run_actor("place", px, py, height, heading, d)
+            except ActorbtError as e:
+                if not self.get_value("holding"):
+                    raise
+                # still held: the next spot (a standoff free on the map can be blocked
+                # for the navigation by what the robot sees there now)
+                failed = e
+                continue
+            self.set_value("put_down", taken + [(px, py)])
+            return released
         if failed is not None:
             raise failed
-        raise ApproachError(f"no side of the surface at ({x:.2f}, {y:.2f}) has room for the base")
+        sides = ", ".join(f"base facing {round(math.degrees(h)) % 360} deg: {c:.2f} m"
+                          for h, c in sorted(room.items(), key=lambda hc: math.degrees(hc[0]) % 360))
+        raise ApproachError(
+            f"no side of the surface at ({x:.2f}, {y:.2f}) has room for the base: it needs "
+            f"{STANDOFF_CLEARANCE:.2f} m clear of the map's obstacles {standoff:.2f}-"
+            f"{standoff + STANDOFF_FARTHER:.2f} m back from a spot on the edge; the most "
+            f"room on each side ({sides})")
+
+    def _roomy_standoff(self, spot: tuple[float, float], heading: float,
+                        nearest: float) -> tuple[float | None, float]:
+        """The nearest standoff distance from ``spot`` [m], ``nearest`` or up to
+        STANDOFF_FARTHER farther back along ``heading``, where the base has
+        STANDOFF_CLEARANCE around it on the map (None if none), and the most clearance
+        seen along the way [m]."""
+        best = 0.0
+        steps = int(round(STANDOFF_FARTHER / STANDOFF_STEP))
+        for k in range(steps + 1):
+            d = nearest + k * STANDOFF_STEP
+            clear = float(self.run_actor("clearance", spot[0] - d * math.cos(heading),
+                                         spot[1] - d * math.sin(heading)))
+            best = max(best, clear)
+            if clear >= STANDOFF_CLEARANCE:
+                return d, best
+        return None, best

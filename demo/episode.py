@@ -235,12 +235,13 @@ class Sightings(TreeObserver):
 
 def _on_surface(pose, place) -> bool:
     x, y, z = pose[:3]
-    return (abs(x - place.x) <= place.sx / 2 and abs(y - place.y) <= place.sy / 2
-            and z > place.sz)
+    c, s = math.cos(place.yaw), math.sin(place.yaw)
+    u, v = c * (x - place.x) + s * (y - place.y), -s * (x - place.x) + c * (y - place.y)
+    return abs(u) <= place.sx / 2 and abs(v) <= place.sy / 2 and z > place.sz
 
 
 def _surface(box) -> dict:
-    return {"x": box.x, "y": box.y, "size_x": box.sx, "size_y": box.sy, "height": box.sz}
+    return {"x": box.x, "y": box.y, "size_x": box.sx, "size_y": box.sy, "height": box.sz, "yaw": box.yaw}
 
 
 def world_places(sim: SimWorld) -> dict:

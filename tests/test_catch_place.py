@@ -135,3 +135,62 @@ def test_the_fingers_first_open_just_past_the_object_as_they_hold_it_now(rt, now
     run_in_actor(rt, lambda: catch.place(7.0, 5.0, 0.12, 0.0))
     assert base.openings[0] == pytest.approx(first)
     assert base.openings[-1] == strategy_for("can").plan_for("upright").open_width
+
+
+
+class _Walled(_Base):
+    """A base whose map has the pallet at (7.0, 6.2), 0.6 x 0.4 m, rounded out to whole 5 cm
+    cells, and (``ring`` not None) a wall all round it ``ring`` m from its cells."""
+
+    def __init__(self, ring=None):
+        super().__init__()
+        self.ring = ring
+
+    @actor
+    def clearance(self, x: float, y: float) -> float:
+        return _walled_clearance(x, y, self.ring)
+
+
+def _walled_clearance(x: float, y: float, ring: float | None) -> float:
+    d = math.hypot(max(abs(x - 7.0) - 0.35, 0.0), max(abs(y - 6.2) - 0.25, 0.0))
+    return d if ring is None else max(min(d, ring - d), 0.0)
+
+
+def test_a_standoff_a_little_short_of_room_moves_back_until_the_base_fits(rt):
+    """The nearest standoff, 0.39 m from a spot 0.12 m inside the edge, stands 0.22 m
+    from the rounded-out pallet: the base needs 0.26 m, so it stops farther back."""
+    base = rt.add_subsystem("base", _Walled)
+    catch = rt.add_subsystem("catch", Catcher)
+    _holding(catch)
+    run_in_actor(rt, lambda: catch.place_on(7.0, 6.2, 0.6, 0.4, 0.12))
+    assert catch.get_value("holding") is None
+    assert len(base.gotos) == 1                              # the first spot, farther back
+    gx, gy = base.gotos[0]
+    assert _walled_clearance(gx, gy, None) >= 0.26
+    assert gy < 6.2 - 0.25 - 0.26 and abs(gx - 7.0) < 0.3    # south of it, the near side
+    rx, ry = base.released_at
+    assert abs(rx - 7.0) < 0.25 and 6.0 < ry < 6.2           # and put it on the pallet
+
+
+def test_with_no_side_roomy_enough_the_place_says_how_much_room_each_side_has(rt):
+    base = rt.add_subsystem("base", _Walled, ring=0.45)      # a pit too narrow for the base
+    catch = rt.add_subsystem("catch", Catcher)
+    _holding(catch)
+    with pytest.raises(ActorError, match=r"no side .* has room for the base: it needs 0.26 m .* "
+                                         r"the most room on each side \(base facing 0 deg: 0.2\d m"):
+        run_in_actor(rt, lambda: catch.place_on(7.0, 6.2, 0.6, 0.4, 0.12))
+    assert base.gotos == [] and catch.get_value("holding") is not None
+
+
+def test_a_turned_surface_is_put_on_across_its_own_edges(rt):
+    base = rt.add_subsystem("base", _Base)
+    catch = rt.add_subsystem("catch", Catcher)
+    _holding(catch)
+    yaw = math.radians(35)
+    run_in_actor(rt, lambda: catch.place_on(7.0, 6.2, 0.6, 0.4, 0.12, yaw))
+    rx, ry = base.released_at
+    c, s = math.cos(yaw), math.sin(yaw)
+    u, v = c * (rx - 7.0) + s * (ry - 6.2), -s * (rx - 7.0) + c * (ry - 6.2)
+    assert abs(u) < 0.3 - 0.05 and abs(v) < 0.2 - 0.05        # well inside the turned pallet
+    # the base faced the pallet square to one of its edges
+    assert min(abs(math.remainder(base.pose[2] - yaw - k * math.pi / 2, 2 * math.pi)) for k in range(4)) < 1e-6
