@@ -7,7 +7,7 @@ import sys
 
 HERE = pathlib.Path(__file__).resolve().parent
 #: hours, not minutes: run only when named (`python bench/run_all.py acceptance`)
-LONG = {"bench_acceptance"}
+LONG = {"bench_acceptance", "bench_real_maps"}
 
 
 def main() -> int:
