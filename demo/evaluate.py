@@ -434,12 +434,13 @@ def print_rates(rows: list[tuple[str, list[Episode]]], label: str, target_rate: 
                 target_rtf: float | None = None, out: TextIO = sys.stdout) -> None:
     """One line per (name, episodes): successes, rate, median real-time factor, wall and
     sim time per episode, and the targets met or MISSED (the benchmarks' summary)."""
-    print(f"\n{label:8s} {'success':>12s} {'rate':>7s} {'RTF median':>11s} "
+    width = max([8, len(label)] + [len(name) for name, _ in rows])
+    print(f"\n{label:{width}s} {'success':>12s} {'rate':>7s} {'RTF median':>11s} "
           f"{'wall/episode':>13s} {'sim/episode':>12s}", file=out)
     for name, eps in rows:
         n, ok = len(eps), sum(e.success for e in eps)
         rtf = statistics.median(e.realtime_factor for e in eps)
-        line = (f"{name:8s} {ok:5d}/{n:<6d} {100 * ok / n:6.1f}% {rtf:10.1f}x "
+        line = (f"{name:{width}s} {ok:5d}/{n:<6d} {100 * ok / n:6.1f}% {rtf:10.1f}x "
                 f"{statistics.median(e.wall_time for e in eps):11.1f} s "
                 f"{statistics.median(e.sim_time for e in eps):10.1f} s   "
                 f"target >= {target_rate:.0%}: {'ok' if ok / n >= target_rate else 'MISSED'}")
