@@ -155,7 +155,12 @@ class Robot:
         """Whether the servo's setpoint is still on its way to the goal, or a finger stands
         more than a millimetre short of it (it squeezes what it holds)."""
         goal = self.gripper_width / 2
-        return any(sp != goal or q - sp > 0.001 for sp, q in zip(self.grip_setpoint, finger_positions))
+        return any(sp != goal for sp in self.grip_setpoint) or self.squeezing(finger_positions)
+
+    def squeezing(self, finger_positions) -> bool:
+        """Whether a finger stands more than a millimetre short of its setpoint: it pushes
+        against something between the fingers."""
+        return any(q - sp > 0.001 for sp, q in zip(self.grip_setpoint, finger_positions))
 
     # ---------------- state ----------------
     def joint_states(self):
