@@ -6,10 +6,11 @@ simulator data instead of a ten-minute exploration.
     .venv/bin/python bench/mapping_replay.py replay out/rec0.npz [--set pair_edges=2 ...] [--edges]
 
 ``record`` runs ``actorbt map build``'s exploration (:func:`demo.mapping.build_map`) and
-keeps every ``/scan`` and ``/odom`` message and, as the referee, the simulator's true pose
-at each scan. ``replay`` feeds the scans to :class:`navstack.slam.Slam` as the mapper does
-(the odometry interpolated at each scan's stamp), with ``--set`` overriding SlamParams
-(values are YAML), and prints:
+keeps every ``/scan``, ``/odom`` and IMU message and, as the referee, the simulator's true
+pose at each scan. ``replay`` feeds the scans to :class:`navstack.slam.Slam` as the mapper
+does (the odometry turned by the IMU's heading, :class:`navstack.gyro_odometry.GyroOdometry`,
+interpolated at each scan's stamp; a recording without IMU messages: the wheels' alone),
+with ``--set`` overriding SlamParams (values are YAML), and prints:
 
 * ``online``: the pose error as the robot drove (the newest keyframe's pose plus the
   odometry since, what the mapper publishes) [cm, RMS and max];
@@ -44,9 +45,12 @@ def record(world: str, seed: int, out: pathlib.Path, max_time: float) -> None:
     from sensor_msgs.msg import LaserScan
 
     from demo.mapping import build_map
+    from sensor_msgs.msg import Imu
+
+    from navstack.localiser import IMU_TOPIC
     from navstack.odometry import yaw_of
 
-    rec: dict = {"scan_t": [], "ranges": [], "truth": [], "odom": [], "meta": None}
+    rec: dict = {"scan_t": [], "ranges": [], "truth": [], "odom": [], "imu": [], "meta": None}
 
     def observe(rt, sim):
         def on_scan(m: LaserScan) -> None:
@@ -59,16 +63,20 @@ def record(world: str, seed: int, out: pathlib.Path, max_time: float) -> None:
             p = m.pose.pose
             rec["odom"].append((m.header.stamp.sec + 1e-9 * m.header.stamp.nanosec, p.position.x,
                                 p.position.y, yaw_of(p.orientation)))
-        subs = [rt.bus.subscribe("/scan", LaserScan, on_scan, 100), rt.bus.subscribe("/odom", Odometry, on_odom, 100)]
+        def on_imu(m: Imu) -> None:
+            rec["imu"].append((m.header.stamp.sec + 1e-9 * m.header.stamp.nanosec, yaw_of(m.orientation)))
+        subs = [rt.bus.subscribe("/scan", LaserScan, on_scan, 100), rt.bus.subscribe("/odom", Odometry, on_odom, 100),
+                rt.bus.subscribe(IMU_TOPIC, Imu, on_imu, 100)]
         return lambda: [s.close() for s in subs]
 
     with tempfile.TemporaryDirectory() as tmp:
         run = build_map(world, seed, tmp, max_time=max_time, observe=observe, progress=sys.stdout)
     out.parent.mkdir(parents=True, exist_ok=True)
     np.savez_compressed(out, scan_t=np.array(rec["scan_t"]), ranges=np.array(rec["ranges"]),
-                        truth=np.array(rec["truth"]), odom=np.array(rec["odom"]), meta=np.array(rec["meta"]),
+                        truth=np.array(rec["truth"]), odom=np.array(rec["odom"]),
+                        imu=np.array(rec["imu"]).reshape(-1, 2), meta=np.array(rec["meta"]),
                         world=np.array(world), seed=np.array(seed))
-    print(f"recorded {len(rec['scan_t'])} scans and {len(rec['odom'])} odometry messages of a "
+    print(f"recorded {len(rec['scan_t'])} scans, {len(rec['odom'])} odometry and {len(rec['imu'])} IMU messages of a "
           f"{run.sim_time:.0f} s run in {out}; live: online error {100 * run.traj_rmse_m:.1f} cm RMS "
           f"({100 * run.traj_max_m:.1f} max), {run.mapping.get('loop_closures')} loop closures")
 
@@ -88,6 +96,7 @@ def fit(truth: np.ndarray, est: np.ndarray, scale: bool) -> tuple[float, float]:
 
 def replay(path: pathlib.Path, overrides: dict, edges: bool = False) -> dict:
     from navstack.map_io import write_map_yaml
+    from navstack.gyro_odometry import GyroOdometry
     from navstack.odometry import OdomHistory
     from navstack.pose_graph import relative
     from navstack.log_odds import LogOddsParams
@@ -105,12 +114,18 @@ def replay(path: pathlib.Path, overrides: dict, edges: bool = False) -> dict:
     if grid:
         params["grid"] = LogOddsParams(**{**SlamParams().grid.__dict__, **grid})
     slam = Slam(SlamParams(initial_pose=tuple(d["truth"][0]), **params))
-    odom, odom_msgs, next_odom, online = OdomHistory(maxlen=1 << 20), d["odom"], 0, []
+    odom, online = OdomHistory(maxlen=1 << 20), []
+    messages = odometry_messages(d["odom"], d.get("imu", np.zeros((0, 2))))
+    gyro, next_msg = GyroOdometry(), 0
     t0 = time.perf_counter()
     for k, t in enumerate(d["scan_t"]):
-        while next_odom < len(odom_msgs) and odom_msgs[next_odom][0] <= t + 1e-9:
-            odom.add(odom_msgs[next_odom][0], odom_msgs[next_odom][1:])
-            next_odom += 1
+        while next_msg < len(messages) and messages[next_msg][0] <= t + 1e-9:
+            stamp, kind, value = messages[next_msg]
+            if kind == "imu":
+                gyro.on_imu(stamp, value)
+            else:
+                odom.add(stamp, gyro.fuse(stamp, value))
+            next_msg += 1
         o = odom.at(t)
         if o is None:
             continue
@@ -138,6 +153,13 @@ def replay(path: pathlib.Path, overrides: dict, edges: bool = False) -> dict:
     if edges:
         out["edges"] = edge_errors(slam, kf_true, relative)
     return out
+
+
+def odometry_messages(odom: np.ndarray, imu: np.ndarray) -> list[tuple]:
+    """/odom and IMU messages merged by stamp, as the mapper receives them: (t, "odom",
+    (x, y, yaw)) and (t, "imu", yaw); an IMU reading before an odometry one at the same stamp."""
+    msgs = [(float(r[0]), "imu", float(r[1])) for r in imu] + [(float(r[0]), "odom", tuple(r[1:])) for r in odom]
+    return sorted(msgs, key=lambda m: (m[0], m[1] != "imu"))
 
 
 def edge_errors(slam, kf_true: np.ndarray, relative) -> dict:

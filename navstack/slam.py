@@ -11,12 +11,20 @@
   same returns, weighted by 1 / range noise^2 (:func:`match_points`: which returns).
   Matching against the recent stretch only (not the whole map) keeps an old, drifted part
   of the map from pulling the robot before the loop is closed explicitly;
+* **tracking** (``track_scans``): every other scan is matched against the newest
+  keyframe's returns, in a small window around the last scan's pose plus the odometry
+  since. :meth:`Slam.pose` (what the mapper publishes) and the next keyframe's guess
+  follow these matches, and keyframes are spaced by them: wheels that slip, or spin
+  while the robot is wedged against furniture, move neither. A loose match (a wall or
+  two) keeps the odometry;
 * **a pose graph** (:class:`~navstack.pose_graph.PoseGraph`): per keyframe, links to the
-  ``pair_edges`` keyframes before it, each a Gauss-Newton match against that keyframe's
-  returns alone (all its scans, placed by the odometry: short baselines, little shrink);
-  else a match edge (the matcher's covariance) from the previous keyframe, or an
-  odometry edge (uncertainty growing with the distance and the turn) where the match
-  failed;
+  ``pair_edges`` keyframes before it and to the ``near_links`` nearest ones of the local
+  stretch (a turn on the spot links back to where it began, not through a chain of
+  links whose heading noise adds up), each a Gauss-Newton match against that keyframe's
+  returns alone (all its scans, placed by the odometry unless the wheels slipped: short
+  baselines, little shrink); else a match edge (the matcher's covariance) from the
+  previous keyframe, or an odometry edge (uncertainty growing with the distance and the
+  turn) where the match failed;
 * **loop closures**: a keyframe is matched against the submap around an old keyframe
   (``loop_min_travel`` back along the path but within ``loop_radius``), over a wide window;
   a good score, a refinement that stays within ``loop_max_refine_shift`` and a
@@ -67,9 +75,22 @@ class SlamParams:
     match_max_range: float = 3.0              # match only returns nearer than this [m]: near
     #   range_max, only the returns whose noise made them short survive (biased towards the laser)
     min_match_score: float = 0.35             # below: trust the odometry
+    track_scans: bool = True                  # match every scan against the newest keyframe:
+    #   the pose published between keyframes, and the next keyframe's guess, follow the laser,
+    #   not the odometry (whose wheels slip, or spin while the robot is wedged against furniture)
+    track_window_xy: float = 0.1              # its search window around the last scan's pose
+    #                                           plus the odometry since [m]
+    track_window_yaw: float = math.radians(1)  # (the gyro holds the heading over a scan)
+    track_max_sigma: float = 0.03             # a looser match (its covariance's widest) keeps
+    #                                           the odometry's [m]
+    slip_tolerance: float = 0.03              # a scan whose match is this far from the odometry's
+    #   offset [m] goes into the map and the links' references at its match; else at the
+    #   odometry's (matches are shrunk towards their reference by a per cent or two)
     pair_edges: int = 3                       # link each keyframe to the N before it, each
     #                                           matched alone (0: one link, the local-map match)
     pair_sigma: tuple = (0.03, math.radians(1.0))   # those links' sigma [m, rad]
+    near_links: int = 3                       # and to the N nearest keyframes of the local
+    near_link_radius: float = 0.3             # stretch within this [m] (a turn on the spot)
     pair_all_scans: bool = True               # a link's reference: every scan of the older
     #   keyframe (each at its odometry offset), not only its first: 3-5 noisy scans of the same
     #   walls average out, and the links' shrink and heading noise drop (bench/mapping_replay.py)
@@ -124,6 +145,14 @@ class Keyframe:
 
 
 @dataclass
+class _LocalMap:
+    key: tuple                   # (keyframes, graph version) it was built for
+    points: np.ndarray           # (N, 2) its returns in the map frame
+    coarse: LikelihoodMap        # for the correlative matcher
+    fine: LikelihoodMap | None   # the density map for the Gauss-Newton refinement
+
+
+@dataclass
 class _Scan:
     ranges: np.ndarray
     angles: np.ndarray
@@ -152,6 +181,11 @@ class Slam:
         self._integrated_at: list[tuple] = []   # per keyframe, the pose its scans were mapped at
         self._t = self._rebuilt_t = 0.0  # the latest scan's time, the last rebuild's [s]
         self._since_closure = 1 << 30
+        self._track_offset = IDENTITY    # the latest scan's pose from the newest keyframe
+        self._track_odom = IDENTITY      # and the odometry there
+        self._local_map: _LocalMap | None = None
+        self._kf_map: _LocalMap | None = None
+        self._graph_version = 0          # bumped whenever the graph moves its nodes
 
     # -- input ---------------------------------------------------------------------------------
     def add(self, odom_pose, ranges, angles, range_max: float, t: float = 0.0,
@@ -162,22 +196,27 @@ class Slam:
         p = self.params
         odom = tuple(float(v) for v in odom_pose)
         self._t = float(t)
-        self._travel += math.hypot(odom[0] - self._odom[0], odom[1] - self._odom[1]) if self.keyframes else 0.0
-        self._odom = odom
         # copies: a row of a caller's larger array would keep all of it alive
         scan = _Scan(np.array(ranges, dtype=np.float32), np.array(angles, dtype=np.float64),
                      float(range_max), float(range_min), float(t))
         if not self.keyframes:
+            self._odom = self._track_odom = odom
             self._new_keyframe(t, odom, scan, p.initial_pose or odom)
             return True
         last = self.keyframes[-1]
-        delta = relative(last.odom, odom)
-        if math.hypot(delta[0], delta[1]) < p.keyframe_dist and abs(delta[2]) < p.keyframe_angle:
+        offset = compose(self._track_offset, relative(self._track_odom, odom))   # the odometry's guess
+        if p.track_scans:
+            offset = self._track(offset, scan)
+        self._travel += math.hypot(offset[0] - self._track_offset[0], offset[1] - self._track_offset[1])
+        self._odom, self._track_offset, self._track_odom = odom, offset, odom
+        if math.hypot(offset[0], offset[1]) < p.keyframe_dist and abs(offset[2]) < p.keyframe_angle:
             if p.map_all_scans:
+                delta = self._scan_delta(offset, relative(last.odom, odom))
                 last.scans.append((delta, scan))
                 self._integrate(compose(self.graph.pose(len(self.keyframes) - 1), delta), scan)
             return False
-        self._new_keyframe(t, odom, scan, None)
+        self._new_keyframe(t, odom, scan, None, offset)
+        self._track_offset = IDENTITY
         return True
 
     # -- output --------------------------------------------------------------------------------
@@ -186,7 +225,7 @@ class Slam:
         if not self.keyframes:
             return self.params.initial_pose or self._odom
         k = len(self.keyframes) - 1
-        return compose(self.graph.pose(k), relative(self.keyframes[k].odom, self._odom))
+        return compose(compose(self.graph.pose(k), self._track_offset), relative(self._track_odom, self._odom))
 
     def map_to_odom(self) -> tuple:
         """The map -> odom transform (x [m], y [m], yaw [rad]) that puts the odometry's
@@ -218,7 +257,9 @@ class Slam:
                 self._integrate(compose(x, delta), scan)
 
     # -- the front end -------------------------------------------------------------------------
-    def _new_keyframe(self, t: float, odom: tuple, scan: _Scan, pose) -> None:
+    def _new_keyframe(self, t: float, odom: tuple, scan: _Scan, pose, offset=None) -> None:
+        """Make the scan a keyframe: at ``pose`` (the first), else matched from ``offset``
+        (its pose guessed from the newest keyframe's)."""
         p = self.params
         pts = match_points(scan, p.match_max_range, p.sensor_offset)
         kf = Keyframe(t, odom, pts, self._weights(pts), self._travel, [(IDENTITY, scan)])
@@ -229,8 +270,7 @@ class Slam:
             self._integrate(pose, scan)
             return
         k = len(self.keyframes)
-        prev = self.keyframes[-1]
-        z_odom = relative(prev.odom, odom)
+        z_odom = offset
         predicted = compose(self.graph.pose(k - 1), z_odom)
         matched, cov = self._match_local(pts, predicted)
         self.graph.add_node(matched if matched is not None else predicted)
@@ -243,14 +283,19 @@ class Slam:
         # against obstacles, and as an extra link it pulls every good match off by its drift)
         pairs = self._pair_matches(k, pts, matched) if matched is not None and p.pair_edges else []
         sx, syaw = p.pair_sigma
+        link_info = np.diag([1 / sx ** 2, 1 / sx ** 2, 1 / syaw ** 2])
         for i, z in pairs:
-            self.graph.add_edge(i, k, z, np.diag([1 / sx ** 2, 1 / sx ** 2, 1 / syaw ** 2]), "pair")
+            self.graph.add_edge(i, k, z, link_info, "pair")
+        if pairs:
+            for i, z in self._near_matches(k, pts, matched):
+                self.graph.add_edge(i, k, z, link_info, "near")
         if not pairs and matched is not None:
             self.graph.add_edge(k - 1, k, relative(self.graph.pose(k - 1), matched), _information(cov), "match")
         elif not pairs:
             self.graph.add_edge(k - 1, k, z_odom, self._odom_information(z_odom), "odom")
         elif k % p.optimize_every == 0:
             self.graph.optimize(max_iterations=10, loss="cauchy", f_scale=3.0)
+            self._graph_version += 1
             self._dirty = self._dirty or self._map_moved()
         self._since_closure += 1
         if self._since_closure > p.loop_cooldown and self._close_loop(k):
@@ -264,26 +309,105 @@ class Slam:
         p = self.params
         if len(pts) < 20:
             return None, None
-        local = self._local_keyframes()
-        ref, weights = self._points_of(local), self._weights_of(local)
-        lmap = LikelihoodMap.from_points(ref, p.resolution, p.match_sigma)
-        res = self.matcher.match(lmap, pts, predicted)
+        local = self._local()
+        res = self.matcher.match(local.coarse, pts, predicted)
         self.last_match_score = res.score
         if res.score < p.min_match_score:
             return None, None
-        pose = res.pose
-        refined = self._refine(ref, pts, pose, weights)
-        # the refinement stays near the lattice cell it started from, or it is not trusted
-        if math.hypot(refined[0] - pose[0], refined[1] - pose[1]) < 2 * p.resolution:
-            pose = refined
-        return pose, res.covariance
+        return self._refine_local(local, pts, res.pose), res.covariance
+
+    def _track(self, offset, scan: _Scan) -> tuple:
+        """A scan's pose from the newest keyframe, matched against that keyframe's returns
+        in a small window around ``offset`` (the last scan's plus the odometry since);
+        ``offset`` itself when the match is too poor or too loose (a wall or two: it
+        slides along them) to trust. Against the keyframe alone, not the local map: a
+        short baseline, no shrink, and the keyframe's own place in the map is the
+        graph's business."""
+        p = self.params
+        pts = match_points(scan, p.match_max_range, p.sensor_offset)
+        if len(pts) < 20 or len(self.keyframes[-1].points) < 20:
+            return offset
+        ref = self._keyframe_map()
+        res = self.matcher.match(ref.coarse, pts, offset, p.track_window_xy, p.track_window_yaw)
+        if res.score < p.min_match_score or np.linalg.eigvalsh(res.covariance[:2, :2])[-1] > p.track_max_sigma ** 2:
+            return offset
+        return self._refine_local(ref, pts, res.pose)
+
+    def _scan_delta(self, tracked, by_odometry) -> tuple:
+        """Where a keyframe's later scan goes, from the keyframe: the odometry's offset
+        (a match's is shrunk towards the reference, by a per cent or two) unless the
+        wheels slipped, i.e. the match disagrees with it by more than ``slip_tolerance``."""
+        slipped = math.hypot(tracked[0] - by_odometry[0], tracked[1] - by_odometry[1]) > self.params.slip_tolerance
+        return tracked if slipped else by_odometry
+
+    def _keyframe_map(self) -> _LocalMap:
+        """The newest keyframe's returns in its own frame, as the matchers' maps (built
+        once per keyframe)."""
+        key = (len(self.keyframes), -1)
+        if self._kf_map is None or self._kf_map.key != key:
+            p = self.params
+            kf = self.keyframes[-1]
+            fine = LikelihoodMap.from_density(kf.points, p.refine_resolution, p.refine_sigma, levels=0,
+                                              weights=kf.weights)
+            self._kf_map = _LocalMap(key, kf.points, LikelihoodMap.from_points(kf.points, p.resolution, p.match_sigma),
+                                     fine)
+        return self._kf_map
+
+    def _refine_local(self, local: _LocalMap, pts: np.ndarray, pose) -> tuple:
+        """The lattice pose refined off it on the local map (:attr:`SlamParams.refine`);
+        a refinement that leaves the lattice cell it started from is not trusted."""
+        p = self.params
+        if p.refine == "gauss_newton":
+            refined = refine(local.fine, pts, pose)[0]
+        elif p.refine == "icp":
+            refined = self._refine(local.points, pts, pose)
+        else:
+            return pose
+        return refined if math.hypot(refined[0] - pose[0], refined[1] - pose[1]) < 2 * p.resolution else pose
+
+    def _local(self) -> _LocalMap:
+        """The local map (:meth:`_local_keyframes` at their current poses) as the matchers'
+        likelihood maps: built once per keyframe and graph update, shared by the scans'
+        tracking and the next keyframe's match."""
+        key = (len(self.keyframes), self._graph_version)
+        if self._local_map is None or self._local_map.key != key:
+            p = self.params
+            local = self._local_keyframes()
+            ref, weights = self._points_of(local), self._weights_of(local)
+            fine = (LikelihoodMap.from_density(ref, p.refine_resolution, p.refine_sigma, levels=0, weights=weights)
+                    if p.refine == "gauss_newton" else None)
+            self._local_map = _LocalMap(key, ref, LikelihoodMap.from_points(ref, p.resolution, p.match_sigma), fine)
+        return self._local_map
 
     def _pair_matches(self, k: int, pts: np.ndarray, matched) -> list[tuple[int, tuple]]:
         """Keyframe k (at ``matched``) refined against each of the ``pair_edges`` keyframes
         before it alone: [(i, relative pose from i to k)]."""
         p = self.params
+        return self._matches_against(range(k - 1, max(-1, k - 1 - p.pair_edges), -1), pts, matched)
+
+    def _near_matches(self, k: int, pts: np.ndarray, matched) -> list[tuple[int, tuple]]:
+        """Keyframe k matched alone against the ``near_links`` keyframes of the local
+        stretch nearest to it (within ``near_link_radius``), beyond its pair links: the
+        robot turning on the spot or coming back over its tracks links to where it stood
+        before on a short baseline, instead of through a chain of links whose heading
+        noise adds up."""
+        p = self.params
+        if not p.near_links:
+            return []
+        first = self._local_keyframes()[0]
+        cand = np.arange(first, max(first, k - p.pair_edges))
+        if len(cand) == 0:
+            return []
+        poses = self.graph.poses[cand]
+        dist = np.hypot(poses[:, 0] - matched[0], poses[:, 1] - matched[1])
+        near = cand[dist < p.near_link_radius]
+        near = near[np.argsort(dist[dist < p.near_link_radius])][:p.near_links]
+        return self._matches_against([int(i) for i in near], pts, matched)
+
+    def _matches_against(self, indices, pts: np.ndarray, matched) -> list[tuple[int, tuple]]:
+        p = self.params
         out = []
-        for i in range(k - 1, max(-1, k - 1 - p.pair_edges), -1):
+        for i in indices:
             kf = self.keyframes[i]
             if len(kf.points) < 20:
                 continue
@@ -401,6 +525,7 @@ class Slam:
             self.graph.add_edge(int(j), k, relative(self.graph.pose(int(j)), pose),
                                 _information(p.loop_cov_scale * res.covariance), "loop")
             self.graph.optimize(loss="cauchy", f_scale=3.0)
+            self._graph_version += 1
             self.loop_closures += 1
             self._dirty = self._dirty or self._map_moved()
             return True

@@ -179,3 +179,31 @@ def test_a_keyframes_scans_line_up_in_its_reference_despite_a_heading_drift():
         worst_raw = max(worst_raw, float(np.abs(raw - true).max()))
     assert worst_raw > 0.02                    # the drift's smear, uncorrected
     assert worst < 0.5 * worst_raw and worst < 0.015
+
+
+def _wedged_run(track_scans: bool) -> list[float]:
+    """The robot drives 6 s, then is wedged against furniture for 20 s: it stands still
+    while its wheels spin (the odometry runs on at 0.17 m/s). The published pose's error
+    at each scan of the wedged part [m]."""
+    occ = read_map_yaml(FIXTURES / "house.yaml")
+    world = SyntheticWorld(occ, world_boxes(FIXTURES / "house_world.yaml"), seed=1, start=0, reverse=False)
+    slam = Slam(SlamParams(initial_pose=world.truth, sensor_offset=world.laser.pose, track_scans=track_scans))
+    s = None
+    while world.t < 6.0:
+        s = world.step()
+        if s.scan is not None:
+            slam.add(s.odom, s.scan.ranges, s.scan.angles, s.scan.range_max, s.t, s.scan.range_min)
+    odom, t, errors = s.odom, s.t, []
+    for _ in range(100):                            # 20 s of 5 Hz scans
+        t += 0.2
+        odom = compose(odom, (0.17 * 0.2, 0.0, 0.0))
+        scan = world.scan()
+        slam.add(odom, scan.ranges, scan.angles, scan.range_max, t, scan.range_min)
+        errors.append(math.dist(slam.pose()[:2], world.truth[:2]))
+    return errors
+
+
+def test_the_published_pose_follows_the_laser_when_the_wheels_slip():
+    tracked = np.array(_wedged_run(track_scans=True))
+    assert np.sqrt(np.mean(tracked ** 2)) < 0.03 and tracked.max() < 0.1
+    assert max(_wedged_run(track_scans=False)) > 0.2       # the odometry between keyframes
