@@ -95,8 +95,9 @@ class SlamParams:
     #   keyframe (each at its odometry offset), not only its first: 3-5 noisy scans of the same
     #   walls average out, and the links' shrink and heading noise drop (bench/mapping_replay.py)
     pair_scan_turn: float = math.radians(5)   # but only the scans turned at most this much from it
-    optimize_every: int = 5                   # keyframes between two graph optimisations
-    #                                           when pair_edges > 0
+    optimize_every: int = 1                   # keyframes between two graph optimisations
+    #   when pair_edges > 0 (every one: the published pose is the newest keyframe's, which
+    #   stands at its local-map match until the graph takes its links in)
     refine: str = "gauss_newton"              # off the lattice: "gauss_newton" (on a fine density
     #                                           map of the local returns), "icp" or "none"
     refine_resolution: float = 0.02           # that map's cells [m]
