@@ -11,7 +11,7 @@
   same returns, weighted by 1 / range noise^2 (:func:`match_points`: which returns).
   Matching against the recent stretch only (not the whole map) keeps an old, drifted part
   of the map from pulling the robot before the loop is closed explicitly;
-* **tracking** (``track_scans``): every other scan is matched against the newest
+* **tracking** (``track_scans``): each scan between keyframes is matched against the newest
   keyframe's returns, in a small window around the last scan's pose plus the odometry
   since. :meth:`Slam.pose` (what the mapper publishes) and the next keyframe's guess
   follow these matches, and keyframes are spaced by them: wheels that slip, or spin
