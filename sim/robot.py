@@ -157,6 +157,12 @@ class Robot:
         goal = self.gripper_width / 2
         return any(sp != goal for sp in self.grip_setpoint) or self.squeezing(finger_positions)
 
+    def holding(self, finger_positions) -> bool:
+        """Whether the servo's setpoint has reached its goal and a finger stands short of
+        it: the fingers have closed on something and hold it."""
+        goal = self.gripper_width / 2
+        return all(sp == goal for sp in self.grip_setpoint) and self.squeezing(finger_positions)
+
     def squeezing(self, finger_positions) -> bool:
         """Whether a finger stands more than a millimetre short of its setpoint: it pushes
         against something between the fingers."""

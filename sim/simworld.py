@@ -41,11 +41,13 @@ CMD_VEL_TIMEOUT = 0.5
 #: below the threshold (None: pybullet's own, which is not 0; bench/bench_physics.py)
 SOLVER_ITERATIONS = 50
 SOLVER_RESIDUAL = None
-#: the contact solver's iterations while a finger squeezes something: friction alone keeps
-#: a held body, and a solver stopped short of converging lets it creep about the line
-#: between the pads. Over a 21 s carry (tests/test_sim_grip_hold.py) a bottle, a can and a
-#: carton, each held at three heights, turned up to 13.7 degrees at 50 iterations, up to
-#: 15.4 at 150, 5.1 at 200, and at most 1.7 at 300.
+#: the contact solver's iterations while the fingers hold something (the servo's setpoint
+#: has reached its goal and a finger stands short of it; a grasp still closing is solved
+#: with the usual ones). Friction alone keeps a held body, and a solver stopped short of
+#: converging lets it creep about the line between the pads. Over a 21 s carry
+#: (tests/test_sim_grip_hold.py) a bottle, a can and a carton, each held at three heights,
+#: turned up to 13.7 degrees at 50 iterations and at most 3.5 at 300 (150 and 200, also
+#: while closing: up to 15.4 and 5.1).
 HOLDING_SOLVER_ITERATIONS = 300
 #: [Hz] physics substeps while the arm or the gripper moves or holds something: grasps,
 #: carries and placements are solved at this rate
@@ -340,7 +342,7 @@ class SimWorld:
         self.t = t_next
         self.ticks += 1
         q, v, _ = self.robot.joint_states()
-        self._choose_iterations(self.robot.squeezing(q[6:8]))
+        self._choose_iterations(self.robot.holding(q[6:8]))
         if follows_hand and (max(map(abs, v[2:6])) > ARM_STILL or max(map(abs, v[6:8])) > FINGER_STILL
                              or self.robot.gripper_busy(q[6:8])):
             self._hand_moved_at = self.t
@@ -349,10 +351,10 @@ class SimWorld:
         self.odometry.update(q[0], q[1], self.dt, yaw)
         self.gyro.update(yaw, self.odometry.v, self.dt)
 
-    def _choose_iterations(self, squeezing: bool) -> None:
-        """More solver iterations for the next control period while the fingers squeeze
-        something (friction alone holds it), the usual ones otherwise."""
-        n = self.holding_solver_iterations if squeezing else self.solver_iterations
+    def _choose_iterations(self, holding: bool) -> None:
+        """More solver iterations for the next control period while the fingers hold
+        something (friction alone keeps it), the usual ones otherwise."""
+        n = self.holding_solver_iterations if holding else self.solver_iterations
         if n != self._iterations_now:
             p.setPhysicsEngineParameter(numSolverIterations=n, physicsClientId=self.cid)
             self._iterations_now = n
