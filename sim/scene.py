@@ -81,9 +81,17 @@ class Scene:
         if obj.name in self.objects:
             raise ValueError(f"object '{obj.name}' already exists")
         cat = CATEGORIES[obj.category]
+        body = self._add_urdf(obj, cat) if cat.urdf else self._add_primitives(obj, cat)
+        # A body at rest leaves the contact solver until something touches it: a house's
+        # resting objects were a quarter of a driving robot's physics time.
+        p.changeDynamics(body, -1, activationState=p.ACTIVATION_STATE_ENABLE_SLEEPING, physicsClientId=self.cid)
+        self.objects[obj.name] = body
+        self.categories[obj.name] = obj.category
+        return body
+
+    def _add_primitives(self, obj: PlacedObject, cat) -> int:
+        """An object built from its category's primitive parts."""
         cid = self.cid
-        if cat.urdf:
-            return self._add_urdf(obj, cat)
         rgba = list(obj.rgba) if obj.rgba is not None else list(cat.rgba)
         types = []
         half, radii, lengths, frames = [], [], [], []
@@ -137,8 +145,6 @@ class Scene:
             # lying bodies must not roll away: a little rolling resistance, as on a rug
             p.changeDynamics(body, -1, lateralFriction=cat.friction, spinningFriction=0.002,
                              rollingFriction=ROLLING_FRICTION, physicsClientId=cid)
-        self.objects[obj.name] = body
-        self.categories[obj.name] = obj.category
         return body
 
     def _labelled_visual(self, obj, cat, rgba):
@@ -179,8 +185,6 @@ class Scene:
             p.changeVisualShape(body, link, rgbaColor=rgba, specularColor=[0.1, 0.1, 0.1], physicsClientId=cid)
             p.changeDynamics(body, link, mass=model.mass, lateralFriction=model.friction, spinningFriction=0.002,
                              rollingFriction=ROLLING_FRICTION, physicsClientId=cid)
-        self.objects[obj.name] = body
-        self.categories[obj.name] = obj.category
         return body
 
     def settle(self, steps: int, still: float = 2e-3) -> int:
@@ -217,3 +221,4 @@ class Scene:
         pos, orn = p.multiplyTransforms([x, y, z], _quat_yaw(yaw), dyn[3], dyn[4])
         p.resetBasePositionAndOrientation(body, pos, orn, physicsClientId=self.cid)
         p.resetBaseVelocity(body, [0, 0, 0], [0, 0, 0], physicsClientId=self.cid)
+        p.changeDynamics(body, -1, activationState=p.ACTIVATION_STATE_WAKE_UP, physicsClientId=self.cid)

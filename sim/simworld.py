@@ -53,12 +53,13 @@ HOLDING_SOLVER_ITERATIONS = 300
 #: carries and placements are solved at this rate
 PHYSICS_HZ = 240
 #: [Hz] physics substeps while the hand is still and empty (driving, looking, standing);
-#: None: always PHYSICS_HZ. At 120 Hz resting objects and the wheel odometry behave as at
-#: 240 Hz for 0.6 of the cost (bench/bench_physics.py). Off by default: a round body held
-#: between the pads can still turn in the hand, and the other course a run takes at 120 Hz
-#: made that drop the house demo's bottle. ``ACTORBT_SIM_STILL_HAND_HZ=120`` (or none) sets
-#: it for every world of a run, also in an evaluation's worker processes.
-STILL_HAND_PHYSICS_HZ: int | None = None
+#: None: always PHYSICS_HZ. Resting objects and the wheel odometry behave as at 240 Hz
+#: (bench/bench_physics.py) for 0.4 of the cost. A held body stays at the full rate: at
+#: 120 Hz it creeps in the hand unless the solver runs so long that the rate saves nothing
+#: (a can turned 5.4 degrees at 400 iterations; 600 cost more than 240 Hz at 300).
+#: ``ACTORBT_SIM_STILL_HAND_HZ=240`` (or none) sets one rate for every world of a run, also
+#: in an evaluation's worker processes.
+STILL_HAND_PHYSICS_HZ: int | None = 120
 #: [s] the hand counts as moving this long after it stopped (what it touched settles)
 HAND_SETTLE = 0.5
 #: joint speeds below which the hand is still: [rad/s] the arm's, [m/s] a finger's

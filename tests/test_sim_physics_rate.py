@@ -23,6 +23,15 @@ def _steps_until(sim: SimWorld, hz: int, seconds: float) -> float | None:
     return None
 
 
+def test_the_still_hand_rate_is_on_by_default(monkeypatch):
+    monkeypatch.delenv("ACTORBT_SIM_STILL_HAND_HZ", raising=False)
+    sim = SimWorld(None, "house", seed=0, camera=False)
+    try:
+        assert _steps_until(sim, STILL_HAND_PHYSICS_HZ, 2.0) is not None
+    finally:
+        sim.close()
+
+
 def test_the_rate_from_the_environment_reaches_every_world(monkeypatch):
     monkeypatch.setenv("ACTORBT_SIM_STILL_HAND_HZ", "120")
     sim = SimWorld(None, "house", seed=0, camera=False)
