@@ -126,12 +126,15 @@ def _at_or_before(history: deque, t: float):
     return None
 
 
+def _stamp(entry: tuple) -> float:
+    return entry[0]
+
+
 def _interpolate(history: deque, t: float, default: float) -> float:
     """The value interpolated at ``t`` (the nearest end outside the history)."""
     if not history:
         return default
-    times = [s for s, _ in history]
-    i = bisect.bisect_left(times, t)
+    i = bisect.bisect_left(history, t, key=_stamp)
     if i <= 0:
         return history[0][1]
     if i >= len(history):

@@ -4,8 +4,14 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-import numpy as np
 from ._pybullet import pybullet as p
+
+
+def _clamp(x: float, lo: float, hi: float) -> float:
+    """x within [lo, hi], as a float (numpy's clip costs microseconds a call on a scalar,
+    and these run every control tick)."""
+    return float(min(max(x, lo), hi))
+
 
 URDF = Path(__file__).resolve().parent / "models" / "mobile_manipulator.urdf"
 
@@ -100,21 +106,21 @@ class Robot:
     # ---------------- commands ----------------
     def set_base_velocity(self, v: float, w: float):
         """Twist -> wheel speeds, clamped to the TurtleBot3 Waffle Pi limits."""
-        v = float(np.clip(v, -MAX_LINEAR, MAX_LINEAR))
-        w = float(np.clip(w, -MAX_ANGULAR, MAX_ANGULAR))
+        v = _clamp(v, -MAX_LINEAR, MAX_LINEAR)
+        w = _clamp(w, -MAX_ANGULAR, MAX_ANGULAR)
         wl = (v - w * WHEEL_SEPARATION / 2) / WHEEL_RADIUS
         wr = (v + w * WHEEL_SEPARATION / 2) / WHEEL_RADIUS
         self.wheel_target = [wl, wr]
 
     def set_arm(self, positions, velocities=None):
         lo_hi = [self.limits[n][:2] for n in ARM]
-        self.arm_target = [float(np.clip(q, lo, hi)) for q, (lo, hi) in zip(positions, lo_hi)]
+        self.arm_target = [_clamp(q, lo, hi) for q, (lo, hi) in zip(positions, lo_hi)]
         self.arm_target_vel = list(velocities) if velocities is not None else [0.0] * 4
 
     def set_gripper(self, width: float):
         """A new goal opening [m]: the fingers' profile starts from where they are (a goal
         repeated while they squeeze leaves it be, and the squeeze with it)."""
-        width = float(np.clip(width, 0.0, GRIPPER_MAX_OPENING))
+        width = _clamp(width, 0.0, GRIPPER_MAX_OPENING)
         if width != self.gripper_width:
             self.grip_setpoint = [s[0] for s in p.getJointStates(self.body, self.grip_idx,
                                                                   physicsClientId=self.cid)]
@@ -125,7 +131,7 @@ class Robot:
         Wheel speeds ramp towards their targets at WHEEL_ACCEL, so the tyres do not skid."""
         cid, b = self.cid, self.body
         step = WHEEL_ACCEL * dt
-        self.wheel_setpoint = [sp + float(np.clip(tg - sp, -step, step))
+        self.wheel_setpoint = [sp + _clamp(tg - sp, -step, step)
                                for sp, tg in zip(self.wheel_setpoint, self.wheel_target)]
         p.setJointMotorControlArray(b, self.wheel_idx, p.VELOCITY_CONTROL,
                                     targetVelocities=self.wheel_setpoint,
@@ -145,7 +151,7 @@ class Robot:
         goal, step = self.gripper_width / 2, GRIPPER_SPEED * dt
         for i, j in enumerate(self.grip_idx):   # (setJointMotorControlArray takes no speed limit)
             sp = self.grip_setpoint[i]
-            sp = self.grip_setpoint[i] = sp + float(np.clip(goal - sp, -step, step))
+            sp = self.grip_setpoint[i] = sp + _clamp(goal - sp, -step, step)
             speed = 0.0 if sp == goal else math.copysign(GRIPPER_SPEED, goal - sp)
             p.setJointMotorControl2(b, j, p.POSITION_CONTROL, targetPosition=sp, targetVelocity=speed,
                                     force=GRIPPER_FORCE, maxVelocity=GRIPPER_CATCH_UP,
