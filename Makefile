@@ -46,8 +46,9 @@ $(STAMP): pyproject.toml interfaces/CMakeLists.txt interfaces/package.xml $(wild
 
 venv: $(STAMP)
 
+# one worker per core (pytest-xdist); a test file stays in one worker
 test: $(STAMP)
-	$(PY) -m pytest -q
+	$(PY) -m pytest -q -n auto --dist loadfile
 
 demo: $(STAMP)
 	$(VENV)/bin/actorbt demo

@@ -13,6 +13,11 @@ from typing import Any, Callable
 import pytest
 
 os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+# Under pytest-xdist (make test) each worker talks ROS on a domain of its own: the same
+# topic and action names in two workers' tests would otherwise reach each other.
+_WORKER = os.environ.get("PYTEST_XDIST_WORKER", "")
+if _WORKER.startswith("gw"):
+    os.environ["ROS_DOMAIN_ID"] = str(40 + int(_WORKER[2:]))
 # A suite started in the background by a non-interactive shell inherits SIGINT ignored, and
 # so would the commands the Ctrl-C tests start (an ignored signal stays ignored across
 # exec): take the default back, so that they see the Ctrl-C they are sent.
