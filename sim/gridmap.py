@@ -14,7 +14,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .description import WorldSpec
+from .marked_yaml import compose_yaml
+from .world_spec import WorldError, WorldSpec
 
 RESOLUTION = 0.05
 
@@ -180,7 +181,6 @@ def is_map_yaml(text: str) -> bool:
 
 def _pgm_pixels(raw: bytes, where: str) -> np.ndarray:
     """P5 (binary) or P2 (ASCII) PGM -> uint16 array [rows, cols], top row first, and maxval."""
-    from .description import WorldError
     magic = raw[:2]
     if magic not in (b"P5", b"P2"):
         raise WorldError(f"{where}: not a PGM image (magic {magic!r}; expected P5 or P2)")
@@ -217,7 +217,6 @@ def _pgm_pixels(raw: bytes, where: str) -> np.ndarray:
 
 def _image_pixels(path: Path, where: str):
     """(lightness 0..1 [rows, cols] top row first, alpha 0..1 or None) of a map image."""
-    from .description import WorldError
     try:
         raw = path.read_bytes()
     except OSError as e:
@@ -240,7 +239,6 @@ def read_map(path_yaml: str | Path) -> MapFile:
     """Read a map_server map as ``map_server`` does: trinary (default), scale or raw mode,
     ``negate``, the two thresholds; errors name the YAML's file:line:column.
     The origin's yaw must be 0 (an axis-aligned grid)."""
-    from .description import WorldError, compose_yaml
     path_yaml = Path(path_yaml)
     try:
         text = path_yaml.read_text()
