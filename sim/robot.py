@@ -5,7 +5,8 @@ import math
 from pathlib import Path
 
 import numpy as np
-from ._pybullet import pybullet as p
+
+from common.quiet_pybullet import pybullet as p
 
 URDF = Path(__file__).resolve().parent / "models" / "mobile_manipulator.urdf"
 

@@ -13,7 +13,7 @@ import os
 from dataclasses import replace
 from pathlib import Path
 
-from ._pybullet import pybullet as p
+from common.quiet_pybullet import pybullet as p
 
 from .objects import CATEGORIES
 from .world_spec import Box, PlacedObject, WorldSpec

@@ -9,7 +9,8 @@ import os
 import time
 
 import numpy as np
-from ._pybullet import pybullet as p
+
+from common.quiet_pybullet import pybullet as p
 
 from .actuators import TrajectoryError, trajectory_from_msg
 from .appearance import noisy_depth
