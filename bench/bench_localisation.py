@@ -72,7 +72,7 @@ class SimHouse:
         self.truth, self.odom = self.sim.robot_pose(), self.sim.odom_pose()
 
     def teleport(self, pose, target=None) -> None:
-        from sim._pybullet import pybullet as p
+        from common.quiet_pybullet import pybullet as p
 
         r = self.sim.robot
         pos, _ = p.getBasePositionAndOrientation(r.body, physicsClientId=r.cid)

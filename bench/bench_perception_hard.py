@@ -33,7 +33,7 @@ import numpy as np
 from actors.camera import Intrinsics, RGBDFrame
 from actors.perception import detect, registered_appearances
 from sim import SimWorld
-from sim._pybullet import pybullet as p
+from common.quiet_pybullet import pybullet as p
 
 MATCH = 0.06          # [m] a detection this close to the body centre is the object
 FALSE = 0.12          # [m] a category detection farther than this from any of its objects

@@ -26,7 +26,7 @@ import time
 import numpy as np
 
 from sim import SimWorld
-from sim._pybullet import pybullet as p
+from common.quiet_pybullet import pybullet as p
 from sim.textures import png_bytes
 
 RENDERERS = ("gl", "egl", "tiny")

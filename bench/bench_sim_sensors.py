@@ -27,7 +27,7 @@ from sensor_msgs.msg import JointState, LaserScan
 
 from bt_engine import Runtime
 from sim import SimWorld
-from sim._pybullet import pybullet as p
+from common.quiet_pybullet import pybullet as p
 from sim.odometry import OdomNoise, WheelOdometry, episode_rng
 from sim.topics import CMD_VEL
 

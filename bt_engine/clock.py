@@ -1,9 +1,13 @@
 """Runtime clocks. Every engine timestamp, sleep and deadline reads one of these."""
 from __future__ import annotations
 
+import os
 import time
 
 from .errors import BadModeError
+
+#: this module's import time: the start of the process where /proc cannot tell
+_IMPORTED = time.monotonic()
 
 
 class Clock:
@@ -71,3 +75,16 @@ def make_clock(spec: "str | Clock | None") -> Clock:
     if spec == "wall":
         return WallClock()
     raise BadModeError(f"unknown clock {spec!r}; expected 'virtual' or 'wall'")
+
+
+def process_uptime() -> float:
+    """Seconds of wall time since this process started (from /proc on Linux; else since
+    this module was imported): how long a command took to be ready."""
+    try:
+        with open("/proc/self/stat") as f:
+            fields = f.read().rpartition(")")[2].split()
+        with open("/proc/uptime") as f:
+            up = float(f.read().split()[0])
+        return max(0.0, up - int(fields[19]) / os.sysconf("SC_CLK_TCK"))
+    except (OSError, ValueError, IndexError, AttributeError):
+        return time.monotonic() - _IMPORTED

@@ -5,7 +5,7 @@ import pathlib
 import sys
 
 from bt_engine.errors import ActorbtError
-from bt_engine.ros.live_options import LiveOptions, add_live_options
+from bt_engine.ros import LiveOptions, add_live_options
 
 
 def _world_options(p) -> None:

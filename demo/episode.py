@@ -20,8 +20,7 @@ from tf2_msgs.msg import TFMessage
 
 import categories
 from bt_engine import ActorError, Runtime
-from bt_engine.cli.app import App
-from bt_engine.cli.config import Config, ConfigError, find_config, load_config
+from bt_engine.cli import App, Config, ConfigError, find_config, load_config
 from bt_engine.trees import TraceRecorder, TreeObserver, tree_host
 from planning.tf_buffer import TransformBuffer, TransformError, pose2d
 from sim import SimWorld
@@ -341,7 +340,7 @@ def run_episode(tree: str = "bt_pick_place", world: str = "house", seed: int = 0
             recorder = TraceRecorder(ep.trace, host, tree=tree, inputs=args, seed=seed)
         session = None
         if live:
-            from bt_engine.ros.live import LiveSession
+            from bt_engine.ros import LiveSession
             session = LiveSession(rt, host, live, tree=tree, inputs=args, seed=seed)
         before = {n: sim.object_pose(n) for n in sim.object_names()}
         sim0 = rt.now()

@@ -2,15 +2,16 @@
 local Ray instance. Ray is optional (``pip install 'actorbt[cluster]'``): it is imported
 here only, when ``--ray`` is asked for.
 
-Every node runs the same code as a ``--jobs`` worker (:func:`demo.evaluate._run_job`, one task
-per episode, one CPU each) and sends the :class:`~demo.episode.Episode` back; the driver
-writes the CSV and the table as for ``--jobs``. The nodes need the project importable: the
-same environment installed on each (``pip install 'actorbt[sim,planning,cluster]'``, or
-one container image), see docs/evaluation.md.
+Every node runs the same code as a ``--jobs`` worker (:func:`demo.evaluate._run_job`, handed
+over by the evaluation; one task per episode, one CPU each) and sends the
+:class:`~demo.episode.Episode` back; the driver writes the CSV and the table as for
+``--jobs``. The nodes need the project importable: the same environment installed on each
+(``pip install 'actorbt[sim,planning,cluster]'``, or one container image), see
+docs/evaluation.md.
 """
 from __future__ import annotations
 
-from typing import Any, Iterable, Iterator
+from typing import Any, Callable, Iterable, Iterator
 
 from bt_engine.errors import ActorbtError
 
@@ -73,14 +74,15 @@ class RayRunner:
         nodes = sum(1 for n in self.ray.nodes() if n.get("Alive"))
         return f"Ray: {nodes} node{'s' * (nodes != 1)}, {int(res.get('CPU', 0))} CPUs"
 
-    def run(self, work: Iterable[tuple]) -> Iterator[Any]:
-        """One Ray task per job (``num_cpus=1``); yields each Episode as it finishes. A
-        task that raised raises here (an actorbt error as itself; any other as Ray's
-        RayTaskError, which also is one of its class, with the remote traceback); the tasks
-        not yet done are cancelled when the caller stops (an error, Ctrl-C)."""
-        from .evaluate import _run_job
+    def run(self, work: Iterable[tuple], run_job: Callable[[tuple], Any]) -> Iterator[Any]:
+        """One Ray task per job (``num_cpus=1``) running ``run_job(job)``, which the caller
+        hands over so that this module imports nothing of the evaluation; yields each
+        Episode as it finishes. A task that raised raises here (an actorbt error as itself;
+        any other as Ray's RayTaskError, which also is one of its class, with the remote
+        traceback); the tasks not yet done are cancelled when the caller stops (an error,
+        Ctrl-C)."""
         ray = self.ray
-        task = ray.remote(num_cpus=1)(_run_job)
+        task = ray.remote(num_cpus=1)(run_job)
         pending = [task.remote(job) for job in work]
         try:
             while pending:

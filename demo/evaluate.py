@@ -16,8 +16,7 @@ from dataclasses import asdict
 from typing import TextIO
 
 import categories
-from bt_engine.cli.app import App
-from bt_engine.cli.config import Config
+from bt_engine.cli import App, Config
 from bt_engine.errors import ActorbtError
 
 from .episode import Episode, episode_app, run_episode
@@ -148,7 +147,7 @@ def evaluate(tree: str, seeds: int, world: str = "house", category: str = "mixed
             work = [job[:4] + (pathlib.Path(job[4]).absolute(),) + job[5:] for job in work]
             with RayRunner(ray, ray_runtime_env) as runner:
                 bar.start(runner.slots, f"{runner.describe()}; {note}" if note else runner.describe(), episodes)
-                for ep in runner.run(work):
+                for ep in runner.run(work, _run_job):
                     finished(ep)
         else:
             bar.start(max(1, min(jobs, len(work))), note, episodes)

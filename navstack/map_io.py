@@ -18,6 +18,8 @@ from pathlib import Path
 import numpy as np
 import yaml
 
+from common.pgm import read_pgm
+
 FREE = 0
 OCCUPIED = 100
 UNKNOWN = -1
@@ -125,44 +127,6 @@ class OccupancyMap:
 
 
 # -- map_server files --------------------------------------------------------------------------
-def _read_pnm(path: Path) -> np.ndarray:
-    """A PGM image as a float array of brightness in 0..1, top row first."""
-    raw = path.read_bytes()
-    magic = raw[:2]
-    if magic not in (b"P5", b"P2"):
-        raise MapError(f"{path}: only PGM images (P5 or P2) are supported, found magic {magic!r}")
-    fields, pos = [], 2
-    while len(fields) < 3:
-        while pos < len(raw) and raw[pos:pos + 1].isspace():
-            pos += 1
-        if raw[pos:pos + 1] == b"#":
-            pos = raw.find(b"\n", pos) + 1 or len(raw)
-            continue
-        end = pos
-        while end < len(raw) and not raw[end:end + 1].isspace():
-            end += 1
-        if end == pos:
-            raise MapError(f"{path}: truncated PGM header")
-        fields.append(int(raw[pos:end]))
-        pos = end
-    w, h, maxval = fields
-    if not (w > 0 and h > 0 and 0 < maxval < 65536):
-        raise MapError(f"{path}: bad PGM size {w}x{h} or maxval {maxval}")
-    if magic == b"P5":
-        pos += 1  # one whitespace byte ends the header
-        dtype = np.dtype(">u2") if maxval > 255 else np.dtype(np.uint8)
-        n = w * h * dtype.itemsize
-        if len(raw) - pos < n:
-            raise MapError(f"{path}: {len(raw) - pos} bytes of pixels, {w}x{h} needs {n}")
-        img = np.frombuffer(raw[pos:pos + n], dtype=dtype).reshape(h, w)
-    else:
-        vals = raw[pos:].split()
-        if len(vals) < w * h:
-            raise MapError(f"{path}: {len(vals)} pixels, {w}x{h} needs {w * h}")
-        img = np.array([int(v) for v in vals[:w * h]]).reshape(h, w)
-    return img.astype(np.float64) / maxval
-
-
 def read_map_yaml(path: str | Path) -> OccupancyMap:
     """Read a map_server YAML file and its image into an :class:`OccupancyMap`."""
     path = Path(path)
@@ -184,7 +148,8 @@ def read_map_yaml(path: str | Path) -> OccupancyMap:
     image = Path(meta["image"])
     if not image.is_absolute():
         image = path.parent / image
-    bright = np.flipud(_read_pnm(image))     # the image's top row is the map's highest y
+    # the image's top row is the map's highest y
+    bright = np.flipud(read_pgm(image.read_bytes(), str(image), MapError))
     if mode == "raw":
         value = np.rint(bright * 255)
         data = np.where(value <= 100, value, UNKNOWN).astype(np.int8)

@@ -33,7 +33,8 @@ from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
-from ._pybullet import pybullet
+
+from common.quiet_pybullet import pybullet
 
 from .errors import InvalidInputError, SceneError
 from .kinematics import ArmKinematics

@@ -16,13 +16,14 @@ import importlib
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from .description import WorldError, WorldSpec, list_worlds, load_world
+    from .description import list_worlds, load_world
     from .simworld import SimWorld
+    from .world_spec import WorldError, WorldSpec
 
 __all__ = ["SimWorld", "start_world", "WorldError", "WorldSpec", "list_worlds", "load_world", "write_map", "snapshot"]
 
 #: name -> the submodule that defines it
-_LAZY = {"SimWorld": "simworld", "WorldError": "description", "WorldSpec": "description",
+_LAZY = {"SimWorld": "simworld", "WorldError": "world_spec", "WorldSpec": "world_spec",
          "list_worlds": "description", "load_world": "description"}
 
 

@@ -11,13 +11,11 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import os
 import signal
 import sys
 import time
 
-#: this module's import time: the start of the process where /proc cannot tell
-_IMPORTED = time.monotonic()
+from bt_engine.clock import process_uptime
 
 
 def register(sub, common) -> None:
@@ -145,7 +143,7 @@ def cmd_run(args, app) -> int:
     world_only = type(app)(args, dataclasses.replace(app.cfg, subsystems={}, trees=None))
     rt = world_only.runtime(clock="wall")
     try:
-        print(f"world {spec['name']} running on the {rt.bus.name} bus, ready in {_uptime():.1f} s; "
+        print(f"world {spec['name']} running on the {rt.bus.name} bus, ready in {process_uptime():.1f} s; "
               "Ctrl-C stops it", flush=True)
         t0 = time.monotonic()
         while args.seconds is None or time.monotonic() - t0 < args.seconds:
@@ -223,19 +221,6 @@ def world_interfaces(args, app, subsystems: dict[str, str] | None = None) -> dic
             "topics": [r for r in rows if r["direction"]],
             "actions": [{"name": a.name, "type": a.type} for a in actions],
             "services": [{"name": s.name, "type": s.type} for s in services]}
-
-
-def _uptime() -> float:
-    """Seconds since this process started (from /proc on Linux; else since this module
-    was imported). The same as ``bt_engine.ros.cli.uptime``, which sim may not import."""
-    try:
-        with open("/proc/self/stat") as f:
-            fields = f.read().rpartition(")")[2].split()
-        with open("/proc/uptime") as f:
-            up = float(f.read().split()[0])
-        return max(0.0, up - int(fields[19]) / os.sysconf("SC_CLK_TCK"))
-    except (OSError, ValueError, IndexError, AttributeError):
-        return time.monotonic() - _IMPORTED
 
 
 def _interrupt(signum, frame) -> None:

@@ -42,180 +42,27 @@ Worlds with varied poses and looks (house_hard) add::
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 import yaml
 
 import categories as registry
-from bt_engine.errors import ActorbtError
-from bt_engine.yaml_hints import syntax_mark, syntax_message
 
 from .appearance import Appearance, ColorJitter, DepthNoise, Lighting, LightingRange
+from .gridmap import is_map_yaml
+from .map_world import build_map_world
+from .marked_yaml import compose_yaml
 from .objects import CATEGORIES, DECOYS
 from .textures import jitter_rgba
-from .varied import POSE_KINDS, Distractors, PoseMix
+from .varied import Placer
+from .world_spec import POSE_KINDS, Box, Distractors, PlacedObject, PoseMix, WorldError, WorldSpec
 
 WORLDS_DIR = Path(__file__).resolve().parent / "worlds"
 ROBOT_RADIUS = 0.26     # circle around base_footprint that covers the Waffle Pi chassis
 DOOR_CLEARANCE = 0.6    # random objects keep this far from wall ends (doorways, corners)
 OTHERS = "others"       # an objects entry for one of every registered category not listed
-
-
-class WorldError(ActorbtError, ValueError):
-    """A world description is invalid or cannot be realised; the message names file:line
-    (an ``ActorbtError``: the command line prints it in one line, exit status 2)."""
-
-
-@dataclass(frozen=True)
-class Box:
-    """A static box: centre (x, y) on the floor, size (sx, sy, sz), yaw."""
-    name: str
-    x: float
-    y: float
-    sx: float
-    sy: float
-    sz: float
-    yaw: float = 0.0
-    rgba: tuple = (0.8, 0.8, 0.8, 1.0)
-    support: bool = False     # a low table objects may stand on (worlds with ``poses``)
-
-    def distance(self, px, py):
-        """Distance from point(s) to the box footprint (0 inside)."""
-        c, s = math.cos(self.yaw), math.sin(self.yaw)
-        dx, dy = np.asarray(px) - self.x, np.asarray(py) - self.y
-        u, v = c * dx + s * dy, -s * dx + c * dy
-        qu = np.maximum(np.abs(u) - self.sx / 2, 0.0)
-        qv = np.maximum(np.abs(v) - self.sy / 2, 0.0)
-        return np.hypot(qu, qv)
-
-    def corners(self):
-        c, s = math.cos(self.yaw), math.sin(self.yaw)
-        out = []
-        for u, v in ((-1, -1), (1, -1), (1, 1), (-1, 1)):
-            u, v = u * self.sx / 2, v * self.sy / 2
-            out.append((self.x + c * u - s * v, self.y + s * u + c * v))
-        return out
-
-
-@dataclass(frozen=True)
-class PlacedObject:
-    """Where an object starts: its frame (the centre of its bounding box) at (x, y) and, by
-    default, standing on the floor turned by ``yaw``. In worlds with ``poses``: ``z`` (None:
-    standing on the floor), ``quat`` (x, y, z, w; None: upright at ``yaw``), ``pose_kind``
-    (upright, lying, tilted), ``support`` (floor, or the furniture it stands on or leans
-    against) and ``rgba`` (None: the model's colour)."""
-    name: str
-    category: str
-    x: float
-    y: float
-    yaw: float
-    z: float | None = None
-    quat: tuple | None = None
-    pose_kind: str = "upright"
-    support: str = "floor"
-    rgba: tuple | None = None
-
-
-@dataclass
-class WorldSpec:
-    name: str
-    source: str
-    bounds: tuple
-    walls: list = field(default_factory=list)        # [Box]
-    rooms: dict = field(default_factory=dict)        # name -> (xmin, ymin, xmax, ymax)
-    furniture: list = field(default_factory=list)    # [Box]
-    place: Box | None = None
-    robot_start: tuple = (0.0, 0.0, 0.0)
-    objects: list = field(default_factory=list)      # [PlacedObject]
-    search_locations: list = field(default_factory=list)   # [(x, y)]; empty: from the map
-    seed: int = 0
-    appearance: Appearance = field(default_factory=Appearance)   # all off: plain colours
-    lighting: Lighting | None = None     # this seed's lighting (appearance.lighting)
-    poses: PoseMix | None = None         # varied poses (None: every object upright on the floor)
-
-    @property
-    def settle_steps(self) -> int:
-        """Physics steps to let the objects come to rest at world creation."""
-        return self.poses.settle_steps if self.poses is not None else 0
-
-    @property
-    def obstacles(self):
-        """Everything static that stands on the floor (walls, furniture, place location)."""
-        return list(self.walls) + list(self.furniture) + ([self.place] if self.place else [])
-
-    def room_of(self, x, y):
-        for name, (x0, y0, x1, y1) in self.rooms.items():
-            if x0 <= x <= x1 and y0 <= y <= y1:
-                return name
-        return None
-
-
-# ---------------------------------------------------------------------------------------
-# YAML with line numbers: we walk yaml's node graph (compose) so every value keeps its mark.
-
-class _Ctx:
-    def __init__(self, path: str):
-        self.path = path
-
-    def err(self, node, msg):
-        where = f"{node.start_mark.line + 1}:{node.start_mark.column + 1}" if node is not None else "1:1"
-        return WorldError(f"{self.path}:{where}: {msg}")
-
-    def mapping(self, node, what):
-        if not isinstance(node, yaml.MappingNode):
-            raise self.err(node, f"{what} must be a mapping")
-        out = {}
-        for k, v in node.value:
-            if not isinstance(k, yaml.ScalarNode):
-                raise self.err(k, f"{what}: keys must be plain names")
-            if k.value in out:
-                raise self.err(k, f"{what}: duplicate key '{k.value}'")
-            out[k.value] = (k, v)
-        return out
-
-    def keys(self, m, allowed, what):
-        for key, (knode, _) in m.items():
-            if key not in allowed:
-                raise self.err(knode, f"{what}: unknown key '{key}' (allowed: {', '.join(sorted(allowed))})")
-
-    def seq(self, node, what):
-        if not isinstance(node, yaml.SequenceNode):
-            raise self.err(node, f"{what} must be a list")
-        return node.value
-
-    def num(self, node, what, positive=False, nonneg=False):
-        if not isinstance(node, yaml.ScalarNode):
-            raise self.err(node, f"{what} must be a number")
-        try:
-            v = float(node.value)
-        except ValueError:
-            raise self.err(node, f"{what} must be a number, got '{node.value}'") from None
-        if not math.isfinite(v):
-            raise self.err(node, f"{what} must be finite")
-        if positive and v <= 0:
-            raise self.err(node, f"{what} must be > 0, got {v}")
-        if nonneg and v < 0:
-            raise self.err(node, f"{what} must be >= 0, got {v}")
-        return v
-
-    def int_(self, node, what, minimum=0):
-        v = self.num(node, what)
-        if v != int(v) or v < minimum:
-            raise self.err(node, f"{what} must be an integer >= {minimum}, got {node.value}")
-        return int(v)
-
-    def vec(self, node, n, what, **kw):
-        items = self.seq(node, what)
-        if len(items) != n:
-            raise self.err(node, f"{what} must have {n} numbers, got {len(items)}")
-        return tuple(self.num(i, what, **kw) for i in items)
-
-    def str_(self, node, what):
-        if not isinstance(node, yaml.ScalarNode) or not node.value:
-            raise self.err(node, f"{what} must be a non-empty string")
-        return node.value
 
 
 def _rgba(ctx, node, default):
@@ -366,20 +213,6 @@ def _distractors(ctx, node) -> Distractors:
 WALL_RGBA = (0.82, 0.80, 0.74, 1.0)
 FURNITURE_RGBA = (0.55, 0.42, 0.30, 1.0)
 PLACE_RGBA = (0.76, 0.60, 0.35, 1.0)
-
-
-def compose_yaml(text: str, path: str, empty: str):
-    """(root node, context) of a YAML text whose values keep their file:line:column; a
-    syntax error or an empty file (``empty`` says what was expected) is a WorldError."""
-    try:
-        root = yaml.compose(text)
-    except yaml.MarkedYAMLError as e:
-        mark = syntax_mark(e)
-        where = f"{mark.line + 1}:{mark.column + 1}" if mark else "1"
-        raise WorldError(f"{path}:{where}: {syntax_message(e)}") from None
-    if root is None:
-        raise WorldError(f"{path}:1: {empty}")
-    return root, _Ctx(path)
 
 
 def parse_world(text: str, path: str = "<string>", seed: int = 0) -> WorldSpec:
@@ -566,8 +399,6 @@ def parse_world(text: str, path: str = "<string>", seed: int = 0) -> WorldSpec:
 
 def _place_varied(ctx, spec, entries, wanted, seed, clearance, tries, distractors):
     """Placement in a world with ``poses``: see sim/varied.py."""
-    from .varied import Placer
-
     placer = Placer(spec, clearance, tries, spec.poses, seed, ROBOT_RADIUS, DOOR_CLEARANCE)
     out = {}
     for node, cat, name, room, pose in entries:      # fixed poses first: upright, on the floor
@@ -694,9 +525,7 @@ def load_world(world: str | Path | WorldSpec = "house", seed: int = 0,
         return world
     p = world_path(world)
     text = p.read_text()
-    from .gridmap import is_map_yaml
     if is_map_yaml(text):
-        from .map_world import build_map_world
         return build_map_world(p, seed, locations)
     if locations is not None:
         raise WorldError(f"{locations}: a locations file goes with a world built from a map_server "

@@ -38,8 +38,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from common.quiet_pybullet import pybullet as p
+
 from . import gl_meshes
-from ._pybullet import pybullet as p
 
 log = logging.getLogger("sim.renderer")
 

@@ -14,7 +14,10 @@ from pathlib import Path
 
 import numpy as np
 
-from .description import WorldSpec
+from common.pgm import is_pgm, read_pgm
+
+from .marked_yaml import compose_yaml
+from .world_spec import WorldError, WorldSpec
 
 RESOLUTION = 0.05
 
@@ -178,52 +181,14 @@ def is_map_yaml(text: str) -> bool:
     return {"image", "resolution"} <= keys
 
 
-def _pgm_pixels(raw: bytes, where: str) -> np.ndarray:
-    """P5 (binary) or P2 (ASCII) PGM -> uint16 array [rows, cols], top row first, and maxval."""
-    from .description import WorldError
-    magic = raw[:2]
-    if magic not in (b"P5", b"P2"):
-        raise WorldError(f"{where}: not a PGM image (magic {magic!r}; expected P5 or P2)")
-    fields, pos = [], 2
-    while len(fields) < 3:          # width, height, maxval; '#' comments between them
-        while pos < len(raw) and raw[pos:pos + 1].isspace():
-            pos += 1
-        if raw[pos:pos + 1] == b"#":
-            pos = raw.find(b"\n", pos) + 1 or len(raw)
-            continue
-        end = pos
-        while end < len(raw) and not raw[end:end + 1].isspace():
-            end += 1
-        if end == pos:
-            raise WorldError(f"{where}: truncated PGM header")
-        fields.append(raw[pos:end])
-        pos = end
-    try:
-        w, h, maxval = (int(f) for f in fields)
-    except ValueError:
-        raise WorldError(f"{where}: bad PGM header {fields!r}") from None
-    if w <= 0 or h <= 0 or not 0 < maxval < 65536:
-        raise WorldError(f"{where}: bad PGM size {w}x{h} or maxval {maxval}")
-    if magic == b"P2":
-        vals = np.array(raw[pos:].split()[:w * h], dtype=np.int64)
-    else:
-        pos += 1                    # exactly one whitespace after maxval
-        dtype = np.dtype(">u2") if maxval > 255 else np.dtype(np.uint8)
-        vals = np.frombuffer(raw[pos:pos + w * h * dtype.itemsize], dtype=dtype)
-    if vals.size != w * h:
-        raise WorldError(f"{where}: PGM data too short ({vals.size} of {w * h} pixels)")
-    return vals.reshape(h, w).astype(np.float64) / maxval
-
-
 def _image_pixels(path: Path, where: str):
     """(lightness 0..1 [rows, cols] top row first, alpha 0..1 or None) of a map image."""
-    from .description import WorldError
     try:
         raw = path.read_bytes()
     except OSError as e:
         raise WorldError(f"{where}: cannot read the image {path}: {e.strerror or e}") from None
-    if raw[:2] in (b"P5", b"P2"):
-        return _pgm_pixels(raw, str(path)), None
+    if is_pgm(raw):
+        return read_pgm(raw, str(path), WorldError), None
     import cv2                      # PNG, BMP...: as map_server (SDL_image) reads them
     img = cv2.imdecode(np.frombuffer(raw, np.uint8), cv2.IMREAD_UNCHANGED)
     if img is None:
@@ -240,7 +205,6 @@ def read_map(path_yaml: str | Path) -> MapFile:
     """Read a map_server map as ``map_server`` does: trinary (default), scale or raw mode,
     ``negate``, the two thresholds; errors name the YAML's file:line:column.
     The origin's yaw must be 0 (an axis-aligned grid)."""
-    from .description import WorldError, compose_yaml
     path_yaml = Path(path_yaml)
     try:
         text = path_yaml.read_text()

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._pybullet import pybullet as p
+from common.quiet_pybullet import pybullet as p
 
 SCAN_FRAME = "base_scan"
 

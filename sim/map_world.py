@@ -28,9 +28,10 @@ import numpy as np
 
 import categories as registry
 
-from .description import Box, PlacedObject, WorldError, WorldSpec, compose_yaml
 from .gridmap import read_map
+from .marked_yaml import compose_yaml
 from .objects import CATEGORIES
+from .world_spec import Box, PlacedObject, WorldError, WorldSpec
 
 WALL_HEIGHT = 0.6           # [m] as sim/worlds/house.yaml's walls
 WALL_RGBA = (0.82, 0.80, 0.74, 1.0)

@@ -16,7 +16,8 @@ import sys
 import threading
 
 import numpy as np
-from ._pybullet import pybullet as p
+
+from common.quiet_pybullet import pybullet as p
 
 log = logging.getLogger("sim.renderer")
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from ._pybullet import pybullet as p
+from common.quiet_pybullet import pybullet as p
 
 
 def _clamp(x: float, lo: float, hi: float) -> float:

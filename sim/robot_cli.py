@@ -29,7 +29,9 @@ import signal
 import sys
 import time
 
-from .cli import _uptime, _world_args
+from bt_engine.clock import process_uptime
+
+from .cli import _world_args
 
 #: what the navstack is, as actorbt.yaml names it
 NAVSTACK = "navstack:NavStack"
@@ -93,7 +95,7 @@ def cmd_robot(args, app) -> int:
     try:
         side.start()
         navstack = "no navstack (run Nav2 and AMCL)" if args.no_navstack else "navstack"
-        say(f"robot ready in {_uptime():.1f} s: world {spec['name']} (seed {spec.get('seed', 0)}), "
+        say(f"robot ready in {process_uptime():.1f} s: world {spec['name']} (seed {spec.get('seed', 0)}), "
             f"{navstack}, node {side.node_name}, faults: {faults.describe()}; Ctrl-C stops it")
         t0 = next_truth = time.monotonic()
         while args.seconds is None or time.monotonic() - t0 < args.seconds:

@@ -13,10 +13,10 @@ import os
 from dataclasses import replace
 from pathlib import Path
 
-from ._pybullet import pybullet as p
+from common.quiet_pybullet import pybullet as p
 
-from .description import Box, PlacedObject, WorldSpec
 from .objects import CATEGORIES
+from .world_spec import Box, PlacedObject, WorldSpec
 
 FLOOR_RGBA = (0.93, 0.91, 0.86, 1.0)
 FLOOR_FRICTION = 1.0

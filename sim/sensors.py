@@ -6,7 +6,8 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from ._pybullet import pybullet as p
+
+from common.quiet_pybullet import pybullet as p
 
 from .lidar import Lidar, LidarModel
 from .odometry import OdomNoise, WheelOdometry

@@ -9,11 +9,12 @@ import os
 import time
 
 import numpy as np
-from ._pybullet import pybullet as p
+
+from common.quiet_pybullet import pybullet as p
 
 from .actuators import TrajectoryError, trajectory_from_msg
 from .appearance import noisy_depth
-from .description import PlacedObject, WorldSpec, load_world
+from .description import load_world
 from .gridmap import RESOLUTION, build_grid
 from .objects import CATEGORIES
 from .renderer import GLThread, Renderer
@@ -26,6 +27,7 @@ from .odometry import episode_rng as odometry_rng
 from .robot import ARM, ROBOT_COLLISION_GROUP, Robot
 from .scene import Scene
 from .sensors import CameraModel
+from .world_spec import PlacedObject, WorldSpec
 
 log = logging.getLogger("sim")
 

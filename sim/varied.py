@@ -25,44 +25,14 @@ import categories as registry
 
 from .objects import CATEGORIES, DECOYS
 from .textures import jitter_rgba
+from .world_spec import Distractors, PlacedObject, PoseMix
 
-POSE_KINDS = ("upright", "lying", "tilted")
 CHASSIS_FRONT = 0.076     # base_footprint to the front of the chassis [m]
 CHASSIS_REAR = 0.205
 CHASSIS_HALF_WIDTH = 0.153
 DEFAULT_REACH, DEFAULT_STANDOFF = 0.27, 0.12
 MAX_TILT_DEG = 55.0       # beyond this a "tilted" object is laid down instead
 LEAN_GAP = 0.002          # between a leaning object and its support at placement [m]
-
-
-@dataclass(frozen=True)
-class PoseMix:
-    """``poses:`` of a world description."""
-    weights: tuple[tuple[str, float], ...] = (("upright", 0.5), ("lying", 0.3), ("tilted", 0.2))
-    tilt_deg: tuple[float, float] = (15.0, 35.0)
-    on_tables: float = 0.4       # chance an upright object in a room with a table stands on it
-    settle_steps: int = 300      # physics steps at world creation (before the robot's loop)
-
-    def fraction(self, kind: str) -> float:
-        total = sum(w for _, w in self.weights)
-        return dict(self.weights).get(kind, 0.0) / total
-
-    def pick(self, u: float) -> str:
-        """The kind at ``u`` in 0..1 (a uniform draw)."""
-        u, acc = u * sum(w for _, w in self.weights), 0.0
-        for kind, w in self.weights:
-            acc += w
-            if u < acc:
-                return kind
-        return self.weights[-1][0]
-
-
-@dataclass(frozen=True)
-class Distractors:
-    """``distractors:`` of a world description."""
-    count: tuple[int, int] = (4, 7)
-    kinds: tuple[str, ...] = tuple(DECOYS)
-    on_tables: float = 0.3
 
 
 # ----------------------------------------------------------------------------- geometry
@@ -292,7 +262,6 @@ class Placer:
     def place(self, name, cat, room, kind=None, support=None):
         """A PlacedObject for ``cat`` in ``room`` (None: anywhere), or None when no spot is
         free. ``kind``/``support`` force the pose kind and the support."""
-        from .description import PlacedObject
 
         model = CATEGORIES[cat]
         prng = self.pose_rng
@@ -349,7 +318,6 @@ class Placer:
         return None
 
     def _on_table(self, name, cat, model, table_name):
-        from .description import PlacedObject
 
         table = next(t for t in self.tables if t.name == table_name)
         r = model.radius
@@ -381,7 +349,6 @@ class Placer:
         return None
 
     def _tilted(self, name, cat, model, room, theta_deg, u_phi):
-        from .description import PlacedObject
 
         phis = [0.0] if is_round(model) else [0.0, math.pi / 2]
         phi = phis[int(u_phi * len(phis)) % len(phis)]
@@ -434,7 +401,6 @@ class Placer:
         return None
 
     def _lying(self, name, cat, model, room, R0):
-        from .description import PlacedObject
 
         pts = part_points(model) @ R0.T
         z = float(-pts[:, 2].min() + 1e-3)
@@ -457,7 +423,6 @@ class Placer:
     # -- distractors
     def distractors(self, spec_d: Distractors, seed, taken: set):
         """PlacedObjects of distractor models, recoloured near the categories' hues."""
-        from .description import PlacedObject
 
         rng = np.random.default_rng([seed, 23])
         crng = np.random.default_rng([seed, 29, 1])
@@ -494,7 +459,6 @@ class Placer:
         return out
 
     def _decoy_on_table(self, name, kind, model, table):
-        from .description import PlacedObject
 
         r = model.radius
         c, s = math.cos(table.yaw), math.sin(table.yaw)

@@ -104,7 +104,7 @@ def place_robot(sim, start: tuple) -> None:
     """Before a runtime's episode starts: put the simulated robot at ``start`` (x, y, yaw),
     its odometry and gyro reset there, and make it the world's start pose (where the episode tells
     the localiser the robot is)."""
-    from sim._pybullet import pybullet as p
+    from common.quiet_pybullet import pybullet as p
 
     def place():
         p.resetBasePositionAndOrientation(sim.robot.body, [start[0], start[1], 0.0],

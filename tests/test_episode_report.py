@@ -139,7 +139,7 @@ def test_what_the_robot_saw_is_kept_for_the_top_view_also_when_the_run_fails(rt,
 
 def test_an_object_on_a_turned_pallet_is_on_it_only_within_its_turned_outline():
     from demo.episode import _on_surface
-    from sim.description import Box
+    from sim.world_spec import Box
     pallet = Box("pallet", 2.0, 1.0, 0.6, 0.4, 0.12, math.radians(90))   # long side along y
     assert _on_surface((2.0, 1.25, 0.2), pallet)       # inside: 0.25 m along its long side
     assert not _on_surface((2.25, 1.0, 0.2), pallet)   # inside were it not turned

@@ -9,7 +9,7 @@ import pytest
 from actors.perception import _score, _segments, backproject, detect, registered_appearances
 from bench.bench_perception_hard import _frame, _teleport
 from sim import SimWorld
-from sim._pybullet import pybullet as p
+from common.quiet_pybullet import pybullet as p
 
 SPOT = (1.6, 1.6)          # open floor in the living room
 

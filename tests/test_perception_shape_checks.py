@@ -10,7 +10,7 @@ import pytest
 from actors.perception import detect, registered_appearances
 from bench.bench_perception_hard import _frame, _teleport
 from sim import SimWorld
-from sim._pybullet import pybullet as p
+from common.quiet_pybullet import pybullet as p
 
 
 @pytest.fixture(scope="module")

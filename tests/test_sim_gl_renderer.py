@@ -12,7 +12,7 @@ from sim import SimWorld
 from sim import gl_meshes
 from sim import gl_renderer as glr
 from sim import renderer as renderer_mod
-from sim._pybullet import pybullet as p
+from common.quiet_pybullet import pybullet as p
 from sim.renderer import Renderer
 
 pytestmark = pytest.mark.skipif(not glr.available(), reason="no moderngl / EGL OpenGL 3.3 here")

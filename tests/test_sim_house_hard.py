@@ -12,7 +12,7 @@ import pytest
 import categories
 from planning import ArmKinematics
 from sim import SimWorld, WorldError, load_world
-from sim._pybullet import pybullet as p
+from common.quiet_pybullet import pybullet as p
 from sim.description import ROBOT_RADIUS
 from sim.objects import CATEGORIES, DECOYS
 from sim.textures import label_texture, print_mask

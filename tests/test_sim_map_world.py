@@ -14,9 +14,10 @@ import pytest
 from planning import OccupancyGrid
 from planning.base_planner import plan_base_path
 from sim import write_map
-from sim.description import WorldError, load_world
+from sim.description import load_world
 from sim.gridmap import GridMap, build_grid, read_map, read_pgm_yaml, write_pgm_yaml
 from sim.map_world import merge_rectangles
+from sim.world_spec import WorldError
 
 RES = 0.05
 ORIGIN = (-1.25, -0.55)      # non-zero: cell (0, 0)'s corner in the map frame

@@ -33,10 +33,7 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import ActorbtError
-from ..trees._library import TreeLibrary
-from ..trees._model import Do, Mission, Node, children_of
-from ..trees._replay import _locate, read_trace
-from ..trees._run import node_path
+from ..trees import Do, Mission, Node, TreeLibrary, children_of, locate_trees, node_path, read_trace
 from ._export import Exporter
 
 __all__ = ["BTLOG_HEADER", "BtlogError", "STATUS_CODES", "Transition", "trace_to_btlog", "write_btlog"]
@@ -152,7 +149,7 @@ def trace_to_btlog(trace: str | Path, *, trees: str | Path | None = None) -> tup
         raise BtlogError(f"{trace}: not a trace: byte {exc.start} is not UTF-8 text, expected JSON lines "
                          "(an actorbt trace, as run --record writes it)") from None
     header, events = read_trace(trace, text.splitlines())
-    files, _notes = _locate(header, trace, trees)
+    files, _notes = locate_trees(header, trace, trees)
     library = TreeLibrary()
     for path in files.values():
         library.load_file(path)

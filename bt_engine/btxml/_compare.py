@@ -19,9 +19,8 @@ import dataclasses
 import inspect
 from typing import Any, Callable
 
-from ..trees._expr import Expr
-from ..trees._model import (Check, Do, Mission, Node, Parallel, ParallelPolicy, RateController, Recovery, Repeat,
-                            Retry, RunOnce, SetValues, Timeout, UseBehaviour, Wait, children_of)
+from ..trees import (Check, Do, Expr, Mission, Node, Parallel, ParallelPolicy, RateController, Recovery,
+                    Repeat, Retry, RunOnce, SetValues, Timeout, UseBehaviour, Wait, children_of)
 from ._values import same_value
 
 __all__ = ["expr_shape", "mission_differences"]

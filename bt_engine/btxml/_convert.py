@@ -23,9 +23,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Iterable
 
-from ..trees._expr import keys_of, parse_expression
-from ..trees._model import Ref
-from ..trees._parse import suggest
+from ..trees import Ref, keys_of, parse_expression, suggest
 from ._builtins import BUILTINS, NAV2, UNSUPPORTED, Handler
 from ._errors import BtXmlError, Pos, UnknownXmlNodeError, UnsupportedXmlError
 from ._extensions import HANDLERS as EXTENSION_HANDLERS

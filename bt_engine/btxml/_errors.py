@@ -3,7 +3,7 @@ loader's errors (they are :class:`~bt_engine.trees.MissionError` subclasses)."""
 
 from __future__ import annotations
 
-from ..trees._errors import MissionError, Pos
+from ..trees import MissionError, Pos
 
 __all__ = ["BtXmlError", "Pos", "UnknownXmlNodeError", "UnsupportedXmlError", "XmlSyntaxError"]
 

@@ -26,12 +26,11 @@ from dataclasses import dataclass, field
 from typing import Any, Callable
 
 from ..errors import ActorbtError
-from ..trees._library import TreeLibrary
-from ..trees._model import (Check, Condition, Do, ForceFailure, ForceSuccess, IfThenElse, Invert, Mission, Node, Parallel,
-                            ParallelPolicy, PipelineSequence, RateController, ReactiveSelector, ReactiveSequence,
-                            Recovery, Ref, Repeat, ResumeSequence, Retry, RunOnce, RunOnceThen, Selector, Sequence,
-                            SetValues, Timeout, UseBehaviour, Wait, WhileDoElse, children_of)
-from ..trees._validate import annotation_text
+from ..trees import (Check, Condition, Do, ForceFailure, ForceSuccess, IfThenElse, Invert, Mission, Node,
+                    Parallel, ParallelPolicy, PipelineSequence, RateController, ReactiveSelector,
+                    ReactiveSequence, Recovery, Ref, Repeat, ResumeSequence, Retry, RunOnce, RunOnceThen,
+                    Selector, Sequence, SetValues, Timeout, TreeLibrary, UseBehaviour, Wait, WhileDoElse,
+                    annotation_text, children_of)
 from ._convert import BUILTINS, NAV2, UNSUPPORTED
 from ._errors import BtXmlError
 from ._extensions import EXTENSIONS, LIST_SEPARATOR, NAV2_MODELS, NodeDecl, PortDecl

@@ -26,7 +26,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-from ..trees._expr import ExprSyntaxError, keys_of, parse_expression
+from ..trees import ExprSyntaxError, keys_of, parse_expression
 from ._errors import BtXmlError
 from ._source import XElement
 

@@ -229,7 +229,7 @@ class NodeModel:
         kinds = {k.value: k for k in NodeKind}
         for element in model.children:
             if element.tag not in kinds:
-                from ..trees._parse import suggest
+                from ..trees import suggest
                 raise UnknownXmlNodeError(
                     element.pos, f"unknown node kind <{element.tag}> in TreeNodesModel{suggest(element.tag, kinds)}, "
                     f"expected one of: {', '.join(kinds)}")

@@ -15,7 +15,7 @@ import ast
 from pathlib import Path
 from typing import Any
 
-from ..trees._parse import suggest
+from ..trees import suggest
 from ._convert import Handler, Importer, _Tree
 from ._errors import BtXmlError, UnsupportedXmlError
 from ._nodes import PortSpec

@@ -1,6 +1,6 @@
 """BehaviorTree.CPP scripts, translated into what actorbt missions say: assignments of
 literals and keys become ``set:`` values, boolean expressions become ``check:``
-expressions (:mod:`bt_engine.trees._expr`). Everything else (arithmetic, string
+expressions (the check: language of :mod:`bt_engine.trees`). Everything else (arithmetic, string
 concatenation, bitwise operators, the ternary, compound assignment) is refused with a
 located error: the check language deliberately has no arithmetic. Nothing is evaluated
 here, and nothing ever reaches ``eval``.
@@ -12,8 +12,7 @@ import re
 from dataclasses import dataclass
 from typing import Any, Callable
 
-from ..trees._expr import ExprSyntaxError, keys_of, parse_expression
-from ..trees._model import Ref
+from ..trees import ExprSyntaxError, Ref, keys_of, parse_expression
 from ._errors import Pos, UnsupportedXmlError
 
 __all__ = ["Assignment", "ScriptError", "condition", "statements"]

@@ -8,8 +8,8 @@ from __future__ import annotations
 
 import re
 
-from ..trees._expr import And, Compare, Expr, ExprSyntaxError, Key, Literal, Neg, Not, Or, parse_expression
-from ..trees._model import Check, Ref, SetValues
+from ..trees import (And, Check, Compare, Expr, ExprSyntaxError, Key, Literal, Neg, Not, Or, Ref, SetValues,
+                    parse_expression)
 from ._compare import expr_shape
 from ._errors import Pos
 from ._script import Assignment, ScriptError, condition, statements

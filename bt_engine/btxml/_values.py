@@ -24,7 +24,7 @@ import math
 import re
 from typing import Any, Iterator
 
-from ..trees._model import Ref, ValueType
+from ..trees import Ref, ValueType
 from ._nodes import JSON_PREFIX, convert_literal, decode_json, python_type
 
 __all__ = ["JSON_PREFIX", "REF_TEXT", "RESULT_TYPE", "decode_json", "encode_value", "mission_form", "port_type", "ref_keys",

@@ -1,5 +1,6 @@
 """``actorbt xml import|export|btlog``: BehaviorTree.CPP (or pytwb) XML to mission files,
-missions to BehaviorTree.CPP XML, and traces to Groot2 logs.
+missions to BehaviorTree.CPP XML, and traces to Groot2 logs; and ``actorbt check --nodes``,
+which checks missions against a BehaviorTree.CPP node model.
 
 ``bt_engine.cli.main`` declares the arguments and imports this module when the command
 runs; each command is ``func(args, app) -> exit status``.
@@ -13,15 +14,20 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import ActorbtError
-from ..trees._errors import MissionError
-from ..trees._host import STANDARD_BEHAVIOURS
-from ..trees._parse import read_mission, suggest
-from ..trees._library import TreeLibrary, check_files
+from ..trees import STANDARD_BEHAVIOURS, MissionError, TreeLibrary, check_files, read_mission, suggest
+from ..trees.cli import cmd_check as check_missions
 from ._api import import_files
 from ._emit import write_missions
 from ._nodes import NodeModel, read_node_model
 
-__all__ = ["cmd_xml_btlog", "cmd_xml_export", "cmd_xml_import"]
+__all__ = ["cmd_check", "cmd_xml_btlog", "cmd_xml_export", "cmd_xml_import"]
+
+
+def cmd_check(args: argparse.Namespace, app: Any) -> int:
+    """``actorbt check`` with ``--nodes``: the nodes declared in the node models count as
+    actors (their ports give the signatures), before the ones implemented here."""
+    resolver = read_node_model(args.nodes).resolver(app.actor_index().resolve)
+    return check_missions(args, app, resolver=resolver)
 
 
 def cmd_xml_import(args: argparse.Namespace, app: Any) -> int:

@@ -103,7 +103,7 @@ def _annotation_out(annotation: Any) -> dict[str, Any] | None:
     """An annotation as text plus the tree value type it demands (what the validator checks)."""
     if annotation is inspect.Parameter.empty:
         return None
-    from ..trees._validate import annotation_text, annotation_type
+    from ..trees import annotation_text, annotation_type
     vtype = annotation_type(annotation)
     return {"text": annotation_text(annotation), "type": vtype.value if vtype else None}
 
@@ -111,8 +111,7 @@ def _annotation_out(annotation: Any) -> dict[str, Any] | None:
 def _annotation_in(d: dict[str, Any] | None) -> Any:
     if d is None:
         return inspect.Parameter.empty
-    from ..trees import ValueType
-    from ..trees._validate import annotation_type
+    from ..trees import ValueType, annotation_type
     vtype = ValueType(d["type"]) if d["type"] else None
     if annotation_type(d["text"]) == vtype:
         return d["text"]  # as a postponed annotation: "float", "list[float]", "Twist"

@@ -134,6 +134,13 @@ def cmd_run(args: argparse.Namespace, app: App) -> int:
     return run_tree(args, app, around=around_run(options, seed=getattr(args, "seed", None)))
 
 
+def cmd_check(args: argparse.Namespace, app: App) -> int:
+    """``check``; with --nodes the XML layer reads the node models (the tree layer does
+    not import it) and hands the tree layer's check the actors they declare."""
+    module = "bt_engine.btxml.cli" if args.nodes else "bt_engine.trees.cli"
+    return _lazy(module, "cmd_check")(args, app)
+
+
 def cmd_shell(args: argparse.Namespace, app: App) -> int:
     from .shell import ActorShell
     rt = app.runtime()
@@ -252,7 +259,7 @@ def _tree_commands(sub: argparse._SubParsersAction) -> None:
                    help="A BehaviorTree.CPP node model (<TreeNodesModel>, a Groot palette) whose Action and "
                         "Condition nodes count as actors with the signatures their ports give: check a Nav2 "
                         "tree without Nav2. Repeat it for several models.")
-    p.set_defaults(func=tree_command("check"))
+    p.set_defaults(func=cmd_check)
 
     p = _command(sub, "xml", "BehaviorTree.CPP XML: import and export trees, Groot2 logs",
                  "Exchange trees with BehaviorTree.CPP v4 (and Groot2, Nav2, pytwb) as XML.")

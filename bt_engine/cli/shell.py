@@ -9,19 +9,15 @@ a message; the shell carries on.
 from __future__ import annotations
 
 import argparse
-import cmd
 import json
-import os
-import pathlib
 import pprint
 from typing import Any, Iterable, NoReturn, TextIO
 
 from ..catalog import text_lines, tool_schema
 from ..errors import ActorbtError
 from ..runtime import Runtime
+from ..shell_base import ShellBase
 from ..literals import parse_args, split_line
-
-HISTORY = pathlib.Path(os.environ.get("ACTORBT_HISTORY", pathlib.Path.home() / ".actorbt_history"))
 
 #: exit status of a stream ended by Ctrl-C (128 + SIGINT, as a shell reports it)
 INTERRUPTED = 130
@@ -91,7 +87,7 @@ def _stream_options(tokens: list[str]) -> tuple[list[str], dict[str, Any]]:
     return rest, vars(opts)
 
 
-class ActorShell(cmd.Cmd):
+class ActorShell(ShellBase):
     intro = ("actorbt shell: type an actor and its arguments (Python literals), e.g. "
              "`sleep 1.5`.\n`list` shows actors, `help NAME` describes one, `stream NAME ARGS` "
              "prints every value of a stream, `quit` leaves.")
@@ -106,40 +102,10 @@ class ActorShell(cmd.Cmd):
             self.use_rawinput = False
         self.rt = rt
 
-    # -- history -----------------------------------------------------------------------
-    def preloop(self) -> None:
-        if self.use_rawinput:
-            try:
-                import readline
-                readline.set_completer_delims(" \t\n")
-                if HISTORY.exists():
-                    readline.read_history_file(HISTORY)
-            except (ImportError, OSError):
-                pass
-
-    def postloop(self) -> None:
-        if self.use_rawinput:
-            try:
-                import readline
-                readline.set_history_length(1000)
-                readline.write_history_file(HISTORY)
-            except (ImportError, OSError):
-                pass
-
     # -- commands ----------------------------------------------------------------------
     def _names(self) -> list[str]:
         refs = self.rt.root.all_actors()
         return sorted({r.path for r in refs} | {r.name for r in refs})
-
-    def emptyline(self) -> bool:
-        return False
-
-    def do_quit(self, arg: str) -> bool:
-        """Leave the shell."""
-        return True
-
-    do_exit = do_quit
-    do_EOF = do_quit
 
     def do_list(self, arg: str) -> None:
         """List actors (optionally those containing TEXT)."""

@@ -19,8 +19,7 @@ from ..actor import ActorRef
 from ..errors import ActorCancelled, ActorError, Cancelled, Failure
 from ..invoke import dispatch
 from ..modes import Mode
-from ..trees import TreeFailure
-from ..trees._trace import to_json
+from ..trees import TreeFailure, to_json
 from .progress import CallWatch, RunWatcher
 
 __all__ = ["CallOutcome", "run_call", "result_text", "MAX_TEXT"]

@@ -14,8 +14,7 @@ from typing import Any, Callable
 
 from py_trees.common import Status
 
-from ..trees import TreeObserver
-from ..trees._trace import EventBuilder
+from ..trees import EventBuilder, TreeObserver
 
 __all__ = ["CallWatch", "RunWatcher", "status_word", "MAX_TRACE_EVENTS"]
 

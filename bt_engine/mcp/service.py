@@ -17,8 +17,7 @@ from ..actor import ActorRef
 from ..catalog import tool_schema
 from ..errors import ActorbtError
 from ..modes import Kind
-from ..trees import MissionError, tree_host
-from ..trees._safety import mission_safety
+from ..trees import MissionError, mission_safety, tree_host
 from .calls import CANCEL_GRACE, CallOutcome, run_call
 from .mission_tools import (MISSION_TOOLS, check_draft, error_entries, errors_text, show_text,
                             trace_result)

@@ -9,7 +9,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, Mapping
 
-from ..cli.config import ConfigError
+from ..cli import ConfigError
 
 __all__ = ["McpSettings", "MOTION_HOW_TO"]
 

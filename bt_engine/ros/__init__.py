@@ -44,10 +44,12 @@ from __future__ import annotations
 
 from typing import Any
 
-__all__ = ["Remote", "RosHost", "RosTransport", "Server", "serve"]
+__all__ = ["LiveOptions", "LiveSession", "Remote", "RosHost", "RosTransport", "Server", "add_live_options",
+           "serve"]
 
 _HOMES = {"Remote": "remote", "RosHost": "host", "RosTransport": "transport",
-          "Server": "server", "serve": "server"}
+          "Server": "server", "serve": "server", "LiveSession": "live", "LiveOptions": "live_options",
+          "add_live_options": "live_options"}
 
 
 def __getattr__(name: str) -> Any:

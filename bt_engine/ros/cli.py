@@ -30,10 +30,9 @@ import threading
 import time
 from typing import Any, Callable
 
+from ..clock import process_uptime
 from .live_options import LiveOptions, add_live_options
 
-#: this module's import time: the start of the process where /proc cannot tell
-_IMPORTED = time.monotonic()
 
 
 def register(sub: Any, common: Callable[[argparse.ArgumentParser], None]) -> None:
@@ -118,19 +117,6 @@ def register(sub: Any, common: Callable[[argparse.ArgumentParser], None]) -> Non
     p.set_defaults(func=cmd_rshell)
 
 
-def uptime() -> float:
-    """Seconds since this process started (from /proc on Linux; else since this module
-    was imported)."""
-    try:
-        with open("/proc/self/stat") as f:
-            fields = f.read().rpartition(")")[2].split()
-        with open("/proc/uptime") as f:
-            up = float(f.read().split()[0])
-        return max(0.0, up - int(fields[19]) / os.sysconf("SC_CLK_TCK"))
-    except (OSError, ValueError, IndexError, AttributeError):
-        return time.monotonic() - _IMPORTED
-
-
 def _progress(text: str) -> None:
     print(f"actorbt serve: {text}", file=sys.stderr, flush=True)
 
@@ -160,10 +146,10 @@ def cmd_serve(args: argparse.Namespace, app: Any) -> int:
             _progress(loading)
 
         def world_up(world: Any) -> None:
-            _progress(f"world {spec['name']} up at {uptime():.1f} s; {loading}")  # type: ignore[index]
+            _progress(f"world {spec['name']} up at {process_uptime():.1f} s; {loading}")  # type: ignore[index]
         rt = app.runtime(clock=getattr(args, "clock", None) or "wall", world_first=True,
                          world_setup=world_up)
-        _progress(f"actors and trees loaded at {uptime():.1f} s; starting the ROS node...")
+        _progress(f"actors and trees loaded at {process_uptime():.1f} s; starting the ROS node...")
         record_dir = None
         if not getattr(args, "no_record", False):
             record_dir = getattr(args, "record_dir", None) or str(app.cfg.base / ".actorbt" / "goals")
@@ -194,7 +180,7 @@ def cmd_serve(args: argparse.Namespace, app: Any) -> int:
             session = LiveSession(rt, tree_host(rt, create=True), live, out=sys.stdout)
             if live.bag:
                 print(f"actorbt serve: recording a bag in {live.bag}", flush=True)
-        print(f"actorbt serve: ready in {uptime():.1f} s (Ctrl-C stops)", flush=True)
+        print(f"actorbt serve: ready in {process_uptime():.1f} s (Ctrl-C stops)", flush=True)
         stop = threading.Event()
         while not stop.wait(3600):
             pass
@@ -325,7 +311,7 @@ def cmd_rshell(args: argparse.Namespace, app: Any) -> int:
         except NoServeError as e:
             print(f"actorbt: {e}", file=sys.stderr)
             return 2
-        print(f"actorbt rshell: connected in {uptime():.1f} s ({len(trees)} trees served)",
+        print(f"actorbt rshell: connected in {process_uptime():.1f} s ({len(trees)} trees served)",
               file=sys.stderr, flush=True)
         interactive = sys.stdin.isatty()
         shell = RemoteShell(remote, app.actors_with_trees, timeout=args.timeout,

@@ -23,23 +23,19 @@ index comes in as a function.
 """
 from __future__ import annotations
 
-import cmd
-import os
-import pathlib
 import pprint
 from typing import Any, Callable
 
 from ..errors import ActorbtError
 from ..literals import parse_args, split_line
+from ..shell_base import ShellBase
 from .client import GoalRejectedError, ServerUnavailableError
 from .remote import GoalRefusedError, NoServeError, Remote, close_matches
-
-HISTORY = pathlib.Path(os.environ.get("ACTORBT_HISTORY", pathlib.Path.home() / ".actorbt_history"))
 
 __all__ = ["RemoteShell"]
 
 
-class RemoteShell(cmd.Cmd):
+class RemoteShell(ShellBase):
     """The shell (see the module docstring).
 
     Args:
@@ -96,37 +92,7 @@ class RemoteShell(cmd.Cmd):
     def complete_help(self, text: str, *ignored: Any) -> list[str]:
         return self.completenames(text)
 
-    # -- history ---------------------------------------------------------------------------
-    def preloop(self) -> None:
-        if self.use_rawinput:
-            try:
-                import readline
-                readline.set_completer_delims(" \t\n")
-                if HISTORY.exists():
-                    readline.read_history_file(HISTORY)
-            except (ImportError, OSError):
-                pass
-
-    def postloop(self) -> None:
-        if self.use_rawinput:
-            try:
-                import readline
-                readline.set_history_length(1000)
-                readline.write_history_file(HISTORY)
-            except (ImportError, OSError):
-                pass
-
     # -- commands --------------------------------------------------------------------------
-    def emptyline(self) -> bool:
-        return False
-
-    def do_quit(self, arg: str) -> bool:
-        """Leave the shell."""
-        return True
-
-    do_exit = do_quit
-    do_EOF = do_quit
-
     def do_list(self, arg: str) -> None:
         """list [TEXT]: the actors of the local actor index (those containing TEXT)."""
         for e in self.entries():

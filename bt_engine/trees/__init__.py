@@ -23,6 +23,10 @@ a resolver (``rt.root.resolve``) handed to it. Inside the package::
     _show      ASCII and Graphviz pictures of a mission
     cli        the actorbt commands run, check, show, replay, plot
     testing    fake resolver, scripted actors, manual clock for tests
+
+Everything other packages use is imported from here (``__all__``), never from a
+``_module``: the front-ends (``btxml``, ``mcp``, ``cli``, ``ros``) build on the mission
+model, the check: language's syntax tree, the trace events and the safety of a mission.
 """
 
 from ._errors import (
@@ -45,7 +49,8 @@ from ._errors import (
     TreeFailure,
     UnresolvedActorError,
 )
-from ._expr import evaluate, parse_expression
+from ._expr import (And, Compare, Expr, ExprSyntaxError, Key, Literal, Neg, Not, Or, evaluate, keys_of,
+                    parse_expression)
 from ._host import STANDARD_BEHAVIOURS, BehaviourFactory, TreeHost, register_tree_folder, tree_host
 from ._library import (BrokenDependencyError, SkippedTreeError, TreeInfo, TreeLibrary, check_files,
                        load_mission)
@@ -89,26 +94,29 @@ from ._model import (
     resolve_value,
     walk,
 )
-from ._parse import NODE_TYPES, parse_mission, read_mission
+from ._parse import NODE_TYPES, parse_mission, read_mission, suggest
 from ._plot import plot_trace
 from ._progress import ProgressPrinter, parse_inputs
-from ._replay import Divergence, ReplayError, ReplayReport, read_trace, replay
-from ._run import TreeObserver, TreeRun
+from ._replay import Divergence, ReplayError, ReplayReport, locate_trees, read_trace, replay
+from ._run import TreeObserver, TreeRun, node_path
+from ._safety import mission_safety
 from ._show import RenderError, ascii_tree, dot_tree, render
-from ._trace import TraceRecorder, to_json
-from ._validate import ActorInfo, Resolver, validate_mission
+from ._trace import EventBuilder, TraceRecorder, to_json
+from ._validate import ActorInfo, Resolver, annotation_text, annotation_type, validate_mission
 
 __all__ = [
     "NODE_TYPES",
     "REQUIRED",
     "STANDARD_BEHAVIOURS",
     "ActorInfo",
+    "And",
     "ArgumentMismatchError",
     "BehaviourFactory",
     "BrokenDependencyError",
     "Check",
     "CheckEvaluationError",
     "CheckExpressionError",
+    "Compare",
     "Composite",
     "Condition",
     "Decorator",
@@ -116,6 +124,9 @@ __all__ = [
     "Do",
     "DuplicateKeyError",
     "DuplicateTreeError",
+    "EventBuilder",
+    "Expr",
+    "ExprSyntaxError",
     "ForceFailure",
     "ForceSuccess",
     "IfThenElse",
@@ -123,11 +134,16 @@ __all__ = [
     "InputSpec",
     "InvalidValueError",
     "Invert",
+    "Key",
     "LimitError",
+    "Literal",
     "Mission",
     "MissionError",
     "MissionSyntaxError",
+    "Neg",
     "Node",
+    "Not",
+    "Or",
     "OutputSpec",
     "Parallel",
     "ParallelPolicy",
@@ -170,12 +186,18 @@ __all__ = [
     "ValueType",
     "Wait",
     "WhileDoElse",
+    "annotation_text",
+    "annotation_type",
     "ascii_tree",
     "check_files",
     "children_of",
     "dot_tree",
     "evaluate",
+    "keys_of",
     "load_mission",
+    "locate_trees",
+    "mission_safety",
+    "node_path",
     "parse_expression",
     "parse_inputs",
     "parse_mission",
@@ -186,6 +208,7 @@ __all__ = [
     "render",
     "replay",
     "resolve_value",
+    "suggest",
     "to_json",
     "tree_host",
     "validate_mission",

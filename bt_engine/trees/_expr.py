@@ -40,6 +40,7 @@ __all__ = [
     "Key",
     "ListExpr",
     "Literal",
+    "Neg",
     "Not",
     "Or",
     "evaluate",

@@ -49,7 +49,8 @@ from ._parse import read_mission
 from ._run import TreeRun
 from ._trace import TRACE_FORMAT, TRACE_VERSION, EventBuilder
 
-__all__ = ["Divergence", "ReplayError", "ReplayReport", "describe_event", "read_trace", "replay"]
+__all__ = ["Divergence", "ReplayError", "ReplayReport", "describe_event", "locate_trees", "read_trace",
+           "replay"]
 
 #: Event types that must match; ``log`` and ``txn`` events are informative only.
 COMPARED = ("run", "tick", "status", "call", "return", "write", "end")
@@ -396,7 +397,11 @@ class _Comparer:
             self.divergence = Divergence(len(self.got) + 1, self.expected[len(self.got)], None)
 
 
-def _locate(header: dict[str, Any], trace: Path, trees: str | Path | None) -> tuple[dict[str, Path], list[str]]:
+def locate_trees(header: dict[str, Any], trace: Path,
+                 trees: str | Path | None) -> tuple[dict[str, Path], list[str]]:
+    """The tree files of a trace (its ``header``): ``name -> path``, found in the folder
+    ``trees`` by tree name, else at the paths the trace recorded (also beside it); and
+    a note for each tree changed since the recording. A tree not found: ReplayError."""
     files: dict[str, Path] = {}
     notes: list[str] = []
     by_name: dict[str, Path] = {}
@@ -447,7 +452,7 @@ def replay(trace: str | Path, *, trees: str | Path | None = None, wall_timeout: 
         expected = [{**e, "t": float(e.get("t", t0)) - t0} for e in expected]
     wall = header.get("clock") == "wall"
     tree = header["tree"]
-    files, notes = _locate(header, trace, trees)
+    files, notes = locate_trees(header, trace, trees)
     calls: dict[int, tuple[dict, dict | None]] = {}
     returns = {e["call"]: e for e in expected if e["type"] == "return"}
     for e in expected:

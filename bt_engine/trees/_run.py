@@ -54,7 +54,7 @@ from ._model import (
     walk,
 )
 
-__all__ = ["RunHost", "TreeObserver", "TreeRun", "written_keys"]
+__all__ = ["RunHost", "TreeObserver", "TreeRun", "node_path", "written_keys"]
 
 
 def _preorder(b: py_trees.behaviour.Behaviour) -> Iterator[py_trees.behaviour.Behaviour]:

@@ -45,7 +45,8 @@ from ._model import (
 )
 from ._parse import suggest
 
-__all__ = ["MAX_ERRORS", "ActorInfo", "Resolver", "annotation_type", "format_signature", "validate_mission"]
+__all__ = ["MAX_ERRORS", "ActorInfo", "Resolver", "annotation_text", "annotation_type", "format_signature",
+           "validate_mission"]
 
 
 class ActorInfo(Protocol):

@@ -22,6 +22,7 @@ from ._library import TreeLibrary, check_files
 from ._model import Mission
 from ._parse import suggest
 from ._progress import ProgressPrinter, parse_inputs
+from ._validate import Resolver
 
 __all__ = ["cmd_check", "cmd_plot", "cmd_replay", "cmd_run", "cmd_show"]
 
@@ -114,20 +115,17 @@ def time_line(sim_time: float, wall_time: float) -> str:
     return f"sim time {sim_time:.1f} s, wall time {wall_time:.1f} s ({factor:.1f}x real time)"
 
 
-def cmd_check(args: argparse.Namespace, app: Any) -> int:
-    # Against the actor index, not a runtime: no robot code is imported or started
-    # (the index is rebuilt, once, when that code changed).
+def cmd_check(args: argparse.Namespace, app: Any, *, resolver: Resolver | None = None) -> int:
+    """Check mission files against ``resolver``, by default the actor index: not a
+    runtime, so no robot code is imported or started (the index is rebuilt, once, when
+    that code changed). ``actorbt check --nodes`` passes its own (bt_engine.btxml.cli)."""
     folder = app.cfg.trees_dir()
     files = [Path(f) for f in args.files]
     folder_files = sorted(folder.glob("*.y*ml")) if folder is not None and folder.is_dir() else []
     if not files:
         files = folder_files
-    resolver = app.actor_index().resolve
-    if getattr(args, "nodes", None):
-        # nodes declared in a BehaviorTree.CPP node model count as actors (their ports
-        # give the signatures), before the ones implemented here
-        from ..btxml import read_node_model
-        resolver = read_node_model(args.nodes).resolver(resolver)
+    if resolver is None:
+        resolver = app.actor_index().resolve
     library = TreeLibrary(resolver, STANDARD_BEHAVIOURS)
     given = {f.resolve() for f in files}
     for path in folder_files:  # trees the checked files may call

@@ -1,6 +1,6 @@
 """pybullet without its build banner: importing it prints "pybullet build time: ..." from
 C to the process's stderr, a line a user would see before every command's own output.
-Import ``pybullet`` from here."""
+Import ``pybullet`` from here (``from common.quiet_pybullet import pybullet``)."""
 from __future__ import annotations
 
 import ctypes
