@@ -10,10 +10,14 @@ from bt_engine import ActorTimeout, Runtime, SubSystem, actor
 class F(SubSystem):
     @actor("fd", "async")
     def fd(self, done):
-        t = threading.Timer(0.05, done, args=("finished",)); t.start(); return t.cancel
+        t = threading.Timer(0.05, done, args=("finished",))
+        t.start()
+        return t.cancel
     @actor("fe", "multi")
     def fe(self, emit):
-        t = threading.Timer(0.05, emit, args=("finished",)); t.start(); return t.cancel
+        t = threading.Timer(0.05, emit, args=("finished",))
+        t.start()
+        return t.cancel
 def iter_first():
     with rt.run_actor_mode(name, "timed_iterator", 1.0) as it:
         return next(it)

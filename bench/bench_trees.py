@@ -106,11 +106,11 @@ def count(shape: Any) -> tuple[int, int]:
     """(composites, leaves)."""
     if shape == "leaf":
         return 0, 1
-    c, l = 1, 0
+    composites, leaves = 1, 0
     for child in shape[1]:
-        cc, ll = count(child)
-        c, l = c + cc, l + ll
-    return c, l
+        cc, cl = count(child)
+        composites, leaves = composites + cc, leaves + cl
+    return composites, leaves
 
 
 def shape_yaml(name: str, shape: Any, leaf: str) -> str:

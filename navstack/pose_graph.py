@@ -94,9 +94,9 @@ class PoseGraph:
         # sqrt information: L^T with L L^T = info, so ||L^T e||^2 = e^T info e
         return np.stack([np.linalg.cholesky(e.info).T for e in self.edges])
 
-    def _errors(self, X: np.ndarray, I: np.ndarray, J: np.ndarray, Z: np.ndarray):
+    def _errors(self, X: np.ndarray, Ei: np.ndarray, Ej: np.ndarray, Z: np.ndarray):
         """Per edge: the error vector (E, 3) and the pieces of its Jacobian."""
-        xi, xj = X[I], X[J]
+        xi, xj = X[Ei], X[Ej]
         ci, si = np.cos(xi[:, 2]), np.sin(xi[:, 2])
         cz, sz = np.cos(Z[:, 2]), np.sin(Z[:, 2])
         dx, dy = xj[:, 0] - xi[:, 0], xj[:, 1] - xi[:, 1]
@@ -123,8 +123,8 @@ class PoseGraph:
         free = np.array([k for k in range(n) if k not in self.fixed], dtype=np.int64)
         col = -np.ones(n, dtype=np.int64)
         col[free] = np.arange(len(free))                  # node -> its block of 3 columns
-        I = np.array([e.i for e in self.edges])
-        J = np.array([e.j for e in self.edges])
+        Ei = np.array([e.i for e in self.edges])
+        Ej = np.array([e.j for e in self.edges])
         Z = np.array([e.z for e in self.edges])
         W = self._whiteners()                              # (E, 3, 3)
         X0 = self.poses
@@ -135,7 +135,7 @@ class PoseGraph:
             return X
 
         def fun(v):
-            e, _ = self._errors(unpack(v), I, J, Z)
+            e, _ = self._errors(unpack(v), Ei, Ej, Z)
             return np.einsum("eab,eb->ea", W, e).ravel()
 
         # the Jacobian's sparsity: rows 3e..3e+2 against the 3 columns of node i and of j
@@ -144,7 +144,7 @@ class PoseGraph:
 
         def jac(v):
             X = unpack(v)
-            _, (ci, si, cz, sz, dx, dy) = self._errors(X, I, J, Z)
+            _, (ci, si, cz, sz, dx, dy) = self._errors(X, Ei, Ej, Z)
             # d(u)/d(t_j) = R_i^T ; d(u)/d(t_i) = -R_i^T ; d(u)/d(yaw_i) = dR_i^T/dyaw (t_j - t_i)
             Rz = np.stack([np.stack([cz, sz], -1), np.stack([-sz, cz], -1)], -2)    # R_z^T (E, 2, 2)
             RiT = np.stack([np.stack([ci, si], -1), np.stack([-si, ci], -1)], -2)   # R_i^T
@@ -159,7 +159,7 @@ class PoseGraph:
             Jj[:, 2, 2] = 1.0
             Ji, Jj = W @ Ji, W @ Jj
             data, rr, cc = [], [], []
-            for blk, nodes in ((Ji, I), (Jj, J)):
+            for blk, nodes in ((Ji, Ei), (Jj, Ej)):
                 c = col[nodes]
                 ok = c >= 0                                               # fixed nodes: no columns
                 data.append(blk[ok].ravel())

@@ -116,3 +116,15 @@ def place_robot(sim, start: tuple) -> None:
         sim.gyro.reset()
     sim._on_hub_call(place)
     sim.spec.robot_start = start
+
+
+@pytest.fixture
+def w(tmp_path):
+    """A tick-table rig (tests/tick_world.py) on a manual clock."""
+    from bt_engine.trees.testing import ManualClock
+    from tick_world import World
+
+    clock = ManualClock()
+    rt = Runtime(clock=clock)
+    yield World(rt, clock, tmp_path)
+    rt.close()

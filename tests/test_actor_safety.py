@@ -2,14 +2,13 @@
 catalog exports it, and how a tree's flags follow from the actors it calls."""
 from __future__ import annotations
 
-import inspect
 from typing import Literal
 
 import pytest
 
-from bt_engine import Runtime, Safety, SubSystem, actor
+from bt_engine import Safety, SubSystem, actor
 from bt_engine.catalog import text_lines, tool_schema
-from bt_engine.cli.actor_index import ActorEntry, ActorIndex
+from bt_engine.cli.actor_index import ActorIndex
 from bt_engine.trees import TreeLibrary, parse_mission, register_tree_folder
 from bt_engine.trees._safety import mission_safety
 

@@ -7,7 +7,7 @@ import textwrap
 import pytest
 
 import categories
-from categories import Approach, Box, Category, Cylinder, Grasp, Revolution
+from categories import Box, Category, Cylinder, Grasp, Revolution
 
 
 JUICE = textwrap.dedent('''

@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import pybullet as p
-import pytest
 
 from bt_engine.trees import TreeObserver
 from demo.episode import run_episode

@@ -50,14 +50,14 @@ def test_the_jacobian_matches_finite_differences():
     g = chain(truth, rng)
     g.add_edge(len(truth) - 1, 0, relative(truth[-1], truth[0]), [[400, 50, 0], [50, 300, 10], [0, 10, 900]], "loop")
     # the errors as optimize() builds them, differentiated numerically
-    I = np.array([e.i for e in g.edges])
-    J = np.array([e.j for e in g.edges])
+    Ei = np.array([e.i for e in g.edges])
+    Ej = np.array([e.j for e in g.edges])
     Z = np.array([e.z for e in g.edges])
     W = g._whiteners()
     X = g.poses + rng.normal(0, 0.05, g.poses.shape)
 
     def f(x):
-        e, _ = g._errors(x.reshape(-1, 3), I, J, Z)
+        e, _ = g._errors(x.reshape(-1, 3), Ei, Ej, Z)
         return np.einsum("eab,eb->ea", W, e).ravel()
 
     num = np.zeros((3 * len(g.edges), X.size))

@@ -44,7 +44,8 @@ class SampleSystem(SubSystem):
         with self.run_actor_mode('pic_receiver', 'timed_iterator', 10) as pic_iter:
             for cv_image in pic_iter:
                 ret = find_coke(cv_image)
-                if ret: break
+                if ret:
+                    break
         return ret
 
 

@@ -156,7 +156,7 @@ def test_map_export_round_trips(tmp_path):
 
 def test_urdf_has_the_contracted_names_and_physics():
     root = ET.parse(URDF).getroot()
-    links = {l.get("name"): l for l in root.findall("link")}
+    links = {link.get("name"): link for link in root.findall("link")}
     joints = {j.get("name"): j for j in root.findall("joint")}
     for n in ("base_footprint", "base_link", "end_effector_link", "camera_link", "camera_optical_frame",
               "base_scan", "imu_link"):

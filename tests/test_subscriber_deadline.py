@@ -13,7 +13,7 @@ from std_msgs.msg import String
 
 from bt_engine import ActorTimeout, Failure, Kind, Runtime, SubSystem
 from bt_engine.bus.actions import ServerUnavailableError
-from bt_engine.errors import ActorCancelled, ActorbtError
+from bt_engine.errors import ActorbtError
 from bt_engine.subsystem import SUBSCRIBER_WAIT
 from tests.conftest import run_in_actor
 

@@ -8,11 +8,11 @@ from __future__ import annotations
 import pytest
 
 from bt_engine.trees import InvalidValueError, parse_mission
-from test_trees_ticks import World, w  # noqa: F401  (the fixture)
+from tick_world import World
 
 
 @pytest.fixture(autouse=True)
-def _close_runs(w: World):  # noqa: F811
+def _close_runs(w: World):
     """Runs driven tick by tick are closed here (their blackboard namespaces removed)."""
     yield
     for run in w.host.live_runs():

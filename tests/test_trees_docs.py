@@ -5,7 +5,6 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-import pytest
 
 from bt_engine import Runtime
 from bt_engine.trees import NODE_TYPES, TreeHost, parse_mission, walk

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import inspect
 from pathlib import Path
 
 import pytest
@@ -10,29 +9,20 @@ import pytest
 from bt_engine import ActorbtError, UnknownActorError
 from bt_engine.trees import (
     REQUIRED,
-    Check,
     Do,
     DuplicateTreeError,
     InputError,
     MissionError,
-    Parallel,
     ParallelPolicy,
-    ReactiveSelector,
-    ReactiveSequence,
     Ref,
-    Repeat,
     Retry,
-    Selector,
     Sequence,
-    SetValues,
     SubtreeCycleError,
     Timeout,
     TreeLibrary,
     UnknownBlackboardKeyError,
     UnresolvedActorError,
-    UseBehaviour,
     ValueType,
-    Wait,
     check_files,
     load_mission,
     parse_mission,

@@ -7,7 +7,6 @@ import json
 import logging
 import shutil
 import threading
-import textwrap
 from pathlib import Path
 
 import numpy as np

@@ -24,7 +24,7 @@ from pathlib import Path
 from typing import Any, Iterable
 
 from ..trees import Ref, keys_of, parse_expression, suggest
-from ._builtins import BUILTINS, NAV2, UNSUPPORTED, Handler
+from ._builtins import BUILTINS, NAV2, UNSUPPORTED
 from ._errors import BtXmlError, Pos, UnknownXmlNodeError, UnsupportedXmlError
 from ._extensions import HANDLERS as EXTENSION_HANDLERS
 from ._nodes import JSON_PREFIX, NodeKind, NodeModel, NodeSpec, PortSpec, convert_literal, decode_json, guess_literal
