@@ -31,7 +31,7 @@ from ..trees import (Check, Condition, Do, ForceFailure, ForceSuccess, IfThenEls
                     ReactiveSequence, Recovery, Ref, Repeat, ResumeSequence, Retry, RunOnce, RunOnceThen,
                     Selector, Sequence, SetValues, Timeout, TreeLibrary, UseBehaviour, Wait, WhileDoElse,
                     annotation_text, children_of)
-from ._convert import BUILTINS, NAV2, UNSUPPORTED
+from ._builtins import BUILTINS, NAV2, UNSUPPORTED
 from ._errors import BtXmlError
 from ._extensions import EXTENSIONS, LIST_SEPARATOR, NAV2_MODELS, NodeDecl, PortDecl
 from ._script_out import check_script, set_script

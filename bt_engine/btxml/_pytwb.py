@@ -16,7 +16,8 @@ from pathlib import Path
 from typing import Any
 
 from ..trees import suggest
-from ._convert import Handler, Importer, _Tree
+from ._builtins import Handler
+from ._convert import Importer, _Tree
 from ._errors import BtXmlError, UnsupportedXmlError
 from ._nodes import PortSpec
 from ._source import XElement
