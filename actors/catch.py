@@ -124,7 +124,7 @@ class Catcher(Approaching, Placing, SubSystem):
         attempts) the search is told to pass it over, as after a close look that rejects
         it: a distractor the looks take for the category (a lego brick for a lying carton)
         would otherwise draw every later search back to it, while the object sought waits
-        elsewhere (house_hard 2015: nine grasps at a brick)."""
+        elsewhere."""
         _, _, yaw = self.run_actor("get_pose")
         views = self.get_value("failed_views")[-9:] + [(xy[0], xy[1], yaw)]
         self.set_value("failed_views", views)
@@ -134,9 +134,7 @@ class Catcher(Approaching, Placing, SubSystem):
     def _pass_over(self, xy: tuple[float, float], category: str) -> None:
         """Tell the search to pass over the ``category`` seen at ``xy`` from now on, and
         the sighting that sent the approach here when the look moved the target: else the
-        search sends the robot back to it, and on to the same object (house_hard 2037: a
-        green sliver on the TV bench taken for a lying bottle, 0.28 m from the bottle that
-        the look moved the target to; five fetches, fifteen grasps)."""
+        search sends the robot back to it, and on to the same object, fetch after fetch."""
         if not self.check_actor("reject_sighting"):
             return
         self.run_actor("reject_sighting", xy[0], xy[1], category)
@@ -233,9 +231,9 @@ class Catcher(Approaching, Placing, SubSystem):
             # from a look pose (a raised object), not a standoff: most of the way, then
             # face it again from near (mini_turn leaves up to half a degree: 15 mm at
             # 1.8 m) and measure what is left on the map. Not on the odometry: a wheel's
-            # scale error (2 % is common) leaves the hand 3-4 cm short after 1.5 m
-            # (house_hard 2008: a bottle on the TV bench, the fingertips closed in front
-            # of it), where the localisation was off by 1.3 cm, and alike at the look.
+            # scale error (2 % is common) leaves the hand 3-4 cm short after 1.5 m, enough
+            # for the fingertips to close in front of a bottle, where the localisation is
+            # within about a centimetre, and alike at the look.
             # Briskly: the gyro's drift, which bends the way, grows with the time it takes.
             driven += self.run_actor("mini_walk", distance - g.reach - strategy.approach.standoff,
                                      speed=LONG_DRIVE_SPEED, tolerance=DRIVE_IN_TOLERANCE)
@@ -271,7 +269,7 @@ class Catcher(Approaching, Placing, SubSystem):
                 self.run_actor("move_to_pose", x, 0.0, z, g.pitch)
             except ActorbtError as e:
                 # put it back down and let go: held on, it would be carried to the next
-                # try and dropped there (house_hard 2009: off the TV bench's edge)
+                # try and dropped there, perhaps off a table's edge
                 self._put_back(g, height)
                 self._back_off(driven, g)
                 raise GraspError(f"{strategy.category} could not be lifted: {e}") from e

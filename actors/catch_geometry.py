@@ -130,9 +130,8 @@ def fresh_views_first(poses: list[tuple[float, float, float]], xy: tuple[float, 
 def seen_again(target: dict, seen: dict) -> dict:
     """``target`` updated with a new detection of it, ``seen``. Its base's height is the
     lower of the two: perception puts it at the lowest part in view, and from near, the
-    camera (looking down) sees only the top of an object on a table (house_hard 2002: a
-    bottle on the TV bench glanced at from 0.4 m after a missed grasp, its base put at
-    0.39 m for 0.25 m; the next picks aimed the hand 14 cm too high, out of reach)."""
+    camera (looking down) sees only the top of an object on a table, and the next pick
+    would aim the hand as high above the table as the object is tall."""
     out = {**target, **seen}
     if isinstance(target.get("z"), (int, float)) and isinstance(seen.get("z"), (int, float)):
         out["z"] = min(float(target["z"]), float(seen["z"]))

@@ -79,8 +79,8 @@ class Placing:
         try:
             driven = self._drive_in(distance - g.reach)
         except ActorbtError:
-            # stopped short (house_hard 2003: the drive in to the pallet timed out 15 mm
-            # short): a little short of the spot, the object still goes down on the surface
+            # stopped short (the drive in can time out a centimetre or two before the
+            # spot): a little short of it, the object still goes down on the surface
             here = self.run_actor("get_pose")
             driven = math.dist(start[:2], here[:2])
             if distance - g.reach - driven > PLACE_SHORT:

@@ -93,8 +93,8 @@ def _rectangle_fit(xy: np.ndarray, direction: float | None = None) -> _Rectangle
 def _densest(c: np.ndarray, noise: float) -> float:
     """Where the values ``c`` [m] crowd most: a face seen squarely, from its points'
     coordinate along its normal. Not their nearest: that is the depth noise's extreme,
-    nearer than the face (house_hard 2040 and 2044: upright cartons on tables seen from
-    1.0-1.3 m, their centres put 6 mm short, median of 34 views; 1 mm with this). The
+    nearer than the face (from 1.0-1.3 m it puts a carton's centre about 6 mm short;
+    this, about 1 mm). The
     peak of their density (smoothed over the noise ``noise``), then the mean of the values
     within twice that of it: a few points of a face seen at a grazing angle, behind the
     one seen squarely, hardly move it."""
@@ -389,8 +389,8 @@ def _score_box_resting(seg: _Segment, sides: tuple[float, float], bz: float) -> 
     if len(side) < 10:
         return 0.0, {"reason": "body not visible"}
     # tangents over FACE_STEP at least: from near, a few pixels' step is within the depth
-    # noise, and the direction comes out at random (house_hard 2039: a lying carton seen
-    # end on from 0.33 m, its faces put 25 degrees off, its fit rejected)
+    # noise, and the direction comes out at random (from 0.33 m a face can come out 25
+    # degrees off, and the fit is rejected)
     stride = max(3, math.ceil(FACE_STEP / px))
     rect = _rectangle_fit(side, _face_direction(seg.grid, lo, hi, stride))
     side_cut = seg.cut("left") or seg.cut("right")

@@ -53,9 +53,9 @@ def _axis(seg: _Segment) -> tuple[np.ndarray, float]:
 def _base(seg: _Segment, app: Appearance | None, evidence: dict) -> float:
     """The height of an object's base [m]: the lowest part of it in view, or, for one
     standing or leaning with a label of another colour whose surface goes on below its
-    colour, that label's top less the label's height above the base (house_hard 2011: a
-    bottle on the study table seen across it, the table's edge hiding the green below the
-    label; its base put at the label's top, 0.14 m high, the arm was sent out of reach)."""
+    colour, that label's top less the label's height above the base (a table's edge can
+    hide a bottle's body below its label: taken at the label's top, the base would be
+    14 cm too high, and the arm sent out of reach)."""
     if app is None or app.label is None or evidence.get("pose", "upright") == "lying" \
             or not seg.continues_below:
         return seg.base
@@ -147,8 +147,7 @@ BASE_SEEN = 0.8
 def base_height(sightings: list[dict]) -> float:
     """The height [m] of the base of an object seen in ``sightings`` (of one object): the
     median ``z`` of those that show most of its height. Perception puts the base at the
-    lowest part in view, so from near, looking down on a table, it is the top's (house_hard
-    2002: a bottle on the TV bench, 0.25 m high, put at 0.39 m by a survey's median)."""
+    lowest part in view, so from near, looking down on a table, it is the object's top."""
     most = max(float(s.get("height") or 0.0) for s in sightings)
     return float(np.median([s["z"] for s in sightings if float(s.get("height") or 0.0) >= BASE_SEEN * most]))
 

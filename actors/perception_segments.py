@@ -205,10 +205,10 @@ def _support(low: np.ndarray, cols: np.ndarray, P: np.ndarray, lab: np.ndarray, 
     point ``zmin`` (the floor's edge pixels blur it). Else, where the first pixels with a
     depth within FOOT_ROWS below it are nearer by an occlusion jump (in half the columns
     or more), something in front hides its foot: the base is taken at that occluder's top,
-    the edge of the table it stands on seen from below (house_hard 2037: a bottle on the TV
-    bench, 0.25 m high, seen over its edge by the camera 9 cm above the floor: its base put
-    at 0.39-0.43 m, and the first grasp closed on its neck). Else ``zmin``, the lowest part
-    in view."""
+    the edge of the table it stands on seen from below (a camera 9 cm above the floor sees
+    a bottle on a 0.25 m bench over the bench's edge: without this its base would be put
+    at the first visible pixels, 15 cm too high, and the grasp would close on its neck).
+    Else ``zmin``, the lowest part in view."""
     h = lab.shape[0]
     sup = []
     for dy in (2, 3, 4):
@@ -375,9 +375,8 @@ def _bridge_labels(mask: np.ndarray, lab: np.ndarray, depth: np.ndarray, P: np.n
 def _depth_steps(coloured: np.ndarray, depth: np.ndarray) -> np.ndarray:
     """Coloured pixels on either side of a depth step (OCCLUSION_JUMP) to a coloured
     neighbour, along rows, columns and diagonals: where one thing stands in front of
-    another. Without them, an object before furniture is not one region with it (house_hard
-    2034: a yellow ball before an orange sofa 2 m behind, in the image one region with it,
-    was taken for a part of the sofa and not seen)."""
+    another. Without them, an object before furniture of a similar colour is one region with
+    it in the image, taken for a part of the furniture and not seen."""
     D = np.where(np.isfinite(depth), depth, np.inf)
     step = np.zeros(coloured.shape, bool)
     h, w = coloured.shape

@@ -100,10 +100,10 @@ class GraspPlan:
     def side_plans(self) -> tuple[GraspPlan, ...]:
         """This plan for each of its ``sides``, the first as declared: the closed range
         moved by the width across that side (a box's wider side fits the open hand too,
-        where the narrow one has no room for the base: house_hard 2009, a carton at the
-        study table's edge, held across its 70 mm side at 71..77 mm). Which side the hand
-        came to is told by where the fingers stall: a box's yaw from afar may swap its
-        sides (house_hard 2003: the 45 mm side, taken for the 70 mm one from 2 m)."""
+        where the narrow one has no room for the base: a carton at a table's edge, held
+        across its 70 mm side at 71..77 mm). Which side the hand came to is told by where
+        the fingers stall: a box's yaw from afar may swap its sides (from 2 m a 45 mm side
+        can be taken for the 70 mm one)."""
         if not self.widths or len(self.widths) != len(self.sides):
             return (self,)
         return (self,) + tuple(self.shifted(w - self.widths[0]) for w in self.widths[1:])
@@ -210,8 +210,8 @@ class Strategy:
             plan = replace(self.upright, sides=(0.0,), one_way=True, offsets=TILTED_OFFSETS, widths=())
             if self.upright.sides and width is not None and not plan.holding(width) \
                     and width < plan.open_width - 0.01:
-                # a box leaning with another side across the lean (house_hard 2015: its
-                # 70 mm side, the hand closing on it at 73 mm): the same grip on that side
+                # a box leaning with another side across the lean (the hand closes on its
+                # 70 mm side at 73 mm): the same grip on that side
                 plan = plan.shifted(width - plan.across)
             return plan
         return self.upright
