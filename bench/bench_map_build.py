@@ -91,7 +91,8 @@ def main(argv=None) -> int:
     ap.add_argument("--world", default="house")
     ap.add_argument("--max-time", type=float, default=900.0)
     args = ap.parse_args(argv)
-    print("$ " + " ".join([".venv/bin/python", "bench/bench_map_build.py"] + (argv if argv is not None else sys.argv[1:])))
+    shown = argv if argv is not None else sys.argv[1:]
+    print("$ " + " ".join([".venv/bin/python", "bench/bench_map_build.py"] + shown))
     out = ROOT / "out" / "bench_map_build"
     rows = []
     for seed in range(args.seed, args.seed + args.seeds):

@@ -142,7 +142,8 @@ def main() -> int:
               f"  (n={len(e)})")
     print(f"  carton yaw error        median {pct(yaw_err, 50):5.2f}  p95 {pct(yaw_err, 95):5.2f}  "
           f"max {pct(yaw_err, 100):5.2f} deg")
-    print(f"  base z error            median {pct(zerr, 50):5.2f}  p95 {pct(zerr, 95):5.2f}  max {pct(zerr, 100):5.2f} mm")
+    print(f"  base z error            median {pct(zerr, 50):5.2f}  p95 {pct(zerr, 95):5.2f}  "
+          f"max {pct(zerr, 100):5.2f} mm")
     ok = allxy and max(allxy) <= 10.0 and right == total and false_targets == 0
     print(f"  target <= 10 mm, every category right: {'met' if ok else 'NOT met'}")
     return 0 if ok else 1

@@ -2,9 +2,10 @@
 
 For every seed, every category object of the world (upright, lying or tilted; on the floor
 or a low table; labelled, under varied light, with depth noise) is looked at from
-``--views`` viewpoints 0.45-0.9 m away (``--band``; 1.1-1.8 m for one on a low table) that the robot's base could occupy (lidar-height
-clearance from the world's grid), facing it. Each view renders one camera frame and runs
-``detect()`` with the camera's true pose (this measures perception, not localisation).
+``--views`` viewpoints 0.45-0.9 m away (``--band``; 1.1-1.8 m for one on a low table) that
+the robot's base could occupy (lidar-height clearance from the world's grid), facing it.
+Each view renders one camera frame and runs ``detect()`` with the camera's true pose (this
+measures perception, not localisation).
 
 Reported per category and pose: views where the object is in the image; recognised (a
 detection of its category within 6 cm of its body centre); the pose reported right;
@@ -116,7 +117,9 @@ def main() -> int:
                     key = (cat, placed.pose_kind)
                     row = rows[key]
                     row["views"] += 1
-                    hit = [dd for dd in dets if dd["category"] == cat and math.dist((dd["x"], dd["y"]), (ox, oy)) < MATCH]
+                    hit = [
+                        dd for dd in dets if dd["category"] == cat and math.dist((dd["x"], dd["y"]), (ox, oy)) < MATCH
+                    ]
                     if hit:
                         row["seen"] += 1
                         row["err"].append(1000 * math.dist((hit[0]["x"], hit[0]["y"]), (ox, oy)))

@@ -194,7 +194,9 @@ def house_grid(resolution: float = 0.05) -> OccupancyGrid:
     d = np.zeros((h, w), np.int8)
 
     def box(x0: float, y0: float, x1: float, y1: float, v: int = 100) -> None:
-        d[int(y0 / resolution) : int(math.ceil(y1 / resolution)), int(x0 / resolution) : int(math.ceil(x1 / resolution))] = v
+        rows = slice(int(y0 / resolution), int(math.ceil(y1 / resolution)))
+        cols = slice(int(x0 / resolution), int(math.ceil(x1 / resolution)))
+        d[rows, cols] = v
 
     t = 0.1
     box(0, 0, 12, t), box(0, 9 - t, 12, 9), box(0, 0, t, 9), box(12 - t, 0, 12, 9)  # outer walls
@@ -225,7 +227,8 @@ def bench_base(n: int, seed: int) -> dict[str, float]:
         times.append(res.planning_time)
         reached += res.ok
     print(
-        f"base: {reached}/{n} goals planned ({100 * reached / n:.0f} %), median {1e3 * statistics.median(times):.2f} ms, "
+        f"base: {reached}/{n} goals planned ({100 * reached / n:.0f} %), "
+        f"median {1e3 * statistics.median(times):.2f} ms, "
         f"p95 {1e3 * pct(times, 95):.2f} ms per query on a {grid.shape[1]}x{grid.shape[0]} grid "
         f"(costmap + graph built once in {build_ms:.1f} ms)"
     )
@@ -243,8 +246,9 @@ def main(argv: list[str] | None = None) -> int:
     base = bench_base(args.goals, args.seed)
     ok = arm["success"] >= 0.99 and arm["median_ms"] <= 20 and arm["p95_ms"] <= 100 and us <= 10
     print(
-        f"summary: arm {100 * arm['success']:.0f} % solved, median {arm['median_ms']:.2f} ms, p95 {arm['p95_ms']:.2f} ms; "
-        f"ruckig {us:.2f} us/segment; base median {base['base_median_ms']:.2f} ms -> targets {'met' if ok else 'MISSED'}"
+        f"summary: arm {100 * arm['success']:.0f} % solved, median {arm['median_ms']:.2f} ms, "
+        f"p95 {arm['p95_ms']:.2f} ms; ruckig {us:.2f} us/segment; "
+        f"base median {base['base_median_ms']:.2f} ms -> targets {'met' if ok else 'MISSED'}"
     )
     return 0
 

@@ -493,7 +493,8 @@ def main() -> None:
         target_s = f"== {target}" if target is not None else "-"
         ok = "" if target is None else ("ok" if ticks == [target] else "MISSED")
         virt = "/".join(f"{v:g}" for v in data["virtual_s"])
-        print(f"  {label:44s} {tick_s:>6s} {target_s:>7s} {data['cpu_ms']:8.2f} {data['wall_ms']:8.2f} {virt:>9s}  {ok}")
+        print(f"  {label:44s} {tick_s:>6s} {target_s:>7s} "
+              f"{data['cpu_ms']:8.2f} {data['wall_ms']:8.2f} {virt:>9s}  {ok}")
 
     print(f"\n3. Load time of a {load['nodes']}-node mission ({load['lines']} YAML lines; "
           f"median of {REPEATS}; no target in the issue)")

@@ -203,7 +203,8 @@ def main(argv=None) -> int:
     p.add_argument("--edges", action="store_true", help="also the pose-graph edges' errors")
     p.add_argument("--json", action="store_true")
     args = ap.parse_args(argv)
-    print("$ " + " ".join([".venv/bin/python", "bench/mapping_replay.py"] + (argv if argv is not None else sys.argv[1:])))
+    shown = argv if argv is not None else sys.argv[1:]
+    print("$ " + " ".join([".venv/bin/python", "bench/mapping_replay.py"] + shown))
     if args.cmd == "record":
         record(args.world, args.seed, args.out, args.max_time)
         return 0

@@ -50,7 +50,9 @@ def syntax_hint(exc: yaml.MarkedYAMLError) -> str:
     if "<stream end>" in problem or "end of stream" in problem:
         return "the text ends inside a value: close the bracket, brace or quote opened before it"
     if "could not find expected ':'" in problem:
-        return f"line {start} is not a 'key: value' line: add ': ' after its key, or indent it as part of the value above"
+        return (
+            f"line {start} is not a 'key: value' line: add ': ' after its key, or indent it as part of the value above"
+        )
     if problem.startswith("expected <block end>"):
         if "'-'" in problem or "<block sequence start>" in problem:
             return (f"check the indentation of this line against the line above{since}: the '-' items of "
@@ -59,10 +61,15 @@ def syntax_hint(exc: yaml.MarkedYAMLError) -> str:
             return (f"check the indentation of this line against the line above{since}: the keys of one "
                     "mapping start in the same column")
         if "<scalar>" in problem:
-            return "a value continues after its end on this line: quote the whole value, or move the rest to its own line"
+            return (
+                "a value continues after its end on this line: quote the whole value, or move the rest to its own line"
+            )
         return f"check the indentation of this line against the line above{since}"
     if "did not find expected key" in problem:
-        return f"check the indentation of this line against the keys above it{since}: keys of one mapping start in the same column"
+        return (
+            f"check the indentation of this line against the keys above it{since}: "
+            "keys of one mapping start in the same column"
+        )
     if "did not find expected '-' indicator" in problem:
         return f"this line is not in line with the list items above it{since}: start it with '- ' in the items' column"
     if "mapping values are not allowed here" in problem:

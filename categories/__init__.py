@@ -16,6 +16,6 @@ from .strategy import Approach, Grasp, GraspPlan, Strategy, TopGrasp
 for _module in BUILT_IN:
     load(_module)
 
-__all__ = ["Approach", "BUILT_IN", "Box", "Category", "CategoryError", "Cylinder", "Grasp", "GraspPlan", "Label", "Revolution",
-           "Shape", "Strategy", "TopGrasp", "UnknownCategoryError", "all_categories", "declared_at", "get", "load", "names",
-           "register", "unregister"]
+__all__ = ["Approach", "BUILT_IN", "Box", "Category", "CategoryError", "Cylinder", "Grasp", "GraspPlan", "Label",
+           "Revolution", "Shape", "Strategy", "TopGrasp", "UnknownCategoryError", "all_categories", "declared_at",
+           "get", "load", "names", "register", "unregister"]

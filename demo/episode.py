@@ -2,9 +2,10 @@
 checked against the simulator's truth, and pictures.
 
 The episode plays the referee, never the robot (the simulator tells the localiser where
-the robot starts, as a user would with RViz's "2D Pose Estimate"): it reads the simulator's own state (``SimWorld.robot_pose()``, object poses) to score
-the outcome, draw the robot's true path and measure the localisation's error (the robot's
-map -> base_footprint on /tf against the true pose, every :data:`LOC_PERIOD` s).
+the robot starts, as a user would with RViz's "2D Pose Estimate"): it reads the simulator's
+own state (``SimWorld.robot_pose()``, object poses) to score the outcome, draw the robot's
+true path and measure the localisation's error (the robot's map -> base_footprint on /tf
+against the true pose, every :data:`LOC_PERIOD` s).
 """
 from __future__ import annotations
 

@@ -23,7 +23,8 @@ from .episode import Episode, episode_app, run_episode
 
 CSV_FIELDS = ["tree", "world", "seed", "category", "success", "tree_status", "failed_node",
               "reason", "placed_object", "pose", "support", "sim_time", "wall_time", "loc_rmse_m", "loc_max_m",
-              "grasp_tilt_deg", "pushed", "objects", "placed", "trace", "target", "end_pose", "end_support", "tree_failure"]
+              "grasp_tilt_deg", "pushed", "objects", "placed", "trace", "target", "end_pose", "end_support",
+              "tree_failure"]
 
 #: each episode's live progress, in its folder
 PROGRESS_LOG = "progress.log"

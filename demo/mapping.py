@@ -3,8 +3,9 @@
 
 The world runs without its map server (``SimWorld.serve_map = False``), navstack's
 ``start_mapping`` runs the mapper instead of the localiser, and the robot's ``explore``
-actor drives to frontiers until none is left; then ``save_map`` writes the map_server map. The referee's side is the episode's: the true path and the error of the
-mapper's pose (map -> base_footprint on /tf) against the simulator's truth.
+actor drives to frontiers until none is left; then ``save_map`` writes the map_server map.
+The referee's side is the episode's: the true path and the error of the mapper's pose
+(map -> base_footprint on /tf) against the simulator's truth.
 """
 from __future__ import annotations
 

@@ -159,7 +159,8 @@ class Amcl:
         self._odom_at_update = None      # odometry pose at the last filter update
         self._last_odom = None           # the newest odometry pose
         self._force_update = False
-        self._pending_global = None      # share of particles to keep, while an informed global localisation waits for a scan
+        # share of particles to keep, while an informed global localisation waits for a scan
+        self._pending_global = None
         self._low_scans = 0
         self._grace_until = -math.inf
         self._rivals = None              # the scan's best places (map -> odom), their fits, the odometry pose

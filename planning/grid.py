@@ -153,7 +153,9 @@ def inflate(
         raise InvalidInputError(f"robot_radius must be >= 0 m, got {robot_radius!r}")
     infl = robot_radius + 0.25 if inflation_radius is None else float(inflation_radius)
     if not (math.isfinite(infl) and infl >= robot_radius):
-        raise InvalidInputError(f"inflation_radius must be >= robot_radius ({robot_radius} m), got {inflation_radius!r}")
+        raise InvalidInputError(
+            f"inflation_radius must be >= robot_radius ({robot_radius} m), got {inflation_radius!r}"
+        )
     data = grid.data
     unknown = data < 0
     obstacle = data >= occupied_threshold

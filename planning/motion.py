@@ -122,7 +122,9 @@ def _as_q(q: Sequence[float], what: str) -> np.ndarray:
     return arr
 
 
-def _fail(t0: float, reason: FailureReason, message: str, planner: str = "", start: np.ndarray | None = None) -> MotionPlan:
+def _fail(
+    t0: float, reason: FailureReason, message: str, planner: str = "", start: np.ndarray | None = None
+) -> MotionPlan:
     return MotionPlan(
         path=(),
         planner=planner,
@@ -263,11 +265,15 @@ def _plan(
     ss.setPlanner(getattr(og, planner)(si))
     remaining = timeout - (time.perf_counter() - t0)
     if remaining <= 0:
-        return _fail(t0, FailureReason.TIMEOUT, f"no time left for {planner} after the checks ({timeout} s budget)", planner, start)
+        return _fail(
+            t0, FailureReason.TIMEOUT, f"no time left for {planner} after the checks ({timeout} s budget)",
+            planner, start,
+        )
     status = ss.solve(remaining)
     if not ss.haveExactSolutionPath():
         text = status.asString()
-        reason = FailureReason.TIMEOUT if "timeout" in text.lower() or "approximate" in text.lower() else FailureReason.NO_PATH
+        timed_out = "timeout" in text.lower() or "approximate" in text.lower()
+        reason = FailureReason.TIMEOUT if timed_out else FailureReason.NO_PATH
         return _fail(
             t0, reason,
             f"{planner} found no collision-free path in {remaining:.3f} s ({text}) "
@@ -331,11 +337,15 @@ def _prepare_start(start: Sequence[float], scene: PlanningScene, t0: float) -> n
     below, above = q < k.lower - _START_CLIP, q > k.upper + _START_CLIP
     if np.any(below | above):
         bad = [k.joint_names[i] for i in np.flatnonzero(below | above)]
-        return _fail(t0, FailureReason.START_INVALID, f"start {np.round(q, 4).tolist()} is outside the limits of {bad}", start=q)
+        return _fail(
+            t0, FailureReason.START_INVALID, f"start {np.round(q, 4).tolist()} is outside the limits of {bad}", start=q
+        )
     q = np.clip(q, k.lower, k.upper)
     report = scene.check(q)
     if not report.valid:
-        return _fail(t0, FailureReason.START_INVALID, f"start {np.round(q, 4).tolist()} is invalid: {report.describe()}", start=q)
+        return _fail(
+            t0, FailureReason.START_INVALID, f"start {np.round(q, 4).tolist()} is invalid: {report.describe()}", start=q
+        )
     return q
 
 
@@ -391,7 +401,10 @@ def plan_joint_motion(
         return _fail(t0, FailureReason.INVALID_INPUT, str(exc), planner, q0)
     report = scene.check(qg)
     if not report.valid:
-        return _fail(t0, FailureReason.GOAL_INVALID, f"goal {np.round(qg, 4).tolist()} is invalid: {report.describe()}", planner, q0)
+        return _fail(
+            t0, FailureReason.GOAL_INVALID, f"goal {np.round(qg, 4).tolist()} is invalid: {report.describe()}",
+            planner, q0,
+        )
     return _plan(
         q0, [qg], scene,
         planner=planner, timeout=timeout, resolution=resolution, recheck_resolution=recheck_resolution,

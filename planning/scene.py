@@ -223,7 +223,9 @@ class PlanningScene:
                 if group == j:
                     lo, hi = (np.array(v) for v in pybullet.getAABB(rid, link, physicsClientId=c))
                     if np.all(hi >= lo):
-                        corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
+                        corners = np.array(
+                            [[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])]
+                        )
                         far = max(far, float(np.max(np.linalg.norm(corners - origin, axis=1))))
             out[j] = far
         return out
@@ -233,7 +235,10 @@ class PlanningScene:
         (triangle inequality along the chain) [m]; (4,)."""
         c, rid = self._client, self._robot
         self._set_arm(np.zeros(4))
-        origins = [np.array(pybullet.getLinkState(rid, j, computeForwardKinematics=True, physicsClientId=c)[4]) for j in self._arm_index]
+        origins = [
+            np.array(pybullet.getLinkState(rid, j, computeForwardKinematics=True, physicsClientId=c)[4])
+            for j in self._arm_index
+        ]
         reach = [0.0] * 4
         for k in range(3, -1, -1):
             reach[k] = own[self._arm_index[k]]
@@ -342,7 +347,9 @@ class PlanningScene:
         orientation: Sequence[float] = (0.0, 0.0, 0.0, 1.0),
     ) -> Obstacle:
         """Add (or replace) a box of full extents ``size`` [m] centred at ``position`` [m]."""
-        return self._add(Obstacle(name, "box", _vec(size, 3, "size"), _vec(position, 3, "position"), _quat(orientation)))
+        return self._add(
+            Obstacle(name, "box", _vec(size, 3, "size"), _vec(position, 3, "position"), _quat(orientation))
+        )
 
     def add_cylinder(
         self,
@@ -354,7 +361,9 @@ class PlanningScene:
     ) -> Obstacle:
         """Add (or replace) an upright cylinder (``radius``, ``height`` [m]) centred at ``position`` [m]."""
         return self._add(
-            Obstacle(name, "cylinder", _vec((radius, height), 2, "size"), _vec(position, 3, "position"), _quat(orientation))
+            Obstacle(
+                name, "cylinder", _vec((radius, height), 2, "size"), _vec(position, 3, "position"), _quat(orientation)
+            )
         )
 
     def add_sphere(self, name: str, radius: float, position: Sequence[float]) -> Obstacle:

@@ -494,7 +494,8 @@ def _place_objects(ctx, spec, entries, seed, clearance, tries):
             raise ctx.err(node, f"cannot place object '{name}' ({cat}) in {where}: no free floor "
                                 f"space after {tries} tries (needs {clearance} m clearance from walls, "
                                 f"furniture, the robot start and the {len(placed)} objects already "
-                                f"placed, and {DOOR_CLEARANCE} m from doorways and wall ends); lower 'count' or 'placement.clearance', or enlarge the area")
+                                f"placed, and {DOOR_CLEARANCE} m from doorways and wall ends); lower 'count' or "
+                                f"'placement.clearance', or enlarge the area")
         yaw = float(rng.uniform(-math.pi, math.pi))
         placed.append((found[0], found[1], r))
         out[name] = PlacedObject(name, cat, float(found[0]), float(found[1]), yaw)

@@ -462,9 +462,10 @@ class Placer:
 
         r = model.radius
         c, s = math.cos(table.yaw), math.sin(table.yaw)
+        half_u, half_v = table.sx / 2 - r - 0.02, table.sy / 2 - r - 0.02   # where the decoy's centre may go
         for _ in range(50):
-            u = float(self.rng.uniform(-(table.sx / 2 - r - 0.02), table.sx / 2 - r - 0.02)) if table.sx > 2 * r + 0.04 else None
-            v = float(self.rng.uniform(-(table.sy / 2 - r - 0.02), table.sy / 2 - r - 0.02)) if table.sy > 2 * r + 0.04 else None
+            u = float(self.rng.uniform(-half_u, half_u)) if table.sx > 2 * r + 0.04 else None
+            v = float(self.rng.uniform(-half_v, half_v)) if table.sy > 2 * r + 0.04 else None
             if u is None or v is None:
                 return None
             ox, oy = table.x + c * u - s * v, table.y + s * u + c * v

@@ -133,7 +133,8 @@ def test_a_mission_outside_an_actors_declared_range_fails_at_load_where_it_is_wr
     ]
     good = ("name: m\ninputs: {s: {type: float, default: 0.5}}\nroot:\n  sequence:\n"
             "    - do: base.roll\n      with: {distance: -1.0, speed: 0.26}\n"
-            "    - do: base.roll\n      with: {distance: \"{s}\"}\n"      # a reference: its value is known when the tree runs
+            # a reference: its value is known when the tree runs
+            "    - do: base.roll\n      with: {distance: \"{s}\"}\n"
             "    - do: base.light\n      with: {colour: green}\n")
     assert _problems(resolver, good) == []
 

@@ -86,7 +86,9 @@ def bt_cpp_v4_problems(text: str) -> list[str]:
         for port in node:
             if port.tag == "description":
                 continue
-            if port.tag not in ("input_port", "output_port", "inout_port") or not allowed_port_name(port.get("name", "")):
+            if port.tag not in ("input_port", "output_port", "inout_port") or not allowed_port_name(
+                port.get("name", "")
+            ):
                 bad.append(f"model {node.get('ID')}: port <{port.tag} name={port.get('name')!r}>")
             ports[port.get("name", "")] = port.tag
         if node.get("ID") in declared or node.get("ID") in BUILTIN:

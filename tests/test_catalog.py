@@ -58,7 +58,9 @@ def test_json_schema_tools(rt):
 # -- parameter docs (the Args: convention) --------------------------------------------------
 class Documented(SubSystem):
     @actor
-    def goto(self, x: float, y: float, theta=0.0, frame: str = "map", timeout: float | None = None) -> tuple[float, float, float]:
+    def goto(
+        self, x: float, y: float, theta=0.0, frame: str = "map", timeout: float | None = None
+    ) -> tuple[float, float, float]:
         """Drive to (x, y) in the map frame.
 
         Fails when no path exists.

@@ -111,7 +111,9 @@ def test_a_close_look_at_a_distractor_rejects_the_target_and_the_search_passes_i
     catch = rt.add_subsystem("catch", Catcher)
     search = rt.add_subsystem("search", Search)
     target = {"category": "carton", "x": 1.6, "y": 0.5, "z": 0.0, "pose": "lying"}
-    with pytest.raises(ActorError, match=r"no carton at \(1\.60, 0\.50\): seen from 0\.60 m, the object there is of no known"):
+    with pytest.raises(
+        ActorError, match=r"no carton at \(1\.60, 0\.50\): seen from 0\.60 m, the object there is of no known"
+    ):
         run_in_actor(rt, lambda: catch._refine(target, "carton", confirm=True))
     assert search.get_value("rejected") == [(1.6, 0.5, "carton")]
     # bt_catch's retry of the same target fails at once, before anything moves

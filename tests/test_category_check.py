@@ -51,7 +51,8 @@ def test_the_stall_window_is_derived_from_the_width_at_the_grasp_height():
 
 @pytest.mark.parametrize("grasp, top, expected", [
     (dict(height=0.035), None, "grasp.height 0.035 m is out of the arm's reach: at reach 0.270 m and pitch 0 deg "
-                               "the hand reaches 0.045..0.369 m above the floor; change grasp.height or approach.reach"),
+                               "the hand reaches 0.045..0.369 m above the floor; "
+                               "change grasp.height or approach.reach"),
     (dict(lift=0.40), None, "the lift (grasp.height + grasp.lift) 0.450 m is out of the arm's reach"),
     (dict(closed_min=0.050, closed_max=0.058), None,
      "at grasp.height 0.050 m the fingers close on 65 mm, outside closed_min..closed_max 50..58 mm; "
@@ -118,7 +119,9 @@ def test_a_declaration_error_names_its_line(tmp_path):
     path.write_text("from categories import Category, Cylinder, Grasp, register\n\n"
                     "CATEGORY = register(Category(name='tall_test', shape=Cylinder(0.03, 0.1), mass=0.01,\n"
                     "                             rgba=(1, 0, 0), grasp=Grasp(height=0.2)))\n")
-    with pytest.raises(categories.CategoryError, match=rf"^{path}:3: tall_test: grasp height 0.2 m is not on the object"):
+    with pytest.raises(
+        categories.CategoryError, match=rf"^{path}:3: tall_test: grasp height 0.2 m is not on the object"
+    ):
         categories.load(path)
 
 

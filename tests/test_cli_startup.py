@@ -57,7 +57,8 @@ def loaded(cwd: Path, *args: str) -> set[str]:
 
 def heavy(modules: set[str]) -> list[str]:
     found = [m for m in modules if m.split(".")[0] in HEAVY]
-    found += [m for m in modules if m.startswith("sim.") and m not in ("sim.cli", "sim.robot_cli")]  # the plugins: argparse only
+    # the plugins: argparse only
+    found += [m for m in modules if m.startswith("sim.") and m not in ("sim.cli", "sim.robot_cli")]
     return sorted(found)
 
 

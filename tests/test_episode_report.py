@@ -98,7 +98,9 @@ def test_the_end_state_is_read_from_the_world():
 def test_a_long_step_is_told_every_heartbeat(rt, tmp_path, monkeypatch):
     """The demo is not silent through a long step: the running node is told."""
     from demo.episode import DemoProgress
-    (tmp_path / "patrol_test.yaml").write_text("name: patrol_test\nroot:\n  sequence:\n    - name: long drive\n      wait: 5\n")
+    (tmp_path / "patrol_test.yaml").write_text(
+        "name: patrol_test\nroot:\n  sequence:\n    - name: long drive\n      wait: 5\n"
+    )
     register_tree_folder(rt, tmp_path)
     monkeypatch.setattr(DemoProgress, "HEARTBEAT", 0.0)
     out = io.StringIO()
@@ -113,7 +115,9 @@ def test_the_evaluation_tells_what_its_running_episodes_do(tmp_path, monkeypatch
     monkeypatch.setattr(Progress, "HEARTBEAT", 0.2)
     folder = tmp_path / "can_seed3"
     folder.mkdir()
-    (folder / PROGRESS_LOG).write_text("[   12.0s] bt_search: search/patrol\n[   80.0s]   ... bt_catch: catch/attempts/attempt\n")
+    (folder / PROGRESS_LOG).write_text(
+        "[   12.0s] bt_search: search/patrol\n[   80.0s]   ... bt_catch: catch/attempts/attempt\n"
+    )
     out = io.StringIO()
     bar = Progress(out, 2)
     bar.start(2, "", [])
@@ -128,7 +132,9 @@ def test_the_evaluation_tells_what_its_running_episodes_do(tmp_path, monkeypatch
 def test_what_the_robot_saw_is_kept_for_the_top_view_also_when_the_run_fails(rt, tmp_path):
     from demo.episode import Sightings
     rt.add_subsystem("steps", Steps)
-    (tmp_path / "saw_test.yaml").write_text("name: saw_test\nroot:\n  sequence:\n    - do: watch\n    - do: steps.search\n")
+    (tmp_path / "saw_test.yaml").write_text(
+        "name: saw_test\nroot:\n  sequence:\n    - do: watch\n    - do: steps.search\n"
+    )
     register_tree_folder(rt, tmp_path)
     seen: list = []
     tree_host(rt).observers.append(Sightings(seen))

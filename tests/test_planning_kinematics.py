@@ -59,7 +59,9 @@ def test_fk_matches_pybullet(kin, bullet):
         q = rng.uniform(kin.lower, kin.upper)
         for name, v in zip(ARM, q):
             pybullet.resetJointState(body, joints[name], float(v), physicsClientId=cid)
-        state = pybullet.getLinkState(body, links["end_effector_link"], computeForwardKinematics=True, physicsClientId=cid)
+        state = pybullet.getLinkState(
+            body, links["end_effector_link"], computeForwardKinematics=True, physicsClientId=cid
+        )
         t = kin.fk(q)
         assert np.allclose(t[:3, 3], state[4], atol=1e-6)
         rot = np.array(pybullet.getMatrixFromQuaternion(state[5])).reshape(3, 3)

@@ -233,14 +233,16 @@ robot: {start: [0.6, 0.6, 0]}
 
 @pytest.mark.parametrize("extra, where, message", [
     ("poses: {upright: 1, sideways: 2}\n", "8:21", "poses: unknown key 'sideways' (allowed: "),
-    ("poses: {upright: 0, lying: 0, tilted: 0}\n", "8:8", "poses: the weights of upright, lying, tilted must not all be 0"),
+    ("poses: {upright: 0, lying: 0, tilted: 0}\n", "8:8",
+     "poses: the weights of upright, lying, tilted must not all be 0"),
     ("poses: {tilt_deg: [40, 20]}\n", "8:19", "poses.tilt_deg must be [low, high] with low <= high"),
     ("poses: {on_tables: 2}\n", "8:20", "poses.on_tables must be a fraction in 0..1, got 2"),
     ("appearance: {labels: maybe}\n", "8:22", "appearance.labels must be true or false, got 'maybe'"),
     ("appearance: {depth_noise: {a: -1}}\n", "8:31", "appearance.depth_noise.a must be >= 0"),
     ("appearance: {lighting: {tint: x}}\n", "8:31", "appearance.lighting.tint must be a number, got 'x'"),
     ("distractors: {count: 3}\n", "8:1", "distractors: needs a 'poses' block"),
-    ("poses: {}\ndistractors: {kinds: [teapot]}\n", "9:23", "distractors.kinds: unknown distractor 'teapot' (one of: mug,"),
+    ("poses: {}\ndistractors: {kinds: [teapot]}\n", "9:23",
+     "distractors.kinds: unknown distractor 'teapot' (one of: mug,"),
     ("poses: {}\nobjects:\n  - {category: can, pose_kind: flying}\n", "10:32",
      "objects[0].pose_kind: expected one of upright, lying, tilted, got 'flying'"),
     ("poses: {}\nobjects:\n  - {category: can, support: sofa}\n", "10:30",

@@ -19,7 +19,9 @@ def config(tmp_path: Path) -> str:
     trees = tmp_path / "trees"
     trees.mkdir()
     shutil.copy(REPO / "trees" / "demo_patrol.yaml", trees)
-    (trees / "fails.yaml").write_text("name: fails\nroot: {sequence: [{set: {n: 1}}, {name: too small, check: n > 5}]}\n")
+    (trees / "fails.yaml").write_text(
+        "name: fails\nroot: {sequence: [{set: {n: 1}}, {name: too small, check: n > 5}]}\n"
+    )
     cfg = tmp_path / "actorbt.yaml"
     cfg.write_text("subsystems: {}\ntrees: trees\n")
     return str(cfg)

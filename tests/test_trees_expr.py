@@ -203,10 +203,13 @@ def test_deep_check_in_a_mission_points_at_the_file_position() -> None:
         parse_mission(text, "deep.yaml")
     # line 3; the expression starts at column 11, the 65th '(' is 64 further along
     assert str(info.value).startswith(
-        f"deep.yaml:3:{11 + MAX_EXPR_DEPTH}: bad check expression: expression nested deeper than {MAX_EXPR_DEPTH} levels")
+        f"deep.yaml:3:{11 + MAX_EXPR_DEPTH}: bad check expression: "
+        f"expression nested deeper than {MAX_EXPR_DEPTH} levels")
 
 
 def test_huge_number_in_a_mission_check_points_at_it() -> None:
     with pytest.raises(CheckExpressionError) as info:
         parse_mission("name: n\nroot: {check: 'flag > " + "9" * 5000 + "'}\n", "n.yaml")
-    assert str(info.value).startswith(f"n.yaml:2:23: bad check expression: number longer than {MAX_NUMBER_DIGITS} digits")
+    assert str(info.value).startswith(
+        f"n.yaml:2:23: bad check expression: number longer than {MAX_NUMBER_DIGITS} digits"
+    )

@@ -246,7 +246,9 @@ def test_structure_only_validation_without_resolver(tmp_path: Path) -> None:
 
 
 def test_library_detects_cycles_across_files(tmp_path: Path) -> None:
-    (tmp_path / "a.yaml").write_text("name: tree_a\nroot: {sequence: [{do: sleep, with: {seconds: 1}}, {do: tree_b}]}\n")
+    (tmp_path / "a.yaml").write_text(
+        "name: tree_a\nroot: {sequence: [{do: sleep, with: {seconds: 1}}, {do: tree_b}]}\n"
+    )
     (tmp_path / "b.yaml").write_text("name: tree_b\nroot: {do: tree_c}\n")
     (tmp_path / "c.yaml").write_text("name: tree_c\nroot: {do: tree_a}\n")
     lib = TreeLibrary(demo_resolver())
@@ -341,8 +343,10 @@ def test_the_issue_repro_is_one_line_from_the_file(tmp_path: Path) -> None:
     path = tmp_path / "a.yaml"
     path.write_bytes(b"name: a\nroot: {wait: 1}\n# \x7f\n")
     [error] = check_files([path])
-    assert str(error) == f"{path}:3:3: non-printable character U+007F is not allowed in YAML, expected printable text " \
-                         "(write it as an escape in a double-quoted string)"
+    assert str(error) == (
+        f"{path}:3:3: non-printable character U+007F is not allowed in YAML, expected printable text "
+        "(write it as an escape in a double-quoted string)"
+    )
 
 
 def test_invalid_utf8_points_at_the_byte(tmp_path: Path) -> None:
@@ -448,7 +452,8 @@ def test_recursive_aliases_are_rejected() -> None:
 
 
 @pytest.mark.parametrize("value,message", [
-    ("!!python/object/apply:os.system [echo]", "unsupported YAML tag 'tag:yaml.org,2002:python/object/apply:os.system'"),
+    ("!!python/object/apply:os.system [echo]",
+     "unsupported YAML tag 'tag:yaml.org,2002:python/object/apply:os.system'"),
     ("!!python/name:os.system", "unsupported YAML tag 'tag:yaml.org,2002:python/name:os.system'"),
     ("!!bool maybe", "'maybe' is not a valid bool, expected a bool or no tag"),
     ("!!int 1e3", "'1e3' is not a valid int"),

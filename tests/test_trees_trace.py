@@ -396,7 +396,9 @@ def test_a_recording_in_the_old_order_still_replays(folder: Path, tmp_path: Path
     # reverse every batch of status changes of one run at one time
     out, batch = [], []
     for e in events + [{"type": "end-of-test"}]:
-        if batch and not (e.get("type") == "status" and e.get("run") == batch[0]["run"] and e.get("t") == batch[0]["t"]):
+        if batch and not (
+            e.get("type") == "status" and e.get("run") == batch[0]["run"] and e.get("t") == batch[0]["t"]
+        ):
             out += batch[::-1]
             batch = []
         (batch if e.get("type") == "status" else out).append(e)

@@ -16,7 +16,9 @@ __all__ = ["DIALECTS", "import_files"]
 DIALECTS: dict[str, type[Importer]] = {"btcpp": Importer, "pytwb": PytwbImporter}
 
 
-def import_files(paths: Iterable[str | Path], model: NodeModel | None = None, dialect: str = "btcpp") -> dict[str, dict]:
+def import_files(
+    paths: Iterable[str | Path], model: NodeModel | None = None, dialect: str = "btcpp"
+) -> dict[str, dict]:
     """Convert every tree of these XML files; returns mission dicts by name, in file
     order (included files where they are included).
 

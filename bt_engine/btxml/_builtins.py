@@ -63,7 +63,7 @@ def _parallel(imp: Importer, el: XElement, node_id: str, ports: dict[str, str], 
         if value == 0 or abs(value) > len(kids):
             raise BtXmlError(el.at(name), f"{name} is {value}, expected 1 to {len(kids)} or -1 to -{len(kids)}")
         counts[attr] = value
-    if counts == {"success_count": -1, "failure_count": 1} or counts == {"success_count": len(kids), "failure_count": 1}:
+    if counts in ({"success_count": -1, "failure_count": 1}, {"success_count": len(kids), "failure_count": 1}):
         return {"parallel": kids}
     if counts["success_count"] == 1 and counts["failure_count"] == 1:
         return {"parallel": {"policy": "success_on_one", "children": kids}}

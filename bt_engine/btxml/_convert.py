@@ -355,7 +355,9 @@ class Importer:
             raise UnsupportedXmlError(el.at(attr), f"{text}: the root blackboard ('@' keys) is not supported, "
                                                    "expected a key of this tree (pass values through SubTree ports)")
         if not _IDENT.match(key):
-            raise BtXmlError(el.at(attr), f"blackboard key {key!r} is not a valid key, expected letters, digits and '_'")
+            raise BtXmlError(
+                el.at(attr), f"blackboard key {key!r} is not a valid key, expected letters, digits and '_'"
+            )
         return key
 
     def literal(self, el: XElement, attr: str, text: str, port: PortSpec | None) -> Any:
@@ -542,15 +544,21 @@ class Importer:
             text = ports.pop(iface.result_port)
             result_key = self.key(el, iface.result_port, text)
             if result_key is None:
-                raise BtXmlError(el.at(iface.result_port), f"port {iface.result_port!r} receives the result of tree "
-                                                           f"{tree_id!r}, expected a blackboard key such as \"{{result}}\"")
+                raise BtXmlError(
+                    el.at(iface.result_port),
+                    f"port {iface.result_port!r} receives the result of tree {tree_id!r}, "
+                    f"expected a blackboard key such as \"{{result}}\"",
+                )
             ctx.write(result_key, el.at(iface.result_port))
         spec = self.model.get(tree_id)
         known = [*iface.inputs, *(o for o in iface.outputs if o not in iface.inputs)]
         for port, text in ports.items():
             if port not in iface.inputs and port not in iface.outputs:
-                raise BtXmlError(el.at(port), f"tree {tree_id!r} has no port {port!r}{suggest(port, known)}: it neither "
-                                              f"reads nor writes that key, expected one of: {', '.join(known) or '(none)'}")
+                raise BtXmlError(
+                    el.at(port),
+                    f"tree {tree_id!r} has no port {port!r}{suggest(port, known)}: it neither reads nor writes "
+                    f"that key, expected one of: {', '.join(known) or '(none)'}",
+                )
             if port in iface.inputs:
                 declared = spec.port(port) if spec is not None and spec.kind is NodeKind.SUBTREE else None
                 args[port] = self.input_value(el, port, text, ctx, declared)

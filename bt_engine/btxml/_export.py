@@ -139,7 +139,8 @@ class Exporter:
         if isinstance(node, Recovery):
             return self.use("RecoveryNode"), {"number_of_retries": encode_value(node.retries, "int")}
         if isinstance(node, Retry):
-            return "RetryUntilSuccessful", {"num_attempts": "-1" if node.times is None else encode_value(node.times, "int")}
+            attempts = "-1" if node.times is None else encode_value(node.times, "int")
+            return "RetryUntilSuccessful", {"num_attempts": attempts}
         if isinstance(node, Repeat):
             return "Repeat", {"num_cycles": "-1" if node.times is None else encode_value(node.times, "int")}
         if isinstance(node, Timeout):

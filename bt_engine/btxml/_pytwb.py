@@ -63,8 +63,11 @@ class PytwbImporter(Importer):
             try:
                 value = ast.literal_eval(stripped[1:-1])
             except (ValueError, SyntaxError, MemoryError, RecursionError) as exc:
-                raise BtXmlError(el.at(attr), f"{attr}={text!r} is not a Python literal ({type(exc).__name__}), "
-                                              "expected e.g. [True], [3] or ['a', 'b']; expressions are not evaluated") from None
+                raise BtXmlError(
+                    el.at(attr),
+                    f"{attr}={text!r} is not a Python literal ({type(exc).__name__}), "
+                    "expected e.g. [True], [3] or ['a', 'b']; expressions are not evaluated",
+                ) from None
             return _escape(value)
         return text.replace("{", "{{").replace("}", "}}")
 
@@ -127,7 +130,9 @@ def _parallel(imp: Importer, el: XElement, node_id: str, ports: dict[str, str], 
     imp.params(el, ports, ("policy", "synchronise"))
     policy = ports.get("policy", "SuccessOnAll").strip()
     if policy not in _POLICIES:
-        extra = " (SuccessOnSelected needs behaviour objects, which XML cannot name)" if policy == "SuccessOnSelected" else ""
+        extra = ""
+        if policy == "SuccessOnSelected":
+            extra = " (SuccessOnSelected needs behaviour objects, which XML cannot name)"
         raise BtXmlError(el.at("policy"), f"policy {policy!r}{suggest(policy, _POLICIES)}{extra}, expected one of: "
                                           f"{', '.join(_POLICIES)}")
     return {"parallel": {"policy": _POLICIES[policy], "children": imp.children(el, ctx, "parallel")}}

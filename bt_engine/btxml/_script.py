@@ -35,7 +35,8 @@ class _Tok:
 
 _TOKEN = re.compile(r"""
     (?P<ws>\s+)
-  | (?P<num>0[xX][0-9a-fA-F]+|[0-9]+\.[0-9]*(?:[eE][+-]?[0-9]+)?|\.[0-9]+(?:[eE][+-]?[0-9]+)?|[0-9]+(?:[eE][+-]?[0-9]+)?)
+  | (?P<num>0[xX][0-9a-fA-F]+
+          | [0-9]+\.[0-9]*(?:[eE][+-]?[0-9]+)? | \.[0-9]+(?:[eE][+-]?[0-9]+)? | [0-9]+(?:[eE][+-]?[0-9]+)?)
   | (?P<str>'[^']*'|"[^"]*")
   | (?P<name>@?[A-Za-z_][A-Za-z0-9_]*)
   | (?P<op>:=|\+=|-=|\*=|/=|==|!=|<=|>=|&&|\|\||\.\.|[-+*/<>!()=;&|^~?:])
@@ -153,7 +154,9 @@ def _translate(tokens: list[_Tok], text: str, locate: Locate) -> str:
     origin: list[tuple[int, int]] = []  # (offset in output, offset in source)
     for tok in tokens:
         if tok.kind == "op" and tok.text in _UNSUPPORTED:
-            raise ScriptError(locate(tok.offset), f"{_UNSUPPORTED[tok.text]} in {text!r} is not supported, since {_WHY}")
+            raise ScriptError(
+                locate(tok.offset), f"{_UNSUPPORTED[tok.text]} in {text!r} is not supported, since {_WHY}"
+            )
         if tok.kind == "op" and tok.text in (":=", "="):
             raise ScriptError(locate(tok.offset), f"assignment inside an expression in {text!r}, expected "
                                                   "'key := value' as a statement of its own, or '==' to compare")
@@ -170,7 +173,9 @@ def _translate(tokens: list[_Tok], text: str, locate: Locate) -> str:
         expr = parse_expression(result)
     except ExprSyntaxError as exc:
         source_offset = max((s for o, s in origin if o <= exc.offset), default=0)
-        raise ScriptError(locate(source_offset), f"cannot translate {text!r} to a check expression: {exc.message}") from None
+        raise ScriptError(
+            locate(source_offset), f"cannot translate {text!r} to a check expression: {exc.message}"
+        ) from None
     for key in keys_of(expr):
         if key.name.startswith("_"):
             raise ScriptError(locate(0), f"key {key.name!r} in {text!r}: keys starting with '_' are not supported")

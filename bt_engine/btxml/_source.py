@@ -129,7 +129,8 @@ def parse_xml(data: bytes, file: str) -> XElement:
         message = expat.ErrorString(exc.code)
         hint = {
             "mismatched tag": "expected the closing tag of the element opened before",
-            "not well-formed (invalid token)": "expected well-formed XML (write & as &amp; and < as &lt; in attributes)",
+            "not well-formed (invalid token)":
+                "expected well-formed XML (write & as &amp; and < as &lt; in attributes)",
             "unclosed token": "expected the element or attribute to be closed",
             "no element found": "expected a <root> element",
             "junk after document element": "expected a single <root> element",
@@ -153,5 +154,7 @@ def read_xml(path: str | Path) -> XElement:
         with open(path, "rb") as stream:
             data = stream.read(MAX_XML_SIZE + 1)
     except (OSError, ValueError) as exc:
-        raise XmlSyntaxError(Pos(file, 1, 1), f"cannot read XML file: {getattr(exc, 'strerror', None) or exc}") from None
+        raise XmlSyntaxError(
+            Pos(file, 1, 1), f"cannot read XML file: {getattr(exc, 'strerror', None) or exc}"
+        ) from None
     return parse_xml(data, file)

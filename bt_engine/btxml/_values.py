@@ -27,8 +27,8 @@ from typing import Any, Iterator
 from ..trees import Ref, ValueType
 from ._nodes import JSON_PREFIX, convert_literal, decode_json, python_type
 
-__all__ = ["JSON_PREFIX", "REF_TEXT", "RESULT_TYPE", "decode_json", "encode_value", "mission_form", "port_type", "ref_keys",
-           "same_value", "value_type_of_port"]
+__all__ = ["JSON_PREFIX", "REF_TEXT", "RESULT_TYPE", "decode_json", "encode_value", "mission_form", "port_type",
+           "ref_keys", "same_value", "value_type_of_port"]
 
 #: the type of the output port of a ``<SubTree>`` model that receives the tree's whole
 #: result mapping (a mission's ``do: tree, out: key``)

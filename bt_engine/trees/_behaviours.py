@@ -22,7 +22,8 @@ from ._model import Check, Do, Ref, SetValues, refs_in, resolve_value
 from ._blackboard import RunBlackboard
 
 __all__ = [
-    "ActorLeaf", "CheckLeaf", "ConditionLeaf", "RepeatNode", "RetryNode", "RunContext", "SetLeaf", "TimeoutNode", "WaitLeaf",
+    "ActorLeaf", "CheckLeaf", "ConditionLeaf", "RepeatNode", "RetryNode", "RunContext", "SetLeaf", "TimeoutNode",
+    "WaitLeaf",
 ]
 
 

@@ -359,9 +359,13 @@ class _Parser:
                 self.advance()
                 field = self.tok
                 if field.kind not in ("name", "kw"):
-                    raise ExprSyntaxError(f"unexpected {self.describe(field)}, expected a field name after '.'", field.offset)
+                    raise ExprSyntaxError(
+                        f"unexpected {self.describe(field)}, expected a field name after '.'", field.offset
+                    )
                 if field.text.startswith("_"):
-                    raise ExprSyntaxError(f"private field {shorten(field.text)}, expected a public field name", field.offset)
+                    raise ExprSyntaxError(
+                        f"private field {shorten(field.text)}, expected a public field name", field.offset
+                    )
                 self.advance()
                 fields.append(field.text)
             if tok.text.startswith("__"):
@@ -369,7 +373,9 @@ class _Parser:
             return Key(tok.text, tuple(fields), tok.offset)
         if tok.kind == "kw":
             raise ExprSyntaxError(f"unexpected keyword {tok.text!r}, expected a value", tok.offset)
-        raise ExprSyntaxError(f"unexpected {self.describe(tok)}, expected a value (number, string, key, list)", tok.offset)
+        raise ExprSyntaxError(
+            f"unexpected {self.describe(tok)}, expected a value (number, string, key, list)", tok.offset
+        )
 
     def nested(self, tok: _Token) -> Expr:
         """What follows an opening ``-``, ``(`` or ``[`` (already consumed)."""

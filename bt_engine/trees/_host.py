@@ -4,9 +4,10 @@
 (all at load time, before anything runs) and registers each as a sync actor of the root
 SubSystem, with its inputs as parameters and its outputs as result. With
 ``strict=False`` the trees that do not load are skipped (see ``TreeLibrary.broken``), and
-calling one by name raises the reason. Calling a tree actor builds a fresh tree with its own blackboard namespace and ticks it in the caller's
-greenlet until it finishes. So trees call trees with ``do:``, actors call trees with
-``run_actor`` in every call mode, and a Python program calls one through the runtime.
+calling one by name raises the reason. Calling a tree actor builds a fresh tree with its own
+blackboard namespace and ticks it in the caller's greenlet until it finishes. So trees call
+trees with ``do:``, actors call trees with ``run_actor`` in every call mode, and a Python
+program calls one through the runtime.
 """
 
 from __future__ import annotations

@@ -164,7 +164,8 @@ class _Parser:
         text = self.string(node, what)
         if not _IDENT.match(text):
             raise InvalidValueError(
-                node.pos, f"{what} {shorten(text)} is not a valid name, expected letters, digits and '_' (e.g. target_pose)"
+                node.pos,
+                f"{what} {shorten(text)} is not a valid name, expected letters, digits and '_' (e.g. target_pose)",
             )
         return text
 
@@ -173,7 +174,9 @@ class _Parser:
             raise InvalidValueError(node.pos, f"{what} must be a mapping, got {_kind(node)}; expected e.g. {example}")
         return node
 
-    def number(self, node: YNode, what: str, *, integer: bool, minimum: float, words: dict[str, Any] | None = None) -> Any:
+    def number(
+        self, node: YNode, what: str, *, integer: bool, minimum: float, words: dict[str, Any] | None = None
+    ) -> Any:
         """A literal number >= minimum, a whole-string reference, or one of ``words``."""
         if isinstance(node, YScalar) and isinstance(node.value, str):
             if words and node.value in words:
@@ -187,7 +190,9 @@ class _Parser:
         value = node.value if isinstance(node, YScalar) else None
         ok_types = (int,) if integer else (int, float)
         if not isinstance(node, YScalar) or isinstance(value, bool) or not isinstance(value, ok_types):
-            raise InvalidValueError(node.pos, f"{what} must be {expected} or a \"{{key}}\" reference, got {_kind(node)}")
+            raise InvalidValueError(
+                node.pos, f"{what} must be {expected} or a \"{{key}}\" reference, got {_kind(node)}"
+            )
         if value < minimum or value != value:  # NaN
             raise InvalidValueError(node.pos, f"{what} is {value!r}, expected {base} >= {minimum:g}")
         return value
@@ -213,8 +218,8 @@ class _Parser:
             if inner is not None:
                 raise InvalidValueError(
                     node.pos_at(inner.start()),
-                    f"{inner.group(0)} inside the string {shorten(node.value)}: a blackboard reference must be the whole "
-                    f"string, expected \"{inner.group(0)}\" alone (write {{{{ }}}} for literal braces)",
+                    f"{inner.group(0)} inside the string {shorten(node.value)}: a blackboard reference must be "
+                    f"the whole string, expected \"{inner.group(0)}\" alone (write {{{{ }}}} for literal braces)",
                 )
             return node.value.replace("{{", "{").replace("}}", "}")
         if isinstance(node, YSeq):
@@ -233,13 +238,19 @@ class _Parser:
     def mission(self) -> Mission:
         top = parse_yaml(self.source, self.file)
         if top is None:
-            raise MissionSyntaxError(Pos(self.file, 1, 1), "empty mission file, expected a mapping with 'name' and 'root'")
+            raise MissionSyntaxError(
+                Pos(self.file, 1, 1), "empty mission file, expected a mapping with 'name' and 'root'"
+            )
         if not isinstance(top, YMap):
-            raise InvalidValueError(top.pos, f"a mission must be a mapping, got {_kind(top)}; expected 'name:' and 'root:'")
+            raise InvalidValueError(
+                top.pos, f"a mission must be a mapping, got {_kind(top)}; expected 'name:' and 'root:'"
+            )
         self.check_fields(top, MISSION_FIELDS, "the mission")
         for required in ("name", "root"):
             if required not in top:
-                raise InvalidValueError(top.pos, f"the mission has no {required!r}, expected fields: {', '.join(MISSION_FIELDS)}")
+                raise InvalidValueError(
+                    top.pos, f"the mission has no {required!r}, expected fields: {', '.join(MISSION_FIELDS)}"
+                )
         name_node = top.get("name")
         name = self.ident(name_node, "the mission name")
         doc_node = top.get("doc")
@@ -314,7 +325,9 @@ class _Parser:
                 specs.append(OutputSpec(name, ValueType.ANY, None, item.pos))
             return tuple(specs)
         if not isinstance(node, YMap):
-            raise InvalidValueError(node.pos, f"outputs must be a list of keys, got {_kind(node)}; expected e.g. [grasp]")
+            raise InvalidValueError(
+                node.pos, f"outputs must be a list of keys, got {_kind(node)}; expected e.g. [grasp]"
+            )
         for key, spec in node.items:
             name = self.ident(key, "output name")
             if isinstance(spec, YScalar) and isinstance(spec.value, str):
@@ -351,14 +364,15 @@ class _Parser:
                 key = others[0]
                 raise UnknownNodeError(
                     key.pos,
-                    f"unknown node type {shorten(key.raw)}{suggest(key.raw, NODE_TYPES)}, expected one of: {', '.join(NODE_TYPES)}",
+                    f"unknown node type {shorten(key.raw)}{suggest(key.raw, NODE_TYPES)}, "
+                    f"expected one of: {', '.join(NODE_TYPES)}",
                 )
             raise UnknownNodeError(y.pos, f"node has no type, expected one of: {', '.join(NODE_TYPES)}")
         if len(types) > 1:
             raise UnknownNodeError(
                 types[1].pos,
-                f"node has two types {shorten(types[0].raw)} and {shorten(types[1].raw)}, expected exactly one per node "
-                "(put several nodes in a sequence)",
+                f"node has two types {shorten(types[0].raw)} and {shorten(types[1].raw)}, "
+                "expected exactly one per node (put several nodes in a sequence)",
             )
         kind = types[0].raw
         self.check_fields(y, (kind, "name", *_NODE_FIELDS.get(kind, ())), f"a {kind} node")
@@ -370,7 +384,9 @@ class _Parser:
         if name_node is not None:
             name = self.string(name_node, "name")
             if not name.strip() or "/" in name:
-                raise InvalidValueError(name_node.pos, f"name {shorten(name)} is not a valid node name, expected non-empty text without '/'")
+                raise InvalidValueError(
+                    name_node.pos, f"name {shorten(name)} is not a valid node name, expected non-empty text without '/'"
+                )
             common["name"] = name
         value = y.get(kind)
         if kind in _COMPOSITES:
@@ -386,7 +402,9 @@ class _Parser:
 
     def children(self, kind: str, node: YNode) -> tuple[Node, ...]:
         if not isinstance(node, YSeq):
-            raise InvalidValueError(node.pos, f"{kind} takes a list of child nodes, got {_kind(node)}; expected '- do: ...' items")
+            raise InvalidValueError(
+                node.pos, f"{kind} takes a list of child nodes, got {_kind(node)}; expected '- do: ...' items"
+            )
         if not node.items:
             raise InvalidValueError(node.pos, f"{kind} has no children, expected at least one child node")
         children = tuple(self.node(item) for item in node.items)
@@ -410,7 +428,8 @@ class _Parser:
             children = self.children(kind, value)
             if len(children) not in (2, 3):
                 raise InvalidValueError(
-                    value.pos, f"{kind} has {len(children)} children, expected 2 or 3: the condition, what runs when it "
+                    value.pos,
+                    f"{kind} has {len(children)} children, expected 2 or 3: the condition, what runs when it "
                     "succeeds and, optionally, what runs when it fails")
             return _COMPOSITES[kind](children=children, **common)
         if kind != "parallel":
@@ -433,7 +452,8 @@ class _Parser:
             except ValueError:
                 names = [p.value for p in ParallelPolicy]
                 raise InvalidValueError(
-                    policy_node.pos, f"unknown policy {shorten(text)}{suggest(text, names)}, expected one of: {', '.join(names)}"
+                    policy_node.pos,
+                    f"unknown policy {shorten(text)}{suggest(text, names)}, expected one of: {', '.join(names)}",
                 ) from None
         selected: list[str] = []
         selected_node = m.get("selected")
@@ -443,7 +463,9 @@ class _Parser:
                     policy_node.pos, "policy success_on_selected needs 'selected', expected a list of child names"
                 )
             if not isinstance(selected_node, YSeq) or not selected_node.items:
-                raise InvalidValueError(selected_node.pos, f"selected must be a non-empty list of child names, got {_kind(selected_node)}")
+                raise InvalidValueError(
+                    selected_node.pos, f"selected must be a non-empty list of child names, got {_kind(selected_node)}"
+                )
             names = [c.name for c in children if c.name is not None]
             for item in selected_node.items:
                 text = self.string(item, "selected child")
@@ -458,7 +480,8 @@ class _Parser:
                 selected.append(text)
         elif selected_node is not None:
             raise InvalidValueError(
-                selected_node.pos, f"'selected' only applies to policy success_on_selected, the policy is {policy.value}"
+                selected_node.pos,
+                f"'selected' only applies to policy success_on_selected, the policy is {policy.value}",
             )
         return Parallel(children=children, policy=policy, selected=tuple(selected), **common)
 
@@ -491,7 +514,8 @@ class _Parser:
         children = self.children("recovery", m.get("children"))
         if len(children) != 2:
             raise InvalidValueError(
-                m.get("children").pos, f"recovery has {len(children)} children, expected 2: the action and its recovery")
+                m.get("children").pos,
+                f"recovery has {len(children)} children, expected 2: the action and its recovery")
         common["field_pos"] = dict(common["field_pos"]) | {k.raw: v.pos for k, v in m.items}
         retries_node = m.get("retries")
         retries = 1 if retries_node is None else self.number(
@@ -547,7 +571,10 @@ class _Parser:
         kind = node_class.kind
         actor = self.string(value, kind)
         if not _ACTOR_NAME.match(actor):
-            raise InvalidValueError(value.pos, f"{kind} {shorten(actor)} is not an actor name, expected e.g. navigate or robot.navigation.goto")
+            raise InvalidValueError(
+                value.pos,
+                f"{kind} {shorten(actor)} is not an actor name, expected e.g. navigate or robot.navigation.goto",
+            )
         args: tuple[Any, ...] = ()
         kwargs: dict[str, Any] = {}
         arg_pos: dict[str, Pos] = {}
@@ -564,7 +591,9 @@ class _Parser:
                 arg_key_pos[name] = key.pos
         elif with_node is not None and not (isinstance(with_node, YScalar) and with_node.value is None):
             raise InvalidValueError(
-                with_node.pos, f"with must be a mapping of arguments, got {_kind(with_node)}; expected e.g. {{target: \"{{found}}\"}}"
+                with_node.pos,
+                f"with must be a mapping of arguments, got {_kind(with_node)}; "
+                f"expected e.g. {{target: \"{{found}}\"}}",
             )
         out_node = y.get("out")
         out = self.ident(out_node, "out key") if out_node is not None else None
@@ -588,7 +617,9 @@ class _Parser:
 
     def leaf_check(self, y: YMap, value: YNode, common: dict[str, Any]) -> Node:
         if not isinstance(value, YScalar) or value.value is None:
-            raise InvalidValueError(value.pos, f"check takes an expression, got {_kind(value)}; expected e.g. check: battery > 0.2")
+            raise InvalidValueError(
+                value.pos, f"check takes an expression, got {_kind(value)}; expected e.g. check: battery > 0.2"
+            )
         source = value.raw
         try:
             expr = parse_expression(source)
@@ -603,7 +634,9 @@ class _Parser:
     def leaf_behaviour(self, y: YMap, value: YNode, common: dict[str, Any]) -> Node:
         name = self.string(value, "behaviour")
         if not _ACTOR_NAME.match(name):
-            raise InvalidValueError(value.pos, f"behaviour {shorten(name)} is not a registered name, expected e.g. CheckBattery")
+            raise InvalidValueError(
+                value.pos, f"behaviour {shorten(name)} is not a registered name, expected e.g. CheckBattery"
+            )
         kwargs: dict[str, Any] = {}
         arg_pos: dict[str, Pos] = {}
         with_node = y.get("with")
@@ -640,7 +673,9 @@ def _read_bytes(path: str | Path, file: str) -> bytes:
         with open(path, "rb") as stream:
             data = stream.read(MAX_MISSION_SIZE + 1)
     except (OSError, ValueError) as exc:  # ValueError: a NUL in the path
-        raise MissionError(Pos(file, 1, 1), f"cannot read mission file: {getattr(exc, 'strerror', None) or exc}") from None
+        raise MissionError(
+            Pos(file, 1, 1), f"cannot read mission file: {getattr(exc, 'strerror', None) or exc}"
+        ) from None
     if len(data) > MAX_MISSION_SIZE:
         raise LimitError(Pos(file, 1, 1), f"file larger than {MAX_MISSION_SIZE} bytes, expected a mission file")
     return data

@@ -297,7 +297,9 @@ class TreeRun:
             kwargs.setdefault("name", label)
         behaviour = factory(**kwargs)
         if not isinstance(behaviour, py_trees.behaviour.Behaviour):
-            raise TypeError(f"behaviour {node.behaviour!r} made {type(behaviour).__name__}, expected a py_trees Behaviour")
+            raise TypeError(
+                f"behaviour {node.behaviour!r} made {type(behaviour).__name__}, expected a py_trees Behaviour"
+            )
         behaviour.name = label
         return behaviour
 

@@ -237,7 +237,9 @@ class _Validator:
         var_kw = any(p.kind is p.VAR_KEYWORD for p in params.values())
         for name in node.kwargs:
             param = params.get(name)
-            if (param is None and not var_kw) or (param is not None and param.kind in (param.POSITIONAL_ONLY, param.VAR_POSITIONAL, param.VAR_KEYWORD)):
+            if (param is None and not var_kw) or (
+                param is not None and param.kind in (param.POSITIONAL_ONLY, param.VAR_POSITIONAL, param.VAR_KEYWORD)
+            ):
                 names = [p.name for p in params.values() if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)]
                 self.errors.append(ArgumentMismatchError(
                     node.arg_key_pos.get(name, node.at("with")),
@@ -357,7 +359,9 @@ class _Validator:
             actual = self.ref_type(value)
             if not _fits(expected, actual):
                 self.errors.append(InvalidValueError(
-                    value.pos, f"{what} {value} holds {_a(actual)}, expected {'an int' if expected is ValueType.INT else 'a number'}"
+                    value.pos,
+                    f"{what} {value} holds {_a(actual)}, "
+                    f"expected {'an int' if expected is ValueType.INT else 'a number'}",
                 ))
 
     # ------------------------------------------------------------ behaviours and trees

@@ -189,7 +189,9 @@ class _Walker:
             for key_node, value_node in node.value:
                 key_pos = _pos(self.file, key_node.start_mark)
                 if key_node.tag == _MERGE_TAG:
-                    raise MissionSyntaxError(key_pos, "YAML merge keys (<<) are not supported, expected the fields written out")
+                    raise MissionSyntaxError(
+                        key_pos, "YAML merge keys (<<) are not supported, expected the fields written out"
+                    )
                 key = self.walk(key_node)
                 if not isinstance(key, YScalar) or isinstance(key.value, (list, dict)):
                     raise MissionSyntaxError(key_pos, "complex mapping key, expected a plain string key")
