@@ -46,8 +46,10 @@ $(STAMP): pyproject.toml interfaces/CMakeLists.txt interfaces/package.xml $(wild
 
 venv: $(STAMP)
 
-# one worker per core (pytest-xdist); a test file stays in one worker
+# the linter first (seconds), then the suite on one worker per core (pytest-xdist); a
+# test file stays in one worker
 test: $(STAMP)
+	$(PY) -m ruff check .
 	$(PY) -m pytest -q -n auto --dist loadfile
 
 demo: $(STAMP)

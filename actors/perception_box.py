@@ -455,5 +455,6 @@ def _score_box_resting(seg: _Segment, sides: tuple[float, float], bz: float) -> 
         yaw += math.pi
     elif yaw > math.pi / 2:
         yaw -= math.pi
-    return conf, {"face_err": e_face, "height_err": e_h, "rect_rms": rect.rms, "bow": bow, "faces": 1 if one_face else 2,
-                  "extents": ext, "seen": seen, "whole": whole, "axis": centre, "yaw": yaw}
+    return conf, {"face_err": e_face, "height_err": e_h, "rect_rms": rect.rms, "bow": bow,
+                  "faces": 1 if one_face else 2, "extents": ext, "seen": seen, "whole": whole,
+                  "axis": centre, "yaw": yaw}

@@ -385,7 +385,8 @@ def _depth_steps(coloured: np.ndarray, depth: np.ndarray) -> np.ndarray:
         b_sl = (slice(dy, h), slice(max(0, dx), w - max(0, -dx)))
         a, b = D[a_sl], D[b_sl]
         with np.errstate(invalid="ignore"):
-            jump = coloured[a_sl] & coloured[b_sl] & (np.abs(a - b) > np.maximum(OCCLUSION_JUMP, 0.04 * np.minimum(a, b)))
+            far_apart = np.abs(a - b) > np.maximum(OCCLUSION_JUMP, 0.04 * np.minimum(a, b))
+            jump = coloured[a_sl] & coloured[b_sl] & far_apart
         step[a_sl] |= jump
         step[b_sl] |= jump
     return step
