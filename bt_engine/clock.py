@@ -19,6 +19,10 @@ class Clock:
     def now(self) -> float:  # pragma: no cover - interface
         raise NotImplementedError
 
+    def advance_to(self, t: float) -> None:  # pragma: no cover - interface
+        """Move time forward to ``t`` [s]: what the hub does to a ``virtual`` clock."""
+        raise NotImplementedError
+
 
 class WallClock(Clock):
     """Real time (monotonic), starting at 0 when created."""

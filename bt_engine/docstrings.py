@@ -75,7 +75,7 @@ def parse(doc: str | None) -> Docstring:
     while i < len(lines):
         m = _HEADER.match(lines[i])
         section = m.group("name").lower() if m else ""
-        if section not in _ARGS and section not in _RETURNS:
+        if m is None or (section not in _ARGS and section not in _RETURNS):
             kept.append(lines[i])
             i += 1
             continue

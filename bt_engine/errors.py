@@ -12,6 +12,10 @@ from typing import Any, Iterable
 class ActorbtError(Exception):
     """Root of every error raised by actorbt."""
 
+    #: the id of the call (transaction) whose own error this is, set when the error is
+    #: raised for that call (see :func:`bt_engine.outcome.caller_error`); None otherwise
+    transaction_id: int | None = None
+
 
 class UnknownActorError(ActorbtError, LookupError):
     """No actor of that name is visible from the caller's scope."""

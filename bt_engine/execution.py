@@ -86,7 +86,7 @@ def bad_arguments(ref: "ActorRef | GenFirst", args: tuple, kwargs: dict,
     try:
         ref.check_args(args, kwargs)
     except BadArgumentsError as e:
-        e.transaction_id = txn.id  # type: ignore[attr-defined]  # it is this call's own error
+        e.transaction_id = txn.id  # it is this call's own error
         return e
     return None
 
@@ -294,7 +294,7 @@ def wait_expired(ref: ActorRef, txn: Transaction) -> None:
         except Exception:
             log.exception("describing the wait of %s failed", ref.path)
     err = ActorTimeout(ref.path, seconds, detail or f"no value within {seconds:g} s")
-    err.transaction_id = txn.id  # type: ignore[attr-defined]  # this call's own error
+    err.transaction_id = txn.id  # this call's own error
     closer, txn.closer = txn.closer, None
     if closer is not None:
         call_quietly(closer)

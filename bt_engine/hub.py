@@ -126,9 +126,12 @@ class Waiter:
         task = self.task
         task.raise_pending()
         if not self.fired:
+            hub_glet = task.hub.glet
+            if hub_glet is None:
+                raise RuntimeError("a task waits only while its hub runs (Hub.run)")
             task.waiter = self
             try:
-                task.hub.glet.switch()
+                hub_glet.switch()
             finally:
                 task.waiter = None
             task.raise_pending()

@@ -40,11 +40,11 @@ def caller_error(txn: Transaction) -> ActorbtError:
             err = ActorCancelled(txn.path, txn.reason or "cancelled")
     else:
         cause = txn.error
-        if isinstance(cause, ActorbtError) and getattr(cause, "transaction_id", None) == txn.id:
+        if isinstance(cause, ActorbtError) and cause.transaction_id == txn.id:
             return cause
         err = ActorError(txn.path, cause if cause is not None else RuntimeError("no result"))
         err.__cause__ = cause
-    err.transaction_id = txn.id  # type: ignore[attr-defined]
+    err.transaction_id = txn.id
     return err
 
 

@@ -16,6 +16,7 @@ from typing import Any, Callable
 
 from .actor import ActorRef, ActorSpec, Safety
 from .api import CallApi
+from .bus.messages import RosAction
 from .bus.qos import qos_depth
 from .bus.transport import silence
 from .errors import ActorbtError, AmbiguousActorError, UnknownActorError
@@ -59,7 +60,7 @@ class SubSystem(CallApi):
         obj._bind(rt, name, parent)
         if not args and not kwargs and _wants_args(cls.__init__, 2):
             args = (name, parent)  # ros_actor's SubSystem(name, parent)
-        obj.__init__(*args, **kwargs)
+        cls.__init__(obj, *args, **kwargs)
         obj._collect_actors(obj)
         return obj
 
@@ -133,7 +134,7 @@ class SubSystem(CallApi):
             raise ActorbtError(f"add_network needs a SubNet class, got {net_cls!r}")
         net = net_cls.__new__(net_cls)
         net._subsystem = self
-        net.__init__(*((self,) if _wants_args(net_cls.__init__, 1) else ()))  # ros_actor: SubNet(subsystem)
+        net_cls.__init__(net, *((self,) if _wants_args(net_cls.__init__, 1) else ()))  # ros_actor: SubNet(subsystem)
         self._collect_actors(net)
         return net
 
@@ -309,7 +310,7 @@ class SubSystem(CallApi):
                               wait=wait,
                               wait_detail=lambda seconds: silence(bus, t, msg_type, seconds))
 
-    def register_action(self, name: str, action_type: type, server: str, *,
+    def register_action(self, name: str, action_type: type[RosAction], server: str, *,
                         moves: bool = False) -> ActorRef:
         """Make async actor ``name(goal)`` that sends a goal to action ``server``;
         ``moves``: the goal commands motion (see :class:`~bt_engine.actor.Safety`)."""

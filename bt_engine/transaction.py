@@ -16,7 +16,7 @@ from .clock import Clock
 from .errors import Cancelled, Failure
 
 if TYPE_CHECKING:
-    from .hub import Hub, Task
+    from .hub import Hub, Task, TimerHandle
 
 log = logging.getLogger("actorbt")
 
@@ -90,7 +90,7 @@ class Transaction:
         self.error: BaseException | None = None
         self.timed_out = False
         self._listeners: list | None = None
-        self._deadline_timer = None
+        self._deadline_timer: TimerHandle | None = None
         table.live[self.id] = self
         if parent is not None:
             parent.children[self.id] = self

@@ -22,6 +22,7 @@ from typing import Any, Callable
 
 from ..errors import ActorbtError
 from ..modes import Kind
+from .messages import RosAction, RosMessage
 
 #: GoalStatus codes (action_msgs/msg/GoalStatus) by name
 STATUS_NAMES = {0: "unknown", 1: "accepted", 2: "executing", 3: "canceling", 4: "succeeded",
@@ -71,7 +72,7 @@ def result_detail(result: Any) -> str:
     return f"error_code {code}" if code else ""
 
 
-def build_message(msg_type: type, value: Any, fields: dict[str, Any]) -> Any:
+def build_message(msg_type: type[RosMessage], value: Any, fields: dict[str, Any]) -> Any:
     """A ``msg_type`` from an instance, a mapping of fields, or keyword fields."""
     if isinstance(value, msg_type):
         msg = value
@@ -94,7 +95,7 @@ def build_message(msg_type: type, value: Any, fields: dict[str, Any]) -> Any:
     return msg
 
 
-def message_signature(first: str, msg_type: type) -> inspect.Signature:
+def message_signature(first: str, msg_type: type[RosMessage]) -> inspect.Signature:
     """``(first: msg_type = None, *, field: type = default, ...)`` for a goal or request
     type; each field is annotated with its Python type (a nested message's class, ``list``
     for a sequence), so the catalog can tell its JSON type."""
@@ -111,7 +112,7 @@ def message_signature(first: str, msg_type: type) -> inspect.Signature:
     return inspect.Signature(params)
 
 
-def message_doc(summary: str, first: str, msg_type: type) -> str:
+def message_doc(summary: str, first: str, msg_type: type[RosMessage]) -> str:
     """A client actor's docstring: ``summary`` and an ``Args:`` entry for ``first`` (the
     whole message) and for each field of ``msg_type`` (a goal or request type)."""
     lines = [summary, "", "Args:",
@@ -143,7 +144,7 @@ class ServerGoal:
 
     _ids = itertools.count(1)
 
-    def __init__(self, server: str, action_type: type, request: Any,
+    def __init__(self, server: str, action_type: type[RosAction], request: Any,
                  finish: Callable[[int, Any], None], feedback: Callable[[Any], None]) -> None:
         self.server = server
         self.action_type = action_type
@@ -196,7 +197,7 @@ OnGoal = Callable[[ServerGoal], None]
 class LocalActionServer:
     """An action served on the local bus (see ``LocalBus.action_server``)."""
 
-    def __init__(self, registry: dict[str, "LocalActionServer"], name: str, action_type: type,
+    def __init__(self, registry: dict[str, "LocalActionServer"], name: str, action_type: type[RosAction],
                  on_goal: OnGoal) -> None:
         self.name = name
         self.action_type = action_type
@@ -216,7 +217,7 @@ class LocalActionServer:
             goal.abort()
 
 
-def local_client_actor(scope: Any, name: str, action_type: type, server: str,
+def local_client_actor(scope: Any, name: str, action_type: type[RosAction], server: str,
                        servers: dict[str, LocalActionServer]) -> Any:
     """Async actor ``name(goal=None, **fields)`` sending goals to the local server
     ``server`` (see the module docstring for its outcomes). It completes only on the hub."""

@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Any, Callable
 
 from ..errors import ActorbtError
 from .actions import LocalActionServer, OnGoal, local_client_actor
-from .messages import type_name
+from .messages import RosAction, type_name
 from .qos import is_latched
 from .transport import EndpointInfo, TopicInfo, Transport, qos_label
 
@@ -145,7 +145,7 @@ class LocalBus(Transport):
         return [EndpointInfo(name, type_name(server.action_type))
                 for name, server in sorted(self._actions.items())]
 
-    def action_server(self, name: str, action_type: type, on_goal: OnGoal) -> LocalActionServer:
+    def action_server(self, name: str, action_type: type[RosAction], on_goal: OnGoal) -> LocalActionServer:
         """Serve action ``name`` in this process (one server per name)."""
         current = self._actions.get(name)
         if current is not None:
@@ -153,7 +153,7 @@ class LocalBus(Transport):
         server = self._actions[name] = LocalActionServer(self._actions, name, action_type, on_goal)
         return server
 
-    def register_action(self, scope: Any, name: str, action_type: type, server: str) -> Any:
+    def register_action(self, scope: Any, name: str, action_type: type[RosAction], server: str) -> Any:
         """Async actor ``name(goal=None, **fields)`` sending goals to local action ``server``
         (served by ``action_server`` in this process by the time a goal is sent)."""
         return local_client_actor(scope, name, action_type, server, self._actions)

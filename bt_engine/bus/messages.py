@@ -20,11 +20,27 @@ import array
 import importlib
 import math
 import struct
-from typing import Any
+from typing import Any, ClassVar, Protocol
 
 from ..errors import ActorbtError
 
-__all__ = ["UnknownTypeError", "message_class", "to_plain", "type_name"]
+__all__ = ["RosAction", "RosMessage", "UnknownTypeError", "message_class", "to_plain", "type_name"]
+
+
+class RosMessage(Protocol):
+    """What the bus needs of a ROS message class (rosidl generates it): a default
+    instance from ``cls()``, and its fields with their ROS types."""
+
+    @classmethod
+    def get_fields_and_field_types(cls) -> dict[str, str]: ...
+
+
+class RosAction(Protocol):
+    """What the bus needs of a ROS action class: its three message classes."""
+
+    Goal: ClassVar[type[RosMessage]]
+    Result: ClassVar[type[RosMessage]]
+    Feedback: ClassVar[type[RosMessage]]
 
 #: how many items of a sequence (characters of a string) are shown by default (ros2's)
 TRUNCATE = 128
@@ -144,7 +160,7 @@ def _is_float32(seq: Any, ros_type: str | None) -> bool:
     dtype = getattr(seq, "dtype", None)
     if dtype is not None:
         return str(dtype) == "float32"
-    return bool(ros_type) and (ros_type.startswith("float[") or ros_type.startswith("sequence<float"))
+    return ros_type is not None and (ros_type.startswith("float[") or ros_type.startswith("sequence<float"))
 
 
 def _short32(x: float) -> float:

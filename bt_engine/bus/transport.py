@@ -9,6 +9,7 @@ from __future__ import annotations
 from typing import Any, Callable, NamedTuple, Protocol
 
 from ..errors import ActorbtError
+from .messages import RosAction
 from .qos import is_latched
 
 
@@ -99,11 +100,11 @@ class Transport:
             return "is the robot or the simulator running?"
         return "does it publish that seldom?"
 
-    def register_action(self, scope: Any, name: str, action_type: type, server: str) -> Any:
+    def register_action(self, scope: Any, name: str, action_type: type[RosAction], server: str) -> Any:
         raise ActorbtError(f"the {self.name} transport has no action clients; "
                            "use the ros transport (transport: ros in actorbt.yaml)")
 
-    def action_server(self, name: str, action_type: type, on_goal: Callable[[Any], None]) -> Any:
+    def action_server(self, name: str, action_type: type[RosAction], on_goal: Callable[[Any], None]) -> Any:
         """Serve action ``name``: ``on_goal(goal)`` runs on the hub with each goal's
         :class:`~bt_engine.bus.actions.ServerGoal`. Returns a handle with ``close()``."""
         raise ActorbtError(f"the {self.name} transport cannot serve actions")
