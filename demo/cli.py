@@ -93,7 +93,7 @@ def cmd_demo(args, app) -> int:
     out = pathlib.Path(args.out)
     _check_category(args.category, "any")
     _check_world(args.world, args.seed, args.locations)
-    live = LiveOptions.of(args)
+    live = LiveOptions.of(args, app.cfg.robot)
     live.check()
     print(f"actorbt demo: {args.tree} in {args.world} (seed {args.seed}), category {args.category}",
           flush=True)

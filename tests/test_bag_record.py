@@ -15,13 +15,16 @@ import pytest
 from bt_engine import Runtime
 from bt_engine.bus.local import LocalPublisher
 from bt_engine.cli.main import main
-from bt_engine.ros.bag import DEFAULT_TOPICS, TRACE_TOPIC, BagRecorder
+from bt_engine.cli.config import load_config
+from bt_engine.ros.bag import DEFAULT_TOPICS, TRACE_TOPIC, BagRecorder, BagTopic
 from bt_engine.ros.cdr import typestore
 from bt_engine.ros.compressed import CompressionError, compress_image
 from bt_engine.ros.tree_status import status_message
 
 REPO = Path(__file__).resolve().parents[1]
 CONFIG = ["--config", str(REPO / "actorbt.yaml")]
+#: what the run records: the standard topics and the camera's, which actorbt.yaml adds
+RECORDED = DEFAULT_TOPICS + tuple(BagTopic(*t) for t in load_config(REPO / "actorbt.yaml").robot["topics"])
 MISSION = """\
 name: little_drive
 doc: Open the hand, drive a little and rest.
@@ -109,8 +112,8 @@ def test_the_bag_is_a_ros2_mcap_folder_with_every_topic(recorded):
 def test_the_counts_are_what_was_published(recorded):
     folder, published = recorded
     _, counts, _ = read_bag(folder / "bag")
-    recorded_counts = {t.bag_name: counts[t.bag_name] for t in DEFAULT_TOPICS}
-    published_counts = {t.bag_name: published[t.name] for t in DEFAULT_TOPICS}
+    recorded_counts = {t.bag_name: counts[t.bag_name] for t in RECORDED}
+    published_counts = {t.bag_name: published[t.name] for t in RECORDED}
     assert recorded_counts == published_counts
     # the simulator published them because the bag listened: a few seconds' worth
     assert counts["/odom"] > 100 and counts["/scan"] > 10 and counts["/camera/color/image_raw/compressed"] > 10

@@ -1,6 +1,7 @@
 """The actorbt command and its shell."""
 from __future__ import annotations
 
+import argparse
 import io
 import json
 import pathlib
@@ -8,9 +9,11 @@ import pathlib
 import pytest
 
 from bt_engine import Runtime
+from bt_engine.cli.config import ConfigError, load_config
 from bt_engine.cli.main import main
 from bt_engine.cli.shell import ActorShell
 from bt_engine.literals import parse_args
+from bt_engine.ros.live_options import LiveOptions
 
 REPO = pathlib.Path(__file__).resolve().parents[1]
 
@@ -57,6 +60,32 @@ def test_bad_config_is_a_clear_error(tmp_path, capsys):
     cfg.write_text("subsystems:\n  x: actors.nothing_here:Nope\n")
     assert main(["--config", str(cfg), "list"]) == 2
     assert "cannot import subsystem 'x'" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("section, says", [
+    ("robot: {body: {size: [0.3, 0.3]}}", "body: expected {size: [x, y, z] in metres"),
+    ("robot: {topics: [{name: camera, type: sensor_msgs/msg/Image}]}", "topics: expected {name: /topic"),
+    ("robot: {topics: [{name: /cam, type: sensor_msgs/msg/Image, qos: fast}]}", "unknown QoS 'fast'"),
+    ("robot: {topics: [{name: /info, type: sensor_msgs/msg/CameraInfo, compress: true}]}",
+     "only for a sensor_msgs/msg/Image"),
+    ("robot: {wheels: 2}", "expected a mapping with body and topics"),
+])
+def test_a_bad_robot_section_is_a_clear_error(tmp_path, section, says):
+    cfg = tmp_path / "actorbt.yaml"
+    cfg.write_text(section + "\n")
+    with pytest.raises(ConfigError) as e:
+        load_config(cfg)
+    assert says in str(e.value) and "for example robot: {body:" in str(e.value)
+
+
+def test_the_robot_section_reaches_the_live_options(tmp_path):
+    cfg = tmp_path / "actorbt.yaml"
+    cfg.write_text("robot:\n  body: {size: [0.2, 0.1, 0.3]}\n"
+                   "  topics: [{name: /cam, type: sensor_msgs/msg/Image, qos: sensor, compress: true}]\n")
+    options = LiveOptions.of(argparse.Namespace(bag="b"), load_config(cfg).robot)
+    assert options.body == (0.2, 0.1, 0.3, 0.0)
+    assert options.topics == (("/cam", "sensor_msgs/msg/Image", "sensor", True),)
+    assert LiveOptions.of(argparse.Namespace()).body is None     # no section: nothing drawn
 
 
 def test_shell_runs_actors_and_survives_bad_input():

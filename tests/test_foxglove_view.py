@@ -15,17 +15,21 @@ import pytest
 
 from bt_engine import Runtime, SubSystem, actor
 from bt_engine.cli.main import main
-from bt_engine.ros.bag import DEFAULT_TOPICS
+from bt_engine.cli.config import load_config
+from bt_engine.ros.bag import DEFAULT_TOPICS, BagTopic
 from bt_engine.ros.cdr import typestore
 from bt_engine.ros.foxglove_layout import layout_json
-from bt_engine.ros.foxglove_scene import Detection, Goal, Scene, detections_in, goal_of
+from bt_engine.ros.foxglove_scene import Body, Detection, Goal, Scene, detections_in, goal_of
 from bt_engine.ros.foxglove_view import PATH_TOPIC, SCENE_TOPIC, FoxgloveView
 from bt_engine.ros.live_options import FoxgloveError, LiveOptions
 from bt_engine.trees import TraceRecorder, TreeHost
 from tests.foxglove_client import FoxgloveClient
 
 REPO = Path(__file__).resolve().parents[1]
-ROS_CHANNELS = {t.bag_name: t.bag_type for t in DEFAULT_TOPICS}
+#: the reference robot's actorbt.yaml: its camera topics and its body
+ROBOT = load_config(REPO / "actorbt.yaml").robot
+TOPICS = DEFAULT_TOPICS + tuple(BagTopic(*t) for t in ROBOT["topics"])
+ROS_CHANNELS = {t.bag_name: t.bag_type for t in TOPICS}
 
 
 class Robotish(SubSystem):
@@ -44,7 +48,7 @@ class Robotish(SubSystem):
 def view():
     rt = Runtime(clock="virtual")
     rt.add_subsystem("robot", Robotish)
-    v = FoxgloveView(rt, port=0)
+    v = FoxgloveView(rt, port=0, topics=TOPICS, body=Body(*ROBOT["body"]))
     try:
         yield v
     finally:
@@ -169,7 +173,7 @@ def test_scene_rules():
         [Detection("bottle", 1.0, 2.0)]
     assert list(detections_in({"category": "can", "x": float("nan"), "y": 0.0})) == []
     assert goal_of(()) is None and goal_of((3.0, 4.0)) is None
-    scene = Scene()
+    scene = Scene(Body(0.28, 0.31, 0.14, x=-0.06))
     assert scene.add_detection(Detection("can", 1.0, 1.0))
     assert scene.add_detection(Detection("can", 1.1, 1.0))          # the same can, seen better
     assert not scene.add_detection(Detection("can", 1.1, 1.0))      # nothing new
@@ -185,6 +189,13 @@ def test_scene_rules():
     assert b"detection/2" not in update and b"goal/1" not in update
     assert len(scene.path) == 2 and scene.path_message(1.0).encode()
 
+
+
+def test_without_a_body_the_scene_draws_no_robot():
+    scene = Scene()
+    scene.add_detection(Detection("can", 1.0, 1.0))
+    update = scene.update(1.0).encode()
+    assert b"detection/0" in update and b"robot" not in update
 
 def test_the_shipped_layout_is_the_generated_one_and_names_the_served_topics():
     shipped = (REPO / "docs" / "foxglove_layout.json").read_text()

@@ -11,6 +11,10 @@
     imports: [my_robot/juice.py]    # modules or .py files imported before anything starts:
                                     # what they register (an object category) is then known
     mcp: {allow_motion: false}      # `actorbt mcp`: may a client run actors that move the robot
+    robot:                          # what --foxglove draws and --bag records of this robot
+      body: {size: [0.281, 0.306, 0.141], x: -0.064}   # [m] a box at base_footprint
+      topics:                       # recorded and shown besides /tf, /odom, /scan, /map ...
+        - {name: /camera/color/image_raw, type: sensor_msgs/msg/Image, qos: sensor, compress: true}
 
 Every command imports the plugins (``--help`` lists their commands), so a plugin keeps
 only argparse wiring at module level and imports its implementation when it runs.
@@ -46,6 +50,9 @@ class Config:
     imports: list[str] = field(default_factory=list)
     #: the ``mcp:`` section (read by :mod:`bt_engine.mcp.settings`)
     mcp: dict[str, Any] = field(default_factory=dict)
+    #: the ``robot:`` section, checked: ``body`` (sx, sy, sz, x) [m] or None, and ``topics``,
+    #: (name, type, qos, compress) each (read by :mod:`bt_engine.ros.live_options`)
+    robot: dict[str, Any] = field(default_factory=lambda: {"body": None, "topics": ()})
 
     @property
     def base(self) -> pathlib.Path:
@@ -55,7 +62,10 @@ class Config:
         return (self.base / self.trees) if self.trees else None
 
 
-_FIELDS = {"subsystems", "trees", "world", "simulator", "transport", "clock", "plugins", "imports", "mcp"}
+_FIELDS = {"subsystems", "trees", "world", "simulator", "transport", "clock", "plugins", "imports", "mcp",
+           "robot"}
+ROBOT_EXAMPLE = ("robot: {body: {size: [0.28, 0.31, 0.14], x: -0.06}, topics: [{name: /camera/image_raw, "
+                 "type: sensor_msgs/msg/Image, qos: sensor, compress: true}]}")
 
 
 def find_config(start: pathlib.Path | None = None) -> pathlib.Path | None:
@@ -97,7 +107,50 @@ def load_config(path: "str | pathlib.Path | None" = None) -> Config:
                   trees=data.get("trees", "trees"), world=world,
                   simulator=data.get("simulator"), transport=data.get("transport", "local"),
                   clock=data.get("clock", "virtual"), plugins=list(data.get("plugins") or []),
-                  imports=[str(i) for i in data.get("imports") or []], mcp=dict(mcp))
+                  imports=[str(i) for i in data.get("imports") or []], mcp=dict(mcp),
+                  robot=_robot_section(p, data.get("robot")))
+
+
+def _robot_section(p: pathlib.Path, section: Any) -> dict[str, Any]:
+    """The checked ``robot:`` section: {"body": (sx, sy, sz, x) or None, "topics": ((name,
+    type, qos, compress), ...)}; anything else is a ConfigError that shows the form."""
+    def bad(what: str) -> ConfigError:
+        return ConfigError(f"{p}: robot: {what}; for example {ROBOT_EXAMPLE}")
+
+    section = {} if section is None else section
+    if not isinstance(section, dict) or set(section) - {"body", "topics"}:
+        raise bad("expected a mapping with body and topics")
+    body = section.get("body")
+    if body is not None:
+        size = body.get("size") if isinstance(body, dict) else None
+        if not (isinstance(size, list) and len(size) == 3 and all(_positive(v) for v in size)) \
+                or set(body) - {"size", "x"} or not _number(body.get("x", 0.0)):
+            raise bad(f"body: expected {{size: [x, y, z] in metres, x: offset}}, got {body!r}")
+        body = (*(float(v) for v in size), float(body.get("x", 0.0)))
+    topics = []
+    for t in section.get("topics") or []:
+        if not isinstance(t, dict) or set(t) - {"name", "type", "qos", "compress"} \
+                or not str(t.get("name", "")).startswith("/") or str(t.get("type", "")).count("/") != 2:
+            raise bad(f"topics: expected {{name: /topic, type: pkg/msg/Type, qos: ..., compress: ...}}, got {t!r}")
+        qos = t.get("qos", 10)
+        try:
+            from ..bus.qos import qos_depth
+            qos_depth(qos)
+        except ActorbtError as e:
+            raise bad(f"topics: {t['name']}: {e}") from None
+        compress = t.get("compress", False)
+        if not isinstance(compress, bool) or (compress and t["type"] != "sensor_msgs/msg/Image"):
+            raise bad(f"topics: {t['name']}: compress is true or false, and only for a sensor_msgs/msg/Image")
+        topics.append((t["name"], t["type"], qos, compress))
+    return {"body": body, "topics": tuple(topics)}
+
+
+def _number(v: Any) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool)
+
+
+def _positive(v: Any) -> bool:
+    return _number(v) and v > 0
 
 
 def run_imports(cfg: Config) -> None:

@@ -126,7 +126,7 @@ def cmd_run(args: argparse.Namespace, app: App) -> int:
     """``run``, with what --bag and --foxglove add around the run (checked before the
     world is built)."""
     from ..trees.cli import cmd_run as run_tree
-    options = LiveOptions.of(args)
+    options = LiveOptions.of(args, app.cfg.robot)
     if not options:
         return run_tree(args, app)
     options.check()

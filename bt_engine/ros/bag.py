@@ -14,13 +14,15 @@ clock; the stamps in the headers are on the same clock). The simulator publishes
 sensors only while someone subscribes: recording makes it publish them all, and render
 the camera at its rate.
 
-What is recorded (:data:`DEFAULT_TOPICS`): /tf, /tf_static, /odom, /scan,
-/joint_states, the colour camera as image_transport's compressed topic
-(``/camera/color/image_raw/compressed``, sensor_msgs/CompressedImage, JPEG), the camera
-info, /map, the tree's status on ``/actorbt/status`` (diagnostic_msgs/DiagnosticArray,
-see :mod:`bt_engine.ros.tree_status`), and, when a tree run is recorded, its trace on
+What is recorded (:data:`DEFAULT_TOPICS`, the topics any ROS mobile robot has): /tf,
+/tf_static, /odom, /scan, /joint_states, /map, the tree's status on ``/actorbt/status``
+(diagnostic_msgs/DiagnosticArray, see :mod:`bt_engine.ros.tree_status`), and, when a tree run is recorded, its trace on
 ``/actorbt/trace`` (std_msgs/String, one JSON Lines record per message, the header
-first: exactly the lines of ``--record``'s file), which ``actorbt replay`` reads.
+first: exactly the lines of ``--record``'s file), which ``actorbt replay`` reads. The
+robot's own topics come from actorbt.yaml (``robot: topics:``): for the reference robot
+its colour camera, recorded as image_transport's compressed topic
+(``/camera/color/image_raw/compressed``, sensor_msgs/CompressedImage, JPEG), and the
+camera info.
 """
 from __future__ import annotations
 
@@ -77,8 +79,6 @@ DEFAULT_TOPICS: tuple[BagTopic, ...] = (
     BagTopic("/odom", "nav_msgs/msg/Odometry", 50),
     BagTopic("/scan", "sensor_msgs/msg/LaserScan", "sensor"),
     BagTopic("/joint_states", "sensor_msgs/msg/JointState", 50),
-    BagTopic("/camera/color/image_raw", "sensor_msgs/msg/Image", "sensor", compress=True),
-    BagTopic("/camera/camera_info", "sensor_msgs/msg/CameraInfo", "sensor"),
     BagTopic("/map", "nav_msgs/msg/OccupancyGrid", "latched"),
     BagTopic(STATUS_TOPIC, "diagnostic_msgs/msg/DiagnosticArray", 100),
 )

@@ -129,7 +129,7 @@ def cmd_serve(args: argparse.Namespace, app: Any) -> int:
     def on_term(signum: int, frame: Any) -> None:
         raise KeyboardInterrupt
     rt = server = session = None
-    live = LiveOptions.of(args)
+    live = LiveOptions.of(args, app.cfg.robot)
     live.check()
     try:
         if threading.current_thread() is threading.main_thread():

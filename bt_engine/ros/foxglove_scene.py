@@ -1,6 +1,7 @@
-"""What the live view draws besides the robot's topics: the robot's body, the detections
-and the navigation goals, as one Foxglove ``SceneUpdate``, and the robot's path as
-``PosesInFrame``. Plain data in, Foxglove messages out; :mod:`.foxglove_view` feeds it.
+"""What the live view draws besides the robot's topics: the robot's body (when the
+configuration gives one), the detections and the navigation goals, as one Foxglove
+``SceneUpdate``, and the robot's path as ``PosesInFrame``. Plain data in, Foxglove
+messages out; :mod:`.foxglove_view` feeds it.
 
 Where the data comes from (the view watches every actor call, see there):
 
@@ -19,7 +20,7 @@ import math
 from dataclasses import dataclass
 from typing import Any, Iterator
 
-__all__ = ["Detection", "Goal", "Scene", "detections_in", "goal_of"]
+__all__ = ["Body", "Detection", "Goal", "Scene", "detections_in", "goal_of"]
 
 #: [m] a detection this near an earlier one of the same category is the same object
 SAME_OBJECT = 0.3
@@ -29,8 +30,18 @@ KEEP = 100
 PATH_STEP, PATH_TURN = 0.02, 0.1
 #: poses kept in the path
 PATH_KEEP = 20000
-#: the robot's body: a TurtleBot3 Waffle Pi's footprint and height [m]
-BODY = (0.281, 0.306, 0.141)
+
+
+@dataclass(frozen=True)
+class Body:
+    """The robot drawn as a box: its size (``sx``, ``sy``, ``sz``) [m], standing on the
+    ground with its centre ``x`` [m] ahead of base_footprint (``robot: body:`` in
+    actorbt.yaml)."""
+
+    sx: float
+    sy: float
+    sz: float
+    x: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -100,7 +111,9 @@ def _hue(name: str) -> tuple[float, float, float]:
 class Scene:
     """The view's own markers; ``update(t)`` is the SceneUpdate to send at ``t`` [s]."""
 
-    def __init__(self) -> None:
+    def __init__(self, body: Body | None = None) -> None:
+        #: the robot's box, None: not drawn (the robot's own topics still show it)
+        self.body = body
         self.detections: list[Detection] = []
         self.goals: list[Goal] = []
         self.path: list[tuple[float, float, float]] = []   # (x, y, yaw) in the odom frame
@@ -141,7 +154,7 @@ class Scene:
         ones the client has)."""
         import foxglove.messages as fm
         stamp = _timestamp(t)
-        entities = [self._robot(fm, stamp)]
+        entities = [] if self.body is None else [self._robot(fm, stamp, self.body)]
         entities += [self._detection(fm, stamp, i, d) for i, d in enumerate(self.detections)]
         entities += [self._goal(fm, stamp, i, g, latest=i == len(self.goals) - 1)
                      for i, g in enumerate(self.goals)]
@@ -153,11 +166,10 @@ class Scene:
                                poses=[_pose(fm, x, y, 0.0, yaw) for x, y, yaw in self.path])
 
     @staticmethod
-    def _robot(fm: Any, stamp: Any) -> Any:
-        sx, sy, sz = BODY
+    def _robot(fm: Any, stamp: Any, body: Body) -> Any:
         return fm.SceneEntity(timestamp=stamp, frame_id="base_footprint", id="robot", frame_locked=True,
-                              cubes=[fm.CubePrimitive(pose=_pose(fm, -0.064, 0.0, sz / 2 + 0.01, 0.0),
-                                                      size=fm.Vector3(x=sx, y=sy, z=sz),
+                              cubes=[fm.CubePrimitive(pose=_pose(fm, body.x, 0.0, body.sz / 2 + 0.01, 0.0),
+                                                      size=fm.Vector3(x=body.sx, y=body.sy, z=body.sz),
                                                       color=fm.Color(r=0.25, g=0.35, b=0.45, a=0.6))])
 
     @staticmethod

@@ -6,12 +6,12 @@ Channels:
 
 - The robot's topics, as a ROS bridge offers them: the topics a bag records
   (:data:`bt_engine.ros.bag.DEFAULT_TOPICS`: /map, /tf, /tf_static, /odom, /scan,
-  /joint_states, /camera/color/image_raw/compressed, /camera/camera_info and the tree's
-  status on /actorbt/status), with their ROS types (``ros2msg`` schemas) and CDR bytes.
+  /joint_states and the tree's status on /actorbt/status, and those ``robot: topics:``
+  adds in actorbt.yaml, such as a camera's), with their ROS types (``ros2msg`` schemas) and CDR bytes.
   So the layout that shows a live run shows its bag too. A topic is subscribed on the
   bus only while a Foxglove client subscribes to its channel: the simulator renders the
   camera only while someone watches it.
-- ``/actorbt/scene`` (foxglove.SceneUpdate): the robot's body, the detections and the
+- ``/actorbt/scene`` (foxglove.SceneUpdate): the robot's body (``robot: body:``), the detections and the
   navigation goals (:mod:`.foxglove_scene` says where they come from).
 - ``/actorbt/path`` (foxglove.PosesInFrame): the robot's path, from its odometry.
 
@@ -31,7 +31,7 @@ from ..errors import RuntimeClosedError
 from .bag import DEFAULT_TOPICS, BagTopic
 from .cdr import message_definition, serialize
 from .compressed import CompressionError, compress_image
-from .foxglove_scene import Scene, detections_in, goal_of
+from .foxglove_scene import Body, Scene, detections_in, goal_of
 from .live_options import FOXGLOVE_PORT, FoxgloveError
 
 __all__ = ["DEFAULT_PORT", "FoxgloveError", "FoxgloveView", "PATH_TOPIC", "SCENE_TOPIC"]
@@ -91,18 +91,19 @@ class FoxgloveView:
         port: the TCP port (0: any free one; :attr:`port` says which).
         host: the address to bind (default 127.0.0.1: this machine only).
         topics: the robot topics to offer.
+        body: the robot's box to draw at base_footprint (None: none).
 
     Raises:
         FoxgloveError: the server cannot bind ``host:port``.
     """
 
     def __init__(self, rt: Any, *, port: int = DEFAULT_PORT, host: str = "127.0.0.1",
-                 topics: tuple[BagTopic, ...] = DEFAULT_TOPICS) -> None:
+                 topics: tuple[BagTopic, ...] = DEFAULT_TOPICS, body: Body | None = None) -> None:
         import foxglove
         from foxglove.channels import PosesInFrameChannel, SceneUpdateChannel
         self.rt = rt
         self.closed = False
-        self.scene = Scene()
+        self.scene = Scene(body)
         self.ctx = foxglove.Context()
         self._topics = {t.bag_name: t for t in topics}
         self._channels = {

@@ -7,7 +7,7 @@ from __future__ import annotations
 import sys
 from typing import Any, Callable, TextIO
 
-from .bag import BagRecorder
+from .bag import DEFAULT_TOPICS, BagRecorder, BagTopic
 from .live_options import LiveOptions
 from .tree_status import TreeStatusPublisher
 
@@ -37,13 +37,17 @@ class LiveSession:
         self.recorded = 0
         try:
             self.status = TreeStatusPublisher(host)
+            topics = DEFAULT_TOPICS + tuple(BagTopic(*t) for t in options.topics)
             if options.foxglove is not None:
+                from .foxglove_scene import Body
                 from .foxglove_view import FoxgloveView
-                self.view = FoxgloveView(rt, port=options.foxglove, host=options.foxglove_host)
+                body = None if options.body is None else Body(*options.body)
+                self.view = FoxgloveView(rt, port=options.foxglove, host=options.foxglove_host,
+                                         topics=topics, body=body)
                 print(f"actorbt: Foxglove view on {self.view.url} (open it in Foxglove: "
                       "Open connection, Foxglove WebSocket)", file=out or sys.stderr, flush=True)
             if options.bag is not None:
-                self.bag = BagRecorder(rt, options.bag)
+                self.bag = BagRecorder(rt, options.bag, topics)
                 if tree is not None:
                     from ..trees import TraceRecorder
                     self.trace = TraceRecorder(self.bag.trace_sink(), host, tree=tree, inputs=inputs,

@@ -8,6 +8,8 @@ import argparse
 import errno
 import socket
 from dataclasses import dataclass
+from typing import Any
+
 from ..errors import ActorbtError
 
 __all__ = ["FOXGLOVE_PORT", "FoxgloveError", "LiveOptions", "add_live_options"]
@@ -57,11 +59,20 @@ class LiveOptions:
     #: the Foxglove view's port (0: any free one), or None for no view
     foxglove: int | None = None
     foxglove_host: str = "127.0.0.1"
+    #: the robot's box in the view, (sx, sy, sz, x) [m], or None (actorbt.yaml ``robot: body:``)
+    body: tuple[float, float, float, float] | None = None
+    #: the robot's topics besides the standard ones, (name, type, qos, compress) each
+    #: (actorbt.yaml ``robot: topics:``)
+    topics: tuple[tuple[str, str, Any, bool], ...] = ()
 
     @classmethod
-    def of(cls, args: argparse.Namespace) -> LiveOptions:
+    def of(cls, args: argparse.Namespace, robot: dict[str, Any] | None = None) -> LiveOptions:
+        """The options of a command's ``args``, with the configuration's ``robot:`` section
+        (:attr:`bt_engine.cli.config.Config.robot`)."""
+        robot = robot or {}
         return cls(getattr(args, "bag", None), getattr(args, "foxglove", None),
-                   getattr(args, "foxglove_host", None) or "127.0.0.1")
+                   getattr(args, "foxglove_host", None) or "127.0.0.1",
+                   body=robot.get("body"), topics=tuple(robot.get("topics") or ()))
 
     def __bool__(self) -> bool:
         return self.bag is not None or self.foxglove is not None
