@@ -30,16 +30,22 @@ class RunBlackboard:
     def __init__(self, tree: str, keys: Iterable[str] = (),
                  on_write: Callable[[str, Any], None] | None = None) -> None:
         self.namespace = f"/actorbt/{tree}/r{uuid.uuid4().hex[:16]}"
-        self._client = py_trees.blackboard.Client(name=f"actorbt:{tree}", namespace=self.namespace)
+        self._client: py_trees.blackboard.Client | None = py_trees.blackboard.Client(
+            name=f"actorbt:{tree}", namespace=self.namespace)
         self._keys: set[str] = set()
         self._storage = py_trees.blackboard.Blackboard.storage
         self.on_write = on_write
         for key in keys:
             self._register(key)
 
+    def _live_client(self) -> py_trees.blackboard.Client:
+        if self._client is None:
+            raise RuntimeError(f"blackboard {self.namespace} is closed: its run has ended")
+        return self._client
+
     def _register(self, key: str) -> None:
         if key not in self._keys:
-            self._client.register_key(key, access=_Access.WRITE)
+            self._live_client().register_key(key, access=_Access.WRITE)
             self._keys.add(key)
 
     def get(self, key: str) -> Any:
@@ -55,7 +61,7 @@ class RunBlackboard:
 
     def set(self, key: str, value: Any) -> None:
         self._register(key)
-        self._client.set(key, value)
+        self._live_client().set(key, value)
         if self.on_write is not None:
             self.on_write(key, value)
 

@@ -11,7 +11,7 @@ at its deadline (``ctx.wake`` through ``rt.call_later``).
 
 from __future__ import annotations
 
-from typing import Any, Iterator
+from typing import Any, Generator, Iterator
 
 import py_trees
 from py_trees.behaviour import Behaviour
@@ -26,7 +26,11 @@ __all__ = [
 ]
 
 
-def _tick(child: Behaviour) -> Iterator[Behaviour]:
+#: a control's logic: yields what its children yield, returns its status
+Step = Generator[Behaviour, None, Status]
+
+
+def _tick(child: Behaviour) -> Step:
     """Tick one child (yielding what it yields); the generator returns its status."""
     yield from child.tick()
     return child.status
@@ -62,7 +66,7 @@ class _Control(py_trees.composites.Composite):
         for child in self.children:
             _halt(child)
 
-    def step(self) -> Iterator[Behaviour]:  # pragma: no cover - abstract
+    def step(self) -> Step:  # pragma: no cover - abstract
         raise NotImplementedError
         yield
 
@@ -86,7 +90,7 @@ class ResumeSequenceNode(_Control):
         for child in self.children[self.index:]:
             _halt(child)
 
-    def step(self) -> Iterator[Behaviour]:
+    def step(self) -> Step:
         while self.index < len(self.children):
             child = self.children[self.index]
             self.current_child = child
@@ -110,7 +114,7 @@ class PipelineSequenceNode(_Control):
         super().start()
         self.furthest = 0
 
-    def step(self) -> Iterator[Behaviour]:
+    def step(self) -> Step:
         for i, child in enumerate(self.children):
             self.current_child = child
             status = yield from _tick(child)
@@ -136,7 +140,7 @@ class IfThenElseNode(_Control):
         super().start()
         self.branch = 0
 
-    def step(self) -> Iterator[Behaviour]:
+    def step(self) -> Step:
         if self.branch == 0:
             self.current_child = self.children[0]
             status = yield from _tick(self.children[0])
@@ -156,7 +160,7 @@ class WhileDoElseNode(_Control):
     """``while_do_else``: the first child is ticked every tick; its success runs the
     second child, its failure the third (or fails); switching halts the other branch."""
 
-    def step(self) -> Iterator[Behaviour]:
+    def step(self) -> Step:
         condition = self.children[0]
         self.current_child = condition
         status = yield from _tick(condition)
@@ -194,7 +198,7 @@ class RecoveryNode(_Control):
         self.current = 0
         self.limit, self.error = _param(self.retries, self.ctx, "recovery retries", integer=True, minimum=0)
 
-    def step(self) -> Iterator[Behaviour]:
+    def step(self) -> Step:
         if self.error is not None:
             self.feedback_message = self.error
             return Status.FAILURE
@@ -238,7 +242,7 @@ class CountingParallel(_Control):
         super().start()
         self.finished = {}
 
-    def step(self) -> Iterator[Behaviour]:
+    def step(self) -> Step:
         n = len(self.children)
         for child in self.children:
             if child in self.finished:

@@ -19,6 +19,7 @@ import re
 from collections.abc import Collection, Iterable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Literal, overload
 
 from ..errors import ActorbtError, UnknownActorError
 from ._errors import DuplicateTreeError, MissionError, Pos
@@ -142,6 +143,12 @@ class TreeLibrary:
 
     # ------------------------------------------------------------ loading
 
+    @overload
+    def add(self, mission: Mission, *, strict: Literal[True] = True) -> Mission: ...
+
+    @overload
+    def add(self, mission: Mission, *, strict: bool) -> Mission | None: ...
+
     def add(self, mission: Mission, *, strict: bool = True) -> Mission | None:
         """Add a parsed mission.
 
@@ -169,6 +176,12 @@ class TreeLibrary:
         self.broken.pop(name, None)  # (re)loaded from its own file
         self._missions[name] = mission
         return mission
+
+    @overload
+    def load_file(self, path: str | Path, *, strict: Literal[True] = True) -> Mission: ...
+
+    @overload
+    def load_file(self, path: str | Path, *, strict: bool) -> Mission | None: ...
 
     def load_file(self, path: str | Path, *, strict: bool = True) -> Mission | None:
         """Parse one file and add it (see :meth:`add`).

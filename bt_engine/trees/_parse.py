@@ -251,15 +251,14 @@ class _Parser:
                 raise InvalidValueError(
                     top.pos, f"the mission has no {required!r}, expected fields: {', '.join(MISSION_FIELDS)}"
                 )
-        name_node = top.get("name")
-        name = self.ident(name_node, "the mission name")
+        name = self.ident(top.required("name"), "the mission name")
         doc_node = top.get("doc")
         doc = None
         if doc_node is not None and not (isinstance(doc_node, YScalar) and doc_node.value is None):
             doc = self.string(doc_node, "doc")
         inputs = self.inputs(top.get("inputs"))
         outputs = self.outputs(top.get("outputs"))
-        root = self.node(top.get("root"))
+        root = self.node(top.required("root"))
         return Mission(name, doc, inputs, outputs, root, self.file, self.source, top.pos)
 
     def type_name(self, node: YNode) -> ValueType:
@@ -299,7 +298,7 @@ class _Parser:
                 vtype = ValueType.of(default)
             else:
                 vtype = ValueType.ANY
-            if default is not REQUIRED and default is not None and not vtype.accepts(default):
+            if default_node is not None and default is not None and not vtype.accepts(default):
                 raise InvalidValueError(
                     default_node.pos,
                     f"default of input {name!r} is {_kind(default_node)}, expected a {vtype.value}",
@@ -388,7 +387,7 @@ class _Parser:
                     name_node.pos, f"name {shorten(name)} is not a valid node name, expected non-empty text without '/'"
                 )
             common["name"] = name
-        value = y.get(kind)
+        value = y.required(kind)
         if kind in _COMPOSITES:
             return self.composite(kind, value, common)
         if kind in _DECORATOR_FIELDS:
@@ -396,7 +395,7 @@ class _Parser:
         if kind in _SIMPLE_DECORATORS:
             child_node = value
             if isinstance(value, YMap) and value.keys() == ["child"]:
-                child_node = value.get("child")
+                child_node = value.required("child")
             return _SIMPLE_DECORATORS[kind](child=self.node(child_node), **common)
         return getattr(self, "leaf_" + kind)(y, value, common)
 
@@ -440,12 +439,14 @@ class _Parser:
         self.check_fields(m, ("policy", "children", "selected", "success_count", "failure_count"), "parallel")
         if "children" not in m:
             raise InvalidValueError(m.pos, "parallel has no 'children', expected a list of child nodes")
-        children = self.children(kind, m.get("children"))
+        children = self.children(kind, m.required("children"))
         if "success_count" in m or "failure_count" in m:
             return self.counted_parallel(m, children, common)
         policy = ParallelPolicy.SUCCESS_ON_ALL
+        policy_pos = m.pos
         policy_node = m.get("policy")
         if policy_node is not None:
+            policy_pos = policy_node.pos
             text = self.string(policy_node, "policy")
             try:
                 policy = ParallelPolicy(text)
@@ -460,7 +461,7 @@ class _Parser:
         if policy is ParallelPolicy.SUCCESS_ON_SELECTED:
             if selected_node is None:
                 raise InvalidValueError(
-                    policy_node.pos, "policy success_on_selected needs 'selected', expected a list of child names"
+                    policy_pos, "policy success_on_selected needs 'selected', expected a list of child names"
                 )
             if not isinstance(selected_node, YSeq) or not selected_node.items:
                 raise InvalidValueError(
@@ -489,7 +490,7 @@ class _Parser:
         for other in ("policy", "selected"):
             if other in m:
                 raise InvalidValueError(
-                    m.get(other).pos, f"parallel takes either {other!r} or success_count/failure_count, not both")
+                    m.required(other).pos, f"parallel takes either {other!r} or success_count/failure_count, not both")
         n = len(children)
         counts: dict[str, int] = {}
         for field_name in ("success_count", "failure_count"):
@@ -511,10 +512,10 @@ class _Parser:
         self.check_fields(m, ("retries", "children"), "recovery")
         if "children" not in m:
             raise InvalidValueError(m.pos, f"recovery has no 'children', expected e.g. recovery: {example}")
-        children = self.children("recovery", m.get("children"))
+        children = self.children("recovery", m.required("children"))
         if len(children) != 2:
             raise InvalidValueError(
-                m.get("children").pos,
+                m.required("children").pos,
                 f"recovery has {len(children)} children, expected 2: the action and its recovery")
         common["field_pos"] = dict(common["field_pos"]) | {k.raw: v.pos for k, v in m.items}
         retries_node = m.get("retries")
@@ -531,7 +532,7 @@ class _Parser:
         self.check_fields(m, _DECORATOR_FIELDS[kind], kind)
         if "child" not in m:
             raise InvalidValueError(m.pos, f"{kind} has no 'child', expected e.g. {kind}: {example}")
-        child = self.node(m.get("child"))
+        child = self.node(m.required("child"))
         common["field_pos"] = dict(common["field_pos"]) | {k.raw: v.pos for k, v in m.items}
         param_node = m.get(param)
         if kind == "repeat":

@@ -127,8 +127,9 @@ def describe_event(event: dict[str, Any] | None) -> str:
         args += [f"{k}={json.dumps(v)}" for k, v in event.get("kwargs", {}).items()]
         what = f"call #{event['call']} {event['actor']}({', '.join(args)}) by {event['path']}"
     elif kind == "return":
+        state = str(event.get("state"))  # as the line shows it (None when missing)
         outcome = {"done": f"returned {json.dumps(event.get('value'))}", "failed": f"failed ({event.get('error')})",
-                   "cancelled": f"cancelled ({event.get('reason')})"}.get(event.get("state"), event.get("state"))
+                   "cancelled": f"cancelled ({event.get('reason')})"}.get(state, state)
         what = f"call #{event['call']} {event['actor']} {outcome} to {event['path']}"
     elif kind == "tick":
         what = f"tick {event['n']}"
@@ -160,7 +161,7 @@ def _same(expected: dict[str, Any], got: dict[str, Any], previous: tuple[dict, d
             return False
     elif abs(t_want - t_got) > TIME_TOLERANCE:
         return False
-    return all(expected.get(k) == got.get(k) for k in _KEYS.get(kind, ()))
+    return all(expected.get(k) == got.get(k) for k in _KEYS.get(str(kind), ()))
 
 
 def read_trace(path: str | Path, lines: list[str] | None = None) -> tuple[dict[str, Any], list[dict[str, Any]]]:
@@ -176,7 +177,7 @@ def read_trace(path: str | Path, lines: list[str] | None = None) -> tuple[dict[s
             lines = Path(path).read_text(encoding="utf-8").splitlines()
         except OSError as exc:
             raise ReplayError(f"{path}: cannot read trace: {exc.strerror or exc}") from None
-    records = []
+    records: list[dict[str, Any]] = []
     for number, line in enumerate(lines, 1):
         if not line.strip():
             continue
@@ -357,7 +358,7 @@ class _Comparer:
         self.wall = wall
         self.got: list[dict[str, Any]] = []
         self.divergence: Divergence | None = None
-        self.on_divergence: Callable[[], None] = lambda: None
+        self.on_divergence: Callable[[], object] = lambda: None
         self._t0: float | None = None
 
     def check(self, event: dict[str, Any]) -> None:

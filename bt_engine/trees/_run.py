@@ -101,7 +101,9 @@ class RunHost(Protocol):
 
     rt: Any
     observers: list[TreeObserver]
-    behaviours: Mapping[str, Callable[..., py_trees.behaviour.Behaviour]]
+
+    @property
+    def behaviours(self) -> Mapping[str, Callable[..., py_trees.behaviour.Behaviour]]: ...
 
     def next_run_id(self) -> int: ...
 
@@ -162,7 +164,7 @@ class TreeRun:
         self.rt = host.rt
         self.mission = mission
         self.parent = parent
-        self.depth = 0 if parent is None else parent.depth + 1
+        self.depth: int = 0 if parent is None else parent.depth + 1
         self.id = host.next_run_id()
         self.txn_id: int | None = None  # the transaction running it, when run as an actor
         self.ticks = 0
@@ -287,6 +289,7 @@ class TreeRun:
     def _behaviour(self, node: UseBehaviour, label: str) -> py_trees.behaviour.Behaviour:
         factory = self.host.behaviours[node.behaviour]
         kwargs = {k: resolve_value(v, self.bb.get) for k, v in node.kwargs.items()}
+        params: Mapping[str, inspect.Parameter]
         try:
             params = inspect.signature(factory).parameters
         except (TypeError, ValueError):
@@ -328,7 +331,7 @@ class TreeRun:
         """The status changes of the last tick in the order they happened: a node that
         started before its children, one that ended after them."""
         last = self._last
-        changes = {}
+        changes: dict[py_trees.behaviour.Behaviour, tuple[Status, Status]] = {}
         for behaviour in self.paths:
             new = behaviour.status
             if new is not last[behaviour]:
@@ -337,10 +340,11 @@ class TreeRun:
         if changes:
             self._report_in_order(self.root, changes)
 
-    def _report_in_order(self, b: py_trees.behaviour.Behaviour, changes: dict) -> None:
+    def _report_in_order(self, b: py_trees.behaviour.Behaviour,
+                         changes: dict[py_trees.behaviour.Behaviour, tuple[Status, Status]]) -> None:
         change = changes.get(b)
         started = change is not None and change[1] is Status.RUNNING
-        if started:
+        if change is not None and started:
             self._notify("status_changed", self.paths[b], *change)
         for child in b.children:
             self._report_in_order(child, changes)

@@ -269,7 +269,7 @@ class TraceRecorder:
         self.rt = host.rt
         self.transactions = transactions
         self._own = isinstance(sink, (str, Path))
-        self._out: IO[str] = open(sink, "w", encoding="utf-8") if self._own else sink  # type: ignore[arg-type]
+        self._out: IO[str] = open(sink, "w", encoding="utf-8") if isinstance(sink, (str, Path)) else sink
         self._follow: int | None = None
         self.builder = EventBuilder(self.emit, self._accept)
         self._hooks = _RuntimeHooks(self)

@@ -52,9 +52,14 @@ __all__ = ["MAX_ERRORS", "ActorInfo", "Resolver", "annotation_text", "annotation
 class ActorInfo(Protocol):
     """What the validator needs to know about an actor (``rt.root.resolve(name)``)."""
 
-    path: str
-    signature: inspect.Signature
-    is_tree: bool
+    @property
+    def path(self) -> str: ...
+
+    @property
+    def signature(self) -> inspect.Signature: ...
+
+    @property
+    def is_tree(self) -> bool: ...
 
 
 #: ``name -> ActorInfo``; raises an error with ``.suggestions`` for unknown names.
@@ -116,7 +121,7 @@ def format_signature(name: str, sig: inspect.Signature) -> str:
         if p.kind is p.KEYWORD_ONLY and not star_done:
             parts.append("*")
         star_done = star_done or p.kind in (p.VAR_POSITIONAL, p.KEYWORD_ONLY)
-        text = {p.VAR_POSITIONAL: "*", p.VAR_KEYWORD: "**"}.get(p.kind, "") + p.name
+        text = ("*" if p.kind is p.VAR_POSITIONAL else "**" if p.kind is p.VAR_KEYWORD else "") + p.name
         if p.annotation is not p.empty:
             text += f": {annotation_text(p.annotation)}"
             if p.default is not p.empty:

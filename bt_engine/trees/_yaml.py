@@ -14,7 +14,7 @@ limit below turns what would be a ``ReaderError``, ``RecursionError``, ``ValueEr
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, Iterator, Union
+from typing import Any, Iterator, Protocol, Union
 
 import yaml
 from yaml.events import AliasEvent, CollectionStartEvent
@@ -46,7 +46,17 @@ _NUMBER_TAGS = {_CORE + "int", _CORE + "float"}
 _VALUE_TAG = _CORE + "value"  # what YAML 1.1 makes of a lone plain '='
 
 
-def _pos(file: str, mark: yaml.Mark) -> Pos:
+class _Mark(Protocol):
+    """Where PyYAML saw something (``yaml.Mark``, or the C loader's own mark), 0-based."""
+
+    line: int
+    column: int
+
+
+def _pos(file: str, mark: _Mark | None) -> Pos:
+    """The 1-based position of ``mark``; the start of the file when PyYAML gives none."""
+    if mark is None:
+        return Pos(file, 1, 1)
     return Pos(file, mark.line + 1, mark.column + 1)
 
 
@@ -108,6 +118,13 @@ class YMap:
                 return v
         return None
 
+    def required(self, key: str) -> YNode:
+        """The value of ``key``, which the caller has checked is there."""
+        value = self.get(key)
+        if value is None:
+            raise LookupError(f"no {key!r} in the mapping at {self.pos}")
+        return value
+
     def key_node(self, key: str) -> YScalar | None:
         for k, _ in self.items:
             if k.raw == key:
@@ -133,7 +150,7 @@ class _Loader(yaml.SafeLoader):
         self.file = file
         self.depth = 0
 
-    def compose_node(self, parent: Node | None, index: object) -> Node:
+    def compose_node(self, parent: Node | None, index: int | Node | None) -> Node | None:
         event = self.peek_event()
         if isinstance(event, AliasEvent):
             # An alias shares a node: nine of them nested make a billion items once expanded.
@@ -141,15 +158,18 @@ class _Loader(yaml.SafeLoader):
                 _pos(self.file, event.start_mark),
                 f"YAML alias *{shorten(event.anchor)[1:-1]} is not supported, expected the value written out",
             )
-        if not isinstance(event, CollectionStartEvent):
-            return super().compose_node(parent, index)
-        if self.depth >= MAX_YAML_DEPTH:
-            raise _too_deep(self.file, event.start_mark)
-        self.depth += 1
+        nested = isinstance(event, CollectionStartEvent)
+        if nested:
+            if self.depth >= MAX_YAML_DEPTH:
+                raise _too_deep(self.file, event.start_mark)
+            self.depth += 1
         try:
-            return super().compose_node(parent, index)
+            # types-PyYAML has index: int, but the composer passes the key node for a
+            # mapping's value and None for a document's root
+            return super().compose_node(parent, index)  # type: ignore[arg-type]
         finally:
-            self.depth -= 1
+            if nested:
+                self.depth -= 1
 
     def fetch_flow_collection_start(self, TokenClass: type) -> None:
         # The scanner runs ahead of the composer, and its work per token grows with the
@@ -160,7 +180,7 @@ class _Loader(yaml.SafeLoader):
         super().fetch_flow_collection_start(TokenClass)
 
 
-def _too_deep(file: str, mark: yaml.Mark) -> LimitError:
+def _too_deep(file: str, mark: _Mark | None) -> LimitError:
     return LimitError(
         _pos(file, mark),
         f"YAML nested deeper than {MAX_YAML_DEPTH} levels, expected a flatter mission "
@@ -251,8 +271,7 @@ def _check_printable(text: str, file: str) -> None:
 
 def _syntax_error(file: str, exc: yaml.MarkedYAMLError) -> MissionSyntaxError:
     mark = syntax_mark(exc)
-    pos = _pos(file, mark) if mark is not None else Pos(file, 1, 1)
-    return MissionSyntaxError(pos, syntax_message(exc))
+    return MissionSyntaxError(_pos(file, mark), syntax_message(exc))
 
 
 def parse_yaml(text: str, file: str) -> YNode | None:

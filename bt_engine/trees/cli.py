@@ -152,7 +152,7 @@ def _load_for_show(app: Any, spec: str) -> Mission:
     if folder is not None and folder.is_dir():
         library.load_folder(folder)
     host_like = type("_Lib", (), {"library": library})()
-    return _mission(host_like, spec)  # type: ignore[arg-type]
+    return _mission(host_like, spec)
 
 
 def cmd_show(args: argparse.Namespace, app: Any) -> int:
