@@ -585,10 +585,10 @@ class Importer:
                 raise BtXmlError(el.pos, f"SubTree {tree_id!r} reads {port!r}, which nothing in it writes, but this "
                                          f"call does not pass it, expected {port}=\"{{key}}\" or _autoremap=\"true\"")
         if result_key is not None:
-            node = {"do": tree_id, **({"with": args} if args else {}), "out": result_key}
+            call = {"do": tree_id, **({"with": args} if args else {}), "out": result_key}
             if not outs:
-                return node
-            return {"sequence": [node, {"set": {key: "{" + f"{result_key}.{port}" + "}" for port, key in outs}}]}
+                return call
+            return {"sequence": [call, {"set": {key: "{" + f"{result_key}.{port}" + "}" for port, key in outs}}]}
         if not outs:
             return self.call(tree_id, args, [], ctx)
         temp = ctx.temp(tree_id)

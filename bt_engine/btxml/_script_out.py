@@ -97,9 +97,10 @@ def set_script(node: SetValues) -> str | None:
                 return None
             text = value.key
         else:
-            text = _literal(value)
-            if text is None:
+            literal = _literal(value)
+            if literal is None:
                 return None
+            text = literal
         parts.append(f"{key} := {text}")
     script = "; ".join(parts)
     try:

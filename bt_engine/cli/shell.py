@@ -11,7 +11,7 @@ from __future__ import annotations
 import argparse
 import json
 import pprint
-from typing import Any, Iterable, NoReturn, TextIO
+from typing import IO, Any, Iterable, NoReturn
 
 from ..catalog import text_lines, tool_schema
 from ..errors import ActorbtError
@@ -28,7 +28,7 @@ def format_value(value: Any, as_json: bool = False) -> str:
     return json.dumps(value, default=str) if as_json else pprint.pformat(value)
 
 
-def print_stream(values: Iterable[Any], out: TextIO, *, as_json: bool = False,
+def print_stream(values: Iterable[Any], out: IO[str], *, as_json: bool = False,
                  count: int | None = None) -> int:
     """Print each of ``values`` on its own line as it arrives (flushed), until the
     iterator ends or ``count`` values were printed (no further value is asked for).
@@ -51,7 +51,7 @@ def print_stream(values: Iterable[Any], out: TextIO, *, as_json: bool = False,
     return 0
 
 
-def stream_actor(rt: Runtime, name: str, args: list[Any], kwargs: dict[str, Any], out: TextIO, *,
+def stream_actor(rt: Runtime, name: str, args: list[Any], kwargs: dict[str, Any], out: IO[str], *,
                  as_json: bool = False, count: int | None = None, timeout: float | None = None) -> int:
     """Iterate actor ``name`` from the calling thread and print its values
     (:func:`print_stream`); ``timeout`` [s, runtime clock] ends the stream. Leaving

@@ -15,7 +15,7 @@ from __future__ import annotations
 import inspect
 import itertools
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Callable, Mapping
+from typing import TYPE_CHECKING, Any, Callable, Literal, Mapping, overload
 
 import py_trees
 import py_trees.behaviours
@@ -332,6 +332,14 @@ def _skipped_tree(name: str, error: MissionError) -> Callable[..., Any]:
 
     skipped_tree.__name__ = name
     return skipped_tree
+
+
+@overload
+def tree_host(rt: Runtime, create: Literal[True]) -> TreeHost: ...
+
+
+@overload
+def tree_host(rt: Runtime, create: bool = False) -> TreeHost | None: ...
 
 
 def tree_host(rt: Runtime, create: bool = False) -> TreeHost | None:
