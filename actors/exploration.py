@@ -7,6 +7,7 @@ navigation's ``goto``. Nothing here knows how the map is made.
 from __future__ import annotations
 
 import logging
+import math
 
 import numpy as np
 
@@ -20,6 +21,7 @@ log = logging.getLogger("actors.exploration")
 
 MAP_WAIT = 10.0         # [s] for the first /map
 SETTLE = 1.0            # [s] after each goal, so the map takes in the new scans
+LOOK_AROUND = 3         # turns of a third of a circle each: a look all round
 
 
 class ExplorationError(ActorbtError):
@@ -54,6 +56,7 @@ class Exploration(SubSystem):
         start = self.runtime.now()
         failed: list[tuple[float, float, float]] = []
         visited: list[tuple[float, float, float]] = []
+        looked_around = False
         while True:
             elapsed = self.runtime.now() - start
             if elapsed > max_time or len(visited) + len(failed) >= max_goals:
@@ -68,6 +71,13 @@ class Exploration(SubSystem):
                 self.run_actor("sleep", SETTLE)
                 continue
             frontier = next_frontier(costmap, (x, y), avoid=failed + visited, min_size=min_frontier)
+            if frontier is None and not looked_around:
+                # No frontier it can reach from here: on a young map (the first scans from
+                # the start) the free floor is a sliver the inflation closes, and an opening
+                # may lie behind the robot. Look all round once before calling it done.
+                self._look_around()
+                looked_around = True
+                continue
             if frontier is None:
                 return {"finished": True, "goals": len(visited), "failed": len(failed),
                         "seconds": round(self.runtime.now() - start, 1)}
@@ -77,7 +87,15 @@ class Exploration(SubSystem):
             try:
                 self.run_actor("goto", gx, gy, gyaw)
                 visited.append(frontier.goal)
+                looked_around = False
             except ActorError as e:
                 log.info("frontier goal (%.2f, %.2f) not reached: %s", gx, gy, e.root_cause)
                 failed.append(frontier.goal)
             self.run_actor("sleep", SETTLE)
+
+    def _look_around(self) -> None:
+        """Turn a full circle in place, in thirds, letting the map take in the scans."""
+        log.info("no frontier within reach: looking all round")
+        for _ in range(LOOK_AROUND):
+            self.run_actor("mini_turn", 2 * math.pi / LOOK_AROUND)
+        self.run_actor("sleep", SETTLE)
