@@ -24,12 +24,19 @@ from typing import Any, ClassVar, Protocol
 
 from ..errors import ActorbtError
 
-__all__ = ["RosAction", "RosMessage", "UnknownTypeError", "message_class", "to_plain", "type_name"]
+__all__ = ["RosAction", "RosMessage", "RosService", "UnknownTypeError", "message_class", "to_plain", "type_name"]
 
 
 class RosMessage(Protocol):
-    """What the bus needs of a ROS message class (rosidl generates it): a default
-    instance from ``cls()``, and its fields with their ROS types."""
+    """A ROS message (rosidl generates its class): made from keyword fields (a default
+    instance from ``cls()``), its fields are attributes, and the class lists them with
+    their ROS types."""
+
+    def __init__(self, **fields: Any) -> None: ...
+
+    def __getattr__(self, field: str) -> Any: ...
+
+    def __setattr__(self, field: str, value: Any) -> None: ...
 
     @classmethod
     def get_fields_and_field_types(cls) -> dict[str, str]: ...
@@ -41,6 +48,16 @@ class RosAction(Protocol):
     Goal: ClassVar[type[RosMessage]]
     Result: ClassVar[type[RosMessage]]
     Feedback: ClassVar[type[RosMessage]]
+    #: rosidl's services and topics the action is made of (SendGoalService,
+    #: FeedbackMessage, ...), which a client that subscribes on its own needs
+    Impl: ClassVar[Any]
+
+
+class RosService(Protocol):
+    """What the bus needs of a ROS service class: its two message classes."""
+
+    Request: ClassVar[type[RosMessage]]
+    Response: ClassVar[type[RosMessage]]
 
 #: how many items of a sequence (characters of a string) are shown by default (ros2's)
 TRUNCATE = 128

@@ -21,6 +21,7 @@ import logging
 from typing import Any, Callable
 
 from ..bus.actions import STATUS_CANCELED, STATUS_SUCCEEDED, ServerGoal
+from ..bus.messages import RosAction
 from .host import RosClosedError
 
 log = logging.getLogger("actorbt.ros")
@@ -30,7 +31,7 @@ class RosActionServer:
     """One action served by a :class:`~bt_engine.ros.transport.RosTransport`'s node
     (``transport``: its ``node``, ``host`` and ``rt`` are used)."""
 
-    def __init__(self, transport: Any, name: str, action_type: type,
+    def __init__(self, transport: Any, name: str, action_type: type[RosAction],
                  on_goal: Callable[[ServerGoal], None]) -> None:
         from rclpy.action import ActionServer
         self.name = name

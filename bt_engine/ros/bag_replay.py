@@ -61,10 +61,10 @@ def trace_lines(path: str | Path) -> list[str]:
 
 def cmd_replay(args: argparse.Namespace, app: Any) -> int:
     """``actorbt replay TRACE``: a ``.jsonl`` trace or a bag folder."""
-    if bag_folder(args.trace) is None:
+    folder = bag_folder(args.trace)
+    if folder is None:
         from ..trees.cli import cmd_replay as replay_jsonl
         return replay_jsonl(args, app)
-    folder = bag_folder(args.trace)
     report = replay(folder, trees=args.trees, lines=trace_lines(folder))
     print(report)
     return 0 if report.ok else 1

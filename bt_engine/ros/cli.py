@@ -146,7 +146,7 @@ def cmd_serve(args: argparse.Namespace, app: Any) -> int:
             _progress(loading)
 
         def world_up(world: Any) -> None:
-            _progress(f"world {spec['name']} up at {process_uptime():.1f} s; {loading}")  # type: ignore[index]
+            _progress(f"world {spec['name']} up at {process_uptime():.1f} s; {loading}")
         rt = app.runtime(clock=getattr(args, "clock", None) or "wall", world_first=True,
                          world_setup=world_up)
         _progress(f"actors and trees loaded at {process_uptime():.1f} s; starting the ROS node...")

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import logging
 import math
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from ..bus.messages import message_class
 from ..errors import RuntimeClosedError
@@ -32,6 +32,9 @@ from .bag import DEFAULT_TOPICS, BagTopic
 from .cdr import message_definition, serialize
 from .compressed import CompressionError, compress_image
 from .foxglove_scene import Body, Scene, detections_in, goal_of
+
+if TYPE_CHECKING:
+    from foxglove.websocket import ServerListener
 from .live_options import FOXGLOVE_PORT, FoxgloveError
 
 __all__ = ["DEFAULT_PORT", "FoxgloveError", "FoxgloveView", "PATH_TOPIC", "SCENE_TOPIC"]
@@ -46,17 +49,20 @@ PATH_TOPIC = "/actorbt/path"
 SCENE_PERIOD, PATH_PERIOD, TIME_PERIOD = 1.0, 0.5, 0.05
 
 
-class _Listener:
-    """The SDK's ServerListener: which channels clients want (called on its threads)."""
+def _listener(view: FoxgloveView) -> ServerListener:
+    """The SDK's ServerListener: which channels clients want (called on its threads).
+    Made here, as the SDK is imported only when a view starts; the callbacks it does not
+    define keep the SDK's defaults."""
+    from foxglove.websocket import ServerListener
 
-    def __init__(self, view: FoxgloveView) -> None:
-        self.view = view
+    class _Listener(ServerListener):
+        def on_subscribe(self, client: Any, channel: Any) -> None:
+            view._demand(channel.topic, +1)
 
-    def on_subscribe(self, client: Any, channel: Any) -> None:
-        self.view._demand(channel.topic, +1)
+        def on_unsubscribe(self, client: Any, channel: Any) -> None:
+            view._demand(channel.topic, -1)
 
-    def on_unsubscribe(self, client: Any, channel: Any) -> None:
-        self.view._demand(channel.topic, -1)
+    return _Listener()
 
 
 class _Hooks:
@@ -122,7 +128,7 @@ class FoxgloveView:
         self._sent = {"path": -1.0, "time": -1.0}
         try:
             self.server = foxglove.start_server(
-                name="actorbt", host=host, port=port, context=self.ctx, server_listener=_Listener(self),
+                name="actorbt", host=host, port=port, context=self.ctx, server_listener=_listener(self),
                 capabilities=[foxglove.Capability.Time])
         except RuntimeError as exc:
             reason = str(exc).split("FoxgloveError:", 1)[-1].strip()

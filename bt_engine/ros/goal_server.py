@@ -33,6 +33,7 @@ import os
 import time
 from typing import TYPE_CHECKING, Any, Protocol
 
+from ..bus.messages import RosAction
 from ..errors import Cancelled, Failure
 from .error_codes import Ending, error_code
 from .goals import GoalError, Invocation
@@ -197,7 +198,7 @@ class GoalServer:
     #: announce acceptance too (not only the end)
     announce_accepted = True
 
-    def __init__(self, owner: Owner, action: str, action_type: type) -> None:
+    def __init__(self, owner: Owner, action: str, action_type: type[RosAction]) -> None:
         self.owner = owner
         self.action = action
         self.action_type = action_type

@@ -160,7 +160,8 @@ class RosHost:
                                      start_parameter_services=False, **options)
         except rclpy.exceptions.InvalidNamespaceException as e:
             raise ValueError(f"invalid namespace {namespace!r}: {e}") from None
-        except rclpy._rclpy_pybind11.RCLError as e:  # unknown --ros-args
+        # rclpy has no stub of its pybind11 module, where RCLError is defined
+        except rclpy._rclpy_pybind11.RCLError as e:  # type: ignore[attr-defined]  # unknown --ros-args
             raise ValueError(f"invalid ROS arguments {' '.join(ros_args or [])!r}: {e}") from None
         with self._lock:
             self._nodes.append(node)

@@ -31,6 +31,7 @@ from typing import Any, Callable
 
 import yaml
 
+from ..bus.messages import RosAction
 from ..errors import ActorbtError, ActorTimeout
 from .client import (STATUS_NAMES, ActionGoalError, GoalCall, GoalNotSentError,
                      GoalRejectedError, ServerUnavailableError, ServerWait)
@@ -268,7 +269,7 @@ class Remote:
     #: feedback callback waits this [s] (goals without one do not)
     SETTLE = 0.25
 
-    def _client(self, action_type: type, action: str) -> Any:
+    def _client(self, action_type: type[RosAction], action: str) -> Any:
         from rclpy.action import ActionClient
         from rclpy.qos import QoSProfile
         client = self._clients.get(action)
@@ -297,7 +298,7 @@ class Remote:
             if g.ended_at is not None and now - g.ended_at > self.FEEDBACK_GRACE:
                 del self._feedback[key]
 
-    def wait_for(self, action_type: type, action: str, timeout: float | None = None) -> bool:
+    def wait_for(self, action_type: type[RosAction], action: str, timeout: float | None = None) -> bool:
         """Wait until ``action`` is discovered; False after ``timeout`` [s]."""
         client = self.host.call(self._client, action_type, action)
         deadline = time.monotonic() + (self.wait if timeout is None else timeout)
@@ -307,7 +308,7 @@ class Remote:
             time.sleep(0.01)
         return True
 
-    def send(self, action_type: type, action: str, goal: Any, *,
+    def send(self, action_type: type[RosAction], action: str, goal: Any, *,
              on_feedback: Callable[[Any], None] | None = None,
              wait: float | None = None) -> RemoteGoal:
         """Send ``goal`` (waiting up to ``wait`` s for the server) and return at once."""

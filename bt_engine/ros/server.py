@@ -216,9 +216,9 @@ class Server:
                 self.announce(f"tree {path}: withdrawn {ep.action}")
         taken = {ep.action for ep in self.endpoints}
         for path, ref in wanted.items():
-            ep = self.trees.get(path)
-            if ep is not None:
-                ep.ref = ref  # an edited file: the same action, the new tree
+            served = self.trees.get(path)
+            if served is not None:
+                served.ref = ref  # an edited file: the same action, the new tree
                 continue
             name = self.resolve(tree_action_name(path))
             if name in taken:

@@ -20,6 +20,7 @@ import logging
 import os
 from typing import TYPE_CHECKING, Any, Callable
 
+from ..bus.messages import RosAction, RosMessage, RosService
 from ..bus.transport import EndpointInfo, TopicInfo, Transport
 from ..modes import Kind
 from ..bus.actions import build_message, message_doc, message_signature, public_name
@@ -192,7 +193,7 @@ class RosTransport(Transport):
         return self.host.call(matching_qos, self.node, topic)
 
     # -- actions and services ----------------------------------------------------------
-    def register_action(self, scope: Any, name: str, action_type: type, server: str) -> Any:
+    def register_action(self, scope: Any, name: str, action_type: type[RosAction], server: str) -> Any:
         """Make async actor ``name(goal=None, **fields)`` sending goals to ``server``.
 
         ``goal`` is an ``action_type.Goal`` or a mapping of its fields; keyword fields
@@ -209,7 +210,7 @@ class RosTransport(Transport):
         return self._client_actor(scope, name, GoalCall, client, server, action_type.Goal,
                                   "goal", doc)
 
-    def action_server(self, name: str, action_type: type, on_goal: Callable[[Any], None]) -> Any:
+    def action_server(self, name: str, action_type: type[RosAction], on_goal: Callable[[Any], None]) -> Any:
         """Serve action ``name`` from this node; ``on_goal(goal)`` runs on the hub with a
         :class:`~bt_engine.bus.actions.ServerGoal` (see :mod:`bt_engine.ros.action_server`)."""
         from .action_server import RosActionServer
@@ -221,7 +222,7 @@ class RosTransport(Transport):
     def rt(self) -> "Runtime":
         return self._rt
 
-    def register_service(self, scope: Any, name: str, srv_type: type, server: str) -> Any:
+    def register_service(self, scope: Any, name: str, srv_type: type[RosService], server: str) -> Any:
         """Make async actor ``name(request=None, **fields)`` calling service ``server``;
         the result is the response. Cancelling drops the pending request."""
         client = self.node.create_client(srv_type, server)
@@ -231,7 +232,7 @@ class RosTransport(Transport):
                                   "request", doc)
 
     def _client_actor(self, scope: Any, name: str, call_type: type, client: Any, server: str,
-                      msg_type: type, param: str, doc: str) -> Any:
+                      msg_type: type[RosMessage], param: str, doc: str) -> Any:
         """An async actor ``name(<param>=None, **fields)`` that sends one message through
         ``client`` as a ``call_type`` (GoalCall or ServiceCall) from the executor thread."""
         host, waiter = self.host, self._waiter

@@ -25,6 +25,7 @@ import pathlib
 import time
 from typing import Any
 
+from ..bus.messages import RosAction
 from .error_codes import Ending
 from .goal_server import GoalServer, Owner, ServedGoal, one_line, shown_path
 from .goals import GoalError, Invocation, decode_tree_goal
@@ -111,8 +112,9 @@ class TreeGoal(ServedGoal):
 
     # -- hub -------------------------------------------------------------------------------
     def starting(self) -> None:
-        if self.server.owner.record_dir is not None:
-            self._open_trace()
+        record_dir = self.server.owner.record_dir
+        if record_dir is not None:
+            self._open_trace(record_dir)
         # the first feedback, right after the start (after the first tick when that
         # comes at once, so it names the running node)
         self.flush_scheduled = True
@@ -168,19 +170,22 @@ class TreeGoal(ServedGoal):
         self.send_feedback(self.server.feedback(self, status, " > ".join(tips) or self.subject,
                                                 int(getattr(top, "ticks", 0))))
 
-    def _open_trace(self) -> None:
-        path = self.call.path
+    def _open_trace(self, record_dir: str | pathlib.Path) -> None:
+        call = self.call
+        if call is None:
+            raise RuntimeError("a refused goal has no trace: it never starts")
+        path = call.path
         try:
             from ..trees import TraceRecorder, tree_host
             host = tree_host(self.rt)
             if host is None:
                 return
-            folder = pathlib.Path(self.server.owner.record_dir)  # type: ignore[arg-type]
+            folder = pathlib.Path(record_dir)
             folder.mkdir(parents=True, exist_ok=True)
             stamp = time.strftime("%Y%m%d-%H%M%S")
             gid = self.key.hex()[:8]
             file = folder / f"{stamp}-{path.replace('.', '_')}-{gid}.jsonl"
-            self.recorder = TraceRecorder(file, host, tree=path, inputs=self.call.kwargs,
+            self.recorder = TraceRecorder(file, host, tree=path, inputs=call.kwargs,
                                           transactions=True)
             self.trace_path = str(file)
         except Exception:
@@ -198,7 +203,7 @@ class TreeGoal(ServedGoal):
 class TreeServer(GoalServer):
     """``/actorbt/tree/<name>`` for tree actor ``ref`` (see the module docstring)."""
 
-    def __init__(self, owner: Owner, action: str, action_type: type, ref: Any,
+    def __init__(self, owner: Owner, action: str, action_type: type[RosAction], ref: Any,
                  progress: TreeProgress) -> None:
         super().__init__(owner, action, action_type)
         self.ref = ref

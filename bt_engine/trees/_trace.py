@@ -41,7 +41,7 @@ import platform
 import threading
 from importlib import metadata
 from pathlib import Path
-from typing import IO, TYPE_CHECKING, Any, Callable
+from typing import IO, TYPE_CHECKING, Any, Callable, Protocol
 
 from py_trees.common import Status
 
@@ -241,6 +241,15 @@ class _RuntimeHooks:
         self.recorder.emit(event)
 
 
+class TextSink(Protocol):
+    """An open text stream a trace goes to (a file, ``sys.stdout``, a bag's trace
+    topic): each line is written, and it is flushed when the recorder closes."""
+
+    def write(self, text: str, /) -> object: ...
+
+    def flush(self) -> None: ...
+
+
 class TraceRecorder:
     """Records tree runs of a host to a JSON Lines file (or any text stream).
 
@@ -262,14 +271,18 @@ class TraceRecorder:
         transactions: also record every runtime transaction (start and end).
     """
 
-    def __init__(self, sink: str | Path | IO[str], host: TreeHost, *, tree: str,
+    def __init__(self, sink: str | Path | TextSink, host: TreeHost, *, tree: str,
                  inputs: dict[str, Any] | None = None, seed: int | None = None,
                  transactions: bool = False) -> None:
         self.host = host
         self.rt = host.rt
         self.transactions = transactions
-        self._own = isinstance(sink, (str, Path))
-        self._out: IO[str] = open(sink, "w", encoding="utf-8") if isinstance(sink, (str, Path)) else sink
+        self._out: TextSink
+        self._file: IO[str] | None = None  # the file it opened itself, closed with it
+        if isinstance(sink, (str, Path)):
+            self._out = self._file = open(sink, "w", encoding="utf-8")
+        else:
+            self._out = sink
         self._follow: int | None = None
         self.builder = EventBuilder(self.emit, self._accept)
         self._hooks = _RuntimeHooks(self)
@@ -340,8 +353,8 @@ class TraceRecorder:
             self.host.observers.remove(self.builder)
         if self.rt.recorder is self._hooks:
             self.rt.recorder = self._previous_recorder
-        if self._own:
-            self._out.close()
+        if self._file is not None:
+            self._file.close()
         else:
             self._out.flush()
 
