@@ -11,6 +11,8 @@ from .modes import Kind
 
 #: Default depth of a stream's buffer; the oldest value is dropped when it is full.
 DEFAULT_STREAM_BUFFER = 16
+#: the attribute @actor sets on the function it marks, holding its ActorSpec
+SPEC_ATTR = "_actor_spec"
 
 
 @dataclass(frozen=True)
@@ -104,7 +106,7 @@ def _mark(fn: Callable, name: str | None, kind: "str | Kind | None", buffer: int
     else:
         k = Kind.parse(kind) if kind is not None else Kind.SYNC
     _check_limits(fn, safety.limits)
-    fn._actor_spec = ActorSpec(name or fn.__name__, k, fn, buffer, hub_only, safety)  # type: ignore[attr-defined]
+    setattr(fn, SPEC_ATTR, ActorSpec(name or fn.__name__, k, fn, buffer, hub_only, safety))
     return fn
 
 

@@ -232,16 +232,19 @@ class StreamWait:
     gap between values). One timer, moved on lazily, whatever the message rate.
     ``on_expired()`` runs after the transaction failed (the multi mode's callback)."""
 
-    __slots__ = ("ref", "txn", "last", "timer", "on_expired")
+    __slots__ = ("ref", "txn", "wait", "last", "timer", "on_expired")
 
     def __init__(self, ref: ActorRef, txn: Transaction,
                  on_expired: Callable[[], None] | None = None) -> None:
+        if ref.wait is None:
+            raise ValueError(f"{ref.path} waits forever for a value: it has no StreamWait")
         self.ref = ref
+        self.wait: float = ref.wait
         self.txn = txn
         self.on_expired = on_expired
         self.last = txn.table.clock.now()
         repace(ref, txn)
-        self.timer: TimerHandle = txn.table.hub.call_at(self.last + ref.wait, self._check)  # type: ignore[operator]
+        self.timer: TimerHandle = txn.table.hub.call_at(self.last + self.wait, self._check)
         txn.add_done_callback(lambda t: self.timer.cancel())
 
     def heard(self) -> None:
@@ -252,7 +255,7 @@ class StreamWait:
         txn = self.txn
         if txn.done:
             return
-        due = self.last + self.ref.wait  # type: ignore[operator]
+        due = self.last + self.wait
         if due > txn.table.clock.now():
             self.timer = txn.table.hub.call_at(due, self._check)
             return

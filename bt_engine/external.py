@@ -118,13 +118,16 @@ class ExternalIterator:
         def pump() -> None:
             it = None
             try:
+                task = self._task
+                if task is None:
+                    raise RuntimeError("the pump runs as the task begin() made")
                 it = dispatch(table, scope.resolve(name), mode, args, kwargs, None, seconds)
                 while True:
                     if self._requests == 0:
                         hub.outside_pending += 1
                         try:
                             while self._requests == 0:
-                                self._waiter = Waiter(self._task)  # type: ignore[arg-type]
+                                self._waiter = Waiter(task)
                                 self._waiter.wait()
                         finally:
                             hub.outside_pending -= 1

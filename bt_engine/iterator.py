@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 import collections
-from typing import Any
+from typing import Any, Generator
 
 from .actor import ActorRef
 from .errors import ActorCancelled, ActorTimeout, Cancelled
@@ -38,7 +38,7 @@ class ActorIterator:
         self.txn.add_done_callback(self._on_finish)
         self._waiter: Waiter | None = None
         self._buffer: collections.deque | None = None
-        self._gen = None
+        self._gen: Generator[Any, None, None] | None = None
         if seconds is not None:
             self.txn.set_deadline(seconds)
         if ref.is_generator:
@@ -49,7 +49,9 @@ class ActorIterator:
             start_stream_impl(ref, self.txn, args, kwargs, first_only=False, on_value=self._push)
 
     def _push(self, value: Any) -> None:
-        self._buffer.append(value)  # type: ignore[union-attr]
+        if self._buffer is None:
+            raise RuntimeError(f"{self.ref.path}: a value came for an iterator that takes none")
+        self._buffer.append(value)
         if self._waiter is not None:
             self._waiter.wake()
 
@@ -112,7 +114,7 @@ class ActorIterator:
             return self._buffer.popleft()
         try:
             if self._gen is not None:
-                return self._next_from_generator(task)
+                return self._next_from_generator(task, self._gen)
             return self._invoke_once(task)
         except (ActorTimeout, ActorCancelled):
             if txn.done:  # the iterator's own deadline or cancel ended the item
@@ -140,20 +142,20 @@ class ActorIterator:
                 child.cancel("caller cancelled")
         return result_or_raise(child)
 
-    def _next_from_generator(self, task: Task) -> Any:
+    def _next_from_generator(self, task: Task, gen: Generator[Any, None, None]) -> Any:
         txn = self.txn
         txn.task = task  # cancellation reaches the generator only while it runs
         task.txns.append(txn)
         try:
             task.raise_pending()
-            return next(self._gen)  # type: ignore[arg-type]
+            return next(gen)
         except StopIteration:
             txn.closer = None
             txn.finish(TxnState.DONE, None)
             raise
         except Cancelled as c:
             drop_pending(task, txn)
-            self._gen.close()  # type: ignore[union-attr]
+            gen.close()
             txn.finish(TxnState.CANCELLED, error=c)
             if c.transaction is txn:
                 return self._stopped()

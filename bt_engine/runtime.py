@@ -20,7 +20,7 @@ from .api import CallApi
 from .bus.local import LocalBus
 from .bus.transport import Transport
 from .clock import Clock, make_clock
-from .errors import ActorbtError
+from .errors import ActorbtError, BadModeError
 from .external import run_on_hub
 from .hub import Hub, TimerHandle, Waiter
 from .subsystem import SubSystem
@@ -77,8 +77,10 @@ class Runtime(CallApi):
             self.bus: Transport = LocalBus(self.hub)
         elif isinstance(bus, Transport):
             self.bus = bus
+        elif isinstance(bus, str):
+            raise BadModeError(f"unknown bus {bus!r}; expected 'local', a Transport or a function making one")
         else:
-            self.bus = bus(self)  # type: ignore[operator]
+            self.bus = bus(self)
         self.root: SubSystem = self.run_on_hub(RootSystem._create, self, "", None)
         self._watchdog: Watchdog | None = None
         if watchdog:

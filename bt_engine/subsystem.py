@@ -14,7 +14,7 @@ from __future__ import annotations
 import inspect
 from typing import Any, Callable
 
-from .actor import ActorRef, ActorSpec, Safety
+from .actor import SPEC_ATTR, ActorRef, ActorSpec, Safety
 from .api import CallApi
 from .bus.messages import RosAction
 from .bus.qos import qos_depth
@@ -173,7 +173,7 @@ class SubSystem(CallApi):
         seen: set[str] = set()
         for klass in type(holder).__mro__:
             for attr, val in vars(klass).items():
-                spec: ActorSpec | None = getattr(val, "_actor_spec", None)
+                spec: ActorSpec | None = getattr(val, SPEC_ATTR, None)
                 if spec is None or attr in seen:
                     continue
                 seen.add(attr)
