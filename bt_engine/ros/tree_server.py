@@ -89,7 +89,8 @@ class TreeProgress:
         top = run
         while getattr(top, "parent", None) is not None:
             top = top.parent
-        g = self.goals.get(getattr(top, "txn_id", None))  # type: ignore[arg-type]
+        txn_id = getattr(top, "txn_id", None)
+        g = self.goals.get(txn_id) if txn_id is not None else None
         if g is not None:
             final = _status_name(finished) if finished is not None and run is top else None
             g.progress(run, top, final)
@@ -200,6 +201,13 @@ class TreeGoal(ServedGoal):
                 log.exception("closing the trace %s failed", self.trace_path)
 
 
+def _tree_goal(g: ServedGoal) -> TreeGoal:
+    """``g`` as the TreeGoal a tree server makes of every goal."""
+    if not isinstance(g, TreeGoal):
+        raise TypeError(f"a tree server's goals are TreeGoals, got {type(g).__name__}")
+    return g
+
+
 class TreeServer(GoalServer):
     """``/actorbt/tree/<name>`` for tree actor ``ref`` (see the module docstring)."""
 
@@ -254,17 +262,18 @@ class TreeServer(GoalServer):
         return res
 
     async def take_turn(self, g: ServedGoal) -> None:
+        tree_goal = _tree_goal(g)
         prev = self.active
         if prev is not None:
             prev.cancel("preempted by a newer goal", Ending.PREEMPTED)
             await prev.finished
-        self.active = g  # type: ignore[assignment]
+        self.active = tree_goal
 
     def leave(self, g: ServedGoal) -> None:
         if self.active is g:
             self.active = None
 
     def concluding(self, g: ServedGoal, outcome: Any) -> None:
-        if g.top is None:  # type: ignore[attr-defined]
+        if _tree_goal(g).top is None:
             # No progress from the trees layer for this actor: a last feedback at the end.
             super().concluding(g, outcome)
