@@ -46,10 +46,11 @@ $(STAMP): pyproject.toml interfaces/CMakeLists.txt interfaces/package.xml $(wild
 
 venv: $(STAMP)
 
-# the linter first (seconds), then the suite on one worker per core (pytest-xdist); a
-# test file stays in one worker
+# the linter and the engine's type check first (seconds), then the suite on one worker
+# per core (pytest-xdist); a test file stays in one worker
 test: $(STAMP)
 	$(PY) -m ruff check .
+	$(PY) -m mypy
 	$(PY) -m pytest -q -n auto --dist loadfile
 
 demo: $(STAMP)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import fcntl
 import glob
+import hashlib
 import itertools
 import os
 import signal
@@ -14,10 +15,13 @@ import pytest
 
 os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
 # Under pytest-xdist (make test) each worker talks ROS on a domain of its own: the same
-# topic and action names in two workers' tests would otherwise reach each other.
+# topic and action names in two workers' tests, or in another run's on this machine,
+# would otherwise reach each other. A run's workers share its id; domains 100-231.
 _WORKER = os.environ.get("PYTEST_XDIST_WORKER", "")
 if _WORKER.startswith("gw"):
-    os.environ["ROS_DOMAIN_ID"] = str(40 + int(_WORKER[2:]))
+    _run = int(hashlib.sha1(os.environ.get("PYTEST_XDIST_TESTRUNUID", "").encode()).hexdigest(), 16)
+    _workers = max(1, int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "1")))
+    os.environ["ROS_DOMAIN_ID"] = str(100 + (_run % max(1, 132 // _workers)) * _workers + int(_WORKER[2:]))
 # A suite started in the background by a non-interactive shell inherits SIGINT ignored, and
 # so would the commands the Ctrl-C tests start (an ignored signal stays ignored across
 # exec): take the default back, so that they see the Ctrl-C they are sent.
