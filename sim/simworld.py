@@ -47,9 +47,9 @@ SOLVER_RESIDUAL = None
 #: has reached its goal and a finger stands short of it; a grasp still closing is solved
 #: with the usual ones). Friction alone keeps a held body, and a solver stopped short of
 #: converging lets it creep about the line between the pads. Over a 21 s carry
-#: (tests/test_sim_grip_hold.py) a bottle, a can and a carton, each held at three heights,
-#: turned up to 13.7 degrees at 50 iterations and at most 3.5 at 300 (150 and 200, also
-#: while closing: up to 15.4 and 5.1).
+#: (tests/test_sim_grip_hold.py) bottles, cans and cartons held at several heights turned
+#: up to 13.7 degrees at 50 iterations (median 4.4) and up to 5.0 at 300 (median 1.3);
+#: 150 and 200, also while closing: up to 15.4 and 5.1.
 HOLDING_SOLVER_ITERATIONS = 300
 #: [Hz] physics substeps while the arm or the gripper moves or holds something: grasps,
 #: carries and placements are solved at this rate
