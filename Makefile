@@ -11,6 +11,11 @@ STAMP  := $(VENV)/.installed
 MSGS_STAMP := $(VENV)/.upstream-msgs
 MSGS_SRC   := $(addprefix interfaces/upstream/,pyproject.toml CMakeLists.txt) \
   $(wildcard $(addprefix interfaces/upstream/*/,CMakeLists.txt package.xml msg/*.msg srv/*.srv action/*.action))
+# actorbt's own action types (actorbt_interfaces): a distribution of its own too, so that
+# actorbt is pure Python and the engine installs without ROS (docs/install.md).
+IFACE_STAMP := $(VENV)/.actorbt-interfaces
+IFACE_SRC   := $(addprefix interfaces/,pyproject.toml CMakeLists.txt package.xml) \
+  $(wildcard interfaces/action/*.action interfaces/srv/*.srv)
 # Debian packages: cmake/g++ build the ROS action types, EGL renders the camera headless,
 # graphviz draws trees.
 DEBS   := cmake g++ libegl1 libegl-mesa0 graphviz
@@ -37,9 +42,14 @@ $(MSGS_STAMP): $(MSGS_SRC)
 	$(PY) -m pip install -q ./interfaces/upstream
 	@touch $(MSGS_STAMP)
 
+$(IFACE_STAMP): $(IFACE_SRC) | $(MSGS_STAMP)
+	$(venv_ready)
+	$(PY) -m pip install -q ./interfaces
+	@touch $(IFACE_STAMP)
+
 # Order-only on the message packages: they are built first, but rebuilding them does not
 # reinstall actorbt.
-$(STAMP): pyproject.toml interfaces/CMakeLists.txt interfaces/package.xml $(wildcard interfaces/action/*.action interfaces/srv/*.srv) | $(MSGS_STAMP)
+$(STAMP): pyproject.toml | $(IFACE_STAMP)
 	$(venv_ready)
 	$(PY) -m pip install -q -e ".[test]"
 	@touch $(STAMP)

@@ -37,7 +37,7 @@ from sensor_msgs.msg import Imu, PointCloud2, PointField
 
 from bt_engine import ActorbtError, ActorError, ActorTimeout, SubSystem, actor
 from bt_engine.bus.actions import ActionGoalError
-from bt_engine.ros.pose_cli import initial_pose_msg
+from bt_ros.pose_cli import initial_pose_msg
 from planning import BasePath, GridPlanner, OccupancyGrid, inflate, with_obstacles
 from planning.viewpoints import viewpoints
 

@@ -39,7 +39,7 @@ COMMANDS: list[tuple[list[str], float | None]] = [
 
 def actorbt() -> list[str]:
     script = Path(sys.executable).with_name("actorbt")
-    return [str(script)] if script.exists() else [sys.executable, "-m", "bt_engine.cli.main"]
+    return [str(script)] if script.exists() else [sys.executable, "-m", "bt_cli.main"]
 
 
 def timed(cmd: list[str]) -> tuple[float, str]:

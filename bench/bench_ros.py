@@ -33,11 +33,11 @@ sys.path.insert(0, str(ROOT))
 
 from bt_engine import Kind, Runtime  # noqa: E402
 from bt_engine.bus.qos import qos_depth  # noqa: E402
-from bt_engine.ros.host import RosHost  # noqa: E402
-from bt_engine.ros.qos import qos_profile  # noqa: E402
-from bt_engine.ros.remote import Remote  # noqa: E402
-from bt_engine.ros.server import serve  # noqa: E402
-from bt_engine.ros.transport import RosTransport  # noqa: E402
+from bt_ros.host import RosHost  # noqa: E402
+from bt_ros.qos import qos_profile  # noqa: E402
+from bt_ros.remote import Remote  # noqa: E402
+from bt_ros.server import serve  # noqa: E402
+from bt_ros.transport import RosTransport  # noqa: E402
 
 GOALS = 200
 CANCELS = 20
@@ -150,7 +150,7 @@ def bench_two_processes(tmp: pathlib.Path) -> None:
     print("\n-- two processes: `actorbt serve` on the ROS bus + client --")
     cfg = tmp / "actorbt.yaml"
     cfg.write_text(f"trees: {write_trees(tmp / 'trees2')}\nworld: null\ntransport: ros\nclock: wall\n")
-    proc = subprocess.Popen([sys.executable, "-m", "bt_engine.cli.main", "--config", str(cfg),
+    proc = subprocess.Popen([sys.executable, "-m", "bt_cli.main", "--config", str(cfg),
                              "serve", "--no-record"], cwd=ROOT, stdout=subprocess.PIPE,
                             stderr=subprocess.STDOUT, text=True)
     try:
@@ -183,7 +183,7 @@ import sys, time, os
 from rclpy.context import Context
 import rclpy
 from sensor_msgs.msg import Image
-from bt_engine.ros.qos import qos_profile
+from bt_ros.qos import qos_profile
 rate, seconds, readers = float(sys.argv[1]), float(sys.argv[2]), int(sys.argv[3])
 ctx = Context(); ctx.init(args=[])
 node = rclpy.create_node("bench_image_pub", context=ctx)

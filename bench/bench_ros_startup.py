@@ -16,7 +16,7 @@ where ``<ros>`` is ``--bus ros`` when ``actorbt serve --help`` offers ``--bus``,
 
 - cold: the wall time of ``actorbt rcall get_pose``, each a new process (``--calls``),
   and of ``actorbt goal nosuchtree`` (a tree the serve does not offer);
-- warm: one :class:`bt_engine.ros.remote.Remote` in this process, ``--warm`` calls of
+- warm: one :class:`bt_ros.remote.Remote` in this process, ``--warm`` calls of
   ``get_pose`` (what ``actorbt rshell`` does per line), after one untimed call.
 
 Figures are median, min and max. One untimed run of ``actorbt --help`` first writes the
@@ -55,14 +55,14 @@ SIM_READY = re.compile(r"\bready\b|running on the")
 LAUNCH = ("import sys; root = sys.argv.pop(1); "
           "sys.meta_path[:] = [f for f in sys.meta_path if not type(f).__module__.startswith('_editable')]; "
           "sys.path.insert(0, root); sys.argv[0] = 'actorbt'; "
-          "from bt_engine.cli.main import main; sys.exit(main())")
+          "from bt_cli.main import main; sys.exit(main())")
 
 
 def actorbt(root: Path = ROOT) -> list[str]:
     if root != ROOT:
         return [sys.executable, "-c", LAUNCH, str(root)]
     script = Path(sys.executable).with_name("actorbt")
-    return [str(script)] if script.exists() else [sys.executable, "-m", "bt_engine.cli.main"]
+    return [str(script)] if script.exists() else [sys.executable, "-m", "bt_cli.main"]
 
 
 def ros_flag(root: Path = ROOT) -> list[str]:
@@ -202,7 +202,7 @@ def calls(root: Path, ros: list[str], opts: argparse.Namespace) -> None:
         print(f"actorbt goal nosuchtree (exit {proc.returncode})               {stats(unknown)}",
               flush=True)
 
-        from bt_engine.ros.remote import Remote  # this checkout's client, in this process
+        from bt_ros.remote import Remote  # this checkout's client, in this process
         t0 = time.perf_counter()
         with Remote() as remote:
             remote.call("get_pose", timeout=30)

@@ -24,7 +24,7 @@ import threading
 import time
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
-ACTORBT = [sys.executable, "-m", "bt_engine.cli.main"]
+ACTORBT = [sys.executable, "-m", "bt_cli.main"]
 ENV = dict(os.environ, ROS_DOMAIN_ID="7", ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST", PYTHONUNBUFFERED="1")
 PLACE = {"x": 2.0, "y": -2.0, "size_x": 0.6, "size_y": 0.4, "height": 0.12}
 SCENARIOS = {

@@ -5,7 +5,7 @@ import pathlib
 import sys
 
 from bt_engine.errors import ActorbtError
-from bt_engine.ros import LiveOptions, add_live_options
+from bt_ros import LiveOptions, add_live_options
 
 
 def _world_options(p) -> None:
@@ -87,7 +87,7 @@ def _check_world(world: str, seed: int, locations: str | None = None) -> None:
 
 
 def cmd_demo(args, app) -> int:
-    from bt_engine.trees import plot_trace
+    from bt_tools.plot import plot_trace
 
     from .episode import print_outcome, run_episode
     out = pathlib.Path(args.out)

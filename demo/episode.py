@@ -21,7 +21,7 @@ from tf2_msgs.msg import TFMessage
 
 import categories
 from bt_engine import ActorError, Runtime
-from bt_engine.cli import App, Config, ConfigError, find_config, load_config
+from bt_cli import App, Config, ConfigError, find_config, load_config
 from bt_engine.trees import TraceRecorder, TreeObserver, tree_host
 from planning.tf_buffer import TransformBuffer, TransformError, pose2d
 from sim import SimWorld
@@ -288,7 +288,7 @@ def run_episode(tree: str = "bt_pick_place", world: str = "house", seed: int = 0
     inputs. With ``out_dir``, the trace and the top view are written there. ``locations``
     names places (a YAML file) for a world built from a map_server map. With ``mapping``
     the world has no map server: for trees that map it first (bt_map_then_fetch calls
-    navstack's ``start_mapping``). ``live`` (a :class:`bt_engine.ros.live_options.LiveOptions`)
+    navstack's ``start_mapping``). ``live`` (a :class:`bt_ros.live_options.LiveOptions`)
     records a bag of the episode and serves a Foxglove view (``demo --bag --foxglove``).
 
     Raises:
@@ -341,7 +341,7 @@ def run_episode(tree: str = "bt_pick_place", world: str = "house", seed: int = 0
             recorder = TraceRecorder(ep.trace, host, tree=tree, inputs=args, seed=seed)
         session = None
         if live:
-            from bt_engine.ros import LiveSession
+            from bt_ros import LiveSession
             session = LiveSession(rt, host, live, tree=tree, inputs=args, seed=seed)
         before = {n: sim.object_pose(n) for n in sim.object_names()}
         sim0 = rt.now()

@@ -16,7 +16,7 @@ from dataclasses import asdict
 from typing import TextIO
 
 import categories
-from bt_engine.cli import App, Config
+from bt_cli import App, Config
 from bt_engine.errors import ActorbtError
 
 from .episode import Episode, episode_app, run_episode

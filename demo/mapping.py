@@ -18,7 +18,7 @@ from typing import Callable, TextIO
 from geometry_msgs.msg import PoseWithCovarianceStamped
 
 from bt_engine import ActorError, Runtime
-from bt_engine.cli import find_config, load_config
+from bt_cli import find_config, load_config
 from sim import SimWorld
 from sim.initial_pose import initial_pose_msg
 

@@ -8,7 +8,7 @@ import pytest
 
 from bt_engine import Safety, SubSystem, actor
 from bt_engine.catalog import text_lines, tool_schema
-from bt_engine.cli.actor_index import ActorIndex
+from bt_cli.actor_index import ActorIndex
 from bt_engine.trees import TreeLibrary, parse_mission, register_tree_folder
 from bt_engine.trees._safety import mission_safety
 

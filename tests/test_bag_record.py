@@ -14,12 +14,12 @@ import pytest
 
 from bt_engine import Runtime
 from bt_engine.bus.local import LocalPublisher
-from bt_engine.cli.main import main
-from bt_engine.cli.config import load_config
-from bt_engine.ros.bag import DEFAULT_TOPICS, TRACE_TOPIC, BagRecorder, BagTopic
-from bt_engine.ros.cdr import typestore
-from bt_engine.ros.compressed import CompressionError, compress_image
-from bt_engine.ros.tree_status import status_message
+from bt_cli.main import main
+from bt_cli.config import load_config
+from bt_ros.bag import DEFAULT_TOPICS, TRACE_TOPIC, BagRecorder, BagTopic
+from bt_ros.cdr import typestore
+from bt_ros.compressed import CompressionError, compress_image
+from bt_ros.tree_status import status_message
 
 REPO = Path(__file__).resolve().parents[1]
 CONFIG = ["--config", str(REPO / "actorbt.yaml")]

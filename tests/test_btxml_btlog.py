@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from bt_engine.cli.main import main
+from bt_cli.main import main
 
 REPO = Path(__file__).resolve().parents[1]
 TRACES = sorted((REPO / "tests" / "replays").glob("*.jsonl"))

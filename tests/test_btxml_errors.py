@@ -6,9 +6,9 @@ from pathlib import Path
 
 import pytest
 
-from bt_engine.btxml import (BtXmlError, UnknownXmlNodeError, UnsupportedXmlError, XmlSyntaxError, import_files,
+from bt_xml import (BtXmlError, UnknownXmlNodeError, UnsupportedXmlError, XmlSyntaxError, import_files,
                              read_node_model)
-from bt_engine.cli.main import main
+from bt_cli.main import main
 
 DATA = Path(__file__).parent / "data" / "btxml"
 

@@ -12,12 +12,12 @@ from typing import Any
 import pytest
 
 from bt_engine import Runtime, SubSystem, actor
-from bt_engine.btxml import dump_mission, import_files
-from bt_engine.btxml._compare import mission_differences
-from bt_engine.btxml._export import ExportError, Exporter, export_tree
-from bt_engine.cli.actor_index import ActorIndex
-from bt_engine.cli.config import import_object, load_config
-from bt_engine.cli.main import main
+from bt_xml import dump_mission, import_files
+from bt_xml._compare import mission_differences
+from bt_xml._export import ExportError, Exporter, export_tree
+from bt_cli.actor_index import ActorIndex
+from bt_cli.config import import_object, load_config
+from bt_cli.main import main
 from bt_engine.trees import STANDARD_BEHAVIOURS, TreeLibrary
 from bt_engine.trees._parse import parse_mission
 

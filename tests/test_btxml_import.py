@@ -9,7 +9,7 @@ from typing import Any
 import pytest
 
 from bt_engine import Runtime, SubSystem, actor
-from bt_engine.btxml import import_files, read_node_model, write_missions
+from bt_xml import import_files, read_node_model, write_missions
 from bt_engine.trees import STANDARD_BEHAVIOURS, TreeHost, TreeLibrary, check_files, read_mission
 
 DATA = Path(__file__).parent / "data" / "btxml"

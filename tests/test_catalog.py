@@ -9,8 +9,8 @@ import pytest
 
 from bt_engine import Runtime, SubSystem, actor, param_docs
 from bt_engine.catalog import catalog, doc_problems, text_lines, tool_schema, tool_schemas
-from bt_engine.cli.actor_index import INDEX_VERSION, ActorIndex
-from bt_engine.cli.config import import_object, load_config
+from bt_cli.actor_index import INDEX_VERSION, ActorIndex
+from bt_cli.config import import_object, load_config
 from bt_engine.trees import register_tree_folder
 
 

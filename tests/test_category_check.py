@@ -131,7 +131,7 @@ def test_category_check_by_hand(tmp_path):
                     f"CATEGORY = register(Category(name='cup_cli_test', shape=Revolution({CUP.sections!r}),\n"
                     "    mass=0.012, rgba=(0.1, 0.3, 0.9, 1.0), grasp=Grasp(height=0.05, lift=0.10)))\n")
     bad.write_text(good.read_text().replace("cup_cli_test", "low_cli_test").replace("height=0.05", "height=0.035"))
-    run = subprocess.run([sys.executable, "-m", "bt_engine.cli.main", "category", "check", str(good), str(bad)],
+    run = subprocess.run([sys.executable, "-m", "bt_cli.main", "category", "check", str(good), str(bad)],
                          capture_output=True, text=True, timeout=120)
     assert run.returncode == 1, run.stderr
     assert f"{good}: category 'cup_cli_test' can work on this robot" in run.stdout

@@ -9,11 +9,11 @@ import pathlib
 import pytest
 
 from bt_engine import Runtime
-from bt_engine.cli.config import ConfigError, load_config
-from bt_engine.cli.main import main
-from bt_engine.cli.shell import ActorShell
+from bt_cli.config import ConfigError, load_config
+from bt_cli.main import main
+from bt_cli.shell import ActorShell
 from bt_engine.literals import parse_args
-from bt_engine.ros.live_options import LiveOptions
+from bt_ros.live_options import LiveOptions
 
 REPO = pathlib.Path(__file__).resolve().parents[1]
 
@@ -160,7 +160,7 @@ def test_call_help_says_what_stream_does_to_other_actors(capsys):
 
 
 def test_ctrl_c_ends_a_stream_cleanly():
-    from bt_engine.cli.shell import INTERRUPTED, print_stream, stream_actor
+    from bt_cli.shell import INTERRUPTED, print_stream, stream_actor
 
     def values():
         yield 1
@@ -194,7 +194,7 @@ def test_ctrl_c_on_a_real_stream_exits_130(config):
     import subprocess
     import sys
     proc = subprocess.Popen(
-        [sys.executable, "-m", "bt_engine.cli.main", "--config", config, "call", "tutorial.count",
+        [sys.executable, "-m", "bt_cli.main", "--config", config, "call", "tutorial.count",
          "1000", "0.05", "--stream", "--clock", "wall"],
         cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
@@ -292,7 +292,7 @@ def test_check_still_fails_on_any_broken_file(project_with_a_broken_tree, capsys
 
 
 def test_demo_and_eval_build_their_runtime_from_actorbt_yaml(project_with_a_broken_tree, capsys):
-    from bt_engine.cli.config import load_config
+    from bt_cli.config import load_config
     from demo.episode import episode_app
     cfg = load_config(project_with_a_broken_tree)
     app = episode_app("open_floor", 3, config=cfg)

@@ -7,8 +7,8 @@ import pathlib
 
 import pytest
 
-from bt_engine.cli.config import load_config
-from bt_engine.cli.main import build_parser, main
+from bt_cli.config import load_config
+from bt_cli.main import build_parser, main
 
 REPO = pathlib.Path(__file__).resolve().parents[1]
 
@@ -66,7 +66,7 @@ def test_the_old_ros_flag_says_what_replaced_it(argv, capsys):
 
 
 def test_the_bus_flag_picks_the_transport(tmp_path):
-    from bt_engine.cli.app import App
+    from bt_cli.app import App
     cfg = tmp_path / "actorbt.yaml"
     cfg.write_text("transport: local\n")
     app = App(argparse.Namespace(bus="ros"), load_config(cfg))

@@ -17,9 +17,9 @@ from typing import Iterator
 import pytest
 
 from bt_engine import Runtime
-from bt_engine.cli.actor_index import ActorIndex
-from bt_engine.cli.app import App
-from bt_engine.cli.config import load_config
+from bt_cli.actor_index import ActorIndex
+from bt_cli.app import App
+from bt_cli.config import load_config
 from bt_engine.errors import AmbiguousActorError, UnknownActorError
 from bt_engine.trees import TreeLibrary, check_files
 
@@ -33,7 +33,7 @@ HEAVY = ("pybullet", "rclpy", "cv2", "matplotlib", "sensor_msgs", "geometry_msgs
 # Runs main() in a fresh interpreter and prints the modules it loaded as the last line.
 PROBE = textwrap.dedent("""
     import contextlib, io, json, sys
-    from bt_engine.cli.main import main
+    from bt_cli.main import main
     with contextlib.redirect_stdout(io.StringIO()):
         try:
             rc = main(sys.argv[1:])
@@ -71,7 +71,7 @@ def robot_project(tmp_path_factory: pytest.TempPathFactory) -> Path:
     (folder / "actorbt.yaml").write_text(json.dumps({
         "subsystems": cfg.subsystems, "trees": str(cfg.trees_dir()), "world": cfg.world,
         "simulator": cfg.simulator, "plugins": cfg.plugins}))
-    subprocess.run([sys.executable, "-m", "bt_engine.cli.main", "check"], cwd=folder, check=True,
+    subprocess.run([sys.executable, "-m", "bt_cli.main", "check"], cwd=folder, check=True,
                    capture_output=True, timeout=300)
     assert (folder / ".actorbt" / "actors.json").is_file()
     return folder
@@ -233,7 +233,7 @@ def test_index_is_rebuilt_when_its_sources_or_subsystems_change(project: Path) -
 # -- --config is read by argparse before the full parser exists --------------------------
 def test_plugins_come_from_the_config_option_in_either_spelling(tmp_path: Path,
                                                                 capsys: pytest.CaptureFixture) -> None:
-    from bt_engine.cli.main import main
+    from bt_cli.main import main
     cfg = tmp_path / "actorbt.yaml"
     cfg.write_text("subsystems: {}\ntrees: null\nplugins: [sim.cli]\n")
     for option in (["--config", str(cfg)], [f"--config={cfg}"]):
@@ -246,7 +246,7 @@ def test_plugins_come_from_the_config_option_in_either_spelling(tmp_path: Path,
 
 
 def test_a_missing_or_broken_config_is_one_line(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
-    from bt_engine.cli.main import main
+    from bt_cli.main import main
     assert main(["--config", str(tmp_path / "nope.yaml"), "list"]) == 2
     err = capsys.readouterr().err
     assert err == f"actorbt: error: cannot read {tmp_path / 'nope.yaml'}: No such file or directory\n"

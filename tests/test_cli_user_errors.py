@@ -11,7 +11,7 @@ import sys
 
 import pytest
 
-from bt_engine.cli.main import main
+from bt_cli.main import main
 
 REPO = pathlib.Path(__file__).resolve().parents[1]
 HOUSE = (REPO / "sim" / "worlds" / "house.yaml").read_text()
@@ -158,7 +158,7 @@ def test_a_recording_that_is_not_json(project, capsys):
 def test_a_user_file_error_is_one_line_from_the_command(project):
     world = a_world_with(project, "category: can", "category: juice")
     env = {**os.environ, "PYTHONPATH": str(REPO)}
-    done = subprocess.run([sys.executable, "-m", "bt_engine.cli.main", "--config", str(project / "actorbt.yaml"),
+    done = subprocess.run([sys.executable, "-m", "bt_cli.main", "--config", str(project / "actorbt.yaml"),
                            "call", "greet", "--world", str(world)], capture_output=True, text=True, env=env,
                           cwd=project, timeout=120)
     assert done.returncode == 2
@@ -169,7 +169,7 @@ def test_a_user_file_error_is_one_line_from_the_command(project):
 
 def test_a_reader_that_stops_early_is_no_error(project):
     env = {**os.environ, "PYTHONPATH": str(REPO)}
-    proc = subprocess.Popen([sys.executable, "-m", "bt_engine.cli.main", "--config", str(project / "actorbt.yaml"),
+    proc = subprocess.Popen([sys.executable, "-m", "bt_cli.main", "--config", str(project / "actorbt.yaml"),
                              "catalog", "--json"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env, cwd=project)
     proc.stdout.close()  # as `| head` does when it has read enough, here before any output
     err = proc.stderr.read().decode()

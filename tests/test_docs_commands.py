@@ -13,7 +13,7 @@ import sys
 
 import pytest
 
-from bt_engine.cli.main import _config, build_parser
+from bt_cli.main import _config, build_parser
 from tests.doc_blocks import DOCS, ROOT, blocks_of
 
 
@@ -79,6 +79,6 @@ QUICK = ("actorbt list", "actorbt check", "actorbt catalog --json", "actorbt cat
 @pytest.mark.parametrize("command", QUICK)
 def test_the_quick_documented_commands_run_as_written(command):
     assert any(c.startswith(command) for _, c in LINES), f"{command!r} is no longer documented"
-    run = subprocess.run([sys.executable, "-m", "bt_engine.cli.main", *shlex.split(command)[1:]],
+    run = subprocess.run([sys.executable, "-m", "bt_cli.main", *shlex.split(command)[1:]],
                          cwd=ROOT, capture_output=True, text=True, timeout=300)
     assert run.returncode == 0, run.stderr

@@ -14,14 +14,14 @@ from typing import Any
 import pytest
 
 from bt_engine import Runtime, SubSystem, actor
-from bt_engine.cli.main import main
-from bt_engine.cli.config import load_config
-from bt_engine.ros.bag import DEFAULT_TOPICS, BagTopic
-from bt_engine.ros.cdr import typestore
-from bt_engine.ros.foxglove_layout import layout_json
-from bt_engine.ros.foxglove_scene import Body, Detection, Goal, Scene, detections_in, goal_of
-from bt_engine.ros.foxglove_view import PATH_TOPIC, SCENE_TOPIC, FoxgloveView
-from bt_engine.ros.live_options import FoxgloveError, LiveOptions
+from bt_cli.main import main
+from bt_cli.config import load_config
+from bt_ros.bag import DEFAULT_TOPICS, BagTopic
+from bt_ros.cdr import typestore
+from bt_ros.foxglove_layout import layout_json
+from bt_ros.foxglove_scene import Body, Detection, Goal, Scene, detections_in, goal_of
+from bt_ros.foxglove_view import PATH_TOPIC, SCENE_TOPIC, FoxgloveView
+from bt_ros.live_options import FoxgloveError, LiveOptions
 from bt_engine.trees import TraceRecorder, TreeHost
 from tests.foxglove_client import FoxgloveClient
 
@@ -199,7 +199,7 @@ def test_without_a_body_the_scene_draws_no_robot():
 
 def test_the_shipped_layout_is_the_generated_one_and_names_the_served_topics():
     shipped = (REPO / "docs" / "foxglove_layout.json").read_text()
-    assert shipped == layout_json(), "regenerate: python -m bt_engine.ros.foxglove_layout docs/foxglove_layout.json"
+    assert shipped == layout_json(), "regenerate: python -m bt_ros.foxglove_layout docs/foxglove_layout.json"
     text = json.dumps(json.loads(shipped))
     served = set(ROS_CHANNELS) | {SCENE_TOPIC, PATH_TOPIC}
     for topic in ("/map", "/scan", SCENE_TOPIC, PATH_TOPIC, "/camera/color/image_raw/compressed",

@@ -77,7 +77,7 @@ def test_missing_walls_lower_recall(truth):
 
 
 def test_cli_map_score_json(truth, tmp_path, capsys):
-    from bt_engine.cli.main import main
+    from bt_cli.main import main
     _, yml = write_pgm_yaml(resample(truth, (1.0, 1.0, math.radians(90))), tmp_path / "built.pgm")
     assert main(["--config", str(ROOT / "actorbt.yaml"), "map", "score", str(yml), "--world", "house",
                  "--json"]) == 0

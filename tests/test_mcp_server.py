@@ -32,7 +32,7 @@ def project(tmp_path) -> pathlib.Path:
 
 
 def _command(project: pathlib.Path, *args: str) -> list[str]:
-    return ["-m", "bt_engine.cli.main", "--config", str(project / "actorbt.yaml"), *args]
+    return ["-m", "bt_cli.main", "--config", str(project / "actorbt.yaml"), *args]
 
 
 def _env(project: pathlib.Path) -> dict[str, str]:
@@ -224,7 +224,7 @@ def test_mission_tools_validate_show_and_run_drafts(project):
 def test_the_project_catalog_is_served_with_its_motion_marked():
     """The real actorbt.yaml, without a world: the robot's actors as tools, motion refused."""
     params = StdioServerParameters(command=sys.executable,
-                                   args=["-m", "bt_engine.cli.main", "mcp", "--world", "none"],
+                                   args=["-m", "bt_cli.main", "mcp", "--world", "none"],
                                    cwd=str(REPO), env={"ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"})
 
     async def main() -> Any:

@@ -9,11 +9,11 @@ import anyio
 import pytest
 
 from bt_engine import Runtime
-from bt_engine.cli.config import ConfigError
-from bt_engine.mcp.service import ToolService
-from bt_engine.mcp.settings import McpSettings
-from bt_engine.mcp.tools import input_schema, mcp_tool
-from bt_engine.mcp.validate import argument_errors, call_arguments
+from bt_cli.config import ConfigError
+from bt_mcp.service import ToolService
+from bt_mcp.settings import McpSettings
+from bt_mcp.tools import input_schema, mcp_tool
+from bt_mcp.validate import argument_errors, call_arguments
 from bt_engine.trees import register_tree_folder
 
 FIXTURE = pathlib.Path(__file__).resolve().parent / "fixtures" / "mcp"

@@ -1,4 +1,4 @@
-"""`actorbt pose init X Y YAW` (bt_engine/ros/pose_cli.py): one /initialpose over ROS, as
+"""`actorbt pose init X Y YAW` (bt_ros/pose_cli.py): one /initialpose over ROS, as
 RViz's "2D Pose Estimate" sends it, heard by a subscription in this test; no subscriber is
 exit status 1, the local bus exit status 2 with where to give the pose instead. Also the
 navigation's set_initial_pose actor, which gives it from a runtime on any bus."""
@@ -11,8 +11,8 @@ import threading
 
 import pytest
 
-from bt_engine.cli.main import main
-from bt_engine.ros.pose_cli import RVIZ_STD_XY, RVIZ_STD_YAW, initial_pose_msg
+from bt_cli.main import main
+from bt_ros.pose_cli import RVIZ_STD_XY, RVIZ_STD_YAW, initial_pose_msg
 
 #: a ROS domain of its own (test_ros_common takes 1..100, test_ros_cli 101..200,
 #: test_topic_cli 201..230)
@@ -70,7 +70,7 @@ def test_over_ros_a_subscriber_gets_the_pose_and_covariance(tmp_path, capsys, ro
     from geometry_msgs.msg import PoseWithCovarianceStamped
     from rclpy.qos import QoSProfile
 
-    from bt_engine.ros.host import RosHost
+    from bt_ros.host import RosHost
     heard: list = []
     arrived = threading.Event()
 

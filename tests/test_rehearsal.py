@@ -23,7 +23,7 @@ from pathlib import Path
 import pytest
 
 REPO = Path(__file__).resolve().parents[1]
-ACTORBT = [sys.executable, "-m", "bt_engine.cli.main"]
+ACTORBT = [sys.executable, "-m", "bt_cli.main"]
 #: a ROS domain of its own (see test_pose_cli for the others)
 DOMAIN = "0"
 ENV = dict(os.environ, ROS_DOMAIN_ID=DOMAIN, ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST",

@@ -1,4 +1,4 @@
-"""Actions served from the hub over ROS 2 (bt_engine.ros.action_server): one runtime
+"""Actions served from the hub over ROS 2 (bt_ros.action_server): one runtime
 serves, another is the client, over real DDS on loopback. The same server code as on
 the local bus (tests/test_bus_actions.py)."""
 from __future__ import annotations
@@ -10,7 +10,7 @@ from actorbt_interfaces.action import CallActor  # noqa: E402
 
 from bt_engine import ActorError, Runtime, SubSystem  # noqa: E402
 from bt_engine.bus.actions import ActionGoalError  # noqa: E402
-from bt_engine.ros.transport import RosTransport  # noqa: E402
+from bt_ros.transport import RosTransport  # noqa: E402
 from tests.test_bus_actions import Echo  # noqa: E402
 from tests.test_ros_common import wait_until  # noqa: E402
 

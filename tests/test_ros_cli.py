@@ -16,14 +16,14 @@ import pytest
 pytest.importorskip("rclpy")
 
 from bt_engine import Runtime  # noqa: E402
-from bt_engine.ros import host as ros_host  # noqa: E402
-from bt_engine.ros.goal_server import one_line, seconds  # noqa: E402
-from bt_engine.ros.names import tree_action_name, tree_of_action  # noqa: E402
-from bt_engine.ros.remote import NoServeError, Remote, UnknownTreeError, close_matches  # noqa: E402
-from bt_engine.ros.server import serve  # noqa: E402
-from bt_engine.ros.shell import RemoteShell  # noqa: E402
-from bt_engine.ros.transport import RosTransport  # noqa: E402
-from bt_engine.ros.yamlio import flow  # noqa: E402
+from bt_ros import host as ros_host  # noqa: E402
+from bt_ros.goal_server import one_line, seconds  # noqa: E402
+from bt_ros.names import tree_action_name, tree_of_action  # noqa: E402
+from bt_ros.remote import NoServeError, Remote, UnknownTreeError, close_matches  # noqa: E402
+from bt_ros.server import serve  # noqa: E402
+from bt_ros.shell import RemoteShell  # noqa: E402
+from bt_ros.transport import RosTransport  # noqa: E402
+from bt_ros.yamlio import flow  # noqa: E402
 from tests.test_ros_common import ROOT, Work, wait_until, write_trees  # noqa: E402
 
 GID = r"[0-9a-f]{8}"
@@ -212,7 +212,7 @@ LONELY = dict(os.environ, ROS_DOMAIN_ID=str(101 + os.getpid() % 100), PYTHONUNBU
                                   ["rcall", "get_pose", "--wait", "1"],
                                   ["rshell", "--wait", "1"]])
 def test_with_no_serve_the_clients_say_how_to_start_one(argv):
-    proc = subprocess.run([sys.executable, "-m", "bt_engine.cli.main", *argv], cwd=ROOT,
+    proc = subprocess.run([sys.executable, "-m", "bt_cli.main", *argv], cwd=ROOT,
                           env=LONELY, input="", capture_output=True, text=True, timeout=60)
     assert proc.returncode == 2, proc.stdout + proc.stderr
     assert "no actorbt serve found within 1 s; start one with `actorbt serve`" in proc.stderr
@@ -220,7 +220,7 @@ def test_with_no_serve_the_clients_say_how_to_start_one(argv):
 
 def test_sim_run_tells_its_start_up_and_loads_no_actors():
     # -X importtime lists every module imported on stderr
-    proc = subprocess.run([sys.executable, "-X", "importtime", "-m", "bt_engine.cli.main", "sim",
+    proc = subprocess.run([sys.executable, "-X", "importtime", "-m", "bt_cli.main", "sim",
                            "run", "--world", "house", "--bus", "ros", "--seconds", "0.5"],
                           cwd=ROOT, env=LONELY, capture_output=True, text=True, timeout=120)
     assert proc.returncode == 0, proc.stdout + proc.stderr

@@ -162,7 +162,7 @@ SUBPROCESS_ENV = dict(os.environ, ROS_AUTOMATIC_DISCOVERY_RANGE=os.environ.get(
 
 def actorbt(*args: str, **kw) -> subprocess.Popen:
     """``actorbt ARGS`` in a subprocess, stdout and stderr merged into one text pipe."""
-    return subprocess.Popen([sys.executable, "-m", "bt_engine.cli.main", *args], cwd=ROOT,
+    return subprocess.Popen([sys.executable, "-m", "bt_cli.main", *args], cwd=ROOT,
                             env=SUBPROCESS_ENV, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
                             text=True, **kw)
 

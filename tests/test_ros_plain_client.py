@@ -174,7 +174,7 @@ def test_the_documented_client_runs(robots, tmp_path):
 
 def test_the_goal_command_takes_a_namespace(robots):
     one, two = robots
-    proc = subprocess.run([sys.executable, "-m", "bt_engine.cli.main", "--config", str(two.cfg),
+    proc = subprocess.run([sys.executable, "-m", "bt_cli.main", "--config", str(two.cfg),
                            "goal", "steps_tree", "--namespace", "robot2", "--args",
                            "{steps: 2, period: 0.01}"], cwd=ROOT, env=ENV, capture_output=True,
                           text=True, timeout=60)
@@ -185,7 +185,7 @@ def test_the_goal_command_takes_a_namespace(robots):
 
 def test_bad_ros_args_are_told(tmp_path):
     cfg = write_config(tmp_path)
-    proc = subprocess.run([sys.executable, "-m", "bt_engine.cli.main", "--config", str(cfg),
+    proc = subprocess.run([sys.executable, "-m", "bt_cli.main", "--config", str(cfg),
                            "serve", "--no-record", "--ros-args", "-r", "nonsense"], cwd=ROOT,
                           env=ENV, capture_output=True, text=True, timeout=60)
     assert proc.returncode == 2, proc.stdout + proc.stderr

@@ -18,8 +18,8 @@ pytest.importorskip("rclpy")
 from actorbt_interfaces.action import CallActor, RunTree  # noqa: E402
 
 from bt_engine import ActorError, Runtime  # noqa: E402
-from bt_engine.ros.remote import Remote  # noqa: E402
-from bt_engine.ros.transport import RosTransport  # noqa: E402
+from bt_ros.remote import Remote  # noqa: E402
+from bt_ros.transport import RosTransport  # noqa: E402
 from tests.test_ros_common import (ROOT, SUBPROCESS_ENV, ServeProcess, actorbt, shm_leaks,  # noqa: E402
                                    shm_mapped, wait_until)
 
@@ -157,7 +157,7 @@ def test_rcall_of_an_unknown_actor_lists_close_matches(server):
 def test_rshell_runs_calls_from_piped_lines(server):
     lines = "\n".join(["work.echo 1 k='v'", "work.boom", "help work.echo", "no_such_actor",
                        "trees", "work.echo [2,3]", ""])
-    proc = subprocess.run([sys.executable, "-m", "bt_engine.cli.main", "--config", str(server.cfg),
+    proc = subprocess.run([sys.executable, "-m", "bt_cli.main", "--config", str(server.cfg),
                            "rshell"], cwd=ROOT, env=ENV, input=lines, capture_output=True,
                           text=True, timeout=60)
     assert proc.returncode == 0, proc.stdout + proc.stderr

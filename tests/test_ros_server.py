@@ -14,13 +14,13 @@ pytest.importorskip("rclpy")
 from actorbt_interfaces.action import CallActor, RunTree  # noqa: E402
 
 from bt_engine import Runtime  # noqa: E402
-from bt_engine.ros.client import GoalRejectedError  # noqa: E402
-from bt_engine.ros.goals import GoalError, parse_call_args, parse_inputs  # noqa: E402
-from bt_engine.ros.names import tree_action_name  # noqa: E402
-from bt_engine.ros.remote import Remote, RemoteCallError  # noqa: E402
-from bt_engine.ros.server import Server, serve  # noqa: E402
-from bt_engine.ros.transport import RosTransport  # noqa: E402
-from bt_engine.ros.yamlio import dump  # noqa: E402
+from bt_ros.client import GoalRejectedError  # noqa: E402
+from bt_ros.goals import GoalError, parse_call_args, parse_inputs  # noqa: E402
+from bt_ros.names import tree_action_name  # noqa: E402
+from bt_ros.remote import Remote, RemoteCallError  # noqa: E402
+from bt_ros.server import Server, serve  # noqa: E402
+from bt_ros.transport import RosTransport  # noqa: E402
+from bt_ros.yamlio import dump  # noqa: E402
 from tests.test_ros_common import Work, wait_until, write_trees  # noqa: E402
 
 
@@ -103,7 +103,7 @@ def test_mission_goal_reports_ticks_and_is_recorded(served):
 def test_a_goal_trace_replays(served, capsys):
     """`actorbt replay` of the trace serve wrote for a goal (wall clock, the recorder opened
     before the run starts), while another caller runs the same tree in the same runtime."""
-    from bt_engine.cli.main import main
+    from bt_cli.main import main
     rt, server, remote, tmp = served
     before = set((tmp / "goals").glob("*steps_tree*.jsonl"))
     other = threading.Event()

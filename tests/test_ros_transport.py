@@ -16,10 +16,10 @@ from std_srvs.srv import SetBool  # noqa: E402
 
 from bt_engine import ActorError, Kind, Runtime, SubSystem  # noqa: E402
 from bt_engine.bus.qos import QosError, qos_depth  # noqa: E402
-from bt_engine.ros.host import RosHost  # noqa: E402
-from bt_engine.ros.qos import qos_profile  # noqa: E402
-from bt_engine.ros.server import serve  # noqa: E402
-from bt_engine.ros.transport import RosTransport  # noqa: E402
+from bt_ros.host import RosHost  # noqa: E402
+from bt_ros.qos import qos_profile  # noqa: E402
+from bt_ros.server import serve  # noqa: E402
+from bt_ros.transport import RosTransport  # noqa: E402
 from tests.test_ros_common import (Work, os_threads, python_threads, shm_leaks,  # noqa: E402
                                    shm_mapped, wait_until)
 
@@ -219,7 +219,7 @@ def test_a_goal_whose_server_dies_fails_instead_of_waiting_for_ever():
     from rclpy.action import ActionServer
     from rclpy.executors import SingleThreadedExecutor
 
-    from bt_engine.ros.client import LOST_GRACE
+    from bt_ros.client import LOST_GRACE
 
     ctx = rclpy.Context()
     rclpy.init(context=ctx)

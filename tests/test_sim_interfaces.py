@@ -7,7 +7,7 @@ import pathlib
 
 import pytest
 
-from bt_engine.cli.main import main
+from bt_cli.main import main
 
 REPO = pathlib.Path(__file__).resolve().parents[1]
 
@@ -93,7 +93,7 @@ def test_the_list_is_read_from_the_bus(capsys, monkeypatch):
 def test_the_real_robots_configuration_differs_only_where_it_must():
     """docs/real-robot.md: actorbt.real.yaml is actorbt.yaml without the simulator and the
     navstack (Nav2 and AMCL stand in), on ROS and the wall clock."""
-    from bt_engine.cli.config import load_config
+    from bt_cli.config import load_config
     sim, real = load_config(REPO / "actorbt.yaml"), load_config(REPO / "actorbt.real.yaml")
     assert real.world is None and real.simulator is None
     assert real.transport == "ros" and real.clock == "wall"

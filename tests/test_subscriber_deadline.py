@@ -269,7 +269,7 @@ def test_a_local_action_without_a_server_fails_at_once_naming_it(rt):
 
 # -- the actorbt command ---------------------------------------------------------------------
 def test_actorbt_call_of_a_silent_topic_ends_with_the_reason(capsys):
-    from bt_engine.cli.main import main
+    from bt_cli.main import main
     config = str(REPO / "actorbt.yaml")
     t0 = time.monotonic()
     rc = main(["--config", config, "call", "robot.navigation.odom", "--world", "none"])
@@ -288,7 +288,7 @@ def test_actorbt_call_of_a_silent_topic_ends_with_the_reason(capsys):
 # -- over ROS 2 ------------------------------------------------------------------------------
 def test_ros_subscriber_waits_in_wall_time_under_the_virtual_clock():
     pytest.importorskip("rclpy")
-    from bt_engine.ros.transport import RosTransport
+    from bt_ros.transport import RosTransport
 
     class RosEar(SubSystem):
         def __init__(self):

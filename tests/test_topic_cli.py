@@ -1,5 +1,5 @@
 """`actorbt topic list | echo | hz` (issue [senses]) and `actorbt action list` beside it
-(bt_engine/cli/action.py): on the local bus in this process, where the virtual clock runs
+(bt_cli/action.py): on the local bus in this process, where the virtual clock runs
 the simulated world fast and times are sim time, and over ROS against an `actorbt sim run
 --bus ros` in another process. Also what they stand on: the bus's topic listing and the
 message converter."""
@@ -22,8 +22,8 @@ import yaml
 
 from bt_engine import Runtime
 from bt_engine.bus.messages import UnknownTypeError, message_class, to_plain, type_name
-from bt_engine.cli.main import main
-from bt_engine.cli.topic import Rate, format_yaml, unknown_topic_message
+from bt_cli.main import main
+from bt_cli.topic import Rate, format_yaml, unknown_topic_message
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
@@ -256,7 +256,7 @@ def test_action_list_shows_the_robots_actions_with_types(capsys):
 
 
 def test_ctrl_c_exits_130_cleanly(world_config):
-    proc = subprocess.Popen([sys.executable, "-m", "bt_engine.cli.main", "--config", world_config,
+    proc = subprocess.Popen([sys.executable, "-m", "bt_cli.main", "--config", world_config,
                              "topic", "hz", "/scan"], cwd=ROOT, stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True)
     try:
@@ -281,14 +281,14 @@ ROS_ENV = dict(os.environ, ROS_DOMAIN_ID=str(201 + os.getpid() % 30), PYTHONUNBU
 
 
 def actorbt(*argv: str, timeout: float = 120) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "bt_engine.cli.main", *argv], cwd=ROOT,
+    return subprocess.run([sys.executable, "-m", "bt_cli.main", *argv], cwd=ROOT,
                           env=ROS_ENV, capture_output=True, text=True, timeout=timeout)
 
 
 @pytest.fixture(scope="module")
 def sim_over_ros():
     pytest.importorskip("rclpy")
-    proc = subprocess.Popen([sys.executable, "-m", "bt_engine.cli.main", "sim", "run", "--world",
+    proc = subprocess.Popen([sys.executable, "-m", "bt_cli.main", "sim", "run", "--world",
                              "house", "--bus", "ros", "--seconds", "300"], cwd=ROOT, env=ROS_ENV,
                             stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
     ready = threading.Event()

@@ -355,7 +355,7 @@ def nasty(tmp_path: Path) -> tuple[str, list[str]]:
 
 
 def test_actorbt_check_prints_one_line_per_nasty_file(nasty: tuple[str, list[str]], capsys) -> None:
-    from bt_engine.cli.main import main
+    from bt_cli.main import main
 
     config, files = nasty
     # check reports mission errors itself (exit status 1), one line each
@@ -371,7 +371,7 @@ def test_actorbt_check_prints_one_line_per_nasty_file(nasty: tuple[str, list[str
 @pytest.mark.parametrize("name", ["control.yaml", "huge_int.yaml", "deep_parens.yaml", "deep_yaml.yaml",
                                   "laughs.yaml", "bad_date.yaml", "keyword_input.yaml"])
 def test_actorbt_show_fails_with_one_line_and_status_2(nasty: tuple[str, list[str]], name: str, capsys) -> None:
-    from bt_engine.cli.main import main
+    from bt_cli.main import main
 
     config, files = nasty
     path = next(f for f in files if f.endswith(name))

@@ -14,8 +14,8 @@ import pytest
 
 from bt_engine import ActorError, Runtime, SubSystem, actor
 from bt_engine.trees import TreeHost
-from bt_engine.trees._plot import plot_trace
-from bt_engine.trees._replay import ReplayError, read_trace, replay
+from bt_tools.plot import plot_trace
+from bt_tools.replay import ReplayError, read_trace, replay
 from bt_engine.trees._trace import TraceRecorder, to_json
 from bt_engine.trees.testing import ScriptedActors
 
@@ -280,7 +280,7 @@ def nap_folder(tmp_path: Path) -> Path:
 @pytest.mark.parametrize("clock", ["virtual", "wall"])
 def test_actorbt_run_record_replays(nap_folder: Path, tmp_path: Path, clock: str,
                                     monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture) -> None:
-    from bt_engine.cli.main import main
+    from bt_cli.main import main
     config = tmp_path / "actorbt.yaml"
     config.write_text("subsystems: {script: bt_engine.trees.testing:ScriptedActors}\n"
                       "trees: trees\nworld: null\n")

@@ -8,7 +8,7 @@ in-process bus.
     messages    ROS type names, and messages as plain data for people (``topic echo``)
 
 Layering: ``bus`` imports only ``bt_engine.errors`` and knows nothing of ROS. The
-rclpy transport, :class:`bt_engine.ros.transport.RosTransport`, lives in the ``ros``
+rclpy transport, :class:`bt_ros.transport.RosTransport`, lives in the ``ros``
 package, which sits above this one.
 """
 from .local import LocalBus

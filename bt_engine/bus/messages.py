@@ -12,7 +12,7 @@ booleans and bytes out (``arrays=False``: ``'<sequence<float>, length: 360>'``).
 of messages and of strings stay (their items' own numeric arrays left out): they are what
 a reader looks for, the frames of /tf_static's ``transforms``, a JointState's names.
 ``ros2 topic echo --no-arr`` leaves every array out, those too. Values that must survive whole
-(an actor's result sent over ROS) go through :func:`bt_engine.ros.yamlio.to_plain`.
+(an actor's result sent over ROS) go through :func:`bt_ros.yamlio.to_plain`.
 """
 from __future__ import annotations
 

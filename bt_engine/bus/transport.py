@@ -1,7 +1,7 @@
 """The transport interface behind SubSystem edges. Messages are real ROS 2 classes.
 
 ``local`` (:mod:`bt_engine.bus.local`, in-process, delivered on the hub) is the embedded
-default; :mod:`bt_engine.ros.transport` implements the same interface over rclpy.
+default; :mod:`bt_ros.transport` implements the same interface over rclpy.
 ``qos`` is a depth or a name of :mod:`bt_engine.bus.qos`.
 """
 from __future__ import annotations

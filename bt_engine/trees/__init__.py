@@ -16,19 +16,17 @@ a resolver (``rt.root.resolve``) handed to it. Inside the package::
     _controls  control nodes for BehaviorTree.CPP and Nav2 trees (pipeline, recovery...)
     _run       one run: build, event-driven tick loop, halt, observers
     _host      trees as actors of a runtime (register_tree_folder)
-    _progress  live progress printing and --arg parsing for the CLI
     _trace     JSON Lines trace recording (TraceRecorder, also rt.recorder)
-    _replay    headless replay of a trace, first divergence
-    _plot      timeline picture of a trace (matplotlib)
-    _show      ASCII and Graphviz pictures of a mission
-    cli        the actorbt commands run, check, show, replay, plot
     testing    fake resolver, scripted actors, manual clock for tests
 
 Everything other packages use is imported from here (``__all__``), never from a
-``_module``: the front-ends (``btxml``, ``mcp``, ``cli``, ``ros``) build on the mission
-model, the check: language's syntax tree, the trace events and the safety of a mission.
+``_module``: the front-ends beside the engine (``bt_tools``, ``bt_xml``, ``bt_mcp``,
+``bt_cli``, ``bt_ros``) build on the mission model, the check: language's syntax tree, the
+trace events and the safety of a mission. Replaying, drawing and plotting a mission or its
+trace, and the tree commands, are ``bt_tools``.
 """
 
+from ._behaviours import ActorLeaf
 from ._errors import (
     ArgumentMismatchError,
     CheckEvaluationError,
@@ -95,20 +93,19 @@ from ._model import (
     walk,
 )
 from ._parse import NODE_TYPES, parse_mission, read_mission, suggest
-from ._plot import plot_trace
-from ._progress import ProgressPrinter, parse_inputs
-from ._replay import Divergence, ReplayError, ReplayReport, locate_trees, read_trace, replay
 from ._run import TreeObserver, TreeRun, node_path
 from ._safety import mission_safety
-from ._show import RenderError, ascii_tree, dot_tree, render
-from ._trace import EventBuilder, TraceRecorder, to_json
+from ._trace import TRACE_FORMAT, TRACE_VERSION, EventBuilder, TraceRecorder, to_json
 from ._validate import ActorInfo, Resolver, annotation_text, annotation_type, validate_mission
 
 __all__ = [
     "NODE_TYPES",
+    "TRACE_FORMAT",
+    "TRACE_VERSION",
     "REQUIRED",
     "STANDARD_BEHAVIOURS",
     "ActorInfo",
+    "ActorLeaf",
     "And",
     "ArgumentMismatchError",
     "BehaviourFactory",
@@ -120,7 +117,6 @@ __all__ = [
     "Composite",
     "Condition",
     "Decorator",
-    "Divergence",
     "Do",
     "DuplicateKeyError",
     "DuplicateTreeError",
@@ -149,16 +145,12 @@ __all__ = [
     "ParallelPolicy",
     "PipelineSequence",
     "Pos",
-    "ProgressPrinter",
     "RateController",
     "ReactiveSelector",
     "ReactiveSequence",
     "Recovery",
     "Ref",
-    "RenderError",
     "Repeat",
-    "ReplayError",
-    "ReplayReport",
     "Resolver",
     "ResumeSequence",
     "Retry",
@@ -188,25 +180,17 @@ __all__ = [
     "WhileDoElse",
     "annotation_text",
     "annotation_type",
-    "ascii_tree",
     "check_files",
     "children_of",
-    "dot_tree",
     "evaluate",
     "keys_of",
     "load_mission",
-    "locate_trees",
     "mission_safety",
     "node_path",
     "parse_expression",
-    "parse_inputs",
     "parse_mission",
-    "plot_trace",
     "read_mission",
-    "read_trace",
     "register_tree_folder",
-    "render",
-    "replay",
     "resolve_value",
     "suggest",
     "to_json",
