@@ -19,12 +19,16 @@ from __future__ import annotations
 import argparse
 import json
 import time
-from typing import Any, Callable
+from typing import TYPE_CHECKING, Callable
 
 from .topic import Bus, _run
 
+if TYPE_CHECKING:
+    from bt_engine.bus.transport import EndpointInfo
+    from .app import App
 
-def register(sub: Any, common: Callable[[argparse.ArgumentParser], None]) -> None:
+
+def register(sub: argparse._SubParsersAction, common: Callable[[argparse.ArgumentParser], None]) -> None:
     p = sub.add_parser(
         "action", help="the robot's actions: list (like ros2 action)",
         description="Look at the robot's actions as `ros2 action` does. On the local bus they "
@@ -49,7 +53,7 @@ def register(sub: Any, common: Callable[[argparse.ArgumentParser], None]) -> Non
     q.set_defaults(func=cmd_list)
 
 
-def actions(bus: Bus, wait: float) -> list[Any]:
+def actions(bus: Bus, wait: float) -> list[EndpointInfo]:
     """The bus's actions; over ROS after ``wait`` seconds of discovery (participants
     announce themselves over time, so a graph read at once is incomplete)."""
     if not bus.ros:
@@ -58,7 +62,7 @@ def actions(bus: Bus, wait: float) -> list[Any]:
     return bus.rt.bus.actions()
 
 
-def cmd_list(args: argparse.Namespace, app: Any) -> int:
+def cmd_list(args: argparse.Namespace, app: App) -> int:
     def body(bus: Bus) -> int:
         found = actions(bus, args.wait)
         if args.json:

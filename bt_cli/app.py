@@ -11,11 +11,15 @@ import logging
 import os
 import sys
 from pathlib import Path
-from typing import Any, Callable, Iterator
+from typing import TYPE_CHECKING, Any, Callable, Iterator
 
 from bt_engine.runtime import Runtime
 from .actor_index import ActorEntry, ActorIndex, loaded_sources
 from .config import Config, ConfigError, import_object, load_config, run_imports
+
+if TYPE_CHECKING:
+    from bt_engine.bus import Transport
+    from bt_engine.trees import TreeLibrary
 
 log = logging.getLogger("actorbt.cli")
 
@@ -75,7 +79,7 @@ class App:
             raise
         return rt
 
-    def _transport(self) -> Any:
+    def _transport(self) -> Callable[[Runtime], Transport] | None:
         kind = getattr(self.args, "bus", None) or self.cfg.transport
         if kind == "local":
             return None
@@ -149,7 +153,7 @@ class App:
         host = register_tree_folder(rt, folder, strict=False)
         self.warn_skipped(host.library, folder)
 
-    def warn_skipped(self, library: Any, folder: Path) -> None:
+    def warn_skipped(self, library: TreeLibrary, folder: Path) -> None:
         """One line on stderr per skipped tree file, once per invocation."""
         for error in sorted(library.broken.values(), key=lambda e: (e.pos.file, e.pos.line, e.pos.column)):
             text = _relative(str(error), folder)

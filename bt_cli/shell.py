@@ -96,7 +96,7 @@ class ActorShell(ShellBase):
     stream_options = ["--count", "--json", "--timeout"]
     prompt = "actorbt> "
 
-    def __init__(self, rt: Runtime, stdin: Any = None, stdout: Any = None) -> None:
+    def __init__(self, rt: Runtime, stdin: IO[str] | None = None, stdout: IO[str] | None = None) -> None:
         super().__init__(stdin=stdin, stdout=stdout)
         if stdin is not None:
             self.use_rawinput = False

@@ -34,9 +34,15 @@ import signal
 import sys
 import threading
 import time
-from typing import Any, Callable, Iterable
+from types import FrameType
+from typing import TYPE_CHECKING, Any, Callable, Iterable, cast
 
 from bt_engine.errors import ActorbtError
+
+if TYPE_CHECKING:
+    from bt_engine.bus.transport import TopicInfo
+    from bt_ros.transport import RosTransport
+    from .app import App
 
 #: exit status of a command ended with Ctrl-C
 INTERRUPTED = 130
@@ -52,7 +58,7 @@ class UnknownTopicError(ActorbtError, LookupError):
     """No topic of that name on the bus."""
 
 
-def register(sub: Any, common: Callable[[argparse.ArgumentParser], None]) -> None:
+def register(sub: argparse._SubParsersAction, common: Callable[[argparse.ArgumentParser], None]) -> None:
     p = sub.add_parser(
         "topic", help="the robot's topics: list, echo, hz (like ros2 topic)",
         description="Look at the robot's topics as `ros2 topic` does: list them, print their "
@@ -140,7 +146,7 @@ def _positive_int(text: str) -> int:
 class Bus:
     """The runtime whose bus the command looks at, and how to close it."""
 
-    def __init__(self, args: argparse.Namespace, app: Any) -> None:
+    def __init__(self, args: argparse.Namespace, app: App) -> None:
         kind = getattr(args, "bus", None) or app.cfg.transport
         self.ros = kind == "ros"
         world = getattr(args, "world", None)
@@ -164,7 +170,7 @@ class Bus:
         clock = "sim time: the virtual clock" if self.virtual else "wall time"
         return f"{'ROS' if self.ros else 'local'} bus, {clock}"
 
-    def topics(self, wait: float = 0.0, until: Callable[[list[Any]], bool] | None = None) -> list[Any]:
+    def topics(self, wait: float = 0.0, until: Callable[[list[TopicInfo]], bool] | None = None) -> list[TopicInfo]:
         """The bus's topics; over ROS after ``wait`` seconds of discovery (or as soon as
         ``until(topics)`` holds)."""
         if not self.ros:
@@ -184,7 +190,7 @@ def topic_name(text: str) -> str:
     return text if text.startswith("/") else "/" + text
 
 
-def find_topic(topics: list[Any], name: str) -> Any:
+def find_topic(topics: list[TopicInfo], name: str) -> TopicInfo:
     """The topic ``name`` of ``topics``; else UnknownTopicError with close matches."""
     for t in topics:
         if t.name == name:
@@ -269,7 +275,7 @@ def _subscribe(bus: Bus, args: argparse.Namespace, what: str, *, keep: bool) -> 
         raise UnknownTopicError(f"{e} (on the ROS graph after {args.wait:g} s of discovery: "
                                 f"ROS_DOMAIN_ID {domain}, discovery range {scope})") from None
     msg_type = message_class(info.type.split(",")[0].strip())
-    qos = bus.rt.bus.matching_qos(name) if bus.ros else 10
+    qos = cast("RosTransport", bus.rt.bus).matching_qos(name) if bus.ros else 10
     print(f"actorbt topic {what}: {name} [{info.type}] ({bus.where})", file=sys.stderr, flush=True)
     if not info.publishers:
         print(f"actorbt topic {what}: nothing publishes {name} yet; waiting (Ctrl-C stops)",
@@ -277,7 +283,7 @@ def _subscribe(bus: Bus, args: argparse.Namespace, what: str, *, keep: bool) -> 
     return Tap(bus, name, msg_type, qos, keep=keep)
 
 
-def _run(args: argparse.Namespace, app: Any, body: Callable[[Bus], int]) -> int:
+def _run(args: argparse.Namespace, app: App, body: Callable[[Bus], int]) -> int:
     """Build the bus, run ``body``, close everything; Ctrl-C (or SIGTERM) is exit status
     130, after a clean close (a ROS node leaves no shared memory behind)."""
     main = threading.current_thread() is threading.main_thread()
@@ -302,12 +308,12 @@ def _run(args: argparse.Namespace, app: Any, body: Callable[[Bus], int]) -> int:
                 signal.signal(signal.SIGTERM, previous)
 
 
-def _interrupt(signum: int, frame: Any) -> None:
+def _interrupt(signum: int, frame: FrameType | None) -> None:
     raise KeyboardInterrupt
 
 
 # -- list --------------------------------------------------------------------------------
-def cmd_list(args: argparse.Namespace, app: Any) -> int:
+def cmd_list(args: argparse.Namespace, app: App) -> int:
     def body(bus: Bus) -> int:
         topics = bus.topics(args.wait)
         if args.json:
@@ -320,7 +326,7 @@ def cmd_list(args: argparse.Namespace, app: Any) -> int:
 
 
 # -- echo --------------------------------------------------------------------------------
-def cmd_echo(args: argparse.Namespace, app: Any) -> int:
+def cmd_echo(args: argparse.Namespace, app: App) -> int:
     from bt_engine.bus.messages import to_plain
     count = 1 if args.once else args.count
     truncate = None if args.full else args.truncate
@@ -368,7 +374,7 @@ def format_yaml(data: Any) -> str:
     class Dumper(yaml.SafeDumper):
         pass
 
-    def represent_list(dumper: yaml.SafeDumper, items: list) -> Any:
+    def represent_list(dumper: yaml.SafeDumper, items: list) -> yaml.SequenceNode:
         flat = all(not isinstance(v, (dict, list)) for v in items)
         return dumper.represent_sequence("tag:yaml.org,2002:seq", items, flow_style=flat)
     Dumper.add_representer(list, represent_list)
@@ -403,7 +409,7 @@ class Rate:
                 f"window: {self.window}")
 
 
-def cmd_hz(args: argparse.Namespace, app: Any) -> int:
+def cmd_hz(args: argparse.Namespace, app: App) -> int:
     def body(bus: Bus) -> int:
         tap = _subscribe(bus, args, "hz", keep=False)
         rt = bus.rt

@@ -21,7 +21,7 @@ if TYPE_CHECKING:
     from .actor import ActorRef
     from .subsystem import SubSystem
 
-_JSON_TYPES: dict[Any, str] = {int: "integer", float: "number", str: "string", bool: "boolean",
+_JSON_TYPES: dict[type, str] = {int: "integer", float: "number", str: "string", bool: "boolean",
                                list: "array", tuple: "array", dict: "object", type(None): "null"}
 
 

@@ -21,6 +21,7 @@ import threading
 from typing import Any, Callable
 
 from .errors import ActorbtError
+from .modes import Mode
 from .runtime import Runtime, current_runtime
 from .subsystem import SubSystem
 from .transaction import Transaction
@@ -85,7 +86,7 @@ def run_actor(name: str, /, *args: Any, **kwargs: Any) -> Any:
     return _here().run_actor(name, *args, **kwargs)
 
 
-def run_actor_mode(name: str, mode: Any, /, *args: Any, **kwargs: Any) -> Any:
+def run_actor_mode(name: str, mode: "str | Mode", /, *args: Any, **kwargs: Any) -> Any:
     """Call actor ``name`` in ``mode`` (see :meth:`Runtime.run_actor_mode`)."""
     return _here().run_actor_mode(name, mode, *args, **kwargs)
 

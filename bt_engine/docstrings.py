@@ -172,7 +172,7 @@ def attach(fn: F, params: Mapping[str, str] | None = None,
     return fn
 
 
-def explicit(fn: Any) -> tuple[dict[str, str], str | Mapping[str, Any] | None]:
+def explicit(fn: Callable[..., Any]) -> tuple[dict[str, str], str | Mapping[str, Any] | None]:
     """What :func:`param_docs` / :func:`attach` put on ``fn`` (a bound method reads its
     function's): the parameter docs and the result description."""
     params = getattr(fn, PARAMS_ATTR, None)

@@ -6,6 +6,7 @@
 from __future__ import annotations
 
 import difflib
+import inspect
 from typing import Any, Iterable
 
 
@@ -42,7 +43,7 @@ class AmbiguousActorError(ActorbtError, LookupError):
 class BadArgumentsError(ActorbtError, TypeError):
     """The arguments do not fit the actor's signature."""
 
-    def __init__(self, path: str, signature: Any, reason: str) -> None:
+    def __init__(self, path: str, signature: inspect.Signature, reason: str) -> None:
         self.path = path
         self.signature = signature
         super().__init__(f"bad arguments for actor {path}{signature}: {reason}")

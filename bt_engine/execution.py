@@ -177,7 +177,7 @@ def start_stream_impl(ref: ActorRef, txn: Transaction, args: tuple, kwargs: dict
     _call_impl(ref, txn, Emitter(txn.table.hub, push, end), args, kwargs)
 
 
-def _call_impl(ref: ActorRef, txn: Transaction, handle: Any, args: tuple, kwargs: dict) -> None:
+def _call_impl(ref: ActorRef, txn: Transaction, handle: Done | Emitter, args: tuple, kwargs: dict) -> None:
     """Call an async or stream implementation with its ``done``/``emit`` handle and keep
     the closer it returns (or call it at once if the work already finished)."""
     hub = txn.table.hub

@@ -1,9 +1,12 @@
 """A level-triggered flag that actors can wait on (used by the tree tick loop)."""
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING
 
 from .hub import Waiter
+
+if TYPE_CHECKING:
+    from .runtime import Runtime
 
 
 class Signal:
@@ -15,7 +18,7 @@ class Signal:
 
     __slots__ = ("_rt", "_set", "_waiters")
 
-    def __init__(self, rt: Any) -> None:
+    def __init__(self, rt: Runtime) -> None:
         """``rt``: the Runtime (its hub and clock)."""
         self._rt = rt
         self._set = False

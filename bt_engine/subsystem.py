@@ -18,7 +18,7 @@ from .actor import SPEC_ATTR, ActorRef, ActorSpec, Safety
 from .api import CallApi
 from .bus.messages import RosAction
 from .bus.qos import qos_depth
-from .bus.transport import silence
+from .bus.transport import Publisher, silence
 from .errors import ActorbtError, AmbiguousActorError, UnknownActorError
 from .modes import Kind
 from .transaction import TransactionTable
@@ -73,7 +73,7 @@ class SubSystem(CallApi):
         self._values: dict[str, Any] = {}
         self._cache: dict[str, ActorRef] = {}
         self._cache_version = -1
-        self._edges: list[Any] = []
+        self._edges: list[Publisher] = []
 
     # -- identity ----------------------------------------------------------------------
     @property
@@ -169,7 +169,7 @@ class SubSystem(CallApi):
         self._rt._topology_changed()
         return True
 
-    def _collect_actors(self, holder: Any) -> None:
+    def _collect_actors(self, holder: "SubSystem | SubNet") -> None:
         seen: set[str] = set()
         for klass in type(holder).__mro__:
             for attr, val in vars(klass).items():

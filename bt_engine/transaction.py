@@ -17,6 +17,7 @@ from .errors import Cancelled, Failure
 
 if TYPE_CHECKING:
     from .hub import Hub, Task, TimerHandle
+    from .modes import Mode
 
 log = logging.getLogger("actorbt")
 
@@ -70,7 +71,7 @@ class Transaction:
                  "_listeners", "_deadline_timer", "scope", "args", "__weakref__")
 
     def __init__(self, table: TransactionTable, path: str, parent: "Transaction | None",
-                 mode: Any, scope: Any = None, task: "Task | None" = None,
+                 mode: Mode, scope: Any = None, task: "Task | None" = None,
                  args: tuple = ()) -> None:
         self.id = table.next_id()
         self.table = table

@@ -19,6 +19,8 @@ from bt_engine.actor import ActorRef
 from bt_engine.errors import ActorCancelled, ActorError, Cancelled, Failure
 from bt_engine.invoke import dispatch
 from bt_engine.modes import Mode
+from bt_engine.runtime import Runtime
+from bt_engine.transaction import Transaction
 from bt_engine.trees import TreeFailure, to_json
 from .progress import CallWatch, RunWatcher
 
@@ -64,7 +66,7 @@ class _Done:
         self.outcome, self.at = outcome, at
 
 
-async def run_call(rt: Any, ref: ActorRef, args: tuple, kwargs: dict, watcher: RunWatcher | None,
+async def run_call(rt: Runtime, ref: ActorRef, args: tuple, kwargs: dict, watcher: RunWatcher | None,
                    on_transition: Callable[[dict[str, Any]], Awaitable[None]],
                    on_end: Callable[[CallOutcome], None] | None = None,
                    on_cancel: Callable[[], None] | None = None) -> CallOutcome:
@@ -89,7 +91,7 @@ async def run_call(rt: Any, ref: ActorRef, args: tuple, kwargs: dict, watcher: R
     watch = CallWatch(hand_over)
     started: dict[str, float] = {}
 
-    def start() -> Any:  # on the hub: registered before its task first runs
+    def start() -> Transaction:  # on the hub: registered before its task first runs
         started["sim"] = rt.now()
         txn = dispatch(rt.txns, ref, Mode.ASYNC, args, kwargs,
                        lambda outcome: hand_over(_Done(outcome, rt.now())))

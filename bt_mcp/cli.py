@@ -6,10 +6,13 @@ from __future__ import annotations
 
 import argparse
 import sys
-from typing import Any, Callable
+from typing import TYPE_CHECKING, Callable
+
+if TYPE_CHECKING:
+    from bt_cli.app import App
 
 
-def register(sub: Any, common: Callable[[argparse.ArgumentParser], None]) -> None:
+def register(sub: argparse._SubParsersAction, common: Callable[[argparse.ArgumentParser], None]) -> None:
     p = sub.add_parser(
         "mcp", help="serve the actors and trees as MCP tools over stdio (for language models)",
         description="Run a Model Context Protocol server on stdin/stdout: every actor and tree of the "
@@ -27,7 +30,7 @@ def register(sub: Any, common: Callable[[argparse.ArgumentParser], None]) -> Non
     p.set_defaults(func=cmd_mcp)
 
 
-def cmd_mcp(args: argparse.Namespace, app: Any) -> int:
+def cmd_mcp(args: argparse.Namespace, app: App) -> int:
     from importlib import metadata
 
     from .server import serve_stdio

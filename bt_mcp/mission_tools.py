@@ -12,7 +12,7 @@ from __future__ import annotations
 from typing import Any
 
 from bt_engine.errors import ActorbtError
-from bt_engine.trees import Mission, MissionError, parse_mission, validate_mission
+from bt_engine.trees import Mission, MissionError, TreeHost, parse_mission, validate_mission
 from bt_tools.show import ascii_tree
 
 __all__ = ["DRAFT_FILE", "MISSION_TOOLS", "check_draft", "error_entries", "trace_result"]
@@ -65,7 +65,7 @@ MISSION_TOOLS: list[dict[str, Any]] = [
 ]
 
 
-def check_draft(host: Any, text: str) -> tuple[Mission | None, list[MissionError]]:
+def check_draft(host: TreeHost, text: str) -> tuple[Mission | None, list[MissionError]]:
     """Parse and validate a draft against the host's actors and trees: the mission (or
     ``None`` when it does not parse) and every problem, by position."""
     try:
@@ -88,7 +88,7 @@ def errors_text(errors: list[MissionError]) -> str:
     return "\n".join(f"{e.pos.line}:{e.pos.column}: {e.message}" for e in errors)
 
 
-def show_text(host: Any, tree: str | None, text: str | None) -> str:
+def show_text(host: TreeHost, tree: str | None, text: str | None) -> str:
     """``show_tree``: a library tree by name, or a draft (parsed only: drawing needs no actor).
 
     Raises:

@@ -14,7 +14,8 @@ from typing import Any, Callable
 
 from py_trees.common import Status
 
-from bt_engine.trees import EventBuilder, TreeObserver
+from bt_engine.transaction import Transaction
+from bt_engine.trees import ActorLeaf, EventBuilder, TreeObserver, TreeRun
 
 __all__ = ["CallWatch", "RunWatcher", "status_word", "MAX_TRACE_EVENTS"]
 
@@ -65,41 +66,41 @@ class RunWatcher(TreeObserver):
     def unwatch(self, txn_id: int) -> None:
         self._calls.pop(txn_id, None)
 
-    def _call(self, run: Any) -> CallWatch | None:
+    def _call(self, run: TreeRun) -> CallWatch | None:
         top = run
         while top.parent is not None:
             top = top.parent
         return self._calls.get(top.txn_id) if top.txn_id is not None else None
 
-    def _forward(self, event: str, run: Any, *args: Any) -> CallWatch | None:
+    def _forward(self, event: str, run: TreeRun, *args: Any) -> CallWatch | None:
         call = self._call(run)
         if call is not None:
             getattr(call.builder, event)(run, *args)
         return call
 
-    def run_started(self, run: Any) -> None:
+    def run_started(self, run: TreeRun) -> None:
         self._forward("run_started", run)
 
-    def tick(self, run: Any) -> None:
+    def tick(self, run: TreeRun) -> None:
         call = self._forward("tick", run)
         if call is not None and run.parent is None:
             call.ticks = run.ticks
 
-    def status_changed(self, run: Any, path: str, old: Status, new: Status) -> None:
+    def status_changed(self, run: TreeRun, path: str, old: Status, new: Status) -> None:
         call = self._forward("status_changed", run, path, old, new)
         if call is not None and not (new is Status.INVALID and old is not Status.RUNNING):
             # (a reset of a finished node to INVALID is no transition worth reporting)
             call.on_transition({"tree": run.mission.name, "path": path,
                                 "status": status_word(new), "depth": run.depth})
 
-    def actor_started(self, run: Any, leaf: Any, args: tuple, kwargs: dict, txn: Any) -> None:
+    def actor_started(self, run: TreeRun, leaf: ActorLeaf, args: tuple, kwargs: dict, txn: Transaction) -> None:
         self._forward("actor_started", run, leaf, args, kwargs, txn)
 
-    def actor_finished(self, run: Any, leaf: Any, txn: Any) -> None:
+    def actor_finished(self, run: TreeRun, leaf: ActorLeaf, txn: Transaction) -> None:
         self._forward("actor_finished", run, leaf, txn)
 
-    def blackboard_write(self, run: Any, key: str, value: Any) -> None:
+    def blackboard_write(self, run: TreeRun, key: str, value: Any) -> None:
         self._forward("blackboard_write", run, key, value)
 
-    def run_finished(self, run: Any, status: Status, outcome: Any) -> None:
+    def run_finished(self, run: TreeRun, status: Status, outcome: Any) -> None:
         self._forward("run_finished", run, status, outcome)

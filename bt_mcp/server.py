@@ -15,6 +15,7 @@ from typing import Any, BinaryIO
 
 import anyio
 import mcp_types as types
+from mcp.server.context import ServerRequestContext
 from mcp.server.lowlevel import Server
 from mcp.server.stdio import stdio_server
 
@@ -40,10 +41,11 @@ def progress_message(event: dict[str, Any]) -> str:
 def build_server(service: ToolService, version: str = "") -> Server:
     """A low-level server whose tools are ``service``'s."""
 
-    async def list_tools(ctx: Any, params: Any) -> types.ListToolsResult:
+    async def list_tools(ctx: ServerRequestContext,
+                         params: types.PaginatedRequestParams | None) -> types.ListToolsResult:
         return types.ListToolsResult.model_validate({"tools": service.list_tools()}, by_name=False)
 
-    async def call_tool(ctx: Any, params: types.CallToolRequestParams) -> types.CallToolResult:
+    async def call_tool(ctx: ServerRequestContext, params: types.CallToolRequestParams) -> types.CallToolResult:
         count = 0
 
         async def report(event: dict[str, Any]) -> None:

@@ -17,7 +17,8 @@ from bt_engine.actor import ActorRef
 from bt_engine.catalog import tool_schema
 from bt_engine.errors import ActorbtError
 from bt_engine.modes import Kind
-from bt_engine.trees import MissionError, mission_safety, tree_host
+from bt_engine.runtime import Runtime
+from bt_engine.trees import Mission, MissionError, TreeHost, mission_safety, tree_host
 from .calls import CANCEL_GRACE, CallOutcome, run_call
 from .mission_tools import (MISSION_TOOLS, check_draft, error_entries, errors_text, show_text,
                             trace_result)
@@ -43,7 +44,7 @@ class _Entry:
 class ToolService:
     """The catalog of runtime ``rt`` and the mission tools, served under ``settings``."""
 
-    def __init__(self, rt: Any, settings: McpSettings) -> None:
+    def __init__(self, rt: Runtime, settings: McpSettings) -> None:
         self.rt = rt
         self.settings = settings
         self.host = tree_host(rt, create=True)
@@ -189,7 +190,7 @@ def _event_line(event: dict[str, Any]) -> str:
     return f"[{event.get('t', 0):8.2f}] {event.get('type')} {rest}"
 
 
-def _draft_actor(rt: Any, host: Any, mission: Any) -> ActorRef:
+def _draft_actor(rt: Runtime, host: TreeHost, mission: Mission) -> ActorRef:
     """The draft as an actor that is not registered (so the tool list stays the catalog)."""
     def run_draft(**inputs: Any) -> dict[str, Any]:
         return host.run_mission(mission, **inputs)

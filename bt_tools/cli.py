@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import Any, Callable
 
 from bt_engine.errors import ActorbtError, ActorError
+from bt_engine.runtime import Runtime
 from bt_engine.trees import (STANDARD_BEHAVIOURS, Mission, MissionError, Resolver, TreeFailure, TreeHost,
                              TreeLibrary, check_files, suggest, tree_host)
 from .progress import ProgressPrinter, parse_inputs
@@ -41,7 +42,7 @@ def _mission(host: TreeHost, spec: str) -> Mission:
 
 
 def cmd_run(args: argparse.Namespace, app: Any, *,
-            around: Callable[[Any, TreeHost, Mission, dict], Any] | None = None) -> int:
+            around: Callable[[Runtime, TreeHost, Mission, dict], Any] | None = None) -> int:
     """Run a tree; unless ``--quiet``, with live progress and an ending like ``actorbt
     demo``'s: the outcome (outputs once, or where it failed), sim and wall time of the
     run, and the trace file given by ``--record``.

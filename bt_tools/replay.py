@@ -40,7 +40,8 @@ from typing import Any, Callable
 
 from bt_engine.errors import ActorbtError, Failure
 from bt_engine.runtime import Runtime
-from bt_engine.transaction import TxnState
+from bt_engine.hub import TimerHandle
+from bt_engine.transaction import Transaction, TxnState
 from bt_engine.trees import (TRACE_FORMAT, TRACE_VERSION, ActorLeaf, EventBuilder, MissionError, TreeHost,
                              TreeLibrary, TreeRun, read_mission)
 
@@ -274,8 +275,8 @@ class ReplayTxn:
         self.error: BaseException | None = None
         self.reason: str | None = None
         self.kind = (call or {}).get("kind", "sync")
-        self._listeners: list[Callable[[Any], None]] = [lambda t: on_done(t.outcome())]
-        self._timer: Any = None
+        self._listeners: list[Callable[[ReplayTxn], None]] = [lambda t: on_done(t.outcome())]
+        self._timer: TimerHandle | None = None
         if call is None or call.get("actor") != actor:
             recorded = f"call #{number} was {call.get('actor')!r}" if call else f"there is no call #{number}"
             self._timer = rt.call_later(0.0, self._finish, TxnState.FAILED, None,
@@ -296,7 +297,7 @@ class ReplayTxn:
             return self.result
         return Failure(self.error or ReplayedError(self.reason or "cancelled"), self)
 
-    def add_done_callback(self, fn: Callable[[Any], None]) -> None:
+    def add_done_callback(self, fn: Callable[[ReplayTxn], None]) -> None:
         if self.done:
             fn(self)
         else:
@@ -472,7 +473,7 @@ def replay(trace: str | Path, *, trees: str | Path | None = None, wall_timeout: 
         limit = end + 1.0 + (WALL_TOLERANCE[0] * len(expected) + WALL_TOLERANCE[1] * end if wall else 0.0)
         inputs = _from_json(header.get("inputs") or {})
 
-        def start() -> Any:
+        def start() -> Transaction:
             txn = rt.start(tree, on_done=lambda _: finished.set(), **inputs)
             comparer.on_divergence = lambda: rt.call_later(0.0, txn.cancel, "replay diverged from the recording")
             rt.call_later(limit, txn.cancel, "replay ran past the end of the recording")

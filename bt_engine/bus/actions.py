@@ -18,11 +18,15 @@ from __future__ import annotations
 
 import inspect
 import itertools
-from typing import Any, Callable
+from typing import TYPE_CHECKING, Any, Callable
 
 from ..errors import ActorbtError
 from ..modes import Kind
 from .messages import RosAction, RosMessage
+
+if TYPE_CHECKING:
+    from ..actor import ActorRef
+    from ..handles import Done
 
 #: GoalStatus codes (action_msgs/msg/GoalStatus) by name
 STATUS_NAMES = {0: "unknown", 1: "accepted", 2: "executing", 3: "canceling", 4: "succeeded",
@@ -218,11 +222,11 @@ class LocalActionServer:
 
 
 def local_client_actor(scope: Any, name: str, action_type: type[RosAction], server: str,
-                       servers: dict[str, LocalActionServer]) -> Any:
+                       servers: dict[str, LocalActionServer]) -> ActorRef:
     """Async actor ``name(goal=None, **fields)`` sending goals to the local server
     ``server`` (see the module docstring for its outcomes). It completes only on the hub."""
 
-    def send(done: Any, *args: Any, **fields: Any) -> Callable[[], None]:
+    def send(done: Done, *args: Any, **fields: Any) -> Callable[[], None]:
         goal_msg = build_message(action_type.Goal, args[0] if args else fields.pop("goal", None), fields)
         target = servers.get(server)
         if target is None:

@@ -18,6 +18,7 @@ from .qos import is_latched
 from .transport import EndpointInfo, TopicInfo, Transport, qos_label
 
 if TYPE_CHECKING:
+    from ..actor import ActorRef
     from ..hub import Hub
 
 
@@ -153,7 +154,7 @@ class LocalBus(Transport):
         server = self._actions[name] = LocalActionServer(self._actions, name, action_type, on_goal)
         return server
 
-    def register_action(self, scope: Any, name: str, action_type: type[RosAction], server: str) -> Any:
+    def register_action(self, scope: Any, name: str, action_type: type[RosAction], server: str) -> ActorRef:
         """Async actor ``name(goal=None, **fields)`` sending goals to local action ``server``
         (served by ``action_server`` in this process by the time a goal is sent)."""
         return local_client_actor(scope, name, action_type, server, self._actions)

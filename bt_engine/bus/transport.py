@@ -6,11 +6,15 @@ default; :mod:`bt_ros.transport` implements the same interface over rclpy.
 """
 from __future__ import annotations
 
-from typing import Any, Callable, NamedTuple, Protocol
+from typing import TYPE_CHECKING, Any, Callable, NamedTuple, Protocol
 
 from ..errors import ActorbtError
 from .messages import RosAction
 from .qos import is_latched
+
+if TYPE_CHECKING:
+    from ..actor import ActorRef
+    from .actions import OnGoal
 
 
 class TopicInfo(NamedTuple):
@@ -100,16 +104,16 @@ class Transport:
             return "is the robot or the simulator running?"
         return "does it publish that seldom?"
 
-    def register_action(self, scope: Any, name: str, action_type: type[RosAction], server: str) -> Any:
+    def register_action(self, scope: Any, name: str, action_type: type[RosAction], server: str) -> ActorRef:
         raise ActorbtError(f"the {self.name} transport has no action clients; "
                            "use the ros transport (transport: ros in actorbt.yaml)")
 
-    def action_server(self, name: str, action_type: type[RosAction], on_goal: Callable[[Any], None]) -> Any:
+    def action_server(self, name: str, action_type: type[RosAction], on_goal: OnGoal) -> Any:
         """Serve action ``name``: ``on_goal(goal)`` runs on the hub with each goal's
         :class:`~bt_engine.bus.actions.ServerGoal`. Returns a handle with ``close()``."""
         raise ActorbtError(f"the {self.name} transport cannot serve actions")
 
-    def register_service(self, scope: Any, name: str, srv_type: type, server: str) -> Any:
+    def register_service(self, scope: Any, name: str, srv_type: type, server: str) -> ActorRef:
         raise ActorbtError(f"the {self.name} transport has no service clients; "
                            "use the ros transport (transport: ros in actorbt.yaml)")
 
