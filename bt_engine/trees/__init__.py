@@ -14,6 +14,10 @@ a resolver (``rt.root.resolve``) handed to it. Inside the package::
     _blackboard  one run's namespace on py_trees' global blackboard
     _behaviours  the py_trees behaviours (actor leaf, set, check, wait, decorators)
     _controls  control nodes for BehaviorTree.CPP and Nav2 trees (pipeline, recovery...)
+    _plugins   controls and decorators written in Python: ports, specs, registration
+    _plugin_nodes  their base classes (ControlNode, DecoratorNode): ticking, ports, actor calls
+    _poses     positions read from poses and paths of any shape (for the Nav2 nodes)
+    nav2_nodes Nav2's RoundRobin, DistanceController, SpeedController, GoalUpdater... as plugins
     _run       one run: build, event-driven tick loop, halt, observers
     _host      trees as actors of a runtime (register_tree_folder)
     _progress  live progress printing and --arg parsing for the CLI
@@ -72,6 +76,9 @@ from ._model import (
     Parallel,
     ParallelPolicy,
     PipelineSequence,
+    PluginControl,
+    PluginDecorator,
+    PluginNode,
     RateController,
     ReactiveSelector,
     ReactiveSequence,
@@ -95,6 +102,9 @@ from ._model import (
     walk,
 )
 from ._parse import NODE_TYPES, parse_mission, read_mission, suggest
+from ._plugin_nodes import ActorCall, ControlNode, DecoratorNode, PluginCallError
+from ._plugins import (UNSET, InputPort, OutputPort, PluginSpec, PortUnsetError, control_node, decorator_node,
+                       node_plugins, plugin_spec, register_node)
 from ._plot import plot_trace
 from ._progress import ProgressPrinter, parse_inputs
 from ._replay import Divergence, ReplayError, ReplayReport, locate_trees, read_trace, replay
@@ -103,11 +113,14 @@ from ._safety import mission_safety
 from ._show import RenderError, ascii_tree, dot_tree, render
 from ._trace import EventBuilder, TraceRecorder, to_json
 from ._validate import ActorInfo, Resolver, annotation_text, annotation_type, validate_mission
+from . import nav2_nodes  # noqa: F401,E402 - registers Nav2's controls and decorators
 
 __all__ = [
     "NODE_TYPES",
     "REQUIRED",
     "STANDARD_BEHAVIOURS",
+    "UNSET",
+    "ActorCall",
     "ActorInfo",
     "And",
     "ArgumentMismatchError",
@@ -119,7 +132,9 @@ __all__ = [
     "Compare",
     "Composite",
     "Condition",
+    "ControlNode",
     "Decorator",
+    "DecoratorNode",
     "Divergence",
     "Do",
     "DuplicateKeyError",
@@ -131,6 +146,7 @@ __all__ = [
     "ForceSuccess",
     "IfThenElse",
     "InputError",
+    "InputPort",
     "InputSpec",
     "InvalidValueError",
     "Invert",
@@ -144,10 +160,17 @@ __all__ = [
     "Node",
     "Not",
     "Or",
+    "OutputPort",
     "OutputSpec",
     "Parallel",
     "ParallelPolicy",
     "PipelineSequence",
+    "PluginCallError",
+    "PluginControl",
+    "PluginDecorator",
+    "PluginNode",
+    "PluginSpec",
+    "PortUnsetError",
     "Pos",
     "ProgressPrinter",
     "RateController",
@@ -191,6 +214,8 @@ __all__ = [
     "ascii_tree",
     "check_files",
     "children_of",
+    "control_node",
+    "decorator_node",
     "dot_tree",
     "evaluate",
     "keys_of",
@@ -198,12 +223,15 @@ __all__ = [
     "locate_trees",
     "mission_safety",
     "node_path",
+    "node_plugins",
     "parse_expression",
     "parse_inputs",
     "parse_mission",
     "plot_trace",
+    "plugin_spec",
     "read_mission",
     "read_trace",
+    "register_node",
     "register_tree_folder",
     "render",
     "replay",
