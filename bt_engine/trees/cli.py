@@ -13,13 +13,14 @@ import pprint
 import sys
 import time
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any, Callable, Mapping
 
 from ..errors import ActorbtError, ActorError
 from ._errors import MissionError, TreeFailure
 from ._host import STANDARD_BEHAVIOURS, TreeHost, tree_host
 from ._library import TreeLibrary, check_files
-from ._model import Mission
+from ._model import Mission, PluginNode, walk
+from ._plugins import PluginSpec
 from ._parse import suggest
 from ._progress import ProgressPrinter, parse_inputs
 from ._validate import Resolver
@@ -115,10 +116,12 @@ def time_line(sim_time: float, wall_time: float) -> str:
     return f"sim time {sim_time:.1f} s, wall time {wall_time:.1f} s ({factor:.1f}x real time)"
 
 
-def cmd_check(args: argparse.Namespace, app: Any, *, resolver: Resolver | None = None) -> int:
+def cmd_check(args: argparse.Namespace, app: Any, *, resolver: Resolver | None = None,
+              nodes: Mapping[str, PluginSpec] | None = None) -> int:
     """Check mission files against ``resolver``, by default the actor index: not a
     runtime, so no robot code is imported or started (the index is rebuilt, once, when
-    that code changed). ``actorbt check --nodes`` passes its own (bt_engine.btxml.cli)."""
+    that code changed). ``actorbt check --nodes`` passes its own (bt_engine.btxml.cli),
+    and ``nodes``: the plugins, with the model's controls and decorators still to write."""
     folder = app.cfg.trees_dir()
     files = [Path(f) for f in args.files]
     folder_files = sorted(folder.glob("*.y*ml")) if folder is not None and folder.is_dir() else []
@@ -126,7 +129,7 @@ def cmd_check(args: argparse.Namespace, app: Any, *, resolver: Resolver | None =
         files = folder_files
     if resolver is None:
         resolver = app.actor_index().resolve
-    library = TreeLibrary(resolver, STANDARD_BEHAVIOURS)
+    library = TreeLibrary(resolver, STANDARD_BEHAVIOURS, nodes)
     given = {f.resolve() for f in files}
     for path in folder_files:  # trees the checked files may call
         if path.resolve() not in given:
@@ -140,7 +143,25 @@ def cmd_check(args: argparse.Namespace, app: Any, *, resolver: Resolver | None =
     if errors:
         return 1
     print(f"{len(files)} mission file{'s' if len(files) != 1 else ''} OK")
+    missing = unwritten_plugins(library, files)
+    if missing:
+        print(f"plugins still to write: {', '.join(missing)} (declared in the node model, used by these trees)")
     return 0
+
+
+def unwritten_plugins(library: TreeLibrary, files: list[Path]) -> list[str]:
+    """The controls and decorators the missions of ``files`` use that a node model
+    declares and no Python class implements yet, as ``Name (kind)``."""
+    wanted = {str(f.resolve()) for f in files}
+    found: dict[str, str] = {}
+    for mission in library:
+        if str(Path(mission.file).resolve()) not in wanted:
+            continue
+        for node in walk(mission.root):
+            spec = library.nodes.get(node.plugin) if isinstance(node, PluginNode) else None
+            if spec is not None and not spec.implemented:
+                found[spec.name] = spec.kind
+    return [f"{name} ({kind})" for name, kind in sorted(found.items())]
 
 
 def _load_for_show(app: Any, spec: str) -> Mission:
