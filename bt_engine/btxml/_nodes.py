@@ -22,8 +22,8 @@ from ..trees import UNSET, InputPort, OutputPort, PluginSpec
 from ._errors import BtXmlError, Pos, UnknownXmlNodeError
 from ._source import XElement, read_xml
 
-__all__ = ["JSON_PREFIX", "ModelResolver", "plugin_ports", "NodeKind", "NodeModel", "NodeSpec", "PortDirection", "PortSpec",
-           "convert_literal", "decode_json", "guess_literal", "python_type", "read_node_model"]
+__all__ = ["JSON_PREFIX", "ModelResolver", "NodeKind", "NodeModel", "NodeSpec", "PortDirection", "PortSpec",
+           "convert_literal", "decode_json", "guess_literal", "plugin_ports", "python_type", "read_node_model"]
 
 #: port text that holds a JSON value (BehaviorTree.CPP v4's prefix; see ``_values``)
 JSON_PREFIX = "json:"

@@ -174,7 +174,7 @@ class _PluginMixin:
         return float(self.ctx.rt.now())
 
     def wake_in(self, seconds: float) -> None:
-        """Ask for a tick ``seconds`` from now (cancelled when the node stops)."""
+        """Ask for a tick ``seconds`` from now (cancelled when the node is halted)."""
         self._timers.append(self.ctx.rt.call_later(max(0.0, seconds), self.ctx.wake))
 
     # ------------------------------------------------------------ actors
@@ -185,12 +185,15 @@ class _PluginMixin:
         Raises:
             ActorbtError: the actor is unknown or the arguments do not fit it.
         """
+        return self._start(actor, args, kwargs, wakes_tree=True)
+
+    def _start(self, actor: str, args: tuple, kwargs: dict, wakes_tree: bool) -> ActorCall:
         path, kind = self.ctx.actor_target(actor)
         site = _CallSite(self.path, Do(pos=self.node.pos, actor=actor), path, kind)
         call: ActorCall | None = None
 
         def done(_outcome: Any) -> None:
-            if call is not None and call in self._calls:
+            if wakes_tree and call is not None and call in self._calls:
                 self.ctx.wake()
 
         call = ActorCall(actor, self.ctx.start_actor(site, args, kwargs, done))
@@ -204,7 +207,8 @@ class _PluginMixin:
             PluginCallError: it failed, was cancelled, or returned False.
             ActorbtError: the actor is unknown or the arguments do not fit it.
         """
-        call = self.start_actor(actor, *args, **kwargs)
+        # the answer is read in this tick: a tick more would only ask again (and again)
+        call = self._start(actor, args, kwargs, wakes_tree=False)
         if not call.done:
             answered = Signal(self.ctx.rt)
             call.txn.add_done_callback(lambda _txn: answered.set())
@@ -214,15 +218,18 @@ class _PluginMixin:
             raise PluginCallError(call.problem)
         return call.value
 
-    def _release(self) -> None:
-        """Cancel what the node still has under way: calls and timers."""
+    def _release(self, halted: bool) -> None:
+        """Cancel the calls the node still has under way, and when it is halted its
+        timers too (a node that succeeded may want a tick later: a pipeline ticks it
+        again, and the period it waits for should be over by then)."""
         calls, self._calls = self._calls, []
         for call in calls:
             if not call.done:
                 call.txn.cancel(self.ctx.halt_reason(self.path))
-        timers, self._timers = self._timers, []
-        for timer in timers:
-            timer.cancel()
+        if halted:
+            timers, self._timers = self._timers, []
+            for timer in timers:
+                timer.cancel()
 
     def _starting(self) -> bool:
         """Whether this tick starts the node anew: it is idle (never ticked, or halted)
@@ -307,7 +314,7 @@ class ControlNode(_PluginMixin, py_trees.composites.Composite):
         yield self
 
     def terminate(self, new_status: Status) -> None:
-        self._release()
+        self._release(halted=new_status is Status.INVALID)
         if new_status is Status.INVALID:
             self.on_halt()
 
@@ -351,6 +358,6 @@ class DecoratorNode(_PluginMixin, py_trees.decorators.Decorator):
         return self.status
 
     def terminate(self, new_status: Status) -> None:
-        self._release()
+        self._release(halted=new_status is Status.INVALID)
         if new_status is Status.INVALID:
             self.on_halt()

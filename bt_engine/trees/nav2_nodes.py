@@ -97,6 +97,7 @@ class DistanceController(DecoratorNode):
             status = self.tick_child()
             if status is Status.SUCCESS:
                 self.start = _pose(self)
+                self.wake_in(float(self.input("poll_period")))  # a pipeline ticks it again: measure then
             return status
         self.feedback_message = f"travelled {travelled:.2f} of {distance:g} m"
         self.wake_in(float(self.input("poll_period")))
