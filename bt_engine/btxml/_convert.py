@@ -522,8 +522,8 @@ class Importer:
         """A control or decorator the model (or the long form) declares, or a registered
         plugin: a call of the plugin of that name, ``control:`` or ``decorator:``, its
         input ports as ``with:`` and its output ports as ``out:``. Ports come from the
-        model, else from the plugin; a port left out stays unset (or takes a ``{key}``
-        default)."""
+        model, else from the plugin; a port left out is left to the plugin (its default,
+        ``{key}`` defaults included, or unset)."""
         if not _IDENT.match(node_id):
             raise BtXmlError(el.pos, f"node {node_id!r} is not a valid plugin name, expected letters, digits and '_'")
         declared = {p.name: p for p in spec.ports} if spec is not None else plugin_ports(plugin, el.pos)
@@ -545,17 +545,6 @@ class Importer:
                                                   "as \"{goal}\"")
                 outs[attr] = key
                 ctx.write(key, el.at(attr))
-        for port in declared.values():
-            if port.name in ports or port.default is None or self.key(el, port.name, port.default) is None:
-                continue  # set, unset, or a literal default: the plugin's own
-            key = self.key(el, port.name, port.default)
-            assert key is not None
-            if port.reads:
-                args[port.name] = "{" + key + "}"
-                ctx.read(key, el.pos)
-            if port.writes:
-                outs[port.name] = key
-                ctx.write(key, el.pos)
         mission_kind = "control" if kind == "Control" else "decorator"
         node: dict[str, Any] = {mission_kind: node_id}
         if args:

@@ -470,7 +470,7 @@ _SCALARS = {"int": "int", "float": "double", "bool": "bool", "str": "std::string
 
 
 def _type_text(annotation: Any) -> str:
-    if annotation is inspect.Parameter.empty or annotation is None or annotation is Any:
+    if annotation is inspect.Parameter.empty or annotation is None:
         return ""
     text = annotation_text(annotation)
     m = _OPTIONAL.match(text.strip())
