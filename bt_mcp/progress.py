@@ -15,7 +15,7 @@ from typing import Any, Callable
 from py_trees.common import Status
 
 from bt_engine.transaction import Transaction
-from bt_engine.trees import ActorLeaf, EventBuilder, TreeObserver, TreeRun
+from bt_engine.trees import CallSite, EventBuilder, TreeObserver, TreeRun
 
 __all__ = ["CallWatch", "RunWatcher", "status_word", "MAX_TRACE_EVENTS"]
 
@@ -93,10 +93,10 @@ class RunWatcher(TreeObserver):
             call.on_transition({"tree": run.mission.name, "path": path,
                                 "status": status_word(new), "depth": run.depth})
 
-    def actor_started(self, run: TreeRun, leaf: ActorLeaf, args: tuple, kwargs: dict, txn: Transaction) -> None:
+    def actor_started(self, run: TreeRun, leaf: CallSite, args: tuple, kwargs: dict, txn: Transaction) -> None:
         self._forward("actor_started", run, leaf, args, kwargs, txn)
 
-    def actor_finished(self, run: TreeRun, leaf: ActorLeaf, txn: Transaction) -> None:
+    def actor_finished(self, run: TreeRun, leaf: CallSite, txn: Transaction) -> None:
         self._forward("actor_finished", run, leaf, txn)
 
     def blackboard_write(self, run: TreeRun, key: str, value: Any) -> None:

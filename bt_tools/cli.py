@@ -13,12 +13,12 @@ import pprint
 import sys
 import time
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any, Callable, Mapping
 
 from bt_engine.errors import ActorbtError, ActorError
 from bt_engine.runtime import Runtime
-from bt_engine.trees import (STANDARD_BEHAVIOURS, Mission, MissionError, Resolver, TreeFailure, TreeHost,
-                             TreeLibrary, check_files, suggest, tree_host)
+from bt_engine.trees import (STANDARD_BEHAVIOURS, Mission, MissionError, PluginNode, PluginSpec, Resolver,
+                             TreeFailure, TreeHost, TreeLibrary, check_files, suggest, tree_host, walk)
 from .progress import ProgressPrinter, parse_inputs
 
 __all__ = ["cmd_check", "cmd_plot", "cmd_replay", "cmd_run", "cmd_show"]
@@ -112,10 +112,12 @@ def time_line(sim_time: float, wall_time: float) -> str:
     return f"sim time {sim_time:.1f} s, wall time {wall_time:.1f} s ({factor:.1f}x real time)"
 
 
-def cmd_check(args: argparse.Namespace, app: Any, *, resolver: Resolver | None = None) -> int:
+def cmd_check(args: argparse.Namespace, app: Any, *, resolver: Resolver | None = None,
+              nodes: Mapping[str, PluginSpec] | None = None) -> int:
     """Check mission files against ``resolver``, by default the actor index: not a
     runtime, so no robot code is imported or started (the index is rebuilt, once, when
-    that code changed). ``actorbt check --nodes`` passes its own (bt_xml.cli)."""
+    that code changed). ``actorbt check --nodes`` passes its own (bt_xml.cli),
+    and ``nodes``: the plugins, with the model's controls and decorators still to write."""
     folder = app.cfg.trees_dir()
     files = [Path(f) for f in args.files]
     folder_files = sorted(folder.glob("*.y*ml")) if folder is not None and folder.is_dir() else []
@@ -123,7 +125,7 @@ def cmd_check(args: argparse.Namespace, app: Any, *, resolver: Resolver | None =
         files = folder_files
     if resolver is None:
         resolver = app.actor_index().resolve
-    library = TreeLibrary(resolver, STANDARD_BEHAVIOURS)
+    library = TreeLibrary(resolver, STANDARD_BEHAVIOURS, nodes)
     given = {f.resolve() for f in files}
     for path in folder_files:  # trees the checked files may call
         if path.resolve() not in given:
@@ -137,7 +139,25 @@ def cmd_check(args: argparse.Namespace, app: Any, *, resolver: Resolver | None =
     if errors:
         return 1
     print(f"{len(files)} mission file{'s' if len(files) != 1 else ''} OK")
+    missing = unwritten_plugins(library, files)
+    if missing:
+        print(f"plugins still to write: {', '.join(missing)} (declared in the node model, used by these trees)")
     return 0
+
+
+def unwritten_plugins(library: TreeLibrary, files: list[Path]) -> list[str]:
+    """The controls and decorators the missions of ``files`` use that a node model
+    declares and no Python class implements yet, as ``Name (kind)``."""
+    wanted = {str(f.resolve()) for f in files}
+    found: dict[str, str] = {}
+    for mission in library:
+        if str(Path(mission.file).resolve()) not in wanted:
+            continue
+        for node in walk(mission.root):
+            spec = library.nodes.get(node.plugin) if isinstance(node, PluginNode) else None
+            if spec is not None and not spec.implemented:
+                found[spec.name] = spec.kind
+    return [f"{name} ({kind})" for name, kind in sorted(found.items())]
 
 
 def _load_for_show(app: Any, spec: str) -> Mission:

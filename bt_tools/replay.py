@@ -31,6 +31,7 @@ What is compared (the rule, whichever way the recording was made: ``actorbt run
 
 from __future__ import annotations
 
+import importlib
 import json
 import math
 import threading
@@ -39,11 +40,11 @@ from pathlib import Path
 from typing import Any, Callable
 
 from bt_engine.errors import ActorbtError, Failure
-from bt_engine.runtime import Runtime
 from bt_engine.hub import TimerHandle
+from bt_engine.runtime import Runtime
 from bt_engine.transaction import Transaction, TxnState
-from bt_engine.trees import (TRACE_FORMAT, TRACE_VERSION, ActorLeaf, EventBuilder, MissionError, TreeHost,
-                             TreeLibrary, TreeRun, read_mission)
+from bt_engine.trees import (TRACE_FORMAT, TRACE_VERSION, CallSite, EventBuilder, MissionError, TreeHost, TreeLibrary,
+                             TreeRun, node_plugins, read_mission)
 
 __all__ = ["Divergence", "ReplayError", "ReplayReport", "describe_event", "locate_trees", "read_trace",
            "replay"]
@@ -329,14 +330,14 @@ class ReplayHost(TreeHost):
 
     def __init__(self, rt: Runtime, calls: dict[int, tuple[dict, dict | None]]) -> None:
         super().__init__(rt)
-        self.library = TreeLibrary(None, self.behaviours)  # no actors: structure-only checks
+        self.library = TreeLibrary(None, self.behaviours, self.nodes)  # no actors: structure-only checks
         self.calls = calls
         self._count = 0
 
     def actor_target(self, name: str) -> tuple[str, str]:
         return name, "sync"  # the kind that matters is the recorded one
 
-    def start_actor(self, run: TreeRun, leaf: ActorLeaf, args: tuple, kwargs: dict,
+    def start_actor(self, run: TreeRun, leaf: CallSite, args: tuple, kwargs: dict,
                     on_done: Callable[[Any], None]) -> Any:
         self._count += 1
         if leaf.node.actor in self.library:  # a tree: run it again
@@ -425,6 +426,20 @@ def locate_trees(header: dict[str, Any], trace: Path,
     return files, notes
 
 
+def _import_plugins(header: dict[str, Any], trace: Path) -> None:
+    """Import the modules that define the plugin nodes the recording used (the header's
+    ``nodes``), unless they are registered already."""
+    known = node_plugins()
+    for name, module in (header.get("nodes") or {}).items():
+        if name in known or not isinstance(module, str):
+            continue
+        try:
+            importlib.import_module(module)
+        except ImportError as exc:
+            raise ReplayError(f"{trace}: node {name!r} is defined in module {module!r}, which does not import: "
+                              f"{exc}") from None
+
+
 def replay(trace: str | Path, *, trees: str | Path | None = None, wall_timeout: float = 120.0,
            lines: list[str] | None = None) -> ReplayReport:
     """Re-execute a recorded tree run and compare it with the recording.
@@ -456,6 +471,7 @@ def replay(trace: str | Path, *, trees: str | Path | None = None, wall_timeout: 
         if e["type"] == "call":
             calls[e["call"]] = (e, returns.get(e["call"]))
     comparer = _Comparer(expected, wall=wall)
+    _import_plugins(header, trace)
     with Runtime(clock="virtual") as rt:
         host = ReplayHost(rt, calls)
         if header.get("max_period") is not None:

@@ -24,6 +24,8 @@ from bt_engine.trees import (
     IfThenElse,
     Parallel,
     PipelineSequence,
+    PluginControl,
+    PluginNode,
     ReactiveSelector,
     ReactiveSequence,
     Recovery,
@@ -66,6 +68,9 @@ def describe(node: Node) -> str:
         return f"wait {node.seconds}s"
     if isinstance(node, UseBehaviour):
         return f"behaviour {node.behaviour}"
+    if isinstance(node, PluginNode):
+        ports = [f"{k}={_value(v)}" for k, v in node.ports.items()] + [f"{k}->{v}" for k, v in node.outs.items()]
+        return f"{node.kind} {node.plugin}" + (f"({', '.join(ports)})" if ports else "")
     if isinstance(node, Parallel) and node.counted:
         return f"parallel success_count={node.success_count} failure_count={node.failure_count}"
     if isinstance(node, Parallel):
@@ -108,6 +113,7 @@ _STYLES: list[tuple[type | tuple[type, ...], dict[str, str]]] = [
     ((IfThenElse, WhileDoElse), {"shape": "diamond", "style": "filled", "fillcolor": "#d4e8fc", "label": "{}"}),
     (Recovery, {"shape": "octagon", "style": "filled", "fillcolor": "#fbd5d5", "label": "↺ {}"}),
     (Parallel, {"shape": "parallelogram", "style": "filled", "fillcolor": "#e3d7f5", "label": "⇉ {}"}),
+    (PluginControl, {"shape": "box3d", "style": "filled", "fillcolor": "#d4e8fc", "label": "{}"}),
     (Decorator, {"shape": "ellipse", "style": "filled", "fillcolor": "#eeeeee", "label": "{}"}),
     (Do, {"shape": "box", "style": "rounded,filled", "fillcolor": "#d8f3d8", "label": "{}"}),
     (Check, {"shape": "ellipse", "style": "filled", "fillcolor": "#fff7b3", "label": "{}"}),

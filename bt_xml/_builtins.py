@@ -267,5 +267,4 @@ UNSUPPORTED: dict[str, str] = {
     "ParallelAll": "use Parallel with success_count and failure_count",
     "ManualSelector": "it asks a human at a terminal, which a mission does not do",
     "SubTreePlus": "it is BehaviorTree.CPP v3; use <SubTree ... _autoremap=\"true\">",
-    "RoundRobin": "Nav2's RoundRobin has no equivalent (use a selector)",
 }

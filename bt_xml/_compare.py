@@ -19,8 +19,8 @@ import dataclasses
 import inspect
 from typing import Any, Callable
 
-from bt_engine.trees import (Check, Do, Expr, Mission, Node, Parallel, ParallelPolicy, RateController, Recovery,
-                    Repeat, Retry, RunOnce, SetValues, Timeout, UseBehaviour, Wait, children_of)
+from bt_engine.trees import (Check, Do, Expr, Mission, Node, Parallel, ParallelPolicy, PluginNode, RateController,
+                             Recovery, Repeat, Retry, RunOnce, SetValues, Timeout, UseBehaviour, Wait, children_of)
 from ._values import same_value
 
 __all__ = ["expr_shape", "mission_differences"]
@@ -108,6 +108,8 @@ def _params(node: Node, signature: Signature | None) -> tuple[Any, ...]:
         return (node.kind, list(node.values), list(node.values.values()))
     if isinstance(node, UseBehaviour):
         return (node.kind, node.behaviour, dict(node.kwargs), list(node.writes))
+    if isinstance(node, PluginNode):
+        return (node.kind, node.plugin, dict(node.ports), dict(node.outs))
     if isinstance(node, Do):
         return (node.kind, node.actor, _arguments(node, signature), node.out)
     return (node.kind,)

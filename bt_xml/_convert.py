@@ -23,11 +23,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Iterable
 
-from bt_engine.trees import Ref, keys_of, parse_expression, suggest
+from bt_engine.trees import PluginSpec, Ref, keys_of, node_plugins, parse_expression, suggest
 from ._builtins import BUILTINS, NAV2, UNSUPPORTED
 from ._errors import BtXmlError, Pos, UnknownXmlNodeError, UnsupportedXmlError
 from ._extensions import HANDLERS as EXTENSION_HANDLERS
-from ._nodes import JSON_PREFIX, NodeKind, NodeModel, NodeSpec, PortSpec, convert_literal, decode_json, guess_literal
+from ._nodes import (JSON_PREFIX, NodeKind, NodeModel, NodeSpec, PortSpec, convert_literal, decode_json, guess_literal,
+                     plugin_ports)
 from ._script import Assignment, condition, statements
 from ._source import XElement, read_xml
 from ._values import REF_TEXT, RESULT_TYPE, ref_keys, value_type_of_port
@@ -116,6 +117,8 @@ class Importer:
         self.interfaces: dict[str, TreeInterface] = {}
         self._active: list[tuple[str, Pos]] = []
         self._files: set[Path] = set()
+        #: the controls and decorators written in Python, to read an undeclared tag by
+        self.plugins: dict[str, PluginSpec] = node_plugins()
 
     # ------------------------------------------------------------ files
 
@@ -321,10 +324,10 @@ class Importer:
             return EXTENSION_HANDLERS[node_id](self, el, node_id, ports, ctx, parent)
         if node_id in UNSUPPORTED:
             raise UnsupportedXmlError(el.pos, f"<{el.tag}> is not supported: {UNSUPPORTED[node_id]}")
-        if declared in ("Control", "Decorator"):
-            raise UnsupportedXmlError(
-                el.pos, f"{declared.lower()} node {node_id!r} has no equivalent in actorbt missions, expected one of "
-                        f"the nodes listed in docs/btxml.md")
+        plugin = self.plugins.get(node_id)
+        if declared in ("Control", "Decorator") or plugin is not None and declared is None and el.children:
+            kind = declared or ("Control" if plugin is not None and plugin.kind == "control" else "Decorator")
+            return self.plugin(el, node_id, kind, ports, ctx, spec, plugin)
         if spec is not None and spec.kind is NodeKind.SUBTREE or node_id in self.trees and self.dialect == "pytwb":
             return self.subtree(el, node_id, ports, ctx)
         if el.children:
@@ -513,6 +516,46 @@ class Importer:
                 outs.append((port.name, key))
                 ctx.write(key, el.pos)
         return self.call(node_id, args, outs, ctx, "condition" if condition else "do")
+
+    def plugin(self, el: XElement, node_id: str, kind: str, ports: dict[str, str], ctx: _Tree, spec: NodeSpec | None,
+               plugin: PluginSpec | None) -> dict:
+        """A control or decorator the model (or the long form) declares, or a registered
+        plugin: a call of the plugin of that name, ``control:`` or ``decorator:``, its
+        input ports as ``with:`` and its output ports as ``out:``. Ports come from the
+        model, else from the plugin; a port left out is left to the plugin (its default,
+        ``{key}`` defaults included, or unset)."""
+        if not _IDENT.match(node_id):
+            raise BtXmlError(el.pos, f"node {node_id!r} is not a valid plugin name, expected letters, digits and '_'")
+        declared = {p.name: p for p in spec.ports} if spec is not None else plugin_ports(plugin, el.pos)
+        args: dict[str, Any] = {}
+        outs: dict[str, str] = {}
+        for attr, text in ports.items():
+            port = declared.get(attr)
+            if port is None and (spec is not None or plugin is not None):
+                raise BtXmlError(el.at(attr), f"node {node_id!r} has no port {attr!r}{suggest(attr, declared)}, "
+                                              f"expected one of: {', '.join(declared) or '(no ports)'}")
+            if not _IDENT.match(attr):
+                raise BtXmlError(el.at(attr), f"port {attr!r} is not a valid port name")
+            if port is None or port.reads:
+                args[attr] = self.input_value(el, attr, text, ctx, port)
+            if port is not None and port.writes:
+                key = self.key(el, attr, text) or (text.strip() if _IDENT.match(text.strip()) else None)
+                if key is None:
+                    raise BtXmlError(el.at(attr), f"output port {attr!r} is {text!r}, expected a blackboard key such "
+                                                  "as \"{goal}\"")
+                outs[attr] = key
+                ctx.write(key, el.at(attr))
+        mission_kind = "control" if kind == "Control" else "decorator"
+        node: dict[str, Any] = {mission_kind: node_id}
+        if args:
+            node["with"] = args
+        if outs:
+            node["out"] = outs
+        if mission_kind == "control":
+            node["children"] = self.children(el, ctx, "control")
+        else:
+            node["child"] = self.child(el, ctx, "decorator")
+        return node
 
     def call(self, actor: str, args: dict[str, Any], outs: list[tuple[str, str]], ctx: _Tree,
              kind: str = "do") -> dict:

@@ -26,11 +26,11 @@ from dataclasses import dataclass, field
 from typing import Any, Callable
 
 from bt_engine.errors import ActorbtError
-from bt_engine.trees import (Check, Condition, Do, ForceFailure, ForceSuccess, IfThenElse, Invert, Mission, Node,
-                    Parallel, ParallelPolicy, PipelineSequence, RateController, ReactiveSelector,
-                    ReactiveSequence, Recovery, Ref, Repeat, ResumeSequence, Retry, RunOnce, RunOnceThen,
-                    Selector, Sequence, SetValues, Timeout, TreeLibrary, UseBehaviour, Wait, WhileDoElse,
-                    annotation_text, children_of)
+from bt_engine.trees import (UNSET, Check, Condition, Do, ForceFailure, ForceSuccess, IfThenElse, InputPort, Invert,
+                             Mission, Node, Parallel, ParallelPolicy, PipelineSequence, PluginNode, PluginSpec,
+                             RateController, ReactiveSelector, ReactiveSequence, Recovery, Ref, Repeat, ResumeSequence,
+                             Retry, RunOnce, RunOnceThen, Selector, Sequence, SetValues, Timeout, TreeLibrary,
+                             UseBehaviour, Wait, WhileDoElse, annotation_text, children_of)
 from ._builtins import BUILTINS, NAV2, UNSUPPORTED
 from ._errors import BtXmlError
 from ._extensions import EXTENSIONS, LIST_SEPARATOR, NAV2_MODELS, NodeDecl, PortDecl
@@ -171,6 +171,8 @@ class Exporter:
             if node.writes:
                 attrs["writes"] = LIST_SEPARATOR.join(node.writes)
             return self.use("ActorbtBehaviour"), attrs
+        if isinstance(node, PluginNode):
+            return self.plugin(node)
         if isinstance(node, Do):
             return self.call(node)
         raise ExportError(node.pos, f"a {node.kind} node has no BehaviorTree.CPP form")  # pragma: no cover
@@ -207,6 +209,24 @@ class Exporter:
         if node.then is RunOnceThen.FAILURE:
             return self.use("SingleTrigger"), {}
         return self.use("ActorbtRunOnce"), {"then": node.then.value.upper()}
+
+    def plugin(self, node: PluginNode) -> tuple[str, dict[str, str]]:
+        """A control or decorator written in Python: a node of its name, its ports as
+        attributes, declared in the model with the plugin's ports (``xml import`` reads
+        it back as the same plugin call)."""
+        spec = self.library.nodes.get(node.plugin)
+        if spec is not None:
+            self.declared[node.plugin] = _plugin_decl(spec)
+        if node.plugin in BUILTINS or node.plugin in NAV2 or node.plugin in EXTENSIONS:
+            raise ExportError(node.at(node.kind), f"{node.kind} {node.plugin!r} has the name of a BehaviorTree.CPP "
+                                                  "node, expected a plugin named otherwise")
+        attrs: dict[str, str] = {}
+        for name, value in node.ports.items():
+            port = spec.ports.get(name) if spec is not None else None
+            attrs[name] = encode_value(value, _cpp_type(port.type) if port is not None else "")
+        for name, key in node.outs.items():
+            attrs[name] = "{" + key + "}"
+        return node.plugin, attrs
 
     def set_values(self, node: SetValues) -> tuple[str, dict[str, str]]:
         if len(node.values) == 1:
@@ -370,6 +390,22 @@ def _tree_model(mission: Mission) -> LeafModel:
         "output_port", model.result_port, RESULT_TYPE,
         "every output of the tree, as one mapping (what a mission's out: receives)")
     return model
+
+
+def _plugin_decl(spec: PluginSpec) -> NodeDecl:
+    """A plugin's entry in the node model: its kind, typed ports and defaults."""
+    ports = []
+    for name, port in spec.ports.items():
+        ptype = _cpp_type(port.type)
+        if isinstance(port, InputPort):
+            default = None
+            if port.default is not UNSET:
+                default = port.default if isinstance(port.default, str) and port.default.startswith("{") \
+                    else encode_value(port.default, ptype, default=True)
+            ports.append(PortDecl("input_port", name, ptype, port.doc, default))
+        else:
+            ports.append(PortDecl("output_port", name, ptype, port.doc))
+    return NodeDecl(spec.kind.capitalize(), spec.name, spec.doc.split("\n\n")[0].replace("\n", " "), tuple(ports))
 
 
 def _leaf_kind(node: Do) -> str:

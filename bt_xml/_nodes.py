@@ -18,11 +18,12 @@ from pathlib import Path
 from typing import Any, Callable, Iterable
 
 from bt_engine.errors import ActorbtError, UnknownActorError
+from bt_engine.trees import UNSET, InputPort, OutputPort, PluginSpec
 from ._errors import BtXmlError, Pos, UnknownXmlNodeError
 from ._source import XElement, read_xml
 
 __all__ = ["JSON_PREFIX", "ModelResolver", "NodeKind", "NodeModel", "NodeSpec", "PortDirection", "PortSpec",
-           "convert_literal", "decode_json", "guess_literal", "python_type", "read_node_model"]
+           "convert_literal", "decode_json", "guess_literal", "plugin_ports", "python_type", "read_node_model"]
 
 #: port text that holds a JSON value (BehaviorTree.CPP v4's prefix; see ``_values``)
 JSON_PREFIX = "json:"
@@ -102,20 +103,38 @@ class NodeSpec:
 
     def signature(self) -> inspect.Signature:
         """The actor signature its input ports give: keyword parameters, typed where the
-        type is a plain one, with the declared defaults (converted)."""
+        type is a plain one, with the declared defaults (converted). A port without a
+        default is optional, as in BehaviorTree.CPP: left out, it is unset (its default
+        is :data:`~bt_engine.trees.UNSET`), and the node fails only if it reads it."""
         params = []
         for port in self.ports:
             if not port.reads:
                 continue
-            default: Any = inspect.Parameter.empty
+            default: Any = UNSET
             if port.default is not None and not _is_reference(port.default):
                 default = convert_literal(port.default, port.type)
             elif port.default is not None or port.writes:
                 default = None
             params.append(inspect.Parameter(port.name, inspect.Parameter.KEYWORD_ONLY, default=default,
                                             annotation=python_type(port.type)))
-        params.sort(key=lambda p: p.default is not inspect.Parameter.empty)
         return inspect.Signature(params, return_annotation=inspect.Signature.empty)
+
+    def plugin_spec(self) -> PluginSpec:
+        """A Control or Decorator as the spec of a plugin that is still to be written
+        (``cls`` None): missions that use it validate, and ``check`` says it is missing."""
+        ports: dict[str, InputPort | OutputPort] = {}
+        for port in self.ports:
+            annotation = python_type(port.type)
+            ptype = Any if annotation is inspect.Parameter.empty else annotation
+            if port.reads:
+                default: Any = UNSET
+                if port.default is not None:
+                    default = port.default if _is_reference(port.default) else convert_literal(port.default, port.type)
+                ports[port.name] = InputPort(ptype, default, port.description)
+            else:
+                ports[port.name] = OutputPort(ptype, port.description)
+        kind = "control" if self.kind is NodeKind.CONTROL else "decorator"
+        return PluginSpec(self.id, kind, ports, self.description, (1, None) if kind == "control" else (1, 1))
 
 
 _INT_TYPES = re.compile(r"(unsigned\s+)?(int|long|short|size_t|u?int\d+_t|std::u?int\d+_t)\Z")
@@ -254,6 +273,15 @@ class NodeModel:
             description = description or element.attrs.get("description", "") or element.text
             self.nodes[node_id] = NodeSpec(node_id, kinds[element.tag], tuple(ports), description, element.pos)
 
+    def plugins(self, registered: dict[str, PluginSpec]) -> dict[str, PluginSpec]:
+        """The plugins ``registered``, plus the model's Controls and Decorators that none
+        of them implements (as unwritten plugins, see :meth:`NodeSpec.plugin_spec`)."""
+        found = dict(registered)
+        for node_id, spec in self.nodes.items():
+            if spec.kind in (NodeKind.CONTROL, NodeKind.DECORATOR) and node_id not in found:
+                found[node_id] = spec.plugin_spec()
+        return found
+
     def resolver(self, fallback: Callable[[str], Any] | None = None) -> "ModelResolver":
         """An actor resolver (for ``check``) that knows the declared leaves, then ``fallback``."""
         return ModelResolver(self, fallback)
@@ -290,6 +318,24 @@ class ModelResolver:
                     raise
                 raise UnknownActorError(name, [*leaves, *suggestions]) from None
         raise UnknownActorError(name, leaves)
+
+
+_CPP_TYPES = {float: "double", int: "int", bool: "bool", str: "std::string"}
+
+
+def plugin_ports(plugin: PluginSpec | None, pos: Pos) -> dict[str, PortSpec]:
+    """A registered plugin's ports as a node model declares them (for the importer)."""
+    ports: dict[str, PortSpec] = {}
+    for name, port in (plugin.ports if plugin is not None else {}).items():
+        cpp = _CPP_TYPES.get(port.type, "")
+        if isinstance(port, InputPort):
+            default = None
+            if port.default is not UNSET:
+                default = port.default if isinstance(port.default, str) else json.dumps(port.default)
+            ports[name] = PortSpec(name, PortDirection.INPUT, cpp, default, port.doc, pos)
+        else:
+            ports[name] = PortSpec(name, PortDirection.OUTPUT, cpp, None, port.doc, pos)
+    return ports
 
 
 def read_node_model(paths: Iterable[str | Path]) -> NodeModel:

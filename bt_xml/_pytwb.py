@@ -18,7 +18,7 @@ from typing import Any
 from bt_engine.trees import suggest
 from ._builtins import Handler
 from ._convert import Importer, _Tree
-from ._errors import BtXmlError, UnsupportedXmlError
+from ._errors import BtXmlError, Pos, UnsupportedXmlError
 from ._nodes import PortSpec
 from ._source import XElement
 
@@ -26,16 +26,41 @@ __all__ = ["PYTWB_NODES", "PytwbImporter"]
 
 
 class PytwbImporter(Importer):
-    """Converts pytwb XML trees (see the module docstring)."""
+    """Converts pytwb XML trees (see the module docstring).
+
+    A workbench is its trees folder: :meth:`load` takes the folder (every ``*.xml`` in
+    it, by name) or files. pytwb names a tree after its file (``bt_pick.xml`` is
+    ``bt_pick``, whatever its ``<BehaviorTree ID>`` says: the demo's files all say
+    ``bt_all``), and that is the name other trees call it by. A file that holds several
+    trees keeps their IDs.
+    """
 
     dialect = "pytwb"
+
+    def __init__(self, model: Any = None) -> None:
+        super().__init__(model)
+        self._trees_in_file = 0
+
+    def load(self, path: str | Path, included_at: Any = None) -> None:
+        folder = Path(path)
+        if included_at is None and folder.is_dir():
+            files = sorted(p for p in folder.iterdir() if p.suffix == ".xml" and p.is_file())
+            if not files:
+                raise BtXmlError(Pos(str(folder), 1, 1), "the folder holds no .xml file, expected a pytwb "
+                                                         "workbench's trees folder")
+            for file in files:
+                super().load(file)
+            return
+        super().load(path, included_at)
 
     def check_root(self, top: XElement) -> None:
         if top.tag != "root":
             raise BtXmlError(top.pos, f"the document element is <{top.tag}>, expected <root>")
+        self._trees_in_file = sum(1 for child in top.children if child.tag == "BehaviorTree")
 
     def add_tree(self, element: XElement, file: str) -> None:
-        if "ID" not in element.attrs and "id" not in element.attrs:
+        if self._trees_in_file == 1 or "ID" not in element.attrs and "id" not in element.attrs:
+            element.attrs.pop("id", None)
             element.attrs["ID"] = Path(file).stem  # pytwb names a tree after its file
         super().add_tree(element, file)
 

@@ -14,8 +14,10 @@ from pathlib import Path
 from typing import Any
 
 from bt_engine.errors import ActorbtError
-from bt_engine.trees import STANDARD_BEHAVIOURS, MissionError, TreeLibrary, check_files, read_mission, suggest
+from bt_engine.trees import (STANDARD_BEHAVIOURS, MissionError, TreeLibrary, check_files, node_plugins, read_mission,
+                     suggest)
 from bt_tools.cli import cmd_check as check_missions
+from bt_tools.cli import unwritten_plugins
 from ._api import import_files
 from ._emit import write_missions
 from ._nodes import NodeModel, read_node_model
@@ -25,9 +27,11 @@ __all__ = ["cmd_check", "cmd_xml_btlog", "cmd_xml_export", "cmd_xml_import"]
 
 def cmd_check(args: argparse.Namespace, app: Any) -> int:
     """``actorbt check`` with ``--nodes``: the nodes declared in the node models count as
-    actors (their ports give the signatures), before the ones implemented here."""
-    resolver = read_node_model(args.nodes).resolver(app.actor_index().resolve)
-    return check_missions(args, app, resolver=resolver)
+    actors (their ports give the signatures), before the ones implemented here; their
+    controls and decorators that no plugin implements count as plugins still to write."""
+    model = read_node_model(args.nodes)
+    resolver = model.resolver(app.actor_index().resolve)
+    return check_missions(args, app, resolver=resolver, nodes=model.plugins(node_plugins()))
 
 
 def cmd_xml_import(args: argparse.Namespace, app: Any) -> int:
@@ -39,12 +43,16 @@ def cmd_xml_import(args: argparse.Namespace, app: Any) -> int:
     source = ", ".join(Path(f).name for f in args.files)
     paths = write_missions(missions, args.out, source)
     resolver = model.resolver() if model is not None and len(model) else None
-    library = TreeLibrary(resolver, STANDARD_BEHAVIOURS)
+    nodes = model.plugins(node_plugins()) if model is not None else None
+    library = TreeLibrary(resolver, STANDARD_BEHAVIOURS, nodes)
     errors = check_files(paths, library=library)
     for path in paths:
         print(f"wrote {path}")
     for error in errors:
         print(error, file=sys.stderr)
+    missing = unwritten_plugins(library, paths)
+    if missing and not errors:
+        print(f"plugins still to write: {', '.join(missing)} (declared in the node model, used by these trees)")
     return 1 if errors else 0
 
 

@@ -14,6 +14,10 @@ a resolver (``rt.root.resolve``) handed to it. Inside the package::
     _blackboard  one run's namespace on py_trees' global blackboard
     _behaviours  the py_trees behaviours (actor leaf, set, check, wait, decorators)
     _controls  control nodes for BehaviorTree.CPP and Nav2 trees (pipeline, recovery...)
+    _plugins   controls and decorators written in Python: ports, specs, registration
+    _plugin_nodes  their base classes (ControlNode, DecoratorNode): ticking, ports, actor calls
+    _poses     positions read from poses and paths of any shape (for the Nav2 nodes)
+    nav2_nodes Nav2's RoundRobin, DistanceController, SpeedController, GoalUpdater... as plugins
     _run       one run: build, event-driven tick loop, halt, observers
     _host      trees as actors of a runtime (register_tree_folder)
     _trace     JSON Lines trace recording (TraceRecorder, also rt.recorder)
@@ -26,7 +30,7 @@ trace events and the safety of a mission. Replaying, drawing and plotting a miss
 trace, and the tree commands, are ``bt_tools``.
 """
 
-from ._behaviours import ActorLeaf
+from ._behaviours import ActorLeaf, CallSite
 from ._errors import (
     ArgumentMismatchError,
     CheckEvaluationError,
@@ -70,6 +74,9 @@ from ._model import (
     Parallel,
     ParallelPolicy,
     PipelineSequence,
+    PluginControl,
+    PluginDecorator,
+    PluginNode,
     RateController,
     ReactiveSelector,
     ReactiveSequence,
@@ -93,30 +100,33 @@ from ._model import (
     walk,
 )
 from ._parse import NODE_TYPES, parse_mission, read_mission, suggest
+from ._plugin_nodes import ActorCall, ControlNode, DecoratorNode, PluginCallError
+from ._plugins import (UNSET, InputPort, OutputPort, PluginSpec, PortUnsetError, control_node, decorator_node,
+                       node_plugins, plugin_spec, register_node)
 from ._run import TreeObserver, TreeRun, node_path
 from ._safety import mission_safety
 from ._trace import TRACE_FORMAT, TRACE_VERSION, EventBuilder, TraceRecorder, to_json
 from ._validate import ActorInfo, Resolver, annotation_text, annotation_type, validate_mission
+from . import nav2_nodes  # noqa: F401,E402 - registers Nav2's controls and decorators
 
 __all__ = [
-    "NODE_TYPES",
-    "TRACE_FORMAT",
-    "TRACE_VERSION",
-    "REQUIRED",
-    "STANDARD_BEHAVIOURS",
+    "ActorCall",
     "ActorInfo",
     "ActorLeaf",
     "And",
     "ArgumentMismatchError",
     "BehaviourFactory",
     "BrokenDependencyError",
+    "CallSite",
     "Check",
     "CheckEvaluationError",
     "CheckExpressionError",
     "Compare",
     "Composite",
     "Condition",
+    "ControlNode",
     "Decorator",
+    "DecoratorNode",
     "Do",
     "DuplicateKeyError",
     "DuplicateTreeError",
@@ -127,6 +137,7 @@ __all__ = [
     "ForceSuccess",
     "IfThenElse",
     "InputError",
+    "InputPort",
     "InputSpec",
     "InvalidValueError",
     "Invert",
@@ -136,15 +147,24 @@ __all__ = [
     "Mission",
     "MissionError",
     "MissionSyntaxError",
+    "NODE_TYPES",
     "Neg",
     "Node",
     "Not",
     "Or",
+    "OutputPort",
     "OutputSpec",
     "Parallel",
     "ParallelPolicy",
     "PipelineSequence",
+    "PluginCallError",
+    "PluginControl",
+    "PluginDecorator",
+    "PluginNode",
+    "PluginSpec",
+    "PortUnsetError",
     "Pos",
+    "REQUIRED",
     "RateController",
     "ReactiveSelector",
     "ReactiveSequence",
@@ -156,11 +176,14 @@ __all__ = [
     "Retry",
     "RunOnce",
     "RunOnceThen",
+    "STANDARD_BEHAVIOURS",
     "Selector",
     "Sequence",
     "SetValues",
     "SkippedTreeError",
     "SubtreeCycleError",
+    "TRACE_FORMAT",
+    "TRACE_VERSION",
     "Timeout",
     "TraceRecorder",
     "TreeFailure",
@@ -169,6 +192,7 @@ __all__ = [
     "TreeLibrary",
     "TreeObserver",
     "TreeRun",
+    "UNSET",
     "UnknownBehaviourError",
     "UnknownBlackboardKeyError",
     "UnknownFieldError",
@@ -182,14 +206,19 @@ __all__ = [
     "annotation_type",
     "check_files",
     "children_of",
+    "control_node",
+    "decorator_node",
     "evaluate",
     "keys_of",
     "load_mission",
     "mission_safety",
     "node_path",
+    "node_plugins",
     "parse_expression",
     "parse_mission",
+    "plugin_spec",
     "read_mission",
+    "register_node",
     "register_tree_folder",
     "resolve_value",
     "suggest",

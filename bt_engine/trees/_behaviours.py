@@ -22,9 +22,26 @@ from ._model import Check, Do, Ref, SetValues, refs_in, resolve_value
 from ._blackboard import RunBlackboard
 
 __all__ = [
-    "ActorLeaf", "CheckLeaf", "ConditionLeaf", "RepeatNode", "RetryNode", "RunContext", "SetLeaf", "TimeoutNode",
-    "WaitLeaf",
+    "ActorLeaf", "CallSite", "CheckLeaf", "ConditionLeaf", "RepeatNode", "RetryNode", "RunContext", "SetLeaf",
+    "TimeoutNode", "WaitLeaf",
 ]
+
+
+class CallSite(Protocol):
+    """Who calls an actor, as traces and replay name it: an actor leaf, or a plugin
+    node's call (``_plugin_nodes``)."""
+
+    @property
+    def path(self) -> str: ...
+
+    @property
+    def node(self) -> Do: ...
+
+    @property
+    def actor_path(self) -> str: ...
+
+    @property
+    def actor_kind(self) -> str: ...
 
 
 class RunContext(Protocol):
@@ -36,11 +53,14 @@ class RunContext(Protocol):
     def wake(self) -> None:
         """Ask for a tick soon (something changed)."""
 
-    def start_actor(self, leaf: ActorLeaf, args: tuple, kwargs: dict, on_done: Callable[[Any], None]) -> Any:
+    def start_actor(self, leaf: CallSite, args: tuple, kwargs: dict, on_done: Callable[[Any], None]) -> Any:
         """Start the leaf's actor asynchronously; returns its Transaction."""
 
     def halt_reason(self, node_path: str) -> str:
         """Why a halted node's transaction is being cancelled."""
+
+    def actor_target(self, name: str) -> tuple[str, str]:
+        """The path a call of actor ``name`` starts, and the actor's kind."""
 
 
 def _read(value: Any, ctx: RunContext) -> Any:

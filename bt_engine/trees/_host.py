@@ -15,7 +15,7 @@ from __future__ import annotations
 import inspect
 import itertools
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Callable, Literal, Mapping, overload
+from typing import TYPE_CHECKING, Any, Callable, Iterable, Literal, Mapping, overload
 
 import py_trees
 import py_trees.behaviours
@@ -23,10 +23,11 @@ import py_trees.behaviours
 from ..catalog import json_type
 from ..docstrings import attach as attach_docs
 from ..docstrings import unit_of
-from ._behaviours import ActorLeaf
+from ._behaviours import CallSite
 from ._errors import DuplicateTreeError, MissionError
 from ._library import SkippedTreeError, TreeLibrary
 from ._model import Mission, UseBehaviour, walk
+from ._plugins import PluginSpec, node_plugins, plugin_spec
 from ._run import TreeObserver, TreeRun
 from ._safety import mission_safety
 
@@ -63,6 +64,8 @@ class TreeHost:
             ``None`` ticks on events only.
         behaviour_period: the longest time between ticks for trees that contain
             ``behaviour:`` nodes, which may poll and so cannot wake the loop.
+        nodes: controls and decorators written in Python (marked classes) that
+            ``control:`` and ``decorator:`` may name, besides every registered one.
 
     Attributes:
         library: the parsed, validated missions.
@@ -70,12 +73,19 @@ class TreeHost:
     """
 
     def __init__(self, rt: Runtime, *, behaviours: Mapping[str, BehaviourFactory] | None = None,
-                 max_period: float | None = None, behaviour_period: float = 0.1) -> None:
+                 max_period: float | None = None, behaviour_period: float = 0.1,
+                 nodes: Iterable[type] = ()) -> None:
         self.rt = rt
         self.behaviours: dict[str, BehaviourFactory] = {**STANDARD_BEHAVIOURS, **(behaviours or {})}
+        self.nodes: dict[str, PluginSpec] = node_plugins()
+        for cls in nodes:
+            spec = plugin_spec(cls)
+            if spec is None:
+                raise TypeError(f"{cls.__qualname__} is not marked with @control_node or @decorator_node")
+            self.nodes[spec.name] = spec
         self.max_period = max_period
         self.behaviour_period = behaviour_period
-        self.library = TreeLibrary(resolver=self._resolve, behaviours=self.behaviours)
+        self.library = TreeLibrary(resolver=self._resolve, behaviours=self.behaviours, nodes=self.nodes)
         self.observers: list[TreeObserver] = []
         self._run_ids = itertools.count(1)
         self._runs_by_txn: dict[int, TreeRun] = {}
@@ -165,7 +175,7 @@ class TreeHost:
             return Path(file).resolve().parent != where
 
         old = self.library
-        fresh = TreeLibrary(resolver=self._resolve, behaviours=self.behaviours)
+        fresh = TreeLibrary(resolver=self._resolve, behaviours=self.behaviours, nodes=self.nodes)
         for mission in old:
             if outside(mission.file):
                 fresh.add(mission)
@@ -238,7 +248,12 @@ class TreeHost:
         kind = getattr(info, "kind", "sync")
         return info.path, getattr(kind, "value", kind)
 
-    def start_actor(self, run: TreeRun, leaf: ActorLeaf, args: tuple, kwargs: dict,
+    def node_plugin(self, name: str) -> PluginSpec:
+        """The control or decorator written in Python that ``control:``/``decorator:``
+        names (the library validated that it is there)."""
+        return self.nodes[name]
+
+    def start_actor(self, run: TreeRun, leaf: CallSite, args: tuple, kwargs: dict,
                     on_done: Callable[[Any], None]) -> Any:
         """Start the actor of an actor leaf and return its Transaction; replay overrides
         this to answer from a recording."""

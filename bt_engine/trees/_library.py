@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import inspect
 import re
-from collections.abc import Collection, Iterable, Iterator
+from collections.abc import Collection, Iterable, Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Literal, overload
@@ -25,6 +25,7 @@ from ..errors import ActorbtError, UnknownActorError
 from ._errors import DuplicateTreeError, MissionError, Pos
 from ._model import Do, Mission, walk
 from ._parse import read_mission
+from ._plugins import PluginSpec, node_plugins
 from ._validate import ActorInfo, Resolver, validate_mission
 
 __all__ = ["BrokenDependencyError", "SkippedTreeError", "TreeInfo", "TreeLibrary", "check_files", "load_mission"]
@@ -117,6 +118,8 @@ class TreeLibrary:
             (``rt.root.resolve``); ``None`` accepts any other name as an actor with
             an unknown signature (structure-only checking).
         behaviours: names ``behaviour:`` may use; ``None`` skips that check.
+        nodes: the controls and decorators written in Python that ``control:`` and
+            ``decorator:`` may name; by default every registered one.
 
     Attributes:
         broken: what tolerant loading skipped and why: tree name (or the file, for a
@@ -135,9 +138,11 @@ class TreeLibrary:
         lib.broken                        # {"bt_x": MissionError(...)}
     """
 
-    def __init__(self, resolver: Resolver | None = None, behaviours: Collection[str] | None = None) -> None:
+    def __init__(self, resolver: Resolver | None = None, behaviours: Collection[str] | None = None,
+                 nodes: Mapping[str, PluginSpec] | None = None) -> None:
         self.resolver = resolver
         self.behaviours = behaviours
+        self.nodes: dict[str, PluginSpec] = dict(node_plugins() if nodes is None else nodes)
         self._missions: dict[str, Mission] = {}
         self.broken: dict[str, MissionError] = {}
 
@@ -289,7 +294,8 @@ class TreeLibrary:
         errors: list[MissionError] = []
         for name in names if names is not None else list(self._missions):
             errors.extend(
-                validate_mission(self._missions[name], self.resolve, behaviours=self.behaviours, trees=self._missions)
+                validate_mission(self._missions[name], self.resolve, behaviours=self.behaviours, trees=self._missions,
+                                 nodes=self.nodes)
             )
         return sorted(errors, key=lambda e: (e.pos.file, e.pos.line, e.pos.column))
 
@@ -317,7 +323,8 @@ class TreeLibrary:
             mission = self._missions.get(name)
             if mission is None:
                 continue
-            errors = validate_mission(mission, self.resolve, behaviours=self.behaviours, trees=self._missions)
+            errors = validate_mission(mission, self.resolve, behaviours=self.behaviours, trees=self._missions,
+                                      nodes=self.nodes)
             if errors:
                 found[name] = min(errors, key=lambda e: (e.pos.line, e.pos.column))
         for name, error in found.items():

@@ -36,6 +36,9 @@ __all__ = [
     "Parallel",
     "ParallelPolicy",
     "PipelineSequence",
+    "PluginControl",
+    "PluginDecorator",
+    "PluginNode",
     "RateController",
     "ReactiveSelector",
     "ReactiveSequence",
@@ -446,6 +449,42 @@ class ForceFailure(Decorator):
     """Success becomes failure."""
 
     kind: ClassVar[str] = "force_failure"
+
+
+@dataclass(frozen=True, eq=False, kw_only=True)
+class PluginNode(Node):
+    """What a control or decorator written in Python (a plugin, see ``_plugins``) is
+    given by the mission.
+
+    Attributes:
+        plugin: the registered name (``control: RoundRobin``).
+        ports: input port values (``with:``): literals or references, in source order.
+        outs: output port -> the blackboard key it writes (``out:``).
+        port_pos: where each input value starts; out_pos: where each output key starts.
+    """
+
+    plugin: str
+    ports: Mapping[str, Any] = field(default_factory=dict)
+    outs: Mapping[str, str] = field(default_factory=dict)
+    port_pos: Mapping[str, Pos] = field(default_factory=dict)
+    out_pos: Mapping[str, Pos] = field(default_factory=dict)
+
+    def default_label(self) -> str:
+        return self.plugin
+
+
+@dataclass(frozen=True, eq=False, kw_only=True)
+class PluginControl(PluginNode, Composite):
+    """``control: Name``: a plugin control node over ``children:``."""
+
+    kind: ClassVar[str] = "control"
+
+
+@dataclass(frozen=True, eq=False, kw_only=True)
+class PluginDecorator(PluginNode, Decorator):
+    """``decorator: Name``: a plugin decorator over ``child:``."""
+
+    kind: ClassVar[str] = "decorator"
 
 
 @dataclass(frozen=True, eq=False, kw_only=True)

@@ -43,6 +43,8 @@ from ._model import (
     Parallel,
     ParallelPolicy,
     PipelineSequence,
+    PluginControl,
+    PluginDecorator,
     RateController,
     ReactiveSelector,
     ReactiveSequence,
@@ -100,13 +102,17 @@ _DECORATOR_EXAMPLES = {
 # composites whose children are a condition and one or two branches
 _BRANCHING = ("if_then_else", "while_do_else")
 _LEAVES = ("do", "condition", "set", "check", "wait", "behaviour")
+# controls and decorators written in Python, by their registered name
+_PLUGINS = ("control", "decorator")
 
 #: Every node type keyword, in the order the docs list them.
-NODE_TYPES: tuple[str, ...] = (*_COMPOSITES, *_DECORATOR_FIELDS, *_SIMPLE_DECORATORS, *_LEAVES)
+NODE_TYPES: tuple[str, ...] = (*_COMPOSITES, *_DECORATOR_FIELDS, *_SIMPLE_DECORATORS, *_PLUGINS, *_LEAVES)
 
 # Fields a node may carry besides its type keyword.
 _NODE_FIELDS: dict[str, tuple[str, ...]] = {"do": ("with", "out"), "condition": ("with", "out"),
-                                             "behaviour": ("with", "writes")}
+                                             "behaviour": ("with", "writes"),
+                                             "control": ("with", "out", "children"),
+                                             "decorator": ("with", "out", "child")}
 
 _IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
 _ACTOR_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*(\.[A-Za-z_][A-Za-z0-9_]*)*\Z")
@@ -388,6 +394,8 @@ class _Parser:
                 )
             common["name"] = name
         value = y.required(kind)
+        if kind in _PLUGINS:
+            return self.plugin(kind, y, value, common)
         if kind in _COMPOSITES:
             return self.composite(kind, value, common)
         if kind in _DECORATOR_FIELDS:
@@ -565,6 +573,39 @@ class _Parser:
         if seconds == 0:
             raise InvalidValueError(param_node.pos, "timeout seconds is 0, expected a number > 0")
         return Timeout(child=child, seconds=seconds, **common)
+
+    def plugin(self, kind: str, y: YMap, value: YNode, common: dict[str, Any]) -> Node:
+        """``control: Name`` with ``children:``, or ``decorator: Name`` with ``child:``;
+        ``with:`` gives the input ports, ``out:`` maps output ports to keys. Whether the
+        name, ports and child count fit the plugin is checked in ``_validate``."""
+        name = self.string(value, kind)
+        if not _IDENT.match(name):
+            raise InvalidValueError(value.pos, f"{kind} {shorten(name)} is not a node name, expected the name a "
+                                               f"plugin is registered under, e.g. RoundRobin")
+        ports: dict[str, Any] = {}
+        port_pos: dict[str, Pos] = {}
+        with_node = y.get("with")
+        if with_node is not None and not (isinstance(with_node, YScalar) and with_node.value is None):
+            for key, val in self.mapping(with_node, "with", "{distance: 1.0, goal: \"{goal}\"}").items:
+                port = self.ident(key, "port name")
+                ports[port] = self.value(val)
+                port_pos[port] = val.pos
+        outs: dict[str, str] = {}
+        out_pos: dict[str, Pos] = {}
+        out_node = y.get("out")
+        if out_node is not None:
+            for key, val in self.mapping(out_node, f"{kind} out", "{output_goal: goal}").items:
+                port = self.ident(key, "output port name")
+                outs[port] = self.ident(val, f"the key of output port {port!r}")
+                out_pos[port] = val.pos
+        fields = dict(plugin=name, ports=ports, outs=outs, port_pos=port_pos, out_pos=out_pos, **common)
+        if kind == "control":
+            if "children" not in y:
+                raise InvalidValueError(y.pos, f"control {name!r} has no 'children', expected a list of child nodes")
+            return PluginControl(children=self.children(f"control {name}", y.required("children")), **fields)
+        if "child" not in y:
+            raise InvalidValueError(y.pos, f"decorator {name!r} has no 'child', expected e.g. child: {{do: plan}}")
+        return PluginDecorator(child=self.node(y.required("child")), **fields)
 
     # ------------------------------------------------------------ leaves
 

@@ -16,11 +16,13 @@ import py_trees
 from py_trees.common import Status
 
 from ..signal import Signal
-from ._behaviours import ActorLeaf, CheckLeaf, ConditionLeaf, RepeatNode, RetryNode, SetLeaf, TimeoutNode, WaitLeaf
+from ._behaviours import (ActorLeaf, CallSite, CheckLeaf, ConditionLeaf, RepeatNode, RetryNode, SetLeaf, TimeoutNode,
+                          WaitLeaf)
 from ._blackboard import RunBlackboard
 from ._controls import (CountingParallel, IfThenElseNode, PipelineSequenceNode, RateControllerNode, RecoveryNode,
                         ResumeSequenceNode, RunOnceNode, WhileDoElseNode)
 from ._errors import TreeFailure
+from ._plugins import PluginSpec
 from ._model import (
     Check,
     Condition,
@@ -34,6 +36,7 @@ from ._model import (
     Parallel,
     ParallelPolicy,
     PipelineSequence,
+    PluginNode,
     RateController,
     ReactiveSelector,
     ReactiveSequence,
@@ -81,10 +84,10 @@ class TreeObserver:
     def tick_finished(self, run: TreeRun) -> None:
         """Tick ``run.ticks`` is over and its status changes were reported."""
 
-    def actor_started(self, run: TreeRun, leaf: ActorLeaf, args: tuple, kwargs: dict, txn: Any) -> None:
+    def actor_started(self, run: TreeRun, leaf: CallSite, args: tuple, kwargs: dict, txn: Any) -> None:
         """An actor leaf (``leaf.path``, ``leaf.node.actor``) started transaction ``txn``."""
 
-    def actor_finished(self, run: TreeRun, leaf: ActorLeaf, txn: Any) -> None:
+    def actor_finished(self, run: TreeRun, leaf: CallSite, txn: Any) -> None:
         """That transaction finished (``txn.state``, ``txn.result``, ``txn.error``)."""
 
     def blackboard_write(self, run: TreeRun, key: str, value: Any) -> None:
@@ -111,8 +114,10 @@ class RunHost(Protocol):
 
     def actor_target(self, name: str) -> tuple[str, str]: ...
 
-    def start_actor(self, run: "TreeRun", leaf: ActorLeaf, args: tuple, kwargs: dict,
+    def start_actor(self, run: "TreeRun", leaf: CallSite, args: tuple, kwargs: dict,
                     on_done: Callable[[Any], None]) -> Any: ...
+
+    def node_plugin(self, name: str) -> PluginSpec: ...
 
     def run_closed(self, run: "TreeRun") -> None: ...
 
@@ -127,6 +132,8 @@ def written_keys(mission: Mission) -> set[str]:
             keys.update(node.values)
         elif isinstance(node, UseBehaviour):
             keys.update(node.writes)
+        elif isinstance(node, PluginNode):
+            keys.update(node.outs.values())
     return keys
 
 
@@ -196,12 +203,15 @@ class TreeRun:
         """Ask for a tick soon."""
         self.signal.set()
 
-    def start_actor(self, leaf: ActorLeaf, args: tuple, kwargs: dict, on_done: Callable[[Any], None]) -> Any:
+    def start_actor(self, leaf: CallSite, args: tuple, kwargs: dict, on_done: Callable[[Any], None]) -> Any:
         txn = self.host.start_actor(self, leaf, args, kwargs, on_done)
         if self.observers:
             self._notify("actor_started", leaf, args, kwargs, txn)
             txn.add_done_callback(lambda t: self._notify("actor_finished", leaf, t))
         return txn
+
+    def actor_target(self, name: str) -> tuple[str, str]:
+        return self.host.actor_target(name)
 
     def halt_reason(self, node_path: str) -> str:
         if self._halt_reason is not None:
@@ -221,7 +231,13 @@ class TreeRun:
         kids = [self._make(child, self._path(path, child.label, taken)) for child in children_of(node)]
         label = path.rsplit("/", 1)[-1]
         b: py_trees.behaviour.Behaviour
-        if isinstance(node, Do):
+        if isinstance(node, PluginNode):
+            spec = self.host.node_plugin(node.plugin)
+            if spec.cls is None:
+                raise TypeError(f"{node.kind} {node.plugin!r} is declared but not implemented: write it (see "
+                                "docs/missions.md, 'Controls and decorators in Python')")
+            b = spec.cls(label, self, node, path, spec, kids)
+        elif isinstance(node, Do):
             leaf_class = ConditionLeaf if isinstance(node, Condition) else ActorLeaf
             b = leaf_class(label, self, node, *self.host.actor_target(node.actor), path=path)
         elif isinstance(node, SetValues):

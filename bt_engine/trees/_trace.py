@@ -46,14 +46,15 @@ from typing import IO, TYPE_CHECKING, Any, Callable, Protocol
 from py_trees.common import Status
 
 from ..transaction import TxnState
-from ._model import Do, walk
+from ._model import Do, PluginNode, walk
 from ._run import TreeObserver, TreeRun
 
 if TYPE_CHECKING:
-    from ._behaviours import ActorLeaf
+    from ._behaviours import CallSite
     from ._host import TreeHost
 
-__all__ = ["TRACE_FORMAT", "TRACE_VERSION", "EventBuilder", "TraceRecorder", "to_json", "tree_files"]
+__all__ = ["TRACE_FORMAT", "TRACE_VERSION", "EventBuilder", "TraceRecorder", "plugin_modules", "to_json",
+           "tree_files"]
 
 TRACE_FORMAT = "actorbt-trace"
 TRACE_VERSION = 1
@@ -98,6 +99,19 @@ def tree_files(host: TreeHost, root: str) -> dict[str, dict[str, str]]:
         mission = host.library[name]
         found[name] = {"file": _portable(mission.file), "sha256": mission.source_hash}
         todo.extend(n.actor for n in walk(mission.root) if isinstance(n, Do))
+    return found
+
+
+def plugin_modules(host: TreeHost, root: str) -> dict[str, str]:
+    """``{plugin node: the module that defines it}`` for the controls and decorators
+    written in Python that ``root`` and the trees it may call use (replay imports them)."""
+    found: dict[str, str] = {}
+    for name in tree_files(host, root):
+        for node in walk(host.library[name].root):
+            if isinstance(node, PluginNode) and node.plugin in host.nodes:
+                module = host.nodes[node.plugin].module
+                if module is not None:
+                    found[node.plugin] = module
     return found
 
 
@@ -164,7 +178,7 @@ class EventBuilder(TreeObserver):
             return
         self._emit(run, {"type": "write", "run": self._run(run), "key": key, "value": to_json(value)})
 
-    def actor_started(self, run: TreeRun, leaf: ActorLeaf, args: tuple, kwargs: dict, txn: Any) -> None:
+    def actor_started(self, run: TreeRun, leaf: CallSite, args: tuple, kwargs: dict, txn: Any) -> None:
         if self._skip(run):
             return
         self._call_count += 1
@@ -175,7 +189,7 @@ class EventBuilder(TreeObserver):
             "args": to_json(list(args)), "kwargs": to_json(kwargs),
         })
 
-    def actor_finished(self, run: TreeRun, leaf: ActorLeaf, txn: Any) -> None:
+    def actor_finished(self, run: TreeRun, leaf: CallSite, txn: Any) -> None:
         if self._skip(run):
             return
         event: dict[str, Any] = {"type": "return", "run": self._run(run), "path": leaf.path,
@@ -296,6 +310,7 @@ class TraceRecorder:
             "recorded": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
             "max_period": host.max_period, "behaviour_period": host.behaviour_period,
             "versions": _versions(), "trees": tree_files(host, tree),
+            "nodes": plugin_modules(host, tree),
         }
         self._write(header)
         host.observers.append(self.builder)

@@ -22,6 +22,7 @@ from ._errors import (
     SubtreeCycleError,
     UnknownBehaviourError,
     UnknownBlackboardKeyError,
+    UnknownNodeError,
     UnresolvedActorError,
     out_of_range,
     shorten,
@@ -30,6 +31,8 @@ from ._model import (
     Check,
     Do,
     Mission,
+    PluginControl,
+    PluginNode,
     RateController,
     Recovery,
     Ref,
@@ -44,6 +47,7 @@ from ._model import (
     walk,
 )
 from ._parse import suggest
+from ._plugins import InputPort, PluginSpec
 
 __all__ = ["MAX_ERRORS", "ActorInfo", "Resolver", "annotation_text", "annotation_type", "format_signature",
            "validate_mission"]
@@ -155,8 +159,10 @@ class _Validator:
         resolver: Resolver | None,
         behaviours: Collection[str] | None,
         trees: Mapping[str, Mission] | None,
+        nodes: Mapping[str, PluginSpec] | None = None,
     ) -> None:
         self.mission = mission
+        self.nodes = nodes
         self.resolver = resolver
         self.behaviours = behaviours
         self.trees = trees
@@ -194,6 +200,8 @@ class _Validator:
                 self.check_number(node.hz, ValueType.FLOAT, "rate_controller hz")
             elif isinstance(node, UseBehaviour):
                 self.check_behaviour(node)
+            elif isinstance(node, PluginNode):
+                self.check_plugin(node)
         for spec in self.mission.outputs:
             if spec.name not in self.key_types and not self.full:
                 self.errors.append(UnknownBlackboardKeyError(
@@ -338,6 +346,12 @@ class _Validator:
             elif isinstance(node, UseBehaviour):
                 for key in node.writes:
                     wrote(key, ValueType.ANY)
+            elif isinstance(node, PluginNode):
+                plugin = self.nodes.get(node.plugin) if self.nodes is not None else None
+                for port, key in node.outs.items():
+                    declared = plugin.outputs.get(port) if plugin is not None else None
+                    wrote(key, annotation_type(declared.type) or ValueType.ANY if declared is not None
+                          else ValueType.ANY)
         self.key_types = {k: (next(iter(v)) if len(v) == 1 else ValueType.ANY) for k, v in types.items()}
 
     def ref_type(self, ref: Ref) -> ValueType:
@@ -390,6 +404,68 @@ class _Validator:
             f"unknown behaviour {node.behaviour!r}{suggest(node.behaviour, known)}, "
             f"expected a registered behaviour: {', '.join(known) or '(none registered)'}",
         ))
+
+    def check_plugin(self, node: PluginNode) -> None:
+        """A control or decorator written in Python: its name, child count, ports (names
+        and literal types) and the actors its ports name, against its spec."""
+        for value in node.ports.values():
+            self.check_refs(value)
+        if self.nodes is None:
+            return
+        spec = self.nodes.get(node.plugin)
+        if spec is None:
+            known = sorted(n for n, s in self.nodes.items() if s.kind == node.kind)
+            self.errors.append(UnknownNodeError(
+                node.at(node.kind),
+                f"unknown {node.kind} {node.plugin!r}{suggest(node.plugin, known)}, expected a registered "
+                f"{node.kind} node: {', '.join(known) or '(none registered)'}"))
+            return
+        if spec.kind != node.kind:
+            field = "children: [...]" if spec.kind == "control" else "child: {...}"
+            self.errors.append(InvalidValueError(
+                node.at(node.kind), f"{node.plugin!r} is a {spec.kind} node, expected {spec.kind}: {node.plugin} "
+                                    f"with {field}"))
+            return
+        if isinstance(node, PluginControl):
+            lo, hi = spec.child_count
+            n = len(node.children)
+            if n < lo or hi is not None and n > hi:
+                wanted = f"{lo}" if lo == hi else f"{lo} to {hi}" if hi is not None else f"at least {lo}"
+                self.errors.append(InvalidValueError(
+                    node.at("children"), f"control {node.plugin!r} has {n} children, expected {wanted}"))
+        inputs = spec.inputs
+        for name, value in node.ports.items():
+            port = spec.ports.get(name)
+            if not isinstance(port, InputPort):
+                what = "is an output port, expected it under out:" if port is not None else \
+                    f"is not a port of it{suggest(name, inputs)}, expected one of: {', '.join(inputs) or '(none)'}"
+                self.errors.append(ArgumentMismatchError(node.port_pos.get(name, node.at("with")),
+                                                         f"{node.kind} {node.plugin!r}: {name!r} {what}"))
+                continue
+            expected = annotation_type(port.type)
+            if expected is not None:
+                self.check_type(value, expected, node.port_pos.get(name, node.at("with")),
+                                f"port {name!r} of {node.kind} {node.plugin!r}")
+            if port.actor and isinstance(value, str) and self.resolver is not None:
+                self.check_named_actor(value, node.port_pos.get(name, node.at("with")))
+        outputs = spec.outputs
+        for name in node.outs:
+            if name not in outputs:
+                self.errors.append(ArgumentMismatchError(
+                    node.out_pos.get(name, node.at("out")),
+                    f"{node.kind} {node.plugin!r} has no output port {name!r}{suggest(name, outputs)}, "
+                    f"expected one of: {', '.join(outputs) or '(none)'}"))
+
+    def check_named_actor(self, name: str, pos: Pos) -> None:
+        """An actor a plugin's port names, resolved as a ``do:`` target is."""
+        assert self.resolver is not None
+        try:
+            self.resolver(name)
+        except (LookupError, ActorbtError) as exc:
+            suggestions = getattr(exc, "suggestions", None) or []
+            hint = f" (did you mean {' or '.join(repr(s) for s in suggestions)}?)" if suggestions else ""
+            self.errors.append(UnresolvedActorError(pos, f"unknown actor {shorten(name)}{hint}, expected a "
+                                                         "registered actor or tree name"))
 
     def tree_calls(self, mission: Mission) -> Iterator[tuple[str, Do]]:
         assert self.trees is not None
@@ -444,6 +520,7 @@ def validate_mission(
     *,
     behaviours: Collection[str] | None = None,
     trees: Mapping[str, Mission] | None = None,
+    nodes: Mapping[str, PluginSpec] | None = None,
 ) -> list[MissionError]:
     """Every load-time problem of a parsed mission, sorted by position (empty if none).
 
@@ -452,5 +529,6 @@ def validate_mission(
         resolver: ``name -> ActorInfo`` for ``do:`` targets; ``None`` skips actor checks.
         behaviours: names accepted by ``behaviour:``; ``None`` skips that check.
         trees: missions by name, to follow ``do:`` calls between trees for cycles.
+        nodes: plugin controls and decorators by name; ``None`` skips that check.
     """
-    return _Validator(mission, resolver, behaviours, trees).run()
+    return _Validator(mission, resolver, behaviours, trees, nodes).run()
