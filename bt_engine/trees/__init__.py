@@ -107,7 +107,9 @@ from ._run import TreeObserver, TreeRun, node_path
 from ._safety import mission_safety
 from ._trace import TRACE_FORMAT, TRACE_VERSION, EventBuilder, TraceRecorder, to_json
 from ._validate import ActorInfo, Resolver, annotation_text, annotation_type, validate_mission
-from . import nav2_nodes  # noqa: F401,E402 - registers Nav2's controls and decorators
+# imported here so that Nav2's controls and decorators are registered whenever missions load
+from .nav2_nodes import (DistanceController, GoalUpdatedController, GoalUpdater, PathLongerOnApproach, RoundRobin,
+                         SpeedController)
 
 __all__ = [
     "ActorCall",
@@ -127,6 +129,7 @@ __all__ = [
     "ControlNode",
     "Decorator",
     "DecoratorNode",
+    "DistanceController",
     "Do",
     "DuplicateKeyError",
     "DuplicateTreeError",
@@ -135,6 +138,8 @@ __all__ = [
     "ExprSyntaxError",
     "ForceFailure",
     "ForceSuccess",
+    "GoalUpdatedController",
+    "GoalUpdater",
     "IfThenElse",
     "InputError",
     "InputPort",
@@ -156,6 +161,7 @@ __all__ = [
     "OutputSpec",
     "Parallel",
     "ParallelPolicy",
+    "PathLongerOnApproach",
     "PipelineSequence",
     "PluginCallError",
     "PluginControl",
@@ -174,6 +180,7 @@ __all__ = [
     "Resolver",
     "ResumeSequence",
     "Retry",
+    "RoundRobin",
     "RunOnce",
     "RunOnceThen",
     "STANDARD_BEHAVIOURS",
@@ -181,6 +188,7 @@ __all__ = [
     "Sequence",
     "SetValues",
     "SkippedTreeError",
+    "SpeedController",
     "SubtreeCycleError",
     "TRACE_FORMAT",
     "TRACE_VERSION",

@@ -14,6 +14,7 @@ reading it fails the node at run time, with a message that names the port.
 
 from __future__ import annotations
 
+import inspect
 from dataclasses import dataclass, field
 from typing import Any, Callable, Mapping, TypeVar
 
@@ -160,7 +161,6 @@ def _mark(kind: str, base: str, name: str | None, child_count: tuple[int, int | 
         lo, hi = child_count
         if lo < 1 or hi is not None and hi < lo:
             raise TypeError(f"@{kind}_node: child_count {child_count!r} is not a range of at least one child")
-        import inspect
         spec = PluginSpec(name or cls.__name__, kind, ports, inspect.cleandoc(cls.__doc__ or ""), child_count, cls)
         setattr(cls, SPEC_ATTR, spec)
         register_node(cls)
