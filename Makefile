@@ -57,11 +57,11 @@ $(STAMP): pyproject.toml | $(IFACE_STAMP)
 venv: $(STAMP)
 
 # the linter and the engine's type check first (seconds), then the suite on one worker
-# per core (pytest-xdist); a test file stays in one worker
+# per core (pytest-xdist); a test file stays in one worker; the slowest tests are listed at the end
 test: $(STAMP)
 	$(PY) -m ruff check .
 	$(PY) -m mypy
-	$(PY) -m pytest -q -n auto --dist loadfile
+	$(PY) -m pytest -q -n auto --dist loadfile --durations=25
 
 demo: $(STAMP)
 	$(VENV)/bin/actorbt demo
