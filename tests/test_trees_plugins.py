@@ -230,6 +230,100 @@ root:
     assert rt.stats() == {"transactions": 0, "tasks": 0}
 
 
+def test_path_longer_on_approach_ticks_the_child_only_for_a_detour_near_the_goal(w: World) -> None:
+    near = [(0.0, 0.0), (1.0, 0.0), (2.0, 0.0)]                  # 2 m, under prox_len
+    detour = [(0.0, 0.0), (0.0, 3.0), (2.0, 3.0), (2.0, 0.0)]    # 8 m to the same goal: > 2 x 2 m
+    run = w.tree("""
+        name: ploa
+        inputs: {path: any}
+        root:
+          name: ploa
+          decorator: PathLongerOnApproach
+          with: {path: "{path}", prox_len: 3.0, length_factor: 2.0}
+          child: {name: replan, do: act, with: {tag: replan}}
+    """, path=near)
+    w.table(run, "ploa replan", [
+        (None,                                       "S", "I"),   # the first path: nothing to compare
+        (None,                                       "S", "I"),   # the same path
+        (w.write(run, "path", detour),               "R", "R"),   # a detour on approach
+        (w.finish("replan"),                         "S", "I"),   # the child's success, then halted
+        (w.write(run, "path", [(0.0, 0.0), (5.0, 5.0)]), "S", "I"),  # another goal: compared from now on
+    ])
+    assert w.script.started == ["replan"]
+
+
+def test_goal_updater_takes_the_newer_goal_its_actor_answers(rt: Runtime, tmp_path: Path) -> None:
+    class Goals(SubSystem):
+        newer: dict | None = None
+
+        @actor
+        def latest(self) -> dict | None:
+            return self.newer
+
+        @actor
+        def follow(self, goal: dict) -> dict:
+            return goal
+
+    goals = rt.add_subsystem("goals", Goals)
+    (tmp_path / "gu.yaml").write_text("""\
+name: gu
+inputs: {goal: {type: dict}}
+outputs: [followed]
+root:
+  decorator: GoalUpdater
+  with: {input_goal: "{goal}", updates: latest}
+  out: {output_goal: current}
+  child: {do: follow, with: {goal: "{current}"}, out: followed}
+""")
+    TreeHost(rt).load_folder(tmp_path)
+    assert rt.call("gu", goal={"x": 1}) == {"followed": {"x": 1}}   # no update: the goal given
+    goals.newer = {"x": 7}
+    assert rt.call("gu", goal={"x": 1}) == {"followed": {"x": 7}}
+
+
+class Cruiser(Robot):
+    """The Robot at a speed of one's choice, noting when it plans."""
+
+    speed = 1.0
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.plan_times: list[float] = []
+
+    @actor
+    def plan(self) -> None:
+        self.plan_times.append(round(self.runtime.now(), 3))
+
+    @actor
+    def cruise(self, seconds: float) -> None:
+        for _ in range(round(seconds / 0.25)):
+            self.runtime.sleep(0.25)
+            self.x += 0.25 * self.speed
+
+
+@pytest.mark.parametrize("speed, plans", [
+    (1.0, [0.0, 0.5, 1.0, 1.5, 2.0, 2.5]),   # 2 Hz at max_speed
+    (0.0, [0.0, 0.5, 2.5]),                  # the first period at max_rate, then 0.5 Hz standing still
+])
+def test_speed_controller_ticks_the_child_faster_the_faster_the_robot(rt: Runtime, tmp_path: Path,
+                                                                        speed: float, plans: list[float]) -> None:
+    robot = rt.add_subsystem("robot", Cruiser)
+    robot.speed = speed
+    (tmp_path / "sc.yaml").write_text("""\
+name: sc
+root:
+  pipeline_sequence:
+    - decorator: SpeedController
+      with: {min_rate: 0.5, max_rate: 2.0, min_speed: 0.0, max_speed: 1.0, pose_actor: where}
+      child: {do: plan}
+    - {do: cruise, with: {seconds: 3.0}}
+""")
+    TreeHost(rt).load_folder(tmp_path)
+    rt.call("sc")
+    assert robot.plan_times == plans
+    assert rt.stats() == {"transactions": 0, "tasks": 0}
+
+
 def test_an_unset_port_fails_the_node_at_run_time(w: World) -> None:
     run = w.tree("""
         name: unset
