@@ -222,6 +222,8 @@ BUILTINS: dict[str, Handler] = {
     "Sequence": _composite("sequence"),
     "ReactiveSequence": _composite("reactive_sequence"),
     "SequenceWithMemory": _composite("resume_sequence"),
+    # BehaviorTree.CPP 3's name for it (Nav2 Humble's trees still use it)
+    "SequenceStar": _composite("resume_sequence"),
     "Fallback": _composite("selector"),
     "ReactiveFallback": _composite("reactive_selector"),
     "Parallel": _parallel,

@@ -12,7 +12,9 @@ from __future__ import annotations
 import enum
 import inspect
 import json
+import math
 import re
+import sys
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable, Iterable
@@ -112,12 +114,24 @@ class NodeSpec:
                 continue
             default: Any = UNSET
             if port.default is not None and not _is_reference(port.default):
-                default = convert_literal(port.default, port.type)
+                default = self._default(port)
             elif port.default is not None or port.writes:
                 default = None
             params.append(inspect.Parameter(port.name, inspect.Parameter.KEYWORD_ONLY, default=default,
                                             annotation=python_type(port.type)))
         return inspect.Signature(params, return_annotation=inspect.Signature.empty)
+
+    def _default(self, port: PortSpec) -> Any:
+        """A port's declared default, converted by its type.
+
+        Raises:
+            BtXmlError: at the port, the default is not a value of its type.
+        """
+        assert port.default is not None
+        try:
+            return convert_literal(port.default, port.type)
+        except ValueError as exc:
+            raise BtXmlError(port.pos, f"the default of port '{port.name}' of node '{self.id}': {exc}") from None
 
     def plugin_spec(self) -> PluginSpec:
         """A Control or Decorator as the spec of a plugin that is still to be written
@@ -129,7 +143,7 @@ class NodeSpec:
             if port.reads:
                 default: Any = UNSET
                 if port.default is not None:
-                    default = port.default if _is_reference(port.default) else convert_literal(port.default, port.type)
+                    default = port.default if _is_reference(port.default) else self._default(port)
                 ports[port.name] = InputPort(ptype, default, port.description)
             else:
                 ports[port.name] = OutputPort(ptype, port.description)
@@ -158,7 +172,36 @@ def python_type(type_name: str) -> Any:
 
 
 _INT = re.compile(r"[+-]?[0-9]+\Z")
-_FLOAT = re.compile(r"[+-]?([0-9]+\.[0-9]*|\.[0-9]+|[0-9]+)([eE][+-]?[0-9]+)?\Z")
+#: a number as std::stod reads one (also inf, infinity and nan, in any case)
+_FLOAT = re.compile(r"[+-]?(([0-9]+\.[0-9]*|\.[0-9]+|[0-9]+)([eE][+-]?[0-9]+)?|inf|infinity|nan)\Z", re.I)
+#: a C++ numeric limit as node models write defaults: ``std::numeric_limits<double>::infinity()``
+_LIMIT = re.compile(r"(?P<sign>[+-]?)\s*(std::)?numeric_limits\s*<\s*(?P<type>[\w:\s]+?)\s*>\s*::\s*"
+                    r"(?P<which>infinity|max|lowest|min|epsilon)\s*\(\s*\)\Z")
+_FLOAT_LIMITS = {"infinity": math.inf, "max": sys.float_info.max, "lowest": -sys.float_info.max,
+                 "min": sys.float_info.min, "epsilon": sys.float_info.epsilon}
+#: bits of the integer types a limit may name (signed unless ``unsigned``/``uint``)
+_INT_BITS = {"short": 16, "int": 32, "long": 64, "size_t": 64}
+
+
+def numeric_limit(text: str) -> float | int | None:
+    """The value of a ``numeric_limits<T>::which()`` default, or None for other text.
+    Floating types are taken as double; BehaviorTree.CPP reads these defaults as C++."""
+    found = _LIMIT.match(text.strip())
+    if found is None:
+        return None
+    ctype, which = found["type"].replace("std::", "").strip(), found["which"]
+    value: float | int
+    if ctype in _FLOAT_TYPES:
+        value = _FLOAT_LIMITS[which]
+    else:
+        bits_match = re.search(r"(\d+)_t\Z", ctype)
+        bits = int(bits_match.group(1)) if bits_match else _INT_BITS.get(ctype.split()[-1], 32)
+        unsigned = ctype.startswith(("unsigned", "uint", "size_t"))
+        top = 2 ** bits - 1 if unsigned else 2 ** (bits - 1) - 1
+        bottom = 0 if unsigned else -top - 1
+        limits = {"max": top, "lowest": bottom, "min": bottom, "infinity": 0, "epsilon": 0}
+        value = limits[which]
+    return -value if found["sign"] == "-" else value
 
 
 def _is_reference(text: str) -> bool:
@@ -200,6 +243,9 @@ def convert_literal(text: str, type_name: str) -> Any:
     if text.strip().startswith(JSON_PREFIX):
         return decode_json(text)
     annotation = python_type(type_name)
+    limit = numeric_limit(text) if annotation in (int, float) else None
+    if limit is not None:
+        return annotation(limit)
     if annotation is int:
         if not _INT.match(text.strip()):
             raise ValueError(f"{text!r} is not an integer")

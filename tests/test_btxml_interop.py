@@ -5,14 +5,17 @@ round trip."""
 
 from __future__ import annotations
 
+import math
+import sys
 from pathlib import Path
 
 import pytest
 
-from bt_xml import Exporter, import_files, mission_differences, read_node_model, write_missions
+from bt_xml import BtXmlError, Exporter, import_files, mission_differences, read_node_model, write_missions
 from bt_engine.trees import (STANDARD_BEHAVIOURS, PluginNode, TreeLibrary, check_files, node_plugins,
                              parse_mission, read_mission, walk)
 from bt_tools.cli import unwritten_plugins
+from bt_xml._nodes import convert_literal
 
 DATA = Path(__file__).parent / "data" / "btxml"
 NAV2 = DATA / "nav2_jazzy"
@@ -62,6 +65,29 @@ def test_a_model_port_without_a_default_is_optional(tmp_path: Path) -> None:
     model = read_node_model([NAV2 / "nav2_tree_nodes.xml"])
     signature = model["ComputePathToPose"].signature()
     assert repr(signature.parameters["start"].default) == "unset"
+
+
+@pytest.mark.parametrize("text, ctype, value", [
+    ("numeric_limits<double>::infinity()", "double", math.inf),      # Nav2 rolling's model writes this
+    ("-std::numeric_limits<double>::infinity()", "double", -math.inf),
+    ("std::numeric_limits<float>::max()", "double", sys.float_info.max),
+    ("std::numeric_limits<int>::max()", "int", 2 ** 31 - 1),
+    ("std::numeric_limits<uint16_t>::max()", "unsigned int", 2 ** 16 - 1),
+    ("inf", "double", math.inf),                                     # as std::stod reads it
+])
+def test_a_model_default_may_be_a_cpp_numeric_limit(text: str, ctype: str, value: float) -> None:
+    assert convert_literal(text, ctype) == value
+
+
+def test_a_model_default_of_the_wrong_type_is_located(tmp_path: Path) -> None:
+    (tmp_path / "model.xml").write_text("""<root BTCPP_format="4"><TreeNodesModel>
+      <Action ID="Drive">
+        <input_port name="speed" type="double" default="fast"/></Action></TreeNodesModel></root>""")
+    (tmp_path / "t.xml").write_text("""<root BTCPP_format="4"><BehaviorTree ID="T"><Drive/></BehaviorTree></root>""")
+    model = read_node_model([tmp_path / "model.xml"])
+    with pytest.raises(BtXmlError, match=r"model.xml:3:9: the default of port 'speed' of node 'Drive': 'fast' is not "
+                                         r"a number"):
+        write_missions(import_files([tmp_path / "t.xml"], model), tmp_path / "out", "t.xml")
 
 
 def test_the_actor_demo_imports_as_one_pytwb_workbench(tmp_path: Path) -> None:
