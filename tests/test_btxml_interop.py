@@ -83,11 +83,10 @@ def test_a_model_default_of_the_wrong_type_is_located(tmp_path: Path) -> None:
     (tmp_path / "model.xml").write_text("""<root BTCPP_format="4"><TreeNodesModel>
       <Action ID="Drive">
         <input_port name="speed" type="double" default="fast"/></Action></TreeNodesModel></root>""")
-    (tmp_path / "t.xml").write_text("""<root BTCPP_format="4"><BehaviorTree ID="T"><Drive/></BehaviorTree></root>""")
     model = read_node_model([tmp_path / "model.xml"])
     with pytest.raises(BtXmlError, match=r"model.xml:3:9: the default of port 'speed' of node 'Drive': 'fast' is not "
                                          r"a number"):
-        write_missions(import_files([tmp_path / "t.xml"], model), tmp_path / "out", "t.xml")
+        model["Drive"].signature()  # what checking a tree that calls Drive asks for
 
 
 def test_the_actor_demo_imports_as_one_pytwb_workbench(tmp_path: Path) -> None:
