@@ -11,6 +11,7 @@
 Other packages (``demo``, ``mcp``) use the names exported here. Each is imported on first
 use (PEP 562), so declaring the commands stays quick.
 """
+
 from __future__ import annotations
 
 import importlib
@@ -23,8 +24,7 @@ if TYPE_CHECKING:
 __all__ = ["App", "Config", "ConfigError", "find_config", "load_config"]
 
 #: name -> the module that defines it
-_HOMES = {"App": "app", "Config": "config", "ConfigError": "config", "find_config": "config",
-          "load_config": "config"}
+_HOMES = {"App": "app", "Config": "config", "ConfigError": "config", "find_config": "config", "load_config": "config"}
 
 
 def __getattr__(name: str) -> Any:

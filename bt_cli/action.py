@@ -14,6 +14,7 @@ those with a server or only a client anywhere.
 Exit status: 0; 2 for a bad option; 130 on Ctrl-C. Nothing here imports ROS, the
 simulator or the robot until the command runs.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -30,25 +31,36 @@ if TYPE_CHECKING:
 
 def register(sub: argparse._SubParsersAction, common: Callable[[argparse.ArgumentParser], None]) -> None:
     p = sub.add_parser(
-        "action", help="the robot's actions: list (like ros2 action)",
+        "action",
+        help="the robot's actions: list (like ros2 action)",
         description="Look at the robot's actions as `ros2 action` does. On the local bus they "
-                    "are the actions served by the runtime actorbt.yaml names (its subsystems "
-                    "and world, started here); with --bus ros, those of the ROS graph (a robot, "
-                    "or an `actorbt sim run --bus ros` in another process).")
+        "are the actions served by the runtime actorbt.yaml names (its subsystems "
+        "and world, started here); with --bus ros, those of the ROS graph (a robot, "
+        "or an `actorbt sim run --bus ros` in another process).",
+    )
     asub = p.add_subparsers(dest="action_command", metavar="ACTION_COMMAND")
     asub.required = True
 
     q = asub.add_parser(
-        "list", help="list the actions (with -t, their types)",
-        description="List every action on the bus, one per line; with -t, each with its type "
-                    "in brackets.")
-    q.add_argument("-t", "--show-types", action="store_true",
-                   help="Show each action's type after its name, as [package/action/Name].")
-    q.add_argument("--json", action="store_true",
-                   help="Print a JSON list of the actions: name and type.")
-    q.add_argument("--wait", type=float, default=1.0, metavar="S",
-                   help="With --bus ros: discover the ROS graph for S seconds before listing "
-                        "(default 1; a robot over Wi-Fi may need more).")
+        "list",
+        help="list the actions (with -t, their types)",
+        description="List every action on the bus, one per line; with -t, each with its type in brackets.",
+    )
+    q.add_argument(
+        "-t",
+        "--show-types",
+        action="store_true",
+        help="Show each action's type after its name, as [package/action/Name].",
+    )
+    q.add_argument("--json", action="store_true", help="Print a JSON list of the actions: name and type.")
+    q.add_argument(
+        "--wait",
+        type=float,
+        default=1.0,
+        metavar="S",
+        help="With --bus ros: discover the ROS graph for S seconds before listing "
+        "(default 1; a robot over Wi-Fi may need more).",
+    )
     common(q)
     q.set_defaults(func=cmd_list)
 
@@ -71,4 +83,5 @@ def cmd_list(args: argparse.Namespace, app: App) -> int:
         for a in found:
             print(f"{a.name} [{a.type}]" if args.show_types else a.name)
         return 0
+
     return _run(args, app, body)

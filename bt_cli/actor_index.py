@@ -6,6 +6,7 @@ subsystems in a runtime without a world, when the configured subsystems change o
 source file it was built from changes size or modification time. Building it imports
 the robot's code (planning, pybullet, ROS messages); reading it imports none of that.
 """
+
 from __future__ import annotations
 
 import inspect
@@ -59,8 +60,16 @@ class ActorEntry:
 
     @classmethod
     def of(cls, ref: ActorRef) -> "ActorEntry":
-        return cls(ref.path, ref.name, ref.kind.value, ref.is_tree, ref.doc, ref.signature,
-                   str(ref.signature), tool_schema(ref))
+        return cls(
+            ref.path,
+            ref.name,
+            ref.kind.value,
+            ref.is_tree,
+            ref.doc,
+            ref.signature,
+            str(ref.signature),
+            tool_schema(ref),
+        )
 
     @property
     def safety(self) -> Safety:
@@ -71,8 +80,7 @@ class ActorEntry:
             bounds = schema if "minimum" in schema or "maximum" in schema else schema.get("items", {})
             if "minimum" in bounds or "maximum" in bounds:
                 limits[name] = (bounds.get("minimum"), bounds.get("maximum"))
-        return Safety(moves=bool(self.tool.get("moves")), read_only=bool(self.tool.get("read_only")),
-                      limits=limits)
+        return Safety(moves=bool(self.tool.get("moves")), read_only=bool(self.tool.get("read_only")), limits=limits)
 
     def text_lines(self) -> list[str]:
         """What ``actorbt catalog`` prints below the signature: the docstring without
@@ -81,20 +89,38 @@ class ActorEntry:
 
     def to_json(self) -> dict[str, Any]:
         sig = self.signature
-        return {"path": self.path, "name": self.name, "kind": self.kind, "is_tree": self.is_tree,
-                "doc": self.doc, "shown": self.shown, "tool": self.tool,
-                "params": [{"name": p.name, "kind": p.kind.name, "annotation": _annotation_out(p.annotation),
-                            **({} if p.default is p.empty else {"default": repr(p.default)})}
-                           for p in sig.parameters.values()],
-                "returns": _annotation_out(sig.return_annotation)}
+        return {
+            "path": self.path,
+            "name": self.name,
+            "kind": self.kind,
+            "is_tree": self.is_tree,
+            "doc": self.doc,
+            "shown": self.shown,
+            "tool": self.tool,
+            "params": [
+                {
+                    "name": p.name,
+                    "kind": p.kind.name,
+                    "annotation": _annotation_out(p.annotation),
+                    **({} if p.default is p.empty else {"default": repr(p.default)}),
+                }
+                for p in sig.parameters.values()
+            ],
+            "returns": _annotation_out(sig.return_annotation),
+        }
 
     @classmethod
     def from_json(cls, d: dict[str, Any]) -> "ActorEntry":
         empty = inspect.Parameter.empty
-        params = [inspect.Parameter(p["name"], getattr(inspect.Parameter, p["kind"]),
-                                    default=_Shown(p["default"]) if "default" in p else empty,
-                                    annotation=_annotation_in(p["annotation"]))
-                  for p in d["params"]]
+        params = [
+            inspect.Parameter(
+                p["name"],
+                getattr(inspect.Parameter, p["kind"]),
+                default=_Shown(p["default"]) if "default" in p else empty,
+                annotation=_annotation_in(p["annotation"]),
+            )
+            for p in d["params"]
+        ]
         sig = inspect.Signature(params, return_annotation=_annotation_in(d["returns"]))
         return cls(d["path"], d["name"], d["kind"], d["is_tree"], d["doc"], sig, d["shown"], d["tool"])
 
@@ -104,6 +130,7 @@ def _annotation_out(annotation: Any) -> dict[str, Any] | None:
     if annotation is inspect.Parameter.empty:
         return None
     from bt_engine.trees import annotation_text, annotation_type
+
     vtype = annotation_type(annotation)
     return {"text": annotation_text(annotation), "type": vtype.value if vtype else None}
 
@@ -112,6 +139,7 @@ def _annotation_in(d: dict[str, Any] | None) -> Any:
     if d is None:
         return inspect.Parameter.empty
     from bt_engine.trees import ValueType, annotation_type
+
     vtype = ValueType(d["type"]) if d["type"] else None
     if annotation_type(d["text"]) == vtype:
         return d["text"]  # as a postponed annotation: "float", "list[float]", "Twist"
@@ -155,8 +183,12 @@ class ActorIndex:
     # -- storage -------------------------------------------------------------------------
     def save(self, path: Path, subsystems: dict[str, str], sources: dict[str, list[int]]) -> None:
         """Write the index with what it depends on; a folder we cannot write is no error."""
-        data = {"version": INDEX_VERSION, "subsystems": subsystems, "sources": sources,
-                "actors": [e.to_json() for e in self.entries]}
+        data = {
+            "version": INDEX_VERSION,
+            "subsystems": subsystems,
+            "sources": sources,
+            "actors": [e.to_json() for e in self.entries],
+        }
         tmp = path.with_name(f"{path.name}.{os.getpid()}.tmp")
         try:
             path.parent.mkdir(parents=True, exist_ok=True)

@@ -3,6 +3,7 @@
 Commands that only need to know the actors (``check``, ``list``, ``catalog``) read the
 :class:`~bt_cli.actor_index.ActorIndex` instead (see that module).
 """
+
 from __future__ import annotations
 
 import argparse
@@ -30,7 +31,7 @@ class App:
     def __init__(self, args: argparse.Namespace, cfg: Config | None = None) -> None:
         self.args = args
         self.cfg: Config = cfg if cfg is not None else load_config(getattr(args, "config", None))
-        run_imports(self.cfg)       # what they register (object categories) must be known first
+        run_imports(self.cfg)  # what they register (object categories) must be known first
         self.world: Any = None
         self._warned: set[str] = set()
 
@@ -45,9 +46,15 @@ class App:
         other._warned = self._warned
         return other
 
-    def runtime(self, clock: str | None = None, with_world: bool = True, *,
-                watchdog: float | None = 0.5, world_first: bool = False,
-                world_setup: Callable[[Any], None] | None = None) -> Runtime:
+    def runtime(
+        self,
+        clock: str | None = None,
+        with_world: bool = True,
+        *,
+        watchdog: float | None = 0.5,
+        world_first: bool = False,
+        world_setup: Callable[[Any], None] | None = None,
+    ) -> Runtime:
         """A runtime with everything actorbt.yaml names, and the world started.
 
         Args:
@@ -129,6 +136,7 @@ class App:
 
     def _tree_entries(self, folder: Path, index: ActorIndex) -> list[ActorEntry]:
         from bt_engine.trees import TreeHost
+
         rt = Runtime(clock="virtual")
         try:
             host = TreeHost(rt)
@@ -183,14 +191,14 @@ class App:
         if spec is None:
             return
         if not self.cfg.simulator:
-            raise ConfigError("a world is configured but actorbt.yaml names no simulator "
-                              "(e.g. simulator: sim:start_world)")
+            raise ConfigError(
+                "a world is configured but actorbt.yaml names no simulator (e.g. simulator: sim:start_world)"
+            )
         start = import_object(self.cfg.simulator, "simulator")
         # the locations file goes only to a simulator that is given one (the engine does
         # not read it: it is the simulator's business)
         extra = {"locations": spec["locations"]} if spec.get("locations") else {}
-        self.world = start(rt, spec["name"], seed=int(spec.get("seed", 0)),
-                           gui=bool(spec.get("gui", False)), **extra)
+        self.world = start(rt, spec["name"], seed=int(spec.get("seed", 0)), gui=bool(spec.get("gui", False)), **extra)
         log.info("world %s (seed %s) started", spec["name"], spec.get("seed", 0))
         if setup is not None:
             setup(self.world)

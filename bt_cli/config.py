@@ -19,6 +19,7 @@
 Every command imports the plugins (``--help`` lists their commands), so a plugin keeps
 only argparse wiring at module level and imports its implementation when it runs.
 """
+
 from __future__ import annotations
 
 import importlib
@@ -62,10 +63,11 @@ class Config:
         return (self.base / self.trees) if self.trees else None
 
 
-_FIELDS = {"subsystems", "trees", "world", "simulator", "transport", "clock", "plugins", "imports", "mcp",
-           "robot"}
-ROBOT_EXAMPLE = ("robot: {body: {size: [0.28, 0.31, 0.14], x: -0.06}, topics: [{name: /camera/image_raw, "
-                 "type: sensor_msgs/msg/Image, qos: sensor, compress: true}]}")
+_FIELDS = {"subsystems", "trees", "world", "simulator", "transport", "clock", "plugins", "imports", "mcp", "robot"}
+ROBOT_EXAMPLE = (
+    "robot: {body: {size: [0.28, 0.31, 0.14], x: -0.06}, topics: [{name: /camera/image_raw, "
+    "type: sensor_msgs/msg/Image, qos: sensor, compress: true}]}"
+)
 
 
 def find_config(start: pathlib.Path | None = None) -> pathlib.Path | None:
@@ -103,17 +105,25 @@ def load_config(path: "str | pathlib.Path | None" = None) -> Config:
     world = data.get("world")
     if isinstance(world, str):
         world = {"name": world}
-    return Config(path=p, subsystems=dict(data.get("subsystems") or {}),
-                  trees=data.get("trees", "trees"), world=world,
-                  simulator=data.get("simulator"), transport=data.get("transport", "local"),
-                  clock=data.get("clock", "virtual"), plugins=list(data.get("plugins") or []),
-                  imports=[str(i) for i in data.get("imports") or []], mcp=dict(mcp),
-                  robot=_robot_section(p, data.get("robot")))
+    return Config(
+        path=p,
+        subsystems=dict(data.get("subsystems") or {}),
+        trees=data.get("trees", "trees"),
+        world=world,
+        simulator=data.get("simulator"),
+        transport=data.get("transport", "local"),
+        clock=data.get("clock", "virtual"),
+        plugins=list(data.get("plugins") or []),
+        imports=[str(i) for i in data.get("imports") or []],
+        mcp=dict(mcp),
+        robot=_robot_section(p, data.get("robot")),
+    )
 
 
 def _robot_section(p: pathlib.Path, section: Any) -> dict[str, Any]:
     """The checked ``robot:`` section: {"body": (sx, sy, sz, x) or None, "topics": ((name,
     type, qos, compress), ...)}; anything else is a ConfigError that shows the form."""
+
     def bad(what: str) -> ConfigError:
         return ConfigError(f"{p}: robot: {what}; for example {ROBOT_EXAMPLE}")
 
@@ -123,18 +133,26 @@ def _robot_section(p: pathlib.Path, section: Any) -> dict[str, Any]:
     body = section.get("body")
     if body is not None:
         size = body.get("size") if isinstance(body, dict) else None
-        if not (isinstance(size, list) and len(size) == 3 and all(_positive(v) for v in size)) \
-                or set(body) - {"size", "x"} or not _number(body.get("x", 0.0)):
+        if (
+            not (isinstance(size, list) and len(size) == 3 and all(_positive(v) for v in size))
+            or set(body) - {"size", "x"}
+            or not _number(body.get("x", 0.0))
+        ):
             raise bad(f"body: expected {{size: [x, y, z] in metres, x: offset}}, got {body!r}")
         body = (*(float(v) for v in size), float(body.get("x", 0.0)))
     topics = []
     for t in section.get("topics") or []:
-        if not isinstance(t, dict) or set(t) - {"name", "type", "qos", "compress"} \
-                or not str(t.get("name", "")).startswith("/") or str(t.get("type", "")).count("/") != 2:
+        if (
+            not isinstance(t, dict)
+            or set(t) - {"name", "type", "qos", "compress"}
+            or not str(t.get("name", "")).startswith("/")
+            or str(t.get("type", "")).count("/") != 2
+        ):
             raise bad(f"topics: expected {{name: /topic, type: pkg/msg/Type, qos: ..., compress: ...}}, got {t!r}")
         qos = t.get("qos", 10)
         try:
             from bt_engine.bus.qos import qos_depth
+
             qos_depth(qos)
         except ActorbtError as e:
             raise bad(f"topics: {t['name']}: {e}") from None

@@ -4,6 +4,7 @@
 packages come with an extra. A command whose extra is not installed stays in ``--help``,
 marked, and running it says which extra to install instead of a bare ImportError.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -13,18 +14,32 @@ from typing import Callable
 from bt_engine.errors import ActorbtError
 
 #: an extra -> the module whose presence shows it is installed
-MARKER = {"ros": "rclpy", "mcp": "mcp", "draw": "graphviz", "sim": "pybullet", "planning": "ompl",
-          "cluster": "ray"}
+MARKER = {"ros": "rclpy", "mcp": "mcp", "draw": "graphviz", "sim": "pybullet", "planning": "ompl", "cluster": "ray"}
 
 #: a third-party module (its top-level name) -> the extra that installs it
 EXTRA_OF = {
-    "rclpy": "ros", "rosbags": "ros", "foxglove": "ros", "numpy": "ros", "builtin_interfaces": "ros",
-    "geometry_msgs": "ros", "sensor_msgs": "ros", "nav_msgs": "ros", "std_msgs": "ros",
-    "diagnostic_msgs": "ros", "action_msgs": "ros", "rosidl_runtime_py": "ros",
-    "mcp": "mcp", "jsonschema": "mcp",
-    "graphviz": "draw", "matplotlib": "draw",
-    "pybullet": "sim", "cv2": "sim", "moderngl": "sim",
-    "ompl": "planning", "ruckig": "planning", "scipy": "planning",
+    "rclpy": "ros",
+    "rosbags": "ros",
+    "foxglove": "ros",
+    "numpy": "ros",
+    "builtin_interfaces": "ros",
+    "geometry_msgs": "ros",
+    "sensor_msgs": "ros",
+    "nav_msgs": "ros",
+    "std_msgs": "ros",
+    "diagnostic_msgs": "ros",
+    "action_msgs": "ros",
+    "rosidl_runtime_py": "ros",
+    "mcp": "mcp",
+    "jsonschema": "mcp",
+    "graphviz": "draw",
+    "matplotlib": "draw",
+    "pybullet": "sim",
+    "cv2": "sim",
+    "moderngl": "sim",
+    "ompl": "planning",
+    "ruckig": "planning",
+    "scipy": "planning",
     "ray": "cluster",
 }
 
@@ -45,8 +60,10 @@ def missing_module_message(error: ModuleNotFoundError) -> str | None:
     an extra or interfaces/ provides (a real bug, to be raised as it is)."""
     top = (error.name or "").split(".")[0]
     if top in SOURCE_BUILT:
-        return (f"needs the ROS interface packages built from actorbt's interfaces/ folder (module {top!r} "
-                "is missing): pip install ./interfaces/upstream ./interfaces (interfaces/README.md)")
+        return (
+            f"needs the ROS interface packages built from actorbt's interfaces/ folder (module {top!r} "
+            "is missing): pip install ./interfaces/upstream ./interfaces (interfaces/README.md)"
+        )
     extra = EXTRA_OF.get(top)
     if extra is None:
         return None
@@ -75,6 +92,8 @@ def _refuse_everywhere(parser: argparse.ArgumentParser, refuse: Callable[..., in
 
 def _needs(command: str, extra: str) -> Callable[..., int]:
     def refuse(*_: object) -> int:
-        raise ActorbtError(f"`actorbt {command}` needs the [{extra}] extra, which is not installed: "
-                           f"{install_hint(extra)}")
+        raise ActorbtError(
+            f"`actorbt {command}` needs the [{extra}] extra, which is not installed: {install_hint(extra)}"
+        )
+
     return refuse

@@ -6,6 +6,7 @@ a message; the shell carries on.
 
 :func:`print_stream` is also what ``actorbt call NAME ARGS --stream`` prints with.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -28,8 +29,7 @@ def format_value(value: Any, as_json: bool = False) -> str:
     return json.dumps(value, default=str) if as_json else pprint.pformat(value)
 
 
-def print_stream(values: Iterable[Any], out: IO[str], *, as_json: bool = False,
-                 count: int | None = None) -> int:
+def print_stream(values: Iterable[Any], out: IO[str], *, as_json: bool = False, count: int | None = None) -> int:
     """Print each of ``values`` on its own line as it arrives (flushed), until the
     iterator ends or ``count`` values were printed (no further value is asked for).
 
@@ -51,8 +51,17 @@ def print_stream(values: Iterable[Any], out: IO[str], *, as_json: bool = False,
     return 0
 
 
-def stream_actor(rt: Runtime, name: str, args: list[Any], kwargs: dict[str, Any], out: IO[str], *,
-                 as_json: bool = False, count: int | None = None, timeout: float | None = None) -> int:
+def stream_actor(
+    rt: Runtime,
+    name: str,
+    args: list[Any],
+    kwargs: dict[str, Any],
+    out: IO[str],
+    *,
+    as_json: bool = False,
+    count: int | None = None,
+    timeout: float | None = None,
+) -> int:
     """Iterate actor ``name`` from the calling thread and print its values
     (:func:`print_stream`); ``timeout`` [s, runtime clock] ends the stream. Leaving
     returns only once the source is closed. A sync or async actor is invoked again for
@@ -88,9 +97,11 @@ def _stream_options(tokens: list[str]) -> tuple[list[str], dict[str, Any]]:
 
 
 class ActorShell(ShellBase):
-    intro = ("actorbt shell: type an actor and its arguments (Python literals), e.g. "
-             "`sleep 1.5`.\n`list` shows actors, `help NAME` describes one, `stream NAME ARGS` "
-             "prints every value of a stream, `quit` leaves.")
+    intro = (
+        "actorbt shell: type an actor and its arguments (Python literals), e.g. "
+        "`sleep 1.5`.\n`list` shows actors, `help NAME` describes one, `stream NAME ARGS` "
+        "prints every value of a stream, `quit` leaves."
+    )
     #: the shell's own commands (the rest of a line is an actor call)
     commands = ["help", "list", "quit", "stream", "transactions"]
     stream_options = ["--count", "--json", "--timeout"]
@@ -142,9 +153,11 @@ class ActorShell(ShellBase):
     def do_help(self, arg: str) -> None:
         """help NAME: the actor's signature and docstring."""
         if not arg:
-            self.stdout.write("Commands: list [TEXT], help NAME, stream NAME ARG... [--count N], "
-                              "transactions, quit.\n"
-                              "Anything else: ACTOR ARG... (key=value for keywords).\n")
+            self.stdout.write(
+                "Commands: list [TEXT], help NAME, stream NAME ARG... [--count N], "
+                "transactions, quit.\n"
+                "Anything else: ACTOR ARG... (key=value for keywords).\n"
+            )
             return
         if arg in self.commands and not self.rt.check_actor(arg):
             doc = getattr(self, f"do_{arg}").__doc__ or ""

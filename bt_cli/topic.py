@@ -21,6 +21,7 @@ Exit status: 0; 1 when ``--timeout`` passed without a message; 2 for an unknown 
 
 Nothing here imports ROS, the simulator or the robot until a command runs.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -60,76 +61,105 @@ class UnknownTopicError(ActorbtError, LookupError):
 
 def register(sub: argparse._SubParsersAction, common: Callable[[argparse.ArgumentParser], None]) -> None:
     p = sub.add_parser(
-        "topic", help="the robot's topics: list, echo, hz (like ros2 topic)",
+        "topic",
+        help="the robot's topics: list, echo, hz (like ros2 topic)",
         description="Look at the robot's topics as `ros2 topic` does: list them, print their "
-                    "messages, measure their rates. On the local bus they are the topics of "
-                    "the runtime actorbt.yaml names (its subsystems and world, started here); "
-                    "with --bus ros, those of the ROS graph (a robot, or an "
-                    "`actorbt sim run --bus ros` in another process).")
+        "messages, measure their rates. On the local bus they are the topics of "
+        "the runtime actorbt.yaml names (its subsystems and world, started here); "
+        "with --bus ros, those of the ROS graph (a robot, or an "
+        "`actorbt sim run --bus ros` in another process).",
+    )
     tsub = p.add_subparsers(dest="topic_command", metavar="TOPIC_COMMAND")
     tsub.required = True
 
-    wait_help = ("With --bus ros: wait up to S seconds for the topic and a publisher of it to "
-                 "be discovered (default 5).")
+    wait_help = "With --bus ros: wait up to S seconds for the topic and a publisher of it to be discovered (default 5)."
     q = tsub.add_parser(
-        "list", help="list the topics (with -t, their types)",
-        description="List every topic on the bus, one per line; with -t, each with its type "
-                    "in brackets.")
-    q.add_argument("-t", "--show-types", action="store_true",
-                   help="Show each topic's type after its name, as [package/msg/Name].")
-    q.add_argument("--json", action="store_true",
-                   help="Print a JSON list of the topics: name, type, publishers, subscribers "
-                        "and the QoS the publishers offer.")
-    q.add_argument("--wait", type=float, default=1.0, metavar="S",
-                   help="With --bus ros: discover the ROS graph for S seconds before listing "
-                        "(default 1; a robot over Wi-Fi may need more).")
+        "list",
+        help="list the topics (with -t, their types)",
+        description="List every topic on the bus, one per line; with -t, each with its type in brackets.",
+    )
+    q.add_argument(
+        "-t", "--show-types", action="store_true", help="Show each topic's type after its name, as [package/msg/Name]."
+    )
+    q.add_argument(
+        "--json",
+        action="store_true",
+        help="Print a JSON list of the topics: name, type, publishers, subscribers and the QoS the publishers offer.",
+    )
+    q.add_argument(
+        "--wait",
+        type=float,
+        default=1.0,
+        metavar="S",
+        help="With --bus ros: discover the ROS graph for S seconds before listing "
+        "(default 1; a robot over Wi-Fi may need more).",
+    )
     common(q)
     q.set_defaults(func=cmd_list)
 
     e = tsub.add_parser(
-        "echo", help="print a topic's messages: TOPIC [--once] [--json]",
+        "echo",
+        help="print a topic's messages: TOPIC [--once] [--json]",
         description="Print each message of a topic as it arrives: as YAML with the ROS field "
-                    "names, followed by '---' (with --json, one JSON object per line). Long "
-                    "arrays and strings are cut after 128 items, as ros2 does; --full prints "
-                    "them whole and --no-arr leaves arrays of numbers out.")
-    e.add_argument("topic", help="The topic's name, e.g. /odom (a name without the leading "
-                                 "slash is taken from /).")
+        "names, followed by '---' (with --json, one JSON object per line). Long "
+        "arrays and strings are cut after 128 items, as ros2 does; --full prints "
+        "them whole and --no-arr leaves arrays of numbers out.",
+    )
+    e.add_argument("topic", help="The topic's name, e.g. /odom (a name without the leading slash is taken from /).")
     e.add_argument("--once", action="store_true", help="Print one message, then exit.")
-    e.add_argument("--count", type=_positive_int, metavar="N",
-                   help="Exit after N messages.")
-    e.add_argument("--json", action="store_true",
-                   help="Print each message as one line of JSON (NaN and infinities become null).")
-    e.add_argument("--no-arr", action="store_true",
-                   help="Leave arrays of numbers, booleans and bytes out, printing only their "
-                        "type and length (an image's pixels, a scan's ranges); arrays of "
-                        "messages and strings are printed (the transforms of /tf_static, a "
-                        "JointState's names), unlike ros2's --no-arr, which leaves them out too.")
-    e.add_argument("--truncate", type=_positive_int, default=128, metavar="N",
-                   help="Keep the first N items of each array and characters of each string "
-                        "(default 128).")
+    e.add_argument("--count", type=_positive_int, metavar="N", help="Exit after N messages.")
+    e.add_argument(
+        "--json", action="store_true", help="Print each message as one line of JSON (NaN and infinities become null)."
+    )
+    e.add_argument(
+        "--no-arr",
+        action="store_true",
+        help="Leave arrays of numbers, booleans and bytes out, printing only their "
+        "type and length (an image's pixels, a scan's ranges); arrays of "
+        "messages and strings are printed (the transforms of /tf_static, a "
+        "JointState's names), unlike ros2's --no-arr, which leaves them out too.",
+    )
+    e.add_argument(
+        "--truncate",
+        type=_positive_int,
+        default=128,
+        metavar="N",
+        help="Keep the first N items of each array and characters of each string (default 128).",
+    )
     e.add_argument("--full", action="store_true", help="Print arrays and strings whole.")
-    e.add_argument("--timeout", type=float, metavar="S",
-                   help="Stop after S seconds on the runtime clock; exit status 1 if no message "
-                        "came.")
+    e.add_argument(
+        "--timeout",
+        type=float,
+        metavar="S",
+        help="Stop after S seconds on the runtime clock; exit status 1 if no message came.",
+    )
     e.add_argument("--wait", type=float, default=5.0, metavar="S", help=wait_help)
     common(e)
     e.set_defaults(func=cmd_echo)
 
     h = tsub.add_parser(
-        "hz", help="print a topic's rate every second: TOPIC [--window N]",
+        "hz",
+        help="print a topic's rate every second: TOPIC [--window N]",
         description="Print a topic's rate every second, as `ros2 topic hz` does: the average "
-                    "rate, the shortest and longest interval, their standard deviation and "
-                    "the number of messages in the window. Times are on the runtime clock: "
-                    "sim time on the virtual clock, wall time with --clock wall or --bus ros.")
-    h.add_argument("topic", help="The topic's name, e.g. /scan (a name without the leading "
-                                 "slash is taken from /).")
-    h.add_argument("--window", type=_positive_int, default=10000, metavar="N",
-                   help="Compute the rate over the last N messages (default 10000).")
-    h.add_argument("--count", type=_positive_int, metavar="N",
-                   help="Exit after N messages, with a last report.")
-    h.add_argument("--timeout", type=float, metavar="S",
-                   help="Exit after S seconds on the runtime clock, with a last report; exit "
-                        "status 1 if no message came.")
+        "rate, the shortest and longest interval, their standard deviation and "
+        "the number of messages in the window. Times are on the runtime clock: "
+        "sim time on the virtual clock, wall time with --clock wall or --bus ros.",
+    )
+    h.add_argument("topic", help="The topic's name, e.g. /scan (a name without the leading slash is taken from /).")
+    h.add_argument(
+        "--window",
+        type=_positive_int,
+        default=10000,
+        metavar="N",
+        help="Compute the rate over the last N messages (default 10000).",
+    )
+    h.add_argument("--count", type=_positive_int, metavar="N", help="Exit after N messages, with a last report.")
+    h.add_argument(
+        "--timeout",
+        type=float,
+        metavar="S",
+        help="Exit after S seconds on the runtime clock, with a last report; exit status 1 if no message came.",
+    )
     h.add_argument("--wait", type=float, default=5.0, metavar="S", help=wait_help)
     common(h)
     h.set_defaults(func=cmd_hz)
@@ -151,12 +181,13 @@ class Bus:
         self.ros = kind == "ros"
         world = getattr(args, "world", None)
         if self.ros and world not in (None, "none"):
-            raise ActorbtError("--world starts a world in this process; with --bus ros the "
-                               "topic commands only listen (start the world with "
-                               "`actorbt sim run --bus ros`)")
+            raise ActorbtError(
+                "--world starts a world in this process; with --bus ros the "
+                "topic commands only listen (start the world with "
+                "`actorbt sim run --bus ros`)"
+            )
         if self.ros and getattr(args, "clock", None) == "virtual":
-            raise ActorbtError("--clock virtual needs the local bus: ROS messages arrive in "
-                               "real time")
+            raise ActorbtError("--clock virtual needs the local bus: ROS messages arrive in real time")
         # no trees (they use no topics); with --bus ros, nothing of actorbt.yaml at all
         cfg = dataclasses.replace(app.cfg, trees=None)
         if self.ros:
@@ -262,9 +293,9 @@ class Tap:
 def _subscribe(bus: Bus, args: argparse.Namespace, what: str, *, keep: bool) -> Tap:
     """A tap on the topic the command names, after checking that it exists."""
     from bt_engine.bus.messages import message_class
+
     name = topic_name(args.topic)
-    topics = bus.topics(args.wait, until=lambda found: any(
-        t.name == name and t.publishers for t in found))
+    topics = bus.topics(args.wait, until=lambda found: any(t.name == name and t.publishers for t in found))
     try:
         info = find_topic(topics, name)
     except UnknownTopicError as e:
@@ -272,14 +303,17 @@ def _subscribe(bus: Bus, args: argparse.Namespace, what: str, *, keep: bool) -> 
             raise
         domain = os.environ.get("ROS_DOMAIN_ID", "0")
         scope = os.environ.get("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
-        raise UnknownTopicError(f"{e} (on the ROS graph after {args.wait:g} s of discovery: "
-                                f"ROS_DOMAIN_ID {domain}, discovery range {scope})") from None
+        raise UnknownTopicError(
+            f"{e} (on the ROS graph after {args.wait:g} s of discovery: "
+            f"ROS_DOMAIN_ID {domain}, discovery range {scope})"
+        ) from None
     msg_type = message_class(info.type.split(",")[0].strip())
     qos = cast("RosTransport", bus.rt.bus).matching_qos(name) if bus.ros else 10
     print(f"actorbt topic {what}: {name} [{info.type}] ({bus.where})", file=sys.stderr, flush=True)
     if not info.publishers:
-        print(f"actorbt topic {what}: nothing publishes {name} yet; waiting (Ctrl-C stops)",
-              file=sys.stderr, flush=True)
+        print(
+            f"actorbt topic {what}: nothing publishes {name} yet; waiting (Ctrl-C stops)", file=sys.stderr, flush=True
+        )
     return Tap(bus, name, msg_type, qos, keep=keep)
 
 
@@ -322,12 +356,14 @@ def cmd_list(args: argparse.Namespace, app: App) -> int:
         for t in topics:
             print(f"{t.name} [{t.type}]" if args.show_types else t.name)
         return 0
+
     return _run(args, app, body)
 
 
 # -- echo --------------------------------------------------------------------------------
 def cmd_echo(args: argparse.Namespace, app: App) -> int:
     from bt_engine.bus.messages import to_plain
+
     count = 1 if args.once else args.count
     truncate = None if args.full else args.truncate
 
@@ -355,14 +391,15 @@ def cmd_echo(args: argparse.Namespace, app: App) -> int:
                     break
         finally:
             if tap.dropped:
-                print(f"actorbt topic echo: {tap.dropped} messages dropped (printing fell behind)",
-                      file=sys.stderr)
+                print(f"actorbt topic echo: {tap.dropped} messages dropped (printing fell behind)", file=sys.stderr)
             tap.close()
         if not shown:
-            print(f"actorbt topic echo: no message on {topic_name(args.topic)} within "
-                  f"{args.timeout:g} s", file=sys.stderr)
+            print(
+                f"actorbt topic echo: no message on {topic_name(args.topic)} within {args.timeout:g} s", file=sys.stderr
+            )
             return 1
         return 0
+
     return _run(args, app, body)
 
 
@@ -377,9 +414,9 @@ def format_yaml(data: Any) -> str:
     def represent_list(dumper: yaml.SafeDumper, items: list) -> yaml.SequenceNode:
         flat = all(not isinstance(v, (dict, list)) for v in items)
         return dumper.represent_sequence("tag:yaml.org,2002:seq", items, flow_style=flat)
+
     Dumper.add_representer(list, represent_list)
-    return yaml.dump(data, Dumper=Dumper, default_flow_style=False, sort_keys=False, width=100,
-                     allow_unicode=True)
+    return yaml.dump(data, Dumper=Dumper, default_flow_style=False, sort_keys=False, width=100, allow_unicode=True)
 
 
 # -- hz ----------------------------------------------------------------------------------
@@ -404,9 +441,11 @@ class Rate:
         return cls(1.0 / mean if mean > 0 else 0.0, min(deltas), max(deltas), std, len(t))
 
     def text(self, clock: str) -> str:
-        return (f"average rate: {self.rate:.3f} ({clock})\n"
-                f"\tmin: {self.min:.3f}s max: {self.max:.3f}s std dev: {self.std_dev:.5f}s "
-                f"window: {self.window}")
+        return (
+            f"average rate: {self.rate:.3f} ({clock})\n"
+            f"\tmin: {self.min:.3f}s max: {self.max:.3f}s std dev: {self.std_dev:.5f}s "
+            f"window: {self.window}"
+        )
 
 
 def cmd_hz(args: argparse.Namespace, app: App) -> int:
@@ -425,6 +464,7 @@ def cmd_hz(args: argparse.Namespace, app: App) -> int:
             rate = Rate.of(stamps) if fresh else None
             print(rate.text(clock) if rate is not None else "no new messages", flush=True)
             fresh = False
+
         try:
             while True:
                 until = min(next_report, end)
@@ -448,7 +488,7 @@ def cmd_hz(args: argparse.Namespace, app: App) -> int:
             if fresh:
                 report()
             return 0
-        print(f"actorbt topic hz: no message on {topic_name(args.topic)} within "
-              f"{args.timeout:g} s", file=sys.stderr)
+        print(f"actorbt topic hz: no message on {topic_name(args.topic)} within {args.timeout:g} s", file=sys.stderr)
         return 1
+
     return _run(args, app, body)

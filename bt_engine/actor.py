@@ -1,4 +1,5 @@
 """The ``@actor`` decorator and the description of one actor."""
+
 from __future__ import annotations
 
 import inspect
@@ -59,9 +60,15 @@ class Safety:
 NO_SAFETY = Safety()
 
 
-def actor(*args: Any, kind: "str | Kind | None" = None, buffer: int = DEFAULT_STREAM_BUFFER,
-          hub_only: bool = False, moves: bool = False, read_only: bool = False,
-          limits: Limits | None = None):
+def actor(
+    *args: Any,
+    kind: "str | Kind | None" = None,
+    buffer: int = DEFAULT_STREAM_BUFFER,
+    hub_only: bool = False,
+    moves: bool = False,
+    read_only: bool = False,
+    limits: Limits | None = None,
+):
     """Declare a method of a SubSystem or SubNet as an actor.
 
     Forms, as in ros_actor::
@@ -96,11 +103,13 @@ def actor(*args: Any, kind: "str | Kind | None" = None, buffer: int = DEFAULT_ST
 
     def deco(fn: Callable) -> Callable:
         return _mark(fn, name, k, buffer, hub_only, safety)
+
     return deco
 
 
-def _mark(fn: Callable, name: str | None, kind: "str | Kind | None", buffer: int,
-          hub_only: bool, safety: Safety) -> Callable:
+def _mark(
+    fn: Callable, name: str | None, kind: "str | Kind | None", buffer: int, hub_only: bool, safety: Safety
+) -> Callable:
     if inspect.isgeneratorfunction(fn):
         k = Kind.STREAM
     else:
@@ -163,27 +172,49 @@ class ActorRef:
         return self.safety.read_only
 
     @classmethod
-    def build(cls, path: str, name: str, fn: Callable, kind: Kind, owner: Any = None,
-              doc: str | None = None, signature: inspect.Signature | None = None,
-              is_tree: bool = False, buffer: int = DEFAULT_STREAM_BUFFER,
-              hub_only: bool = False, safety: Safety | None = None, wait: float | None = None,
-              wait_detail: Callable[[float], str] | None = None) -> "ActorRef":
+    def build(
+        cls,
+        path: str,
+        name: str,
+        fn: Callable,
+        kind: Kind,
+        owner: Any = None,
+        doc: str | None = None,
+        signature: inspect.Signature | None = None,
+        is_tree: bool = False,
+        buffer: int = DEFAULT_STREAM_BUFFER,
+        hub_only: bool = False,
+        safety: Safety | None = None,
+        wait: float | None = None,
+        wait_detail: Callable[[float], str] | None = None,
+    ) -> "ActorRef":
         is_gen = inspect.isgeneratorfunction(fn)
         if signature is None:
             signature = _caller_signature(fn, kind, is_gen)
         if wait is not None:
             if kind is not Kind.STREAM or is_gen:
-                raise ActorbtError(f"{path}: wait= bounds the wait for a value of an emit-style "
-                                   f"stream, and it is {'a generator' if is_gen else kind.value}")
-            if isinstance(wait, bool) or not isinstance(wait, (int, float)) \
-                    or not 0 < wait < math.inf:
-                raise ActorbtError(f"{path}: wait must be a positive number of seconds or None, "
-                                   f"got {wait!r}")
-        return cls(path=path, name=name, fn=fn, kind=kind, signature=signature,
-                   doc=inspect.cleandoc(doc if doc is not None else (fn.__doc__ or "")),
-                   owner=owner, is_tree=is_tree, is_generator=is_gen, buffer=buffer,
-                   hub_only=hub_only, safety=safety or NO_SAFETY, wait=wait,
-                   wait_detail=wait_detail)
+                raise ActorbtError(
+                    f"{path}: wait= bounds the wait for a value of an emit-style "
+                    f"stream, and it is {'a generator' if is_gen else kind.value}"
+                )
+            if isinstance(wait, bool) or not isinstance(wait, (int, float)) or not 0 < wait < math.inf:
+                raise ActorbtError(f"{path}: wait must be a positive number of seconds or None, got {wait!r}")
+        return cls(
+            path=path,
+            name=name,
+            fn=fn,
+            kind=kind,
+            signature=signature,
+            doc=inspect.cleandoc(doc if doc is not None else (fn.__doc__ or "")),
+            owner=owner,
+            is_tree=is_tree,
+            is_generator=is_gen,
+            buffer=buffer,
+            hub_only=hub_only,
+            safety=safety or NO_SAFETY,
+            wait=wait,
+            wait_detail=wait_detail,
+        )
 
     def check_args(self, args: tuple, kwargs: dict) -> None:
         """Raise BadArgumentsError when the arguments do not fit the signature."""

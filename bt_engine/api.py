@@ -1,6 +1,7 @@
 """The calling API shared by SubSystem, SubNet and Runtime: ros_actor's names
 (``run_actor``, ``run_actor_mode``, ...) and the keyword-only ones (``call``, ``start``,
 ``stream``). Each resolves names from its own scope."""
+
 from __future__ import annotations
 
 import contextlib
@@ -24,8 +25,9 @@ class CallApi:
     def _txns(self) -> TransactionTable:  # pragma: no cover - overridden
         raise NotImplementedError
 
-    def _dispatch(self, name: str, mode: Mode, args: tuple, kwargs: dict,
-                  cb: Callable | None = None, seconds: float | None = None) -> Any:
+    def _dispatch(
+        self, name: str, mode: Mode, args: tuple, kwargs: dict, cb: Callable | None = None, seconds: float | None = None
+    ) -> Any:
         table = self._txns()
         if table.hub.thread_id == get_ident():
             return dispatch(table, self._call_scope().resolve(name), mode, args, kwargs, cb, seconds)
@@ -46,8 +48,9 @@ class CallApi:
         cb, seconds, args = m.split_args(args)
         return self._dispatch(name, m, args, kwargs, cb, seconds)
 
-    def run_actor_async(self, name: str, callback: Callable[[Any], Any] | None, /, *args: Any,
-                        **kwargs: Any) -> Transaction:
+    def run_actor_async(
+        self, name: str, callback: Callable[[Any], Any] | None, /, *args: Any, **kwargs: Any
+    ) -> Transaction:
         """Start actor ``name``; ``callback(result)`` (or a Failure) when it finishes."""
         return self._dispatch(name, Mode.ASYNC, args, kwargs, callback)
 
@@ -69,14 +72,14 @@ class CallApi:
         mode = Mode.SYNC if timeout is None else Mode.TIMED
         return self._dispatch(name, mode, args, kwargs, None, timeout)
 
-    def start(self, name: str, /, *args: Any, on_done: Callable[[Any], Any] | None = None,
-              **kwargs: Any) -> Transaction:
+    def start(
+        self, name: str, /, *args: Any, on_done: Callable[[Any], Any] | None = None, **kwargs: Any
+    ) -> Transaction:
         """Start ``name`` and return its Transaction; ``on_done(result | Failure)``."""
         return self._dispatch(name, Mode.ASYNC, args, kwargs, on_done)
 
     @contextlib.contextmanager
-    def stream(self, name: str, /, *args: Any, timeout: float | None = None,
-               **kwargs: Any) -> Iterator[Iterator[Any]]:
+    def stream(self, name: str, /, *args: Any, timeout: float | None = None, **kwargs: Any) -> Iterator[Iterator[Any]]:
         """``with x.stream(name) as it: for v in it: ...``; ``timeout`` [s] ends it."""
         mode = Mode.ITERATOR if timeout is None else Mode.TIMED_ITERATOR
         it = self._dispatch(name, mode, args, kwargs, None, timeout)
@@ -84,4 +87,3 @@ class CallApi:
             yield it
         finally:
             it.close()
-

@@ -3,6 +3,7 @@ JSON-Schema tool descriptions so a planner or an LLM can choose and call actors.
 
 Parameter descriptions and units come from the actors' ``Args:`` docstring sections
 (see :mod:`bt_engine.docstrings`), a tree's from its inputs' ``doc:``."""
+
 from __future__ import annotations
 
 import collections.abc
@@ -21,8 +22,16 @@ if TYPE_CHECKING:
     from .actor import ActorRef
     from .subsystem import SubSystem
 
-_JSON_TYPES: dict[type, str] = {int: "integer", float: "number", str: "string", bool: "boolean",
-                               list: "array", tuple: "array", dict: "object", type(None): "null"}
+_JSON_TYPES: dict[type, str] = {
+    int: "integer",
+    float: "number",
+    str: "string",
+    bool: "boolean",
+    list: "array",
+    tuple: "array",
+    dict: "object",
+    type(None): "null",
+}
 
 
 def json_type(annotation: Any) -> dict[str, Any]:
@@ -85,8 +94,9 @@ def docs_of(ref: "ActorRef") -> Docstring:
     doc = parse_docstring(ref.doc)
     params, returns = explicit_docs(ref.fn)
     if params or isinstance(returns, str):
-        doc = dataclasses.replace(doc, params={**doc.params, **params},
-                                  returns=returns if isinstance(returns, str) else doc.returns)
+        doc = dataclasses.replace(
+            doc, params={**doc.params, **params}, returns=returns if isinstance(returns, str) else doc.returns
+        )
     return doc
 
 
@@ -95,16 +105,25 @@ def doc_problems(ref: "ActorRef") -> list[str]:
     documented names that are no parameter (a typo, or a renamed parameter)."""
     params = ref.signature.parameters
     documented = docs_of(ref).params
-    problems = [f"{ref.path}: parameter {n!r} has no description" for n, p in params.items()
-                if p.kind is not p.VAR_KEYWORD and not documented.get(n, "").strip()]
+    problems = [
+        f"{ref.path}: parameter {n!r} has no description"
+        for n, p in params.items()
+        if p.kind is not p.VAR_KEYWORD and not documented.get(n, "").strip()
+    ]
     problems += [f"{ref.path}: documents {n!r}, which is no parameter" for n in documented if n not in params]
     return problems
 
 
 def describe(ref: "ActorRef") -> dict[str, Any]:
     """One actor as a plain dict: path, kind, doc, signature, tree or not."""
-    return {"path": ref.path, "name": ref.name, "kind": ref.kind.value, "is_tree": ref.is_tree,
-            "signature": f"{ref.path}{ref.signature}", "doc": ref.doc}
+    return {
+        "path": ref.path,
+        "name": ref.name,
+        "kind": ref.kind.value,
+        "is_tree": ref.is_tree,
+        "signature": f"{ref.path}{ref.signature}",
+        "doc": ref.doc,
+    }
 
 
 def tool_schema(ref: "ActorRef") -> dict[str, Any]:
@@ -135,29 +154,32 @@ def tool_schema(ref: "ActorRef") -> dict[str, Any]:
             text = text + _VARIADIC.format(name=p.name) if text else "positional values (*args)"
         else:
             schema = dict(json_type(ann)) or _type_of_default(p.default)
-        props[p.name] = _bounded(_described(schema, text), safety.limits.get(p.name),
-                                 p.kind is p.VAR_POSITIONAL)
+        props[p.name] = _bounded(_described(schema, text), safety.limits.get(p.name), p.kind is p.VAR_POSITIONAL)
         if p.kind is p.VAR_POSITIONAL:
             continue
         if p.default is p.empty:
             required.append(p.name)
         elif _jsonable(p.default):
             props[p.name]["default"] = p.default
-    tool: dict[str, Any] = {"name": ref.path,
-                            "description": docs.summary or f"{ref.kind.value} actor {ref.path}"}
+    tool: dict[str, Any] = {"name": ref.path, "description": docs.summary or f"{ref.kind.value} actor {ref.path}"}
     if docs.details:
         tool["details"] = docs.details
-    tool.update({"kind": ref.kind.value, "is_tree": ref.is_tree,
-                 "moves": safety.moves, "read_only": safety.read_only,
-                 "parameters": {"type": "object", "properties": props, "required": required}})
+    tool.update(
+        {
+            "kind": ref.kind.value,
+            "is_tree": ref.is_tree,
+            "moves": safety.moves,
+            "read_only": safety.read_only,
+            "parameters": {"type": "object", "properties": props, "required": required},
+        }
+    )
     returns = _returns(ref, hints, docs)
     if returns:
         tool["returns"] = returns
     return tool
 
 
-def _bounded(schema: dict[str, Any], limit: "tuple[float | None, float | None] | None",
-             each: bool) -> dict[str, Any]:
+def _bounded(schema: dict[str, Any], limit: "tuple[float | None, float | None] | None", each: bool) -> dict[str, Any]:
     """``schema`` with a declared limit as ``minimum`` / ``maximum`` (of its items when
     ``each``: a ``*args`` parameter)."""
     if limit is None:
@@ -194,8 +216,13 @@ def _type_of_default(default: Any) -> dict[str, Any]:
     return {"type": t} if t else {}
 
 
-_ITERATORS = {collections.abc.Iterator, collections.abc.Iterable, collections.abc.Generator,
-              collections.abc.AsyncIterator, collections.abc.AsyncGenerator}
+_ITERATORS = {
+    collections.abc.Iterator,
+    collections.abc.Iterable,
+    collections.abc.Generator,
+    collections.abc.AsyncIterator,
+    collections.abc.AsyncGenerator,
+}
 
 
 def _returns(ref: "ActorRef", hints: dict[str, Any], docs: Docstring) -> dict[str, Any]:
@@ -254,7 +281,7 @@ def _param_line(name: str, schema: Mapping[str, Any], required: bool | None) -> 
     text = schema.get("description", "")
     variadic = _VARIADIC.format(name=name)
     if text.endswith(variadic):
-        name, text = f"*{name}", text[:-len(variadic)]
+        name, text = f"*{name}", text[: -len(variadic)]
     return f"{name}: {text} ({', '.join(notes)})" if text else f"{name} ({', '.join(notes)})"
 
 

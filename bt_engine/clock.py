@@ -1,4 +1,5 @@
 """Runtime clocks. Every engine timestamp, sleep and deadline reads one of these."""
+
 from __future__ import annotations
 
 import os

@@ -14,6 +14,7 @@ module-level state", a thin layer over that single instance.
 
 Called from inside an actor, these functions act on the runtime running that actor.
 """
+
 from __future__ import annotations
 
 import atexit
@@ -91,8 +92,7 @@ def run_actor_mode(name: str, mode: "str | Mode", /, *args: Any, **kwargs: Any) 
     return _here().run_actor_mode(name, mode, *args, **kwargs)
 
 
-def run_actor_async(name: str, callback: Callable[[Any], Any] | None, /, *args: Any,
-                    **kwargs: Any) -> Transaction:
+def run_actor_async(name: str, callback: Callable[[Any], Any] | None, /, *args: Any, **kwargs: Any) -> Transaction:
     """Start actor ``name``; ``callback(result)`` (or a Failure) when it finishes."""
     return _here().run_actor_async(name, callback, *args, **kwargs)
 

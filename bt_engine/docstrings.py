@@ -22,6 +22,7 @@ parentheses is ignored, the hints say it), ``*q:`` for a variadic parameter, and
 Where a docstring is not possible (a generated callable, a tree), :func:`param_docs`
 attaches the same information to the function; it wins over the docstring.
 """
+
 from __future__ import annotations
 
 import inspect
@@ -38,8 +39,10 @@ RETURNS_ATTR = "_actor_returns_doc"
 _ARGS = {"args", "arguments", "parameters", "params", "keyword args", "keyword arguments"}
 _RETURNS = {"returns", "return", "yields", "yield"}
 _HEADER = re.compile(r"^(?P<indent>\s*)(?P<name>[A-Za-z][A-Za-z ]*?)\s*:\s*$")
-_ENTRY = re.compile(r"^(?P<names>\*{0,2}[A-Za-z_]\w*(?:\s*,\s*\*{0,2}[A-Za-z_]\w*)*)"
-                    r"\s*(?:\([^)]*\))?\s*:(?:\s+(?P<text>.*)|$)")
+_ENTRY = re.compile(
+    r"^(?P<names>\*{0,2}[A-Za-z_]\w*(?:\s*,\s*\*{0,2}[A-Za-z_]\w*)*)"
+    r"\s*(?:\([^)]*\))?\s*:(?:\s+(?P<text>.*)|$)"
+)
 _BRACKET = re.compile(r"\[([^\[\]]*)\]")
 _UNIT = re.compile(r"^(?=.*[A-Za-zµ°%Ω])[\wµ°%Ω/^*·.\-]{1,12}$")
 
@@ -144,8 +147,9 @@ def unit_of(text: str | None) -> str | None:
     return units.pop() if len(units) == 1 else None
 
 
-def param_docs(docs: Mapping[str, str] | None = None, /, *, returns: str | Mapping[str, Any] | None = None,
-               **more: str) -> Callable[[F], F]:
+def param_docs(
+    docs: Mapping[str, str] | None = None, /, *, returns: str | Mapping[str, Any] | None = None, **more: str
+) -> Callable[[F], F]:
     """Document an actor's parameters without a docstring ``Args:`` section.
 
     ::
@@ -157,13 +161,14 @@ def param_docs(docs: Mapping[str, str] | None = None, /, *, returns: str | Mappi
     ``returns``: a text, or a JSON-Schema fragment, describing the result. These win over
     the docstring's entries of the same names.
     """
+
     def deco(fn: F) -> F:
         return attach(fn, {**(docs or {}), **more}, returns)
+
     return deco
 
 
-def attach(fn: F, params: Mapping[str, str] | None = None,
-           returns: str | Mapping[str, Any] | None = None) -> F:
+def attach(fn: F, params: Mapping[str, str] | None = None, returns: str | Mapping[str, Any] | None = None) -> F:
     """Attach parameter docs (and a result description) to ``fn``; returns ``fn``."""
     if params:
         setattr(fn, PARAMS_ATTR, {**getattr(fn, PARAMS_ATTR, {}), **params})

@@ -3,6 +3,7 @@
 ``Cancelled`` is the one exception that does not: it derives from ``BaseException`` so that
 ``except Exception`` in actor code cannot swallow a cancellation.
 """
+
 from __future__ import annotations
 
 import difflib
@@ -36,8 +37,8 @@ class AmbiguousActorError(ActorbtError, LookupError):
         self.name = name
         self.paths = sorted(paths)
         super().__init__(
-            f"actor name {name!r} is ambiguous here; use one of the absolute paths: "
-            + ", ".join(self.paths))
+            f"actor name {name!r} is ambiguous here; use one of the absolute paths: " + ", ".join(self.paths)
+        )
 
 
 class BadArgumentsError(ActorbtError, TypeError):
@@ -68,7 +69,7 @@ def shorten(text: str, limit: int = MESSAGE_LIMIT) -> str:
 def _path_chain(paths: list[str], limit: int = 6) -> str:
     if len(paths) > limit:
         hidden = len(paths) - limit + 2
-        paths = paths[:limit // 2] + [f"... {hidden} more ..."] + paths[-(limit // 2 - 1):]
+        paths = paths[: limit // 2] + [f"... {hidden} more ..."] + paths[-(limit // 2 - 1) :]
     return " -> ".join(paths)
 
 
@@ -91,8 +92,7 @@ class ActorError(ActorbtError):
         self.call_chain: list[str] = [path] + (inner.call_chain if inner else [])
         self.root_cause: BaseException = inner.root_cause if inner else cause
         root = self.root_cause
-        super().__init__(f"actor {_path_chain(self.call_chain)} failed: "
-                         f"{type(root).__name__}: {shorten(str(root))}")
+        super().__init__(f"actor {_path_chain(self.call_chain)} failed: {type(root).__name__}: {shorten(str(root))}")
 
 
 class ActorTimeout(ActorbtError, TimeoutError):
@@ -104,8 +104,7 @@ class ActorTimeout(ActorbtError, TimeoutError):
         self.path = path
         self.seconds = seconds
         self.detail = detail
-        super().__init__(f"actor {path}: {detail}" if detail
-                         else f"actor {path} did not finish within {seconds:g} s")
+        super().__init__(f"actor {path}: {detail}" if detail else f"actor {path} did not finish within {seconds:g} s")
 
 
 class ActorCancelled(ActorbtError):

@@ -7,6 +7,7 @@
 The call modes (:mod:`bt_engine.invoke`, :mod:`bt_engine.iterator`) are built from
 these. Everything here runs on the hub thread.
 """
+
 from __future__ import annotations
 
 import logging
@@ -32,8 +33,7 @@ def current_txn(table: TransactionTable) -> Transaction | None:
 
 
 # -- sync bodies ---------------------------------------------------------------------------
-def run_body(ref: "ActorRef | GenFirst", txn: Transaction, task: Task, args: tuple,
-             kwargs: dict) -> Any:
+def run_body(ref: "ActorRef | GenFirst", txn: Transaction, task: Task, args: tuple, kwargs: dict) -> Any:
     """Run a sync-kind actor's body in ``task`` under ``txn`` and translate its outcome.
 
     Returns the result. Raises what the caller sees (:mod:`bt_engine.outcome`), or
@@ -79,8 +79,7 @@ def drop_pending(task: Task, txn: Transaction) -> None:
         t = t.parent
 
 
-def bad_arguments(ref: "ActorRef | GenFirst", args: tuple, kwargs: dict,
-                  txn: Transaction) -> BadArgumentsError | None:
+def bad_arguments(ref: "ActorRef | GenFirst", args: tuple, kwargs: dict, txn: Transaction) -> BadArgumentsError | None:
     """The BadArgumentsError of call ``txn`` when its arguments do not fit, or None when
     they fit (a TypeError raised inside the actor is then the actor's own failure)."""
     try:
@@ -117,8 +116,9 @@ def sync_body(ref: ActorRef) -> "ActorRef | GenFirst":
     return GenFirst(ref) if ref.is_generator else ref
 
 
-def spawn(table: TransactionTable, ref: ActorRef, mode: Mode, args: tuple,
-          body: Callable[[Task, Transaction], Any]) -> Transaction:
+def spawn(
+    table: TransactionTable, ref: ActorRef, mode: Mode, args: tuple, body: Callable[[Task, Transaction], Any]
+) -> Transaction:
     """Run ``body(task, txn)`` in a new task under a new transaction (child of the
     current one)."""
     hub = table.hub
@@ -142,17 +142,20 @@ def spawn(table: TransactionTable, ref: ActorRef, mode: Mode, args: tuple,
 
 
 # -- async and stream implementations ----------------------------------------------------------
-def start_async_impl(ref: ActorRef, txn: Transaction, args: tuple, kwargs: dict,
-                     on_result: Callable[[Any], None] | None = None) -> None:
+def start_async_impl(
+    ref: ActorRef, txn: Transaction, args: tuple, kwargs: dict, on_result: Callable[[Any], None] | None = None
+) -> None:
     """Start an async-kind implementation; ``done(result)`` finishes ``txn`` (or, with
     ``on_result``, hands the result there)."""
     _call_impl(ref, txn, Done(txn, on_result), args, kwargs)
 
 
-def start_stream_impl(ref: ActorRef, txn: Transaction, args: tuple, kwargs: dict,
-                      first_only: bool, on_value: Callable[[Any], None] | None) -> None:
+def start_stream_impl(
+    ref: ActorRef, txn: Transaction, args: tuple, kwargs: dict, first_only: bool, on_value: Callable[[Any], None] | None
+) -> None:
     """Start an emit-style stream; with ``first_only`` the first value finishes ``txn``,
     otherwise every value goes to ``on_value`` until the stream ends or is closed."""
+
     def push(value: Any) -> None:
         if txn.done:
             return
@@ -209,8 +212,7 @@ def _closer_of(returned: Any, txn: Transaction) -> Callable[[], Any] | None:
         return returned
     if isinstance(returned, (list, tuple)):
         for pair in returned:
-            if isinstance(pair, (list, tuple)) and len(pair) == 2 and pair[0] == "close" \
-                    and callable(pair[1]):
+            if isinstance(pair, (list, tuple)) and len(pair) == 2 and pair[0] == "close" and callable(pair[1]):
                 fn = pair[1]
                 return lambda: fn(txn)
     return None
@@ -234,8 +236,7 @@ class StreamWait:
 
     __slots__ = ("ref", "txn", "wait", "last", "timer", "on_expired")
 
-    def __init__(self, ref: ActorRef, txn: Transaction,
-                 on_expired: Callable[[], None] | None = None) -> None:
+    def __init__(self, ref: ActorRef, txn: Transaction, on_expired: Callable[[], None] | None = None) -> None:
         if ref.wait is None:
             raise ValueError(f"{ref.path} waits forever for a value: it has no StreamWait")
         self.ref = ref

@@ -4,6 +4,7 @@ The call is handed to the hub and the calling thread waits on a
 ``concurrent.futures.Future``. Ctrl-C in the waiting thread cancels the work it waited
 for, then re-raises.
 """
+
 from __future__ import annotations
 
 import concurrent.futures
@@ -72,9 +73,16 @@ def run_on_hub(hub: Hub, fn: Callable, *args: Any) -> Any:
     return h.wait()
 
 
-def call_from_thread(table: TransactionTable, scope: Any, name: str, mode: Mode,
-                     args: tuple, kwargs: dict, cb: Callable | None,
-                     seconds: float | None) -> Any:
+def call_from_thread(
+    table: TransactionTable,
+    scope: Any,
+    name: str,
+    mode: Mode,
+    args: tuple,
+    kwargs: dict,
+    cb: Callable | None,
+    seconds: float | None,
+) -> Any:
     """Call actor ``name`` (resolved from ``scope``) in ``mode`` from an outside thread.
 
     Blocking modes run in a new task on the hub while this thread waits; iterator modes
@@ -88,10 +96,13 @@ def call_from_thread(table: TransactionTable, scope: Any, name: str, mode: Mode,
 
     def run() -> Any:
         return dispatch(table, scope.resolve(name), mode, args, kwargs, cb, seconds)
+
     if mode in (Mode.SYNC, Mode.TIMED):
+
         def begin() -> None:
             h.task = Task(hub, lambda: h.settle(run))
             hub.switch_to(h.task)
+
         hub.call_soon_threadsafe(begin)
     else:
         hub.call_soon_threadsafe(h.settle, run)
@@ -106,8 +117,16 @@ class ExternalIterator:
     still (the consumer counts as outside work).
     """
 
-    def __init__(self, table: TransactionTable, scope: Any, name: str, mode: Mode,
-                 args: tuple, kwargs: dict, seconds: float | None) -> None:
+    def __init__(
+        self,
+        table: TransactionTable,
+        scope: Any,
+        name: str,
+        mode: Mode,
+        args: tuple,
+        kwargs: dict,
+        seconds: float | None,
+    ) -> None:
         self._hub = hub = table.hub
         self._q: queue.SimpleQueue = queue.SimpleQueue()
         self._requests = 0
@@ -146,6 +165,7 @@ class ExternalIterator:
         def begin() -> None:
             self._task = Task(hub, pump)
             hub.switch_to(self._task)
+
         run_on_hub(hub, begin)
 
     def _request(self) -> None:
@@ -177,6 +197,7 @@ class ExternalIterator:
             task = self._task
             if task is not None and not task.dead:
                 task.deliver_cancel(Cancelled(None, "iterator closed"))
+
         if not self._hub.stopped:
             run_on_hub(self._hub, stop)
 

@@ -2,6 +2,7 @@
 
 Both may be called from any thread: off the hub they hop onto it.
 """
+
 from __future__ import annotations
 
 from typing import Any, Callable
@@ -53,8 +54,7 @@ class Emitter:
 
     __slots__ = ("hub", "_push", "_end")
 
-    def __init__(self, hub: Hub, push: Callable[[Any], None],
-                 end: Callable[[BaseException | None], None]) -> None:
+    def __init__(self, hub: Hub, push: Callable[[Any], None], end: Callable[[BaseException | None], None]) -> None:
         self.hub = hub
         self._push = push
         self._end = end

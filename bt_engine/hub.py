@@ -8,6 +8,7 @@ Other threads never touch hub state; they post work with ``call_soon_threadsafe`
 Under the virtual clock the hub decides when time jumps; the rule it follows is stated
 once, in :class:`bt_engine.clock.VirtualClock`, and implemented in :meth:`Hub._idle`.
 """
+
 from __future__ import annotations
 
 import collections
@@ -219,7 +220,8 @@ class Hub:
             return g
         raise HubBlockingError(
             f"{what} blocks, but it was called from a hub callback, which must not block; "
-            "use an async call mode (start / run_actor_mode(..., 'async', cb)) instead")
+            "use an async call mode (start / run_actor_mode(..., 'async', cb)) instead"
+        )
 
     def sleep(self, seconds: float) -> None:
         """Block the current task for ``seconds`` of runtime-clock time."""
@@ -304,8 +306,7 @@ class Hub:
         if clock.virtual:
             # Jump only while work is live, nothing is posted and no outside work holds
             # time still; while foreign work may still complete, no faster than wall time.
-            if (timers and not self._inbox and self.outside_pending == 0
-                    and not self._is_idle_world()):
+            if timers and not self._inbox and self.outside_pending == 0 and not self._is_idle_world():
                 due = timers[0][0]
                 if self._pace_from is not None:
                     wall0, virtual0 = self._pace_from

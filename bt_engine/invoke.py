@@ -4,14 +4,23 @@ actor is written). See docs/architecture.md, "The life of a call".
 All functions here run on the hub thread. Blocking modes need a task (a greenlet);
 calls from other threads come through :mod:`bt_engine.external` first.
 """
+
 from __future__ import annotations
 
 from typing import Any, Callable
 
 from .actor import ActorRef
 from .errors import ActorbtError, Cancelled, Failure
-from .execution import (StreamWait, current_txn, drop_pending, run_body, spawn,
-                        start_async_impl, start_stream_impl, sync_body)
+from .execution import (
+    StreamWait,
+    current_txn,
+    drop_pending,
+    run_body,
+    spawn,
+    start_async_impl,
+    start_stream_impl,
+    sync_body,
+)
 from .hub import Task, Waiter
 from .iterator import ActorIterator
 from .modes import Kind, Mode
@@ -19,8 +28,15 @@ from .outcome import failure_of, is_failure, result_or_raise
 from .transaction import Transaction, TransactionTable, TxnState
 
 
-def dispatch(table: TransactionTable, ref: ActorRef, mode: Mode, args: tuple, kwargs: dict,
-             cb: Callable | None = None, seconds: float | None = None) -> Any:
+def dispatch(
+    table: TransactionTable,
+    ref: ActorRef,
+    mode: Mode,
+    args: tuple,
+    kwargs: dict,
+    cb: Callable | None = None,
+    seconds: float | None = None,
+) -> Any:
     """Run ``ref`` in ``mode``. Returns the result, a Transaction or an iterator."""
     if mode is Mode.SYNC:
         return call_sync(table, ref, args, kwargs, None)
@@ -34,8 +50,7 @@ def dispatch(table: TransactionTable, ref: ActorRef, mode: Mode, args: tuple, kw
 
 
 # -- sync and timed --------------------------------------------------------------------
-def call_sync(table: TransactionTable, ref: ActorRef, args: tuple, kwargs: dict,
-              seconds: float | None) -> Any:
+def call_sync(table: TransactionTable, ref: ActorRef, args: tuple, kwargs: dict, seconds: float | None) -> Any:
     """Block the calling task until ``ref`` returns (a stream: its first value)."""
     task = table.hub.require_task(f"a sync call of {ref.path}")
     parent = task.txns[-1] if task.txns else None
@@ -50,9 +65,9 @@ def call_sync(table: TransactionTable, ref: ActorRef, args: tuple, kwargs: dict,
     w = Waiter(task)
     txn.add_done_callback(lambda t: w.wake())
     if seconds is not None:
-        txn.set_deadline(seconds)   # the caller's deadline replaces a stream's wait
+        txn.set_deadline(seconds)  # the caller's deadline replaces a stream's wait
     elif ref.wait is not None:
-        StreamWait(ref, txn)        # a silent stream fails the call (a topic nobody publishes)
+        StreamWait(ref, txn)  # a silent stream fails the call (a topic nobody publishes)
     _start_impl_once(ref, txn, args, kwargs)
     try:
         w.wait()
@@ -76,13 +91,11 @@ def _notify(cb: Callable | None, txn: Transaction) -> None:
         txn.add_done_callback(lambda t: cb(t.result if t.state is TxnState.DONE else failure_of(t)))
 
 
-def start_async(table: TransactionTable, ref: ActorRef, args: tuple, kwargs: dict,
-                cb: Callable | None) -> Transaction:
+def start_async(table: TransactionTable, ref: ActorRef, args: tuple, kwargs: dict, cb: Callable | None) -> Transaction:
     """Start ``ref`` and return its Transaction; ``cb(result | Failure)`` at the end."""
     if ref.kind is Kind.SYNC or ref.is_generator:
         body = sync_body(ref)
-        txn = spawn(table, ref, Mode.ASYNC, args,
-                    lambda task, txn: run_body(body, txn, task, args, kwargs))
+        txn = spawn(table, ref, Mode.ASYNC, args, lambda task, txn: run_body(body, txn, task, args, kwargs))
         _notify(cb, txn)
         return txn
     ref.check_args(args, kwargs)
@@ -95,24 +108,24 @@ def start_async(table: TransactionTable, ref: ActorRef, args: tuple, kwargs: dic
 
 
 # -- multi -------------------------------------------------------------------------------
-def start_multi(table: TransactionTable, ref: ActorRef, args: tuple, kwargs: dict,
-                cb: Callable | None) -> Transaction:
+def start_multi(table: TransactionTable, ref: ActorRef, args: tuple, kwargs: dict, cb: Callable | None) -> Transaction:
     """Call ``cb`` with every value until the transaction is cancelled or the stream
     ends; a failure is passed to ``cb`` as a Failure and ends it."""
     emit = cb if cb is not None else (lambda v: None)
     if ref.kind is Kind.SYNC:
-        return _spawn_root(table, ref, Mode.MULTI, args,
-                           lambda task, txn: _repeat_sync(table, ref, task, txn, args, kwargs, emit))
+        return _spawn_root(
+            table, ref, Mode.MULTI, args, lambda task, txn: _repeat_sync(table, ref, task, txn, args, kwargs, emit)
+        )
     if ref.is_generator:
-        return _spawn_root(table, ref, Mode.MULTI, args,
-                           lambda task, txn: _pull_generator(ref, txn, args, kwargs, emit))
+        return _spawn_root(
+            table, ref, Mode.MULTI, args, lambda task, txn: _pull_generator(ref, txn, args, kwargs, emit)
+        )
     ref.check_args(args, kwargs)
     txn = Transaction(table, ref.path, current_txn(table), Mode.MULTI, ref.owner, None, args)
     if ref.kind is Kind.STREAM:
         on_value = emit
-        if ref.wait is not None:   # the gap between values is bounded
-            on_value = _resetting(StreamWait(ref, txn, on_expired=lambda: emit(failure_of(txn))),
-                                  emit)
+        if ref.wait is not None:  # the gap between values is bounded
+            on_value = _resetting(StreamWait(ref, txn, on_expired=lambda: emit(failure_of(txn))), emit)
         start_stream_impl(ref, txn, args, kwargs, first_only=False, on_value=on_value)
         if txn.state is TxnState.FAILED and cb is not None:
             cb(failure_of(txn))
@@ -128,20 +141,30 @@ def start_multi(table: TransactionTable, ref: ActorRef, args: tuple, kwargs: dic
             start_async_impl(ref, txn, args, kwargs, on_result=again)
             if txn.state is TxnState.FAILED and cb is not None:
                 cb(failure_of(txn))
+
     restart()
     return txn
 
 
 def _resetting(gap: StreamWait, emit: Callable[[Any], Any]) -> Callable[[Any], None]:
     """``emit`` that starts the wait for the next value again."""
+
     def on_value(value: Any) -> None:
         gap.heard()
         emit(value)
+
     return on_value
 
 
-def _repeat_sync(table: TransactionTable, ref: ActorRef, task: Task, txn: Transaction,
-                 args: tuple, kwargs: dict, emit: Callable[[Any], Any]) -> None:
+def _repeat_sync(
+    table: TransactionTable,
+    ref: ActorRef,
+    task: Task,
+    txn: Transaction,
+    args: tuple,
+    kwargs: dict,
+    emit: Callable[[Any], Any],
+) -> None:
     while True:
         child = Transaction(table, ref.path, txn, Mode.SYNC, ref.owner, task, args)
         try:
@@ -154,8 +177,7 @@ def _repeat_sync(table: TransactionTable, ref: ActorRef, task: Task, txn: Transa
         table.hub.yield_now()  # let others run between invocations
 
 
-def _pull_generator(ref: ActorRef, txn: Transaction, args: tuple, kwargs: dict,
-                    emit: Callable[[Any], Any]) -> None:
+def _pull_generator(ref: ActorRef, txn: Transaction, args: tuple, kwargs: dict, emit: Callable[[Any], Any]) -> None:
     gen = ref.fn(*args, **kwargs)
     try:
         for value in gen:
@@ -171,10 +193,12 @@ def _pull_generator(ref: ActorRef, txn: Transaction, args: tuple, kwargs: dict,
     txn.finish(TxnState.DONE, None)
 
 
-def _spawn_root(table: TransactionTable, ref: ActorRef, mode: Mode, args: tuple,
-                body: Callable[[Task, Transaction], None]) -> Transaction:
+def _spawn_root(
+    table: TransactionTable, ref: ActorRef, mode: Mode, args: tuple, body: Callable[[Task, Transaction], None]
+) -> Transaction:
     """Spawn ``body`` with its transaction on the task's stack, so that calls it makes
     are children and a cancel ends it quietly."""
+
     def wrapped(task: Task, txn: Transaction) -> None:
         task.txns.append(txn)
         try:
@@ -185,4 +209,5 @@ def _spawn_root(table: TransactionTable, ref: ActorRef, mode: Mode, args: tuple,
             txn.finish(TxnState.CANCELLED, error=c)
         finally:
             task.txns.pop()
+
     return spawn(table, ref, mode, args, wrapped)

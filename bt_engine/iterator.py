@@ -1,4 +1,5 @@
 """The ``iterator`` and ``timed_iterator`` call modes, consumed in the calling task."""
+
 from __future__ import annotations
 
 import collections
@@ -6,8 +7,7 @@ from typing import Any, Generator
 
 from .actor import ActorRef
 from .errors import ActorCancelled, ActorTimeout, Cancelled
-from .execution import (arm_wait, current_txn, drop_pending, run_body, start_async_impl,
-                        start_stream_impl)
+from .execution import arm_wait, current_txn, drop_pending, run_body, start_async_impl, start_stream_impl
 from .hub import Task, Waiter
 from .modes import Kind, Mode
 from .outcome import caller_error, is_failure, result_or_raise
@@ -24,8 +24,9 @@ class ActorIterator:
     leaving the block closes the source.
     """
 
-    def __init__(self, table: TransactionTable, ref: ActorRef, args: tuple, kwargs: dict,
-                 seconds: float | None) -> None:
+    def __init__(
+        self, table: TransactionTable, ref: ActorRef, args: tuple, kwargs: dict, seconds: float | None
+    ) -> None:
         self.table = table
         self.ref = ref
         self.args = args
@@ -124,8 +125,9 @@ class ActorIterator:
     def _invoke_once(self, task: Task) -> Any:
         """One repeated invocation of a sync or async actor, as a child transaction."""
         ref, txn = self.ref, self.txn
-        child = Transaction(self.table, ref.path, txn, Mode.SYNC, ref.owner,
-                            task if ref.kind is Kind.SYNC else None, self.args)
+        child = Transaction(
+            self.table, ref.path, txn, Mode.SYNC, ref.owner, task if ref.kind is Kind.SYNC else None, self.args
+        )
         if ref.kind is Kind.SYNC:
             task.txns.append(txn)  # nested calls see the iterator as their parent
             try:

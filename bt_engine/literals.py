@@ -1,4 +1,5 @@
 """Terminal arguments to Python values: literals via ``ast.literal_eval``, never ``eval``."""
+
 from __future__ import annotations
 
 import ast

@@ -2,6 +2,7 @@
 
 Strings of the ros_actor-style API (``run_actor_mode(name, 'timed', ...)``) are parsed once into these enums.
 """
+
 from __future__ import annotations
 
 import difflib
@@ -27,8 +28,7 @@ class Kind(enum.Enum):
             return value
         kind = _KIND_NAMES.get(value)
         if kind is None:
-            raise BadModeError(
-                f"unknown actor kind {value!r}; expected one of: sync, async, multi (or stream)")
+            raise BadModeError(f"unknown actor kind {value!r}; expected one of: sync, async, multi (or stream)")
         return kind
 
 
@@ -72,8 +72,7 @@ class Mode(enum.Enum):
         """
         if self in (Mode.ASYNC, Mode.MULTI):
             if not args or not (args[0] is None or callable(args[0])):
-                raise BadModeError(f"mode {self.value!r} needs a callback (or None) before the "
-                                   "actor's arguments")
+                raise BadModeError(f"mode {self.value!r} needs a callback (or None) before the actor's arguments")
             return args[0], None, args[1:]
         if self in (Mode.TIMED, Mode.TIMED_ITERATOR):
             first: Any = args[0] if args else None
@@ -85,4 +84,7 @@ class Mode(enum.Enum):
 
 #: the enum values, plus the word orders ros_actor programs use ('timed' + a base mode)
 _MODE_NAMES = {m.value: m for m in Mode} | {
-    "timed_sync": Mode.TIMED, "sync_timed": Mode.TIMED, "iterator_timed": Mode.TIMED_ITERATOR}
+    "timed_sync": Mode.TIMED,
+    "sync_timed": Mode.TIMED,
+    "iterator_timed": Mode.TIMED_ITERATOR,
+}

@@ -1,5 +1,6 @@
 """Importing a Python file by its path, once: what ``imports`` in actorbt.yaml and a
 category file loaded by path both need."""
+
 from __future__ import annotations
 
 import hashlib

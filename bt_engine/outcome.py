@@ -6,6 +6,7 @@ says why not. Every call mode translates outcomes here, so they all agree.
 - failed: :class:`BadArgumentsError` (the call did not fit the signature), or
   :class:`ActorError` naming the actor and chaining the original exception
 """
+
 from __future__ import annotations
 
 from typing import Any

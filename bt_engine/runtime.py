@@ -5,6 +5,7 @@ trace recorder and bus. Nothing in the engine is module-global.
         rt.add_subsystem("robot", Robot)
         rt.call("robot.goto", 1.0, 2.0, 0.0)  # from any thread
 """
+
 from __future__ import annotations
 
 import concurrent.futures
@@ -53,9 +54,12 @@ class Runtime(CallApi):
             disables it.
     """
 
-    def __init__(self, clock: "str | Clock | None" = None,
-                 bus: "str | Transport | Callable[[Runtime], Transport] | None" = None,
-                 watchdog: float | None = 0.5) -> None:
+    def __init__(
+        self,
+        clock: "str | Clock | None" = None,
+        bus: "str | Transport | Callable[[Runtime], Transport] | None" = None,
+        watchdog: float | None = 0.5,
+    ) -> None:
         self.clock = make_clock(clock)
         self._topology_version = 0
         self._executor: concurrent.futures.ThreadPoolExecutor | None = None
@@ -70,6 +74,7 @@ class Runtime(CallApi):
             hub.thread_id = threading.get_ident()
             started.set()
             hub.run()
+
         self._thread = threading.Thread(target=hub_main, name="actorbt-hub", daemon=True)
         self._thread.start()
         started.wait()
@@ -178,14 +183,14 @@ class Runtime(CallApi):
         hub = self.hub
         task = hub.require_task("offload")
         if self._executor is None:
-            self._executor = concurrent.futures.ThreadPoolExecutor(
-                max_workers=4, thread_name_prefix="actorbt-offload")
+            self._executor = concurrent.futures.ThreadPoolExecutor(max_workers=4, thread_name_prefix="actorbt-offload")
         w = Waiter(task)
         hub.outside_pending += 1
 
         def settle(f: concurrent.futures.Future) -> None:
             hub.outside_pending -= 1
             w.wake(f)
+
         fut = self._executor.submit(fn, *args)
         fut.add_done_callback(lambda f: hub.call_soon_threadsafe(settle, f))
         return w.wait().result()

@@ -1,6 +1,7 @@
 """What the two actor shells (``actorbt shell`` and ``actorbt rshell``) share: their
 history, ``~/.actorbt_history`` or the file ``$ACTORBT_HISTORY`` names (through readline
 where Python has it), and the ways out."""
+
 from __future__ import annotations
 
 import cmd
@@ -22,6 +23,7 @@ class ShellBase(cmd.Cmd):
         if self.use_rawinput:
             try:
                 import readline
+
                 readline.set_completer_delims(" \t\n")
                 if HISTORY.exists():
                     readline.read_history_file(HISTORY)
@@ -32,6 +34,7 @@ class ShellBase(cmd.Cmd):
         if self.use_rawinput:
             try:
                 import readline
+
                 readline.set_history_length(HISTORY_LENGTH)
                 readline.write_history_file(HISTORY)
             except (ImportError, OSError):

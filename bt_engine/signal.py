@@ -1,4 +1,5 @@
 """A level-triggered flag that actors can wait on (used by the tree tick loop)."""
+
 from __future__ import annotations
 
 from typing import TYPE_CHECKING

@@ -9,6 +9,7 @@ descendants, then the same from its parent, up to the root. A name defined in tw
 subsystems below the scope where it is looked up is ambiguous. A dotted name
 (``robot.navigation.goto``) is absolute.
 """
+
 from __future__ import annotations
 
 import inspect
@@ -54,8 +55,7 @@ class SubSystem(CallApi):
     _rt: Any
 
     @classmethod
-    def _create(cls, rt: Any, name: str, parent: "SubSystem | None",
-                *args: Any, **kwargs: Any) -> "SubSystem":
+    def _create(cls, rt: Any, name: str, parent: "SubSystem | None", *args: Any, **kwargs: Any) -> "SubSystem":
         obj = cls.__new__(cls)
         obj._bind(rt, name, parent)
         if not args and not kwargs and _wants_args(cls.__init__, 2):
@@ -138,12 +138,22 @@ class SubSystem(CallApi):
         self._collect_actors(net)
         return net
 
-    def add_actor(self, name: str, fn: Callable, kind: "str | Kind" = Kind.SYNC, *,
-                  doc: str | None = None, signature: inspect.Signature | None = None,
-                  is_tree: bool = False, buffer: int | None = None, replace: bool = False,
-                  hub_only: bool = False, safety: Safety | None = None,
-                  wait: float | None = None,
-                  wait_detail: Callable[[float], str] | None = None) -> ActorRef:
+    def add_actor(
+        self,
+        name: str,
+        fn: Callable,
+        kind: "str | Kind" = Kind.SYNC,
+        *,
+        doc: str | None = None,
+        signature: inspect.Signature | None = None,
+        is_tree: bool = False,
+        buffer: int | None = None,
+        replace: bool = False,
+        hub_only: bool = False,
+        safety: Safety | None = None,
+        wait: float | None = None,
+        wait_detail: Callable[[float], str] | None = None,
+    ) -> ActorRef:
         """Register a plain callable as an actor of this subsystem (trees, bus edges);
         ``safety``: whether it moves the robot, is read-only, its limits (see @actor);
         ``wait`` / ``wait_detail`` (an emit-style stream): how long a caller waits for a
@@ -153,10 +163,21 @@ class SubSystem(CallApi):
             k = Kind.STREAM
         if name in self._actors and not replace:
             raise ActorbtError(f"{self._actor_path(name)} is already defined")
-        ref = ActorRef.build(self._actor_path(name), name, fn, k, owner=self, doc=doc,
-                             signature=signature, is_tree=is_tree, hub_only=hub_only, safety=safety,
-                             wait=wait, wait_detail=wait_detail,
-                             **({"buffer": buffer} if buffer else {}))
+        ref = ActorRef.build(
+            self._actor_path(name),
+            name,
+            fn,
+            k,
+            owner=self,
+            doc=doc,
+            signature=signature,
+            is_tree=is_tree,
+            hub_only=hub_only,
+            safety=safety,
+            wait=wait,
+            wait_detail=wait_detail,
+            **({"buffer": buffer} if buffer else {}),
+        )
         self._actors[name] = ref
         self._rt._topology_changed()
         return ref
@@ -178,8 +199,9 @@ class SubSystem(CallApi):
                     continue
                 seen.add(attr)
                 bound = getattr(holder, attr)
-                self.add_actor(spec.name or attr, bound, spec.kind, buffer=spec.buffer,
-                               hub_only=spec.hub_only, safety=spec.safety)
+                self.add_actor(
+                    spec.name or attr, bound, spec.kind, buffer=spec.buffer, hub_only=spec.hub_only, safety=spec.safety
+                )
 
     @property
     def children(self) -> dict[str, "SubSystem"]:
@@ -265,8 +287,9 @@ class SubSystem(CallApi):
         raise KeyError(f"no value {key!r} in {self!r} or its parents")
 
     # -- edges to the outside world (bus) --------------------------------------------
-    def register_publisher(self, name: str, msg_type: type, topic: str, qos: Any = 10, *,
-                           moves: bool = False) -> ActorRef:
+    def register_publisher(
+        self, name: str, msg_type: type, topic: str, qos: Any = 10, *, moves: bool = False
+    ) -> ActorRef:
         """Make actor ``name(msg)`` that publishes ``msg`` on ``topic``. ``qos``: a depth,
         a name ("sensor", "latched", "reliable") or an rclpy QoSProfile. ``moves``: what
         it publishes commands motion (``/cmd_vel``), see :class:`~bt_engine.actor.Safety`."""
@@ -277,15 +300,24 @@ class SubSystem(CallApi):
             if not isinstance(msg, msg_type):
                 raise TypeError(f"{name} publishes {msg_type.__name__}, got {type(msg).__name__}")
             pub.publish(msg)
-        type_name = f"{msg_type.__module__}.{msg_type.__name__}"
-        publish.__doc__ = (f"Publish a {type_name} on {_topic(topic)}.\n\n"
-                           f"Args:\n    msg: the {type_name} message to publish\n")
-        return self.add_actor(name, publish, Kind.SYNC, signature=inspect.Signature(
-            [inspect.Parameter("msg", inspect.Parameter.POSITIONAL_OR_KEYWORD, annotation=msg_type)]),
-            safety=Safety(moves=moves))
 
-    def register_subscriber(self, name: str, msg_type: type, topic: str, qos: Any = 10, *,
-                            wait: float | None = SUBSCRIBER_WAIT) -> ActorRef:
+        type_name = f"{msg_type.__module__}.{msg_type.__name__}"
+        publish.__doc__ = (
+            f"Publish a {type_name} on {_topic(topic)}.\n\nArgs:\n    msg: the {type_name} message to publish\n"
+        )
+        return self.add_actor(
+            name,
+            publish,
+            Kind.SYNC,
+            signature=inspect.Signature(
+                [inspect.Parameter("msg", inspect.Parameter.POSITIONAL_OR_KEYWORD, annotation=msg_type)]
+            ),
+            safety=Safety(moves=moves),
+        )
+
+    def register_subscriber(
+        self, name: str, msg_type: type, topic: str, qos: Any = 10, *, wait: float | None = SUBSCRIBER_WAIT
+    ) -> ActorRef:
         """Make stream actor ``name`` that emits each message arriving on ``topic``;
         its buffer keeps as many of the latest messages as the ``qos`` depth. On a
         transport that delivers on the hub (the local bus) it is ``hub_only``.
@@ -300,24 +332,28 @@ class SubSystem(CallApi):
 
         def subscribe(emit: Callable[[Any], None]) -> Callable[[], None]:
             return bus.subscribe(t, msg_type, emit, qos).close
-        subscribe.__doc__ = (f"Messages ({msg_type.__module__}.{msg_type.__name__}) arriving on {t}."
-                             + (f"\n\nWaiting more than {wait:g} s for one fails (ActorTimeout)."
-                                if wait is not None else ""))
-        return self.add_actor(name, subscribe, Kind.STREAM, buffer=qos_depth(qos),
-                              signature=inspect.Signature([]),
-                              hub_only=bus.delivers_on_hub,
-                              safety=Safety(read_only=True),  # listening changes nothing
-                              wait=wait,
-                              wait_detail=lambda seconds: silence(bus, t, msg_type, seconds))
 
-    def register_action(self, name: str, action_type: type[RosAction], server: str, *,
-                        moves: bool = False) -> ActorRef:
+        subscribe.__doc__ = f"Messages ({msg_type.__module__}.{msg_type.__name__}) arriving on {t}." + (
+            f"\n\nWaiting more than {wait:g} s for one fails (ActorTimeout)." if wait is not None else ""
+        )
+        return self.add_actor(
+            name,
+            subscribe,
+            Kind.STREAM,
+            buffer=qos_depth(qos),
+            signature=inspect.Signature([]),
+            hub_only=bus.delivers_on_hub,
+            safety=Safety(read_only=True),  # listening changes nothing
+            wait=wait,
+            wait_detail=lambda seconds: silence(bus, t, msg_type, seconds),
+        )
+
+    def register_action(self, name: str, action_type: type[RosAction], server: str, *, moves: bool = False) -> ActorRef:
         """Make async actor ``name(goal)`` that sends a goal to action ``server``;
         ``moves``: the goal commands motion (see :class:`~bt_engine.actor.Safety`)."""
         return _declared(self._rt.bus.register_action(self, name, action_type, server), moves)
 
-    def register_service(self, name: str, srv_type: type, server: str, *,
-                         moves: bool = False) -> ActorRef:
+    def register_service(self, name: str, srv_type: type, server: str, *, moves: bool = False) -> ActorRef:
         """Make async actor ``name(request)`` that calls service ``server``."""
         return _declared(self._rt.bus.register_service(self, name, srv_type, server), moves)
 
@@ -336,8 +372,7 @@ def _wants_args(init: Callable, n: int) -> bool:
         params = list(inspect.signature(init).parameters.values())[1:]  # skip self
     except (TypeError, ValueError):
         return False
-    required = [p for p in params if p.default is p.empty
-                and p.kind in (p.POSITIONAL_ONLY, p.POSITIONAL_OR_KEYWORD)]
+    required = [p for p in params if p.default is p.empty and p.kind in (p.POSITIONAL_ONLY, p.POSITIONAL_OR_KEYWORD)]
     return len(required) == n
 
 

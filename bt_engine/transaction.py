@@ -5,6 +5,7 @@ next blocking point of its task (sync-style actors) or calls its closer (async a
 stream actors). A transaction that finishes cancels whatever children it left running,
 so no work outlives its owner.
 """
+
 from __future__ import annotations
 
 import enum
@@ -66,13 +67,39 @@ class Transaction:
     (why it was cancelled); ``timed_out``.
     """
 
-    __slots__ = ("id", "path", "parent", "mode", "started", "deadline", "state", "children",
-                 "task", "closer", "reason", "result", "error", "timed_out", "table",
-                 "_listeners", "_deadline_timer", "scope", "args", "__weakref__")
+    __slots__ = (
+        "id",
+        "path",
+        "parent",
+        "mode",
+        "started",
+        "deadline",
+        "state",
+        "children",
+        "task",
+        "closer",
+        "reason",
+        "result",
+        "error",
+        "timed_out",
+        "table",
+        "_listeners",
+        "_deadline_timer",
+        "scope",
+        "args",
+        "__weakref__",
+    )
 
-    def __init__(self, table: TransactionTable, path: str, parent: "Transaction | None",
-                 mode: Mode, scope: Any = None, task: "Task | None" = None,
-                 args: tuple = ()) -> None:
+    def __init__(
+        self,
+        table: TransactionTable,
+        path: str,
+        parent: "Transaction | None",
+        mode: Mode,
+        scope: Any = None,
+        task: "Task | None" = None,
+        args: tuple = (),
+    ) -> None:
         self.id = table.next_id()
         self.table = table
         self.path = path

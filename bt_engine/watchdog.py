@@ -1,6 +1,7 @@
 """Warn when actor code holds the hub thread too long (a stray ``time.sleep``, a
 blocking socket read), naming the actor and where it blocked, like asyncio's debug mode.
 """
+
 from __future__ import annotations
 
 import logging
@@ -59,7 +60,9 @@ class Watchdog:
         if frame is not None:
             last = traceback.extract_stack(frame)[-1]
             where = f" at {last.filename}:{last.lineno} in {last.name}: {last.line}"
-        msg = (f"hub blocked for {held:.2f} s by {who}{where}; use runtime.offload() or "
-               "sleep on the runtime clock instead of blocking the hub")
+        msg = (
+            f"hub blocked for {held:.2f} s by {who}{where}; use runtime.offload() or "
+            "sleep on the runtime clock instead of blocking the hub"
+        )
         self.warnings.append(msg)
         log.warning(msg)

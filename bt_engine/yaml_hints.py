@@ -6,6 +6,7 @@ actorbt.yaml, goal inputs) adds the likely fix from :func:`syntax_message`, in w
 newcomer can act on. The advice is a guess from the parser's problem and context; when
 no rule fits, a general hint names what usually causes the error.
 """
+
 from __future__ import annotations
 
 import re
@@ -13,8 +14,9 @@ import re
 import yaml
 
 #: what most YAML syntax errors come from, when no specific rule fits
-GENERAL_HINT = ("check this line and the one above it: the indentation, a missing ': ' after a key, "
-                "or a quote or bracket left open")
+GENERAL_HINT = (
+    "check this line and the one above it: the indentation, a missing ': ' after a key, or a quote or bracket left open"
+)
 
 
 def _line(mark: yaml.Mark | None) -> int | None:
@@ -35,14 +37,20 @@ def syntax_hint(exc: yaml.MarkedYAMLError) -> str:
     if found:
         return f"a plain value cannot start with '{found.group(1)}' in YAML: put the value in quotes"
     if "quoted scalar" in context:
-        return (f"the quoted text opened at line {start} is never closed: add the closing quote "
-                "(or escape a quote inside it)")
+        return (
+            f"the quoted text opened at line {start} is never closed: add the closing quote "
+            "(or escape a quote inside it)"
+        )
     if "flow sequence" in context:
-        return (f"the [list] opened at line {start} is not closed, or two of its items lack a ',' "
-                "between them: check its brackets and commas")
+        return (
+            f"the [list] opened at line {start} is not closed, or two of its items lack a ',' "
+            "between them: check its brackets and commas"
+        )
     if "flow mapping" in context:
-        return (f"the {{mapping}} opened at line {start} is not closed, or two of its entries lack a ',' "
-                "between them: check its braces and commas")
+        return (
+            f"the {{mapping}} opened at line {start} is not closed, or two of its entries lack a ',' "
+            "between them: check its braces and commas"
+        )
     if "another document" in problem:
         return "the file holds one document: remove this '---' line, or put the second part in a file of its own"
     if "alias" in context or "undefined alias" in problem:
@@ -55,11 +63,15 @@ def syntax_hint(exc: yaml.MarkedYAMLError) -> str:
         )
     if problem.startswith("expected <block end>"):
         if "'-'" in problem or "<block sequence start>" in problem:
-            return (f"check the indentation of this line against the line above{since}: the '-' items of "
-                    "one list start in the same column, and a list under a key is indented more than the key")
+            return (
+                f"check the indentation of this line against the line above{since}: the '-' items of "
+                "one list start in the same column, and a list under a key is indented more than the key"
+            )
         if "<block mapping start>" in problem:
-            return (f"check the indentation of this line against the line above{since}: the keys of one "
-                    "mapping start in the same column")
+            return (
+                f"check the indentation of this line against the line above{since}: the keys of one "
+                "mapping start in the same column"
+            )
         if "<scalar>" in problem:
             return (
                 "a value continues after its end on this line: quote the whole value, or move the rest to its own line"
@@ -73,17 +85,27 @@ def syntax_hint(exc: yaml.MarkedYAMLError) -> str:
     if "did not find expected '-' indicator" in problem:
         return f"this line is not in line with the list items above it{since}: start it with '- ' in the items' column"
     if "mapping values are not allowed here" in problem:
-        return ("a ':' where no key can start: if the ':' belongs to a value, put the value in quotes; "
-                "if this line is a key, check its indentation and that the line above ends with its value "
-                "(is a ':' missing there?)")
+        return (
+            "a ':' where no key can start: if the ':' belongs to a value, put the value in quotes; "
+            "if this line is a key, check its indentation and that the line above ends with its value "
+            "(is a ':' missing there?)"
+        )
     return GENERAL_HINT
 
 
 #: the parser's names of what it met, in words
 _TOKENS = {
-    "'?'": "a key", "<block mapping start>": "a key", "'-'": "a '-' item", "<block sequence start>": "a '-' item",
-    "<scalar>": "a value", "<stream end>": "the end of the text", "<block end>": "the end of the block above",
-    "<document start>": "a new document", "<anchor>": "an '&' anchor", "<alias>": "a '*' alias", "<tag>": "a '!' tag",
+    "'?'": "a key",
+    "<block mapping start>": "a key",
+    "'-'": "a '-' item",
+    "<block sequence start>": "a '-' item",
+    "<scalar>": "a value",
+    "<stream end>": "the end of the text",
+    "<block end>": "the end of the block above",
+    "<document start>": "a new document",
+    "<anchor>": "an '&' anchor",
+    "<alias>": "a '*' alias",
+    "<tag>": "a '!' tag",
 }
 
 
@@ -101,11 +123,13 @@ def syntax_problem(exc: yaml.MarkedYAMLError) -> str:
     if met:
         wanted = " or ".join(_words(t) for t in re.split(r" or ", met.group(1)))
         return f"{_words(met.group(2))} where {wanted} was expected"
-    for raw, words in (("mapping values are not allowed here", "a ':' after a value"),
-                       ("could not find expected ':'", "a line with no ': ' after its key"),
-                       ("found unexpected end of stream", "the text ends inside a quoted value"),
-                       ("found undefined alias", "a '*' alias that names no anchor"),
-                       ("but found another document", "a second document ('---') in one file")):
+    for raw, words in (
+        ("mapping values are not allowed here", "a ':' after a value"),
+        ("could not find expected ':'", "a line with no ': ' after its key"),
+        ("found unexpected end of stream", "the text ends inside a quoted value"),
+        ("found undefined alias", "a '*' alias that names no anchor"),
+        ("but found another document", "a second document ('---') in one file"),
+    ):
         if problem.startswith(raw):
             return words
     char = re.search(r"found character '(.+?)' that cannot start any token", problem)

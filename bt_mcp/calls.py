@@ -5,6 +5,7 @@ The MCP server runs on an asyncio loop in the main thread; actors run on the run
 hub thread. The hub hands events over with ``loop.call_soon_threadsafe``; the loop
 never blocks on the hub (starting a call waits in a worker thread).
 """
+
 from __future__ import annotations
 
 import asyncio
@@ -66,10 +67,16 @@ class _Done:
         self.outcome, self.at = outcome, at
 
 
-async def run_call(rt: Runtime, ref: ActorRef, args: tuple, kwargs: dict, watcher: RunWatcher | None,
-                   on_transition: Callable[[dict[str, Any]], Awaitable[None]],
-                   on_end: Callable[[CallOutcome], None] | None = None,
-                   on_cancel: Callable[[], None] | None = None) -> CallOutcome:
+async def run_call(
+    rt: Runtime,
+    ref: ActorRef,
+    args: tuple,
+    kwargs: dict,
+    watcher: RunWatcher | None,
+    on_transition: Callable[[dict[str, Any]], Awaitable[None]],
+    on_end: Callable[[CallOutcome], None] | None = None,
+    on_cancel: Callable[[], None] | None = None,
+) -> CallOutcome:
     """Run actor ``ref`` to its end, awaiting ``on_transition(event)`` for every node
     transition of its tree runs; ``on_end(outcome)`` is called however it ended, and
     ``on_cancel()`` as soon as a cancellation starts (``on_end`` follows once it stopped).
@@ -93,8 +100,7 @@ async def run_call(rt: Runtime, ref: ActorRef, args: tuple, kwargs: dict, watche
 
     def start() -> Transaction:  # on the hub: registered before its task first runs
         started["sim"] = rt.now()
-        txn = dispatch(rt.txns, ref, Mode.ASYNC, args, kwargs,
-                       lambda outcome: hand_over(_Done(outcome, rt.now())))
+        txn = dispatch(rt.txns, ref, Mode.ASYNC, args, kwargs, lambda outcome: hand_over(_Done(outcome, rt.now())))
         if watcher is not None:
             watcher.watch(txn.id, watch)
         return txn
@@ -119,8 +125,15 @@ async def run_call(rt: Runtime, ref: ActorRef, args: tuple, kwargs: dict, watche
             if isinstance(item, _Done):
                 on_end(_outcome(item, started["sim"], time.perf_counter() - wall0, watch))
             else:  # still stopping after the grace period: say so rather than wait on
-                on_end(CallOutcome(error="cancelled: still stopping", cancelled=True, ticks=watch.ticks,
-                                   trace=watch.events, dropped=watch.dropped))
+                on_end(
+                    CallOutcome(
+                        error="cancelled: still stopping",
+                        cancelled=True,
+                        ticks=watch.ticks,
+                        trace=watch.events,
+                        dropped=watch.dropped,
+                    )
+                )
         raise
     finally:
         if watcher is not None:
@@ -132,8 +145,9 @@ async def run_call(rt: Runtime, ref: ActorRef, args: tuple, kwargs: dict, watche
 
 
 def _outcome(done: _Done, sim0: float, wall: float, watch: CallWatch) -> CallOutcome:
-    out = CallOutcome(sim_time=done.at - sim0, wall_time=wall, ticks=watch.ticks,
-                      trace=watch.events, dropped=watch.dropped)
+    out = CallOutcome(
+        sim_time=done.at - sim0, wall_time=wall, ticks=watch.ticks, trace=watch.events, dropped=watch.dropped
+    )
     result = done.outcome
     if isinstance(result, Failure):
         error = result.exception

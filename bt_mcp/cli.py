@@ -2,6 +2,7 @@
 
 Declaring the command imports nothing of the SDK; it is imported when the command runs.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -14,19 +15,29 @@ if TYPE_CHECKING:
 
 def register(sub: argparse._SubParsersAction, common: Callable[[argparse.ArgumentParser], None]) -> None:
     p = sub.add_parser(
-        "mcp", help="serve the actors and trees as MCP tools over stdio (for language models)",
+        "mcp",
+        help="serve the actors and trees as MCP tools over stdio (for language models)",
         description="Run a Model Context Protocol server on stdin/stdout: every actor and tree of the "
-                    "catalog is a tool (JSON-Schema input, read-only and motion hints), plus "
-                    "validate_mission, run_mission, show_tree and get_trace. Actors that move the robot "
-                    "are refused unless motion is allowed (--allow-motion, or mcp: {allow_motion: true} "
-                    "in actorbt.yaml). See docs/mcp.md for a client configuration.")
+        "catalog is a tool (JSON-Schema input, read-only and motion hints), plus "
+        "validate_mission, run_mission, show_tree and get_trace. Actors that move the robot "
+        "are refused unless motion is allowed (--allow-motion, or mcp: {allow_motion: true} "
+        "in actorbt.yaml). See docs/mcp.md for a client configuration.",
+    )
     common(p)
     motion = p.add_mutually_exclusive_group()
-    motion.add_argument("--allow-motion", dest="allow_motion", action="store_true", default=None,
-                        help="Run actors and trees that move the robot (default: refused; overrides "
-                             "actorbt.yaml's mcp: allow_motion).")
-    motion.add_argument("--no-motion", dest="allow_motion", action="store_false",
-                        help="Refuse actors and trees that move the robot, whatever actorbt.yaml says.")
+    motion.add_argument(
+        "--allow-motion",
+        dest="allow_motion",
+        action="store_true",
+        default=None,
+        help="Run actors and trees that move the robot (default: refused; overrides actorbt.yaml's mcp: allow_motion).",
+    )
+    motion.add_argument(
+        "--no-motion",
+        dest="allow_motion",
+        action="store_false",
+        help="Refuse actors and trees that move the robot, whatever actorbt.yaml says.",
+    )
     p.set_defaults(func=cmd_mcp)
 
 

@@ -7,6 +7,7 @@ its task first runs), and the runs under that transaction (nested trees included
 routed to it. Everything here runs on the hub thread, except ``CallWatch.events``
 being read once the call ended.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -90,8 +91,7 @@ class RunWatcher(TreeObserver):
         call = self._forward("status_changed", run, path, old, new)
         if call is not None and not (new is Status.INVALID and old is not Status.RUNNING):
             # (a reset of a finished node to INVALID is no transition worth reporting)
-            call.on_transition({"tree": run.mission.name, "path": path,
-                                "status": status_word(new), "depth": run.depth})
+            call.on_transition({"tree": run.mission.name, "path": path, "status": status_word(new), "depth": run.depth})
 
     def actor_started(self, run: TreeRun, leaf: CallSite, args: tuple, kwargs: dict, txn: Transaction) -> None:
         self._forward("actor_started", run, leaf, args, kwargs, txn)

@@ -1,5 +1,6 @@
 """MCP ``CallToolResult``s in wire form: a text for the model, structured content for
 a program, and ``isError`` for anything the model should correct or know failed."""
+
 from __future__ import annotations
 
 from typing import Any
@@ -32,8 +33,7 @@ def outcome_result(name: str, outcome: CallOutcome, is_tree: bool) -> dict[str, 
             return error_result(f"{name}: {outcome.error}", {"status": "FAILURE", "error": outcome.error})
         return text_result(result_text(outcome.value), {"result": outcome.value})
     summary = {"ticks": outcome.ticks, **_times(outcome)}
-    when = (f"after {outcome.ticks} ticks, {outcome.sim_time:.1f} s sim time "
-            f"({outcome.wall_time:.1f} s wall)")
+    when = f"after {outcome.ticks} ticks, {outcome.sim_time:.1f} s sim time ({outcome.wall_time:.1f} s wall)"
     if not outcome.ok:
         structured = {"status": "FAILURE", "error": outcome.error, "failed_at": outcome.failed_at, **summary}
         return error_result(f"{name}: {outcome.error} {when}", structured)

@@ -7,6 +7,7 @@ client sent a progress token): ``progress`` counts them, ``message`` is
 (:mod:`bt_mcp.wire`); file descriptor 1 points at stderr, so what actors and the
 simulator's libraries print cannot corrupt it.
 """
+
 from __future__ import annotations
 
 import io
@@ -41,8 +42,9 @@ def progress_message(event: dict[str, Any]) -> str:
 def build_server(service: ToolService, version: str = "") -> Server:
     """A low-level server whose tools are ``service``'s."""
 
-    async def list_tools(ctx: ServerRequestContext,
-                         params: types.PaginatedRequestParams | None) -> types.ListToolsResult:
+    async def list_tools(
+        ctx: ServerRequestContext, params: types.PaginatedRequestParams | None
+    ) -> types.ListToolsResult:
         return types.ListToolsResult.model_validate({"tools": service.list_tools()}, by_name=False)
 
     async def call_tool(ctx: ServerRequestContext, params: types.CallToolRequestParams) -> types.CallToolResult:
@@ -57,13 +59,17 @@ def build_server(service: ToolService, version: str = "") -> Server:
             result = await service.call(params.name, params.arguments, report)
         except Exception as error:  # a bug of ours must not end the session
             log.exception("tool %s failed", params.name)
-            result = {"content": [{"type": "text", "text": f"{params.name}: internal error: "
-                                                           f"{type(error).__name__}: {error}"}],
-                      "isError": True}
+            result = {
+                "content": [
+                    {"type": "text", "text": f"{params.name}: internal error: {type(error).__name__}: {error}"}
+                ],
+                "isError": True,
+            }
         return types.CallToolResult.model_validate(result, by_name=False)
 
-    return Server("actorbt", version=version, instructions=INSTRUCTIONS,
-                  on_list_tools=list_tools, on_call_tool=call_tool)
+    return Server(
+        "actorbt", version=version, instructions=INSTRUCTIONS, on_list_tools=list_tools, on_call_tool=call_tool
+    )
 
 
 def serve_stdio(service: ToolService, version: str = "", wire: BinaryIO | None = None) -> None:

@@ -5,6 +5,7 @@ a ``CallToolResult`` (wire form). ``bt_mcp.server`` connects it to a session.
 A call goes: known tool? -> motion allowed? -> arguments fit the schema? -> run.
 Nothing runs until all three said yes, so bad input or refused motion moves nothing.
 """
+
 from __future__ import annotations
 
 import inspect
@@ -20,8 +21,7 @@ from bt_engine.modes import Kind
 from bt_engine.runtime import Runtime
 from bt_engine.trees import Mission, MissionError, TreeHost, mission_safety, tree_host
 from .calls import CANCEL_GRACE, CallOutcome, run_call
-from .mission_tools import (MISSION_TOOLS, check_draft, error_entries, errors_text, show_text,
-                            trace_result)
+from .mission_tools import MISSION_TOOLS, check_draft, error_entries, errors_text, show_text, trace_result
 from .progress import RunWatcher
 from .results import error_result, outcome_result, text_result
 from .settings import MOTION_HOW_TO, McpSettings
@@ -38,7 +38,7 @@ Report = Callable[[dict[str, Any]], Awaitable[None]]
 class _Entry:
     ref: ActorRef
     tool: dict[str, Any]  # the catalog's description
-    mcp: dict[str, Any]   # as an MCP tool
+    mcp: dict[str, Any]  # as an MCP tool
 
 
 class ToolService:
@@ -51,7 +51,7 @@ class ToolService:
         self.watcher = RunWatcher()
         rt.run_on_hub(self.host.observers.append, self.watcher)
         self.last_run: dict[str, Any] | None = None
-        self._stopping = 0                  # cancelled tree calls not stopped yet
+        self._stopping = 0  # cancelled tree calls not stopped yet
         self._stopped = anyio.Event()
         self._entries = self._catalog()
         self._mission_tools = {t["name"]: t for t in MISSION_TOOLS}
@@ -64,8 +64,9 @@ class ToolService:
         entries = {}
         for ref in sorted(refs, key=lambda r: r.path):
             tool = tool_schema(ref)
-            entries[ref.path] = _Entry(ref, tool, mcp_tool(tool, ref.signature,
-                                                           allow_motion=self.settings.allow_motion))
+            entries[ref.path] = _Entry(
+                ref, tool, mcp_tool(tool, ref.signature, allow_motion=self.settings.allow_motion)
+            )
         return entries
 
     def close(self) -> None:
@@ -110,8 +111,9 @@ class ToolService:
         outcome = await self._run_tree(name, arguments, entry.ref, args, kwargs, report)
         return outcome_result(name, outcome, True)
 
-    async def _run_tree(self, shown: str, arguments: dict[str, Any], ref: ActorRef, args: tuple,
-                        kwargs: dict, report: Report) -> CallOutcome:
+    async def _run_tree(
+        self, shown: str, arguments: dict[str, Any], ref: ActorRef, args: tuple, kwargs: dict, report: Report
+    ) -> CallOutcome:
         """A tree call whose trace is kept for ``get_trace``, also when it is cancelled."""
         cancelled = False
 
@@ -127,38 +129,52 @@ class ToolService:
                 if not self._stopping:
                     self._stopped.set()
                     self._stopped = anyio.Event()
+
         return await run_call(self.rt, ref, args, kwargs, self.watcher, report, on_end, on_cancel)
 
     def _keep_trace(self, name: str, arguments: dict[str, Any], outcome: CallOutcome) -> None:
-        self.last_run = {"tool": name, "arguments": arguments, "events": outcome.trace,
-                         "dropped": outcome.dropped,
-                         "outcome": {"status": _status(outcome), "error": outcome.error,
-                                     "ticks": outcome.ticks, "sim_time": round(outcome.sim_time, 3)}}
+        self.last_run = {
+            "tool": name,
+            "arguments": arguments,
+            "events": outcome.trace,
+            "dropped": outcome.dropped,
+            "outcome": {
+                "status": _status(outcome),
+                "error": outcome.error,
+                "ticks": outcome.ticks,
+                "sim_time": round(outcome.sim_time, 3),
+            },
+        }
 
     # -- the mission tools (called with their validated arguments) -------------------------
     async def _validate_mission(self, report: Report, yaml: str) -> dict[str, Any]:
         _, errors = await anyio.to_thread.run_sync(check_draft, self.host, yaml)
         if errors:
-            return error_result(f"{len(errors)} error(s):\n{errors_text(errors)}",
-                                {"valid": False, "errors": error_entries(errors)})
+            return error_result(
+                f"{len(errors)} error(s):\n{errors_text(errors)}", {"valid": False, "errors": error_entries(errors)}
+            )
         return text_result("valid", {"valid": True, "errors": []})
 
     async def _run_mission(self, report: Report, yaml: str, inputs: dict | None = None) -> dict[str, Any]:
         mission, errors = await anyio.to_thread.run_sync(check_draft, self.host, yaml)
         if errors or mission is None:
-            return error_result(f"not run: {len(errors)} error(s):\n{errors_text(errors)}",
-                                {"valid": False, "errors": error_entries(errors)})
+            return error_result(
+                f"not run: {len(errors)} error(s):\n{errors_text(errors)}",
+                {"valid": False, "errors": error_entries(errors)},
+            )
         safety = await anyio.to_thread.run_sync(mission_safety, mission, self.host.library.resolve)
         if safety.moves and not self.settings.allow_motion:
-            return error_result(_motion_refused(f"mission {mission.name} calls actors that move the robot"),
-                                {"refused": "motion"})
+            return error_result(
+                _motion_refused(f"mission {mission.name} calls actors that move the robot"), {"refused": "motion"}
+            )
         ref = _draft_actor(self.rt, self.host, mission)
         try:
             mission.bind_inputs(**(inputs or {}))
         except ActorbtError as error:
             return _refused("run_mission", [f"inputs: {error}"])
-        outcome = await self._run_tree("run_mission", {"mission": mission.name, "inputs": inputs or {}},
-                                       ref, (), dict(inputs or {}), report)
+        outcome = await self._run_tree(
+            "run_mission", {"mission": mission.name, "inputs": inputs or {}}, ref, (), dict(inputs or {}), report
+        )
         return outcome_result(mission.name, outcome, True)
 
     async def _show_tree(self, report: Report, tree: str | None = None, yaml: str | None = None) -> dict[str, Any]:
@@ -174,8 +190,11 @@ class ToolService:
                 await self._stopped.wait()
         result = trace_result(self.last_run, limit, types)
         shown = len(result["events"])
-        head = (f"{result['tool']}: {shown} event(s)" + (f", {result['omitted']} omitted" if result["omitted"] else "")
-                if result["tool"] else result["note"])
+        head = (
+            f"{result['tool']}: {shown} event(s)" + (f", {result['omitted']} omitted" if result["omitted"] else "")
+            if result["tool"]
+            else result["note"]
+        )
         return text_result(head + "\n" + "\n".join(_event_line(e) for e in result["events"]), result)
 
 
@@ -192,12 +211,20 @@ def _event_line(event: dict[str, Any]) -> str:
 
 def _draft_actor(rt: Runtime, host: TreeHost, mission: Mission) -> ActorRef:
     """The draft as an actor that is not registered (so the tool list stays the catalog)."""
+
     def run_draft(**inputs: Any) -> dict[str, Any]:
         return host.run_mission(mission, **inputs)
-    return ActorRef.build(f"run_mission:{mission.name}", mission.name, run_draft, Kind.SYNC,
-                          owner=rt.root, doc=mission.doc or "",
-                          signature=inspect.Signature([inspect.Parameter("inputs", inspect.Parameter.VAR_KEYWORD)]),
-                          is_tree=True)
+
+    return ActorRef.build(
+        f"run_mission:{mission.name}",
+        mission.name,
+        run_draft,
+        Kind.SYNC,
+        owner=rt.root,
+        doc=mission.doc or "",
+        signature=inspect.Signature([inspect.Parameter("inputs", inspect.Parameter.VAR_KEYWORD)]),
+        is_tree=True,
+    )
 
 
 def _motion_refused(what: str) -> str:
@@ -212,5 +239,6 @@ def _refused(name: str, problems: list[str]) -> dict[str, Any]:
 
 def _unknown_tool(name: str, known: list[str]) -> str:
     import difflib
+
     close = difflib.get_close_matches(name, known, n=3)
     return f"unknown tool {name!r}" + (f"; did you mean {', '.join(map(repr, close))}?" if close else "")

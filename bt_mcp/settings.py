@@ -4,6 +4,7 @@ the command line (the command line wins).
     mcp:
       allow_motion: false   # default: actors that move the robot are refused
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -14,8 +15,7 @@ from bt_cli import ConfigError
 __all__ = ["McpSettings", "MOTION_HOW_TO"]
 
 #: how a user allows motion, quoted in every refusal and in the tool descriptions
-MOTION_HOW_TO = ("start the server with `actorbt mcp --allow-motion`, or set "
-                 "`mcp: {allow_motion: true}` in actorbt.yaml")
+MOTION_HOW_TO = "start the server with `actorbt mcp --allow-motion`, or set `mcp: {allow_motion: true}` in actorbt.yaml"
 
 _KEYS = {"allow_motion"}
 
@@ -23,8 +23,8 @@ _KEYS = {"allow_motion"}
 @dataclass(frozen=True)
 class McpSettings:
     """Attributes:
-        allow_motion: run actors and trees that move the robot (off by default: a
-            language model should not drive a robot nobody is watching).
+    allow_motion: run actors and trees that move the robot (off by default: a
+        language model should not drive a robot nobody is watching).
     """
 
     allow_motion: bool = False

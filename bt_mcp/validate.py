@@ -4,6 +4,7 @@ positional and keyword arguments.
 
 Every message names the argument, so a model can correct its call.
 """
+
 from __future__ import annotations
 
 import difflib
@@ -59,8 +60,9 @@ def _where(error: jsonschema.ValidationError) -> str:
     return repr(head) + "".join(f"[{p!r}]" if isinstance(p, int) else f".{p}" for p in rest)
 
 
-def call_arguments(signature: inspect.Signature,
-                   arguments: Mapping[str, Any]) -> tuple[tuple[Any, ...], dict[str, Any]]:
+def call_arguments(
+    signature: inspect.Signature, arguments: Mapping[str, Any]
+) -> tuple[tuple[Any, ...], dict[str, Any]]:
     """``arguments`` by name -> ``(args, kwargs)`` for an actor with ``signature``.
 
     A ``*args`` parameter arrives as an array under its name: its values, and the

@@ -8,6 +8,7 @@ the world starts until after it has closed, fd 1 points at stderr and only the p
 writes to a private duplicate of the original stdout. C's own stdout buffer is flushed
 before fd 1 is given back.
 """
+
 from __future__ import annotations
 
 import contextlib

@@ -17,8 +17,21 @@ from typing import Any, Callable, Mapping
 
 from bt_engine.errors import ActorbtError, ActorError
 from bt_engine.runtime import Runtime
-from bt_engine.trees import (STANDARD_BEHAVIOURS, Mission, MissionError, PluginNode, PluginSpec, Resolver,
-                             TreeFailure, TreeHost, TreeLibrary, check_files, suggest, tree_host, walk)
+from bt_engine.trees import (
+    STANDARD_BEHAVIOURS,
+    Mission,
+    MissionError,
+    PluginNode,
+    PluginSpec,
+    Resolver,
+    TreeFailure,
+    TreeHost,
+    TreeLibrary,
+    check_files,
+    suggest,
+    tree_host,
+    walk,
+)
 from .progress import ProgressPrinter, parse_inputs
 
 __all__ = ["cmd_check", "cmd_plot", "cmd_replay", "cmd_run", "cmd_show"]
@@ -41,8 +54,9 @@ def _mission(host: TreeHost, spec: str) -> Mission:
     )
 
 
-def cmd_run(args: argparse.Namespace, app: Any, *,
-            around: Callable[[Runtime, TreeHost, Mission, dict], Any] | None = None) -> int:
+def cmd_run(
+    args: argparse.Namespace, app: Any, *, around: Callable[[Runtime, TreeHost, Mission, dict], Any] | None = None
+) -> int:
     """Run a tree; unless ``--quiet``, with live progress and an ending like ``actorbt
     demo``'s: the outcome (outputs once, or where it failed), sim and wall time of the
     run, and the trace file given by ``--record``.
@@ -68,8 +82,10 @@ def cmd_run(args: argparse.Namespace, app: Any, *,
             watcher = around(rt, host, mission, inputs)
         if args.record:
             from bt_engine.trees import TraceRecorder
-            recorder = TraceRecorder(args.record, host, tree=mission.name, inputs=inputs,
-                                     seed=getattr(args, "seed", None))
+
+            recorder = TraceRecorder(
+                args.record, host, tree=mission.name, inputs=inputs, seed=getattr(args, "seed", None)
+            )
         sim0, wall0 = rt.now(), time.perf_counter()
         try:
             result = rt.call(mission.name, **inputs)
@@ -112,8 +128,13 @@ def time_line(sim_time: float, wall_time: float) -> str:
     return f"sim time {sim_time:.1f} s, wall time {wall_time:.1f} s ({factor:.1f}x real time)"
 
 
-def cmd_check(args: argparse.Namespace, app: Any, *, resolver: Resolver | None = None,
-              nodes: Mapping[str, PluginSpec] | None = None) -> int:
+def cmd_check(
+    args: argparse.Namespace,
+    app: Any,
+    *,
+    resolver: Resolver | None = None,
+    nodes: Mapping[str, PluginSpec] | None = None,
+) -> int:
     """Check mission files against ``resolver``, by default the actor index: not a
     runtime, so no robot code is imported or started (the index is rebuilt, once, when
     that code changed). ``actorbt check --nodes`` passes its own (bt_xml.cli),
@@ -162,6 +183,7 @@ def unwritten_plugins(library: TreeLibrary, files: list[Path]) -> list[str]:
 
 def _load_for_show(app: Any, spec: str) -> Mission:
     from bt_engine.trees import read_mission
+
     if _is_file(spec):
         return read_mission(spec)
     library = TreeLibrary()
@@ -174,6 +196,7 @@ def _load_for_show(app: Any, spec: str) -> Mission:
 
 def cmd_show(args: argparse.Namespace, app: Any) -> int:
     from .show import ascii_tree, render
+
     mission = _load_for_show(app, args.tree)
     print(ascii_tree(mission))
     if args.out:
@@ -183,6 +206,7 @@ def cmd_show(args: argparse.Namespace, app: Any) -> int:
 
 def cmd_replay(args: argparse.Namespace, app: Any) -> int:
     from .replay import replay
+
     report = replay(args.trace, trees=args.trees)
     print(report)
     return 0 if report.ok else 1
@@ -190,5 +214,6 @@ def cmd_replay(args: argparse.Namespace, app: Any) -> int:
 
 def cmd_plot(args: argparse.Namespace, app: Any) -> int:
     from .plot import plot_trace
+
     print(f"wrote {plot_trace(args.trace, args.out)}")
     return 0

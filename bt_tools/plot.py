@@ -14,8 +14,15 @@ from .replay import read_trace
 
 __all__ = ["plot_trace"]
 
-_COLOURS = {"SUCCESS": "#4caf50", "done": "#4caf50", "FAILURE": "#e53935", "failed": "#e53935",
-            "INVALID": "#9e9e9e", "cancelled": "#9e9e9e", "open": "#ffb300"}
+_COLOURS = {
+    "SUCCESS": "#4caf50",
+    "done": "#4caf50",
+    "FAILURE": "#e53935",
+    "failed": "#e53935",
+    "INVALID": "#9e9e9e",
+    "cancelled": "#9e9e9e",
+    "open": "#ffb300",
+}
 
 
 def _rows(events: list[dict[str, Any]]) -> tuple[list[str], dict[str, list], dict[str, list], float]:
@@ -59,9 +66,9 @@ def _rows(events: list[dict[str, Any]]) -> tuple[list[str], dict[str, list], dic
     order = [r for r in order if not r.startswith("actor ")] + [r for r in order if r.startswith("actor ")]
     if len(set(trees.values())) == 1:  # one tree: its name on every row says nothing
         prefix = f"{next(iter(trees.values()))}: "
-        order = [r[len(prefix):] if r.startswith(prefix) else r for r in order]
-        bars = {k[len(prefix):] if k.startswith(prefix) else k: v for k, v in bars.items()}
-        marks = {k[len(prefix):] if k.startswith(prefix) else k: v for k, v in marks.items()}
+        order = [r[len(prefix) :] if r.startswith(prefix) else r for r in order]
+        bars = {k[len(prefix) :] if k.startswith(prefix) else k: v for k, v in bars.items()}
+        marks = {k[len(prefix) :] if k.startswith(prefix) else k: v for k, v in marks.items()}
     return order, bars, marks, end
 
 
@@ -95,9 +102,20 @@ def plot_trace(trace: str | Path, out: str | Path, *, title: str | None = None) 
     ax.set_xlabel("runtime clock [s]")
     ax.grid(axis="x", alpha=0.3)
     ax.set_title(title or f"{header.get('tree')} ({Path(trace).name})")
-    ax.legend(handles=[Patch(color=_COLOURS[k], label=v) for k, v in
-                       (("SUCCESS", "succeeded"), ("FAILURE", "failed"), ("INVALID", "halted / cancelled"),
-                        ("open", "still running"))], loc="upper left", bbox_to_anchor=(1.0, 1.0), fontsize=7)
+    ax.legend(
+        handles=[
+            Patch(color=_COLOURS[k], label=v)
+            for k, v in (
+                ("SUCCESS", "succeeded"),
+                ("FAILURE", "failed"),
+                ("INVALID", "halted / cancelled"),
+                ("open", "still running"),
+            )
+        ],
+        loc="upper left",
+        bbox_to_anchor=(1.0, 1.0),
+        fontsize=7,
+    )
     fig.tight_layout()
     out = Path(out)
     fig.savefig(out, dpi=110)

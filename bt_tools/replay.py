@@ -43,11 +43,20 @@ from bt_engine.errors import ActorbtError, Failure
 from bt_engine.hub import TimerHandle
 from bt_engine.runtime import Runtime
 from bt_engine.transaction import Transaction, TxnState
-from bt_engine.trees import (TRACE_FORMAT, TRACE_VERSION, CallSite, EventBuilder, MissionError, TreeHost, TreeLibrary,
-                             TreeRun, node_plugins, read_mission)
+from bt_engine.trees import (
+    TRACE_FORMAT,
+    TRACE_VERSION,
+    CallSite,
+    EventBuilder,
+    MissionError,
+    TreeHost,
+    TreeLibrary,
+    TreeRun,
+    node_plugins,
+    read_mission,
+)
 
-__all__ = ["Divergence", "ReplayError", "ReplayReport", "describe_event", "locate_trees", "read_trace",
-           "replay"]
+__all__ = ["Divergence", "ReplayError", "ReplayReport", "describe_event", "locate_trees", "read_trace", "replay"]
 
 #: Event types that must match; ``log`` and ``txn`` events are informative only.
 COMPARED = ("run", "tick", "status", "call", "return", "write", "end")
@@ -85,8 +94,10 @@ class Divergence:
     got: dict[str, Any] | None
 
     def __str__(self) -> str:
-        return (f"first divergence at event {self.index}: expected {describe_event(self.expected)}, "
-                f"got {describe_event(self.got)}")
+        return (
+            f"first divergence at event {self.index}: expected {describe_event(self.expected)}, "
+            f"got {describe_event(self.got)}"
+        )
 
 
 @dataclass
@@ -125,8 +136,11 @@ def describe_event(event: dict[str, Any] | None) -> str:
         what = f"call #{event['call']} {event['actor']}({', '.join(args)}) by {event['path']}"
     elif kind == "return":
         state = str(event.get("state"))  # as the line shows it (None when missing)
-        outcome = {"done": f"returned {json.dumps(event.get('value'))}", "failed": f"failed ({event.get('error')})",
-                   "cancelled": f"cancelled ({event.get('reason')})"}.get(state, state)
+        outcome = {
+            "done": f"returned {json.dumps(event.get('value'))}",
+            "failed": f"failed ({event.get('error')})",
+            "cancelled": f"cancelled ({event.get('reason')})",
+        }.get(state, state)
         what = f"call #{event['call']} {event['actor']} {outcome} to {event['path']}"
     elif kind == "tick":
         what = f"tick {event['n']}"
@@ -141,8 +155,9 @@ def describe_event(event: dict[str, Any] | None) -> str:
     return f"[{where}] {what}"
 
 
-def _same(expected: dict[str, Any], got: dict[str, Any], previous: tuple[dict, dict] | None = None,
-          wall: bool = False) -> bool:
+def _same(
+    expected: dict[str, Any], got: dict[str, Any], previous: tuple[dict, dict] | None = None, wall: bool = False
+) -> bool:
     """Whether ``got`` matches ``expected`` (times relative to the run's start); on the wall
     clock, the gaps since the ``previous`` (expected, got) pair are compared instead."""
     kind = expected.get("type")
@@ -266,8 +281,9 @@ def _from_json(value: Any) -> Any:
 class ReplayTxn:
     """Stands in for an actor call's Transaction; ends as the recorded call did."""
 
-    def __init__(self, rt: Runtime, number: int, actor: str, call: dict | None, ret: dict | None,
-                 on_done: Callable[[Any], None]) -> None:
+    def __init__(
+        self, rt: Runtime, number: int, actor: str, call: dict | None, ret: dict | None, on_done: Callable[[Any], None]
+    ) -> None:
         self.rt = rt
         self.id = number
         self.path = actor
@@ -280,13 +296,15 @@ class ReplayTxn:
         self._timer: TimerHandle | None = None
         if call is None or call.get("actor") != actor:
             recorded = f"call #{number} was {call.get('actor')!r}" if call else f"there is no call #{number}"
-            self._timer = rt.call_later(0.0, self._finish, TxnState.FAILED, None,
-                                        ReplayedError(f"not in the recording: {recorded}"))
+            self._timer = rt.call_later(
+                0.0, self._finish, TxnState.FAILED, None, ReplayedError(f"not in the recording: {recorded}")
+            )
         elif ret is not None and ret.get("state") == "done":
             self._timer = rt.call_later(ret["t"] - call["t"], self._finish, TxnState.DONE, _from_json(ret.get("value")))
         elif ret is not None and ret.get("state") == "failed":
-            self._timer = rt.call_later(ret["t"] - call["t"], self._finish, TxnState.FAILED, None,
-                                        ReplayedError(ret.get("error", "failed")))
+            self._timer = rt.call_later(
+                ret["t"] - call["t"], self._finish, TxnState.FAILED, None, ReplayedError(ret.get("error", "failed"))
+            )
         # cancelled, or still running when the recording ended: the tree must halt it
 
     @property
@@ -337,8 +355,9 @@ class ReplayHost(TreeHost):
     def actor_target(self, name: str) -> tuple[str, str]:
         return name, "sync"  # the kind that matters is the recorded one
 
-    def start_actor(self, run: TreeRun, leaf: CallSite, args: tuple, kwargs: dict,
-                    on_done: Callable[[Any], None]) -> Any:
+    def start_actor(
+        self, run: TreeRun, leaf: CallSite, args: tuple, kwargs: dict, on_done: Callable[[Any], None]
+    ) -> Any:
         self._count += 1
         if leaf.node.actor in self.library:  # a tree: run it again
             return super().start_actor(run, leaf, args, kwargs, on_done)
@@ -383,8 +402,12 @@ class _Comparer:
         if first.get("type") != "status" or event.get("type") != "status":
             return
         j = i + 1
-        while (j < len(self.expected) and self.expected[j].get("type") == "status"
-               and self.expected[j].get("run") == first.get("run") and self.expected[j].get("t") == first.get("t")):
+        while (
+            j < len(self.expected)
+            and self.expected[j].get("type") == "status"
+            and self.expected[j].get("run") == first.get("run")
+            and self.expected[j].get("t") == first.get("t")
+        ):
             if _same(self.expected[j], event, previous, self.wall):
                 self.expected[i], self.expected[j] = self.expected[j], self.expected[i]
                 return
@@ -395,8 +418,7 @@ class _Comparer:
             self.divergence = Divergence(len(self.got) + 1, self.expected[len(self.got)], None)
 
 
-def locate_trees(header: dict[str, Any], trace: Path,
-                 trees: str | Path | None) -> tuple[dict[str, Path], list[str]]:
+def locate_trees(header: dict[str, Any], trace: Path, trees: str | Path | None) -> tuple[dict[str, Path], list[str]]:
     """The tree files of a trace (its ``header``): ``name -> path``, found in the folder
     ``trees`` by tree name, else at the paths the trace recorded (also beside it); and
     a note for each tree changed since the recording. A tree not found: ReplayError."""
@@ -436,12 +458,14 @@ def _import_plugins(header: dict[str, Any], trace: Path) -> None:
         try:
             importlib.import_module(module)
         except ImportError as exc:
-            raise ReplayError(f"{trace}: node {name!r} is defined in module {module!r}, which does not import: "
-                              f"{exc}") from None
+            raise ReplayError(
+                f"{trace}: node {name!r} is defined in module {module!r}, which does not import: {exc}"
+            ) from None
 
 
-def replay(trace: str | Path, *, trees: str | Path | None = None, wall_timeout: float = 120.0,
-           lines: list[str] | None = None) -> ReplayReport:
+def replay(
+    trace: str | Path, *, trees: str | Path | None = None, wall_timeout: float = 120.0, lines: list[str] | None = None
+) -> ReplayReport:
     """Re-execute a recorded tree run and compare it with the recording.
 
     Args:

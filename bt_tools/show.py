@@ -127,8 +127,13 @@ def dot_graph(mission: Mission) -> "graphviz.Digraph":
     graph = graphviz.Digraph(
         mission.name,
         graph_attr={"rankdir": "TB", "fontname": "Helvetica"},
-        node_attr={"fontname": "Helvetica", "fontsize": "11", "shape": "box", "style": "rounded,filled",
-                   "fillcolor": "white"},
+        node_attr={
+            "fontname": "Helvetica",
+            "fontsize": "11",
+            "shape": "box",
+            "style": "rounded,filled",
+            "fillcolor": "white",
+        },
     )
     count = 0
 

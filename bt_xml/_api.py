@@ -26,8 +26,9 @@ def import_files(
         BtXmlError: the first problem found, located in its XML file.
     """
     if dialect not in DIALECTS:
-        raise BtXmlError(Pos("<command line>", 1, 1), f"unknown dialect {dialect!r}, expected one of: "
-                                                      f"{', '.join(DIALECTS)}")
+        raise BtXmlError(
+            Pos("<command line>", 1, 1), f"unknown dialect {dialect!r}, expected one of: {', '.join(DIALECTS)}"
+        )
     importer = DIALECTS[dialect](model)
     for path in paths:
         importer.load(path)

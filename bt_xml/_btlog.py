@@ -96,8 +96,12 @@ class _Expander:
         self.next_uid += 1
         inst.uids[path] = uid
         first = {"ID": element.attrib.pop("ID")} if "ID" in element.attrib else {}
-        element.attrib = {**first, "name": node.label, **{k: v for k, v in element.attrib.items() if k != "name"},
-                          "_uid": str(uid)}
+        element.attrib = {
+            **first,
+            "name": node.label,
+            **{k: v for k, v in element.attrib.items() if k != "name"},
+            "_uid": str(uid),
+        }
         if isinstance(node, Do) and node.actor in self.library:
             sub_path = (inst.fullpath + "/" if inst.fullpath else "") + node.label
             element.set("_fullpath", sub_path)
@@ -147,8 +151,10 @@ def trace_to_btlog(trace: str | Path, *, trees: str | Path | None = None) -> tup
     except OSError as exc:
         raise BtlogError(f"{trace}: cannot read trace: {exc.strerror or exc}") from None
     except UnicodeDecodeError as exc:  # a binary file: a .btlog, a bag
-        raise BtlogError(f"{trace}: not a trace: byte {exc.start} is not UTF-8 text, expected JSON lines "
-                         "(an actorbt trace, as run --record writes it)") from None
+        raise BtlogError(
+            f"{trace}: not a trace: byte {exc.start} is not UTF-8 text, expected JSON lines "
+            "(an actorbt trace, as run --record writes it)"
+        ) from None
     header, events = read_trace(trace, text.splitlines())
     files, _notes = locate_trees(header, trace, trees)
     library = TreeLibrary()
@@ -171,33 +177,48 @@ def trace_to_btlog(trace: str | Path, *, trees: str | Path | None = None) -> tup
         elif kind == "status":
             inst = runs.get(event["run"])
             if inst is None:
-                raise BtlogError(f"{trace}:{number}: a status of run {event['run']}, which has not started, "
-                                 "expected a run event first")
+                raise BtlogError(
+                    f"{trace}:{number}: a status of run {event['run']}, which has not started, "
+                    "expected a run event first"
+                )
             uid = inst.uids.get(event["path"])
             if uid is None:
-                raise BtlogError(f"{trace}:{number}: tree {inst.mission.name!r} ({inst.mission.file}) has no node "
-                                 f"{event['path']!r}: was it changed since the recording?")
+                raise BtlogError(
+                    f"{trace}:{number}: tree {inst.mission.name!r} ({inst.mission.file}) has no node "
+                    f"{event['path']!r}: was it changed since the recording?"
+                )
             code = STATUS_CODES.get(event["new"])
             if code is None:
-                raise BtlogError(f"{trace}:{number}: status {event['new']!r}, expected one of "
-                                 f"{', '.join(STATUS_CODES)}")
+                raise BtlogError(
+                    f"{trace}:{number}: status {event['new']!r}, expected one of {', '.join(STATUS_CODES)}"
+                )
             t_us = round(float(event["t"]) * 1e6)
             if not 0 <= t_us <= _MAX_DELTA_US:
-                raise BtlogError(f"{trace}:{number}: time {event['t']} s is outside the log's range "
-                                 f"(0 to {_MAX_DELTA_US / 1e6:.0f} s after the start)")
+                raise BtlogError(
+                    f"{trace}:{number}: time {event['t']} s is outside the log's range "
+                    f"(0 to {_MAX_DELTA_US / 1e6:.0f} s after the start)"
+                )
             if records and t_us < records[-1].t_us:
                 t_us = records[-1].t_us  # the log's times never go back
             records.append(Transition(t_us, uid, code))
     return expander.xml(), _first_timestamp(header), records
 
 
-def _run_instance(trace: Path, number: int, event: dict[str, Any], runs: dict[int, _Instance],
-                  pending: dict[int, list[tuple[str, str]]], main: _Instance) -> _Instance:
+def _run_instance(
+    trace: Path,
+    number: int,
+    event: dict[str, Any],
+    runs: dict[int, _Instance],
+    pending: dict[int, list[tuple[str, str]]],
+    main: _Instance,
+) -> _Instance:
     parent = event.get("parent")
     if parent is None:
         if event["tree"] != main.mission.name:
-            raise BtlogError(f"{trace}:{number}: run {event['run']} is tree {event['tree']!r}, expected the "
-                             f"header's tree {main.mission.name!r}")
+            raise BtlogError(
+                f"{trace}:{number}: run {event['run']} is tree {event['tree']!r}, expected the "
+                f"header's tree {main.mission.name!r}"
+            )
         return main
     caller = runs.get(parent)
     if caller is None:
@@ -212,8 +233,10 @@ def _run_instance(trace: Path, number: int, event: dict[str, Any], runs: dict[in
     # no call event: the one SubTree node of the caller that calls this tree
     found = [inst for inst in caller.calls.values() if inst.mission.name == event["tree"]]
     if not found:
-        raise BtlogError(f"{trace}:{number}: run {event['run']} is tree {event['tree']!r}, which tree "
-                         f"{caller.mission.name!r} does not call")
+        raise BtlogError(
+            f"{trace}:{number}: run {event['run']} is tree {event['tree']!r}, which tree "
+            f"{caller.mission.name!r} does not call"
+        )
     return found[0]
 
 
@@ -233,4 +256,3 @@ def write_btlog(path: str | Path, xml: str, first_us: int, records: list[Transit
     except OSError as exc:
         raise BtlogError(f"{out}: cannot write: {exc.strerror or exc}") from None
     return out
-

@@ -43,6 +43,7 @@ def _composite(kind: str) -> Handler:
     def handler(imp: Importer, el: XElement, node_id: str, ports: dict[str, str], ctx: _Tree, parent: str) -> dict:
         imp.params(el, ports, ())
         return {kind: imp.children(el, ctx, kind)}
+
     return handler
 
 
@@ -50,6 +51,7 @@ def _decorator(kind: str) -> Handler:
     def handler(imp: Importer, el: XElement, node_id: str, ports: dict[str, str], ctx: _Tree, parent: str) -> dict:
         imp.params(el, ports, ())
         return {kind: imp.child(el, ctx, kind)}
+
     return handler
 
 
@@ -74,6 +76,7 @@ def _branching(kind: str) -> Handler:
     def handler(imp: Importer, el: XElement, node_id: str, ports: dict[str, str], ctx: _Tree, parent: str) -> dict:
         imp.params(el, ports, ())
         return {kind: imp.children(el, ctx, kind, (2, 3))}
+
     return handler
 
 
@@ -136,6 +139,7 @@ def _always(value: str) -> Handler:
         imp.params(el, ports, ())
         imp.children(el, ctx, "leaf", (0, 0))
         return {"name": node_id, "check": value}
+
     return handler
 
 
@@ -145,8 +149,7 @@ def _sleep(imp: Importer, el: XElement, node_id: str, ports: dict[str, str], ctx
     return {"wait": imp.number(el, "msec", ports["msec"], ctx, integer=False, scale=0.001, ref_ok=False)}
 
 
-def _set_blackboard(imp: Importer, el: XElement, node_id: str, ports: dict[str, str], ctx: _Tree,
-                    parent: str) -> dict:
+def _set_blackboard(imp: Importer, el: XElement, node_id: str, ports: dict[str, str], ctx: _Tree, parent: str) -> dict:
     imp.params(el, ports, ("value", "output_key"), ("value", "output_key"))
     imp.children(el, ctx, "leaf", (0, 0))
     text = ports["output_key"].strip()
@@ -166,8 +169,9 @@ def _script(imp: Importer, el: XElement, node_id: str, ports: dict[str, str], ct
     return nodes[0] if len(nodes) == 1 else {"sequence": nodes}
 
 
-def _script_condition(imp: Importer, el: XElement, node_id: str, ports: dict[str, str], ctx: _Tree,
-                      parent: str) -> dict:
+def _script_condition(
+    imp: Importer, el: XElement, node_id: str, ports: dict[str, str], ctx: _Tree, parent: str
+) -> dict:
     imp.params(el, ports, ("code",), ("code",))
     imp.children(el, ctx, "leaf", (0, 0))
     return imp.check(el, "code", ports["code"], ctx)
@@ -179,18 +183,22 @@ def _switch(n: int) -> Handler:
         imp.params(el, ports, ("variable", *cases), ("variable", *cases))
         key = imp.key(el, "variable", ports["variable"])
         if key is None:
-            raise BtXmlError(el.at("variable"), "variable must be a blackboard key such as \"{state}\"")
+            raise BtXmlError(el.at("variable"), 'variable must be a blackboard key such as "{state}"')
         ctx.read(key, el.at("variable"))
         kids = imp.children(el, ctx, "while_do_else", (n + 1, n + 1))
         node = kids[-1]
         for case, kid in reversed(list(zip(cases, kids))):
             value = guess_literal(ports[case])
-            shown = f'"{value}"' if isinstance(value, str) else ("true" if value is True else "false" if value is False
-                                                                 else repr(value))
+            shown = (
+                f'"{value}"'
+                if isinstance(value, str)
+                else ("true" if value is True else "false" if value is False else repr(value))
+            )
             if isinstance(value, str) and ('"' in value or "\\" in value):
                 raise UnsupportedXmlError(el.at(case), f"{case} {value!r}: quotes and backslashes are not supported")
             node = {"while_do_else": [{"check": f"{key} == {shown}"}, kid, node]}
         return node
+
     return handler
 
 
@@ -211,8 +219,7 @@ def _rate(imp: Importer, el: XElement, node_id: str, ports: dict[str, str], ctx:
     return {"rate_controller": {"hz": hz, "child": imp.child(el, ctx, "rate_controller")}}
 
 
-def _single_trigger(imp: Importer, el: XElement, node_id: str, ports: dict[str, str], ctx: _Tree,
-                    parent: str) -> dict:
+def _single_trigger(imp: Importer, el: XElement, node_id: str, ports: dict[str, str], ctx: _Tree, parent: str) -> dict:
     imp.params(el, ports, ())
     return {"run_once": {"then": "failure", "child": imp.child(el, ctx, "run_once")}}
 
@@ -268,5 +275,5 @@ UNSUPPORTED: dict[str, str] = {
     "LoopBool": "queues on the blackboard are not supported; loop in an actor",
     "ParallelAll": "use Parallel with success_count and failure_count",
     "ManualSelector": "it asks a human at a terminal, which a mission does not do",
-    "SubTreePlus": "it is BehaviorTree.CPP v3; use <SubTree ... _autoremap=\"true\">",
+    "SubTreePlus": 'it is BehaviorTree.CPP v3; use <SubTree ... _autoremap="true">',
 }

@@ -19,8 +19,26 @@ import dataclasses
 import inspect
 from typing import Any, Callable
 
-from bt_engine.trees import (Check, Do, Expr, Mission, Node, Parallel, ParallelPolicy, PluginNode, RateController,
-                             Recovery, Repeat, Retry, RunOnce, SetValues, Timeout, UseBehaviour, Wait, children_of)
+from bt_engine.trees import (
+    Check,
+    Do,
+    Expr,
+    Mission,
+    Node,
+    Parallel,
+    ParallelPolicy,
+    PluginNode,
+    RateController,
+    Recovery,
+    Repeat,
+    Retry,
+    RunOnce,
+    SetValues,
+    Timeout,
+    UseBehaviour,
+    Wait,
+    children_of,
+)
 from ._values import same_value
 
 __all__ = ["expr_shape", "mission_differences"]
@@ -31,8 +49,10 @@ Signature = Callable[[str], "inspect.Signature | None"]
 def expr_shape(expr: Expr) -> Any:
     """A check expression's syntax tree without character offsets."""
     if dataclasses.is_dataclass(expr):
-        return (type(expr).__name__, *(expr_shape(getattr(expr, f.name)) for f in dataclasses.fields(expr)
-                                       if f.name != "offset"))
+        return (
+            type(expr).__name__,
+            *(expr_shape(getattr(expr, f.name)) for f in dataclasses.fields(expr) if f.name != "offset"),
+        )
     if isinstance(expr, tuple):
         return tuple(expr_shape(e) for e in expr)
     return (type(expr).__name__, expr) if isinstance(expr, (bool, int, float)) else expr
@@ -119,8 +139,11 @@ def _arguments(node: Do, signature: Signature | None) -> dict[str, Any]:
     if not node.args:
         return dict(node.kwargs)
     sig = signature(node.actor) if signature is not None else None
-    names = [p.name for p in sig.parameters.values() if p.kind in (p.POSITIONAL_ONLY, p.POSITIONAL_OR_KEYWORD)] \
-        if sig is not None else []
+    names = (
+        [p.name for p in sig.parameters.values() if p.kind in (p.POSITIONAL_ONLY, p.POSITIONAL_OR_KEYWORD)]
+        if sig is not None
+        else []
+    )
     if len(names) < len(node.args):
         return {"*args": list(node.args), **node.kwargs}
     return {**dict(zip(names, node.args)), **node.kwargs}

@@ -27,8 +27,17 @@ from bt_engine.trees import PluginSpec, Ref, keys_of, node_plugins, parse_expres
 from ._builtins import BUILTINS, NAV2, UNSUPPORTED
 from ._errors import BtXmlError, Pos, UnknownXmlNodeError, UnsupportedXmlError
 from ._extensions import HANDLERS as EXTENSION_HANDLERS
-from ._nodes import (JSON_PREFIX, NodeKind, NodeModel, NodeSpec, PortSpec, convert_literal, decode_json, guess_literal,
-                     plugin_ports)
+from ._nodes import (
+    JSON_PREFIX,
+    NodeKind,
+    NodeModel,
+    NodeSpec,
+    PortSpec,
+    convert_literal,
+    decode_json,
+    guess_literal,
+    plugin_ports,
+)
 from ._script import Assignment, condition, statements
 from ._source import XElement, read_xml
 from ._values import REF_TEXT, RESULT_TYPE, ref_keys, value_type_of_port
@@ -65,9 +74,9 @@ class TreeInterface:
 
     inputs: dict[str, bool] = field(default_factory=dict)  # key -> required
     outputs: list[str] = field(default_factory=list)
-    types: dict[str, str] = field(default_factory=dict)     # key -> mission type name
+    types: dict[str, str] = field(default_factory=dict)  # key -> mission type name
     defaults: dict[str, Any] = field(default_factory=dict)
-    docs: dict[str, str] = field(default_factory=dict)      # input key -> its doc
+    docs: dict[str, str] = field(default_factory=dict)  # input key -> its doc
     output_types: dict[str, str] = field(default_factory=dict)
     output_docs: dict[str, str] = field(default_factory=dict)
     declared: bool = False
@@ -93,8 +102,6 @@ class _Tree:
     def temp(self, what: str) -> str:
         self.temps += 1
         return f"_{what}_out{self.temps}"
-
-
 
 
 class Importer:
@@ -133,8 +140,10 @@ class Importer:
             return
         self._files.add(resolved)
         if included_at is not None and not Path(path).is_file():
-            raise BtXmlError(included_at, f"included file {str(path)!r} does not exist, expected a path relative "
-                                          "to the including file")
+            raise BtXmlError(
+                included_at,
+                f"included file {str(path)!r} does not exist, expected a path relative to the including file",
+            )
         top = read_xml(path)
         self.check_root(top)
         file = str(path)
@@ -144,46 +153,55 @@ class Importer:
             elif element.tag == "include":
                 target = element.attrs.get("path")
                 if not target:
-                    raise BtXmlError(element.pos, "<include> has no path, expected <include path=\"other.xml\"/>")
+                    raise BtXmlError(element.pos, '<include> has no path, expected <include path="other.xml"/>')
                 if "ros_pkg" in element.attrs:
-                    raise UnsupportedXmlError(element.at("ros_pkg"), "<include ros_pkg=...> needs a ROS package index, "
-                                                                     "expected a path relative to this file")
+                    raise UnsupportedXmlError(
+                        element.at("ros_pkg"),
+                        "<include ros_pkg=...> needs a ROS package index, expected a path relative to this file",
+                    )
                 self.load(Path(path).parent / target, element.at("path"))
             elif element.tag == "TreeNodesModel":
                 self.model.add_element(element)
                 self.has_model = True
             else:
                 raise UnknownXmlNodeError(
-                    element.pos, f"unexpected <{element.tag}> in <root>"
-                                 f"{suggest(element.tag, ('BehaviorTree', 'include', 'TreeNodesModel'))}, "
-                                 "expected <BehaviorTree>, <include> or <TreeNodesModel>")
+                    element.pos,
+                    f"unexpected <{element.tag}> in <root>"
+                    f"{suggest(element.tag, ('BehaviorTree', 'include', 'TreeNodesModel'))}, "
+                    "expected <BehaviorTree>, <include> or <TreeNodesModel>",
+                )
         main = top.attrs.get("main_tree_to_execute")
         if main:
             self.main[file] = main
 
     def check_root(self, top: XElement) -> None:
         if top.tag != "root":
-            raise BtXmlError(top.pos, f"the document element is <{top.tag}>, expected <root BTCPP_format=\"4\">")
+            raise BtXmlError(top.pos, f'the document element is <{top.tag}>, expected <root BTCPP_format="4">')
         fmt = top.attrs.get("BTCPP_format")
         if fmt is not None and fmt != "4":
-            raise UnsupportedXmlError(top.at("BTCPP_format"), f"BTCPP_format is {fmt!r}: only BehaviorTree.CPP v4 "
-                                                              "XML is imported, expected BTCPP_format=\"4\"")
+            raise UnsupportedXmlError(
+                top.at("BTCPP_format"),
+                f'BTCPP_format is {fmt!r}: only BehaviorTree.CPP v4 XML is imported, expected BTCPP_format="4"',
+            )
 
     def add_tree(self, element: XElement, file: str) -> None:
         tree_id = element.attrs.get("ID") or element.attrs.get("id")
         if not tree_id:
-            raise BtXmlError(element.pos, "<BehaviorTree> has no ID, expected <BehaviorTree ID=\"MainTree\">")
+            raise BtXmlError(element.pos, '<BehaviorTree> has no ID, expected <BehaviorTree ID="MainTree">')
         if not _IDENT.match(tree_id):
-            raise BtXmlError(element.at("ID"), f"tree ID {tree_id!r} is not a valid mission name, expected letters, "
-                                               "digits and '_'")
+            raise BtXmlError(
+                element.at("ID"), f"tree ID {tree_id!r} is not a valid mission name, expected letters, digits and '_'"
+            )
         if tree_id in self.trees:
             first = self.trees[tree_id].element.pos
-            raise BtXmlError(element.pos, f"tree {tree_id!r} is defined twice (first at {first}), expected one "
-                                          "<BehaviorTree> per ID")
+            raise BtXmlError(
+                element.pos, f"tree {tree_id!r} is defined twice (first at {first}), expected one <BehaviorTree> per ID"
+            )
         nodes = element.children
         if len(nodes) != 1:
-            raise BtXmlError(element.pos, f"<BehaviorTree ID=\"{tree_id}\"> has {len(nodes)} root nodes, expected "
-                                          "exactly one")
+            raise BtXmlError(
+                element.pos, f'<BehaviorTree ID="{tree_id}"> has {len(nodes)} root nodes, expected exactly one'
+            )
         self.trees[tree_id] = TreeDef(tree_id, element, file)
         self.order.append(tree_id)
 
@@ -201,7 +219,7 @@ class Importer:
             return self.interfaces[tree_id]
         if any(t == tree_id for t, _ in self._active):
             chain = [t for t, _ in self._active]
-            chain = chain[chain.index(tree_id):] + [tree_id]
+            chain = chain[chain.index(tree_id) :] + [tree_id]
             raise BtXmlError(at, f"subtree cycle {' -> '.join(chain)}, expected trees that do not call themselves")
         tree = self.trees[tree_id]
         self._active.append((tree_id, at))
@@ -249,8 +267,10 @@ class Importer:
         written = [k for k in ctx.writes if not k.startswith("_")]
         for port in declared.values():
             if port.writes and port.name not in written:
-                raise BtXmlError(port.pos, f"subtree {tree_id!r} declares output port {port.name!r}, but nothing in "
-                                           "it writes that key")
+                raise BtXmlError(
+                    port.pos,
+                    f"subtree {tree_id!r} declares output port {port.name!r}, but nothing in it writes that key",
+                )
         return iface
 
     def mission(self, tree: TreeDef, iface: TreeInterface, root: dict) -> dict:
@@ -268,16 +288,22 @@ class Importer:
             if iface.doc is not None:
                 mission["doc"] = iface.doc
         else:
-            mission["doc"] = (f"Imported from {Path(tree.file).name}:{tree.element.pos.line} (BehaviorTree.CPP "
-                              f"<BehaviorTree ID=\"{tree.id}\">)." if self.dialect == "btcpp" else
-                              f"Imported from {Path(tree.file).name}:{tree.element.pos.line} (pytwb).")
+            mission["doc"] = (
+                f"Imported from {Path(tree.file).name}:{tree.element.pos.line} (BehaviorTree.CPP "
+                f'<BehaviorTree ID="{tree.id}">).'
+                if self.dialect == "btcpp"
+                else f"Imported from {Path(tree.file).name}:{tree.element.pos.line} (pytwb)."
+            )
         if inputs:
             mission["inputs"] = inputs
         if iface.output_types and any(t != "any" for t in iface.output_types.values()) or iface.output_docs:
             mission["outputs"] = {
-                key: {"type": iface.output_types.get(key, "any"),
-                      **({"doc": iface.output_docs[key]} if key in iface.output_docs else {})}
-                for key in iface.outputs}
+                key: {
+                    "type": iface.output_types.get(key, "any"),
+                    **({"doc": iface.output_docs[key]} if key in iface.output_docs else {}),
+                }
+                for key in iface.outputs
+            }
         elif iface.outputs:
             mission["outputs"] = list(iface.outputs)
         mission["root"] = root
@@ -292,8 +318,11 @@ class Importer:
         special = {k: v for k, v in attrs.items() if k.startswith("_") and k != "_autoremap"}
         for key in special:
             if key not in (*_PRE, *_POST):
-                raise BtXmlError(el.at(key), f"unknown attribute {key!r}{suggest(key, (*_PRE, *_POST, '_autoremap'))}, "
-                                             f"expected one of: {', '.join((*_PRE, *_POST, '_autoremap'))}")
+                raise BtXmlError(
+                    el.at(key),
+                    f"unknown attribute {key!r}{suggest(key, (*_PRE, *_POST, '_autoremap'))}, "
+                    f"expected one of: {', '.join((*_PRE, *_POST, '_autoremap'))}",
+                )
         ports = {k: v for k, v in attrs.items() if k not in special}
         result = self.dispatch(el, node_id, long_kind, ports, ctx, parent)
         name = el.attrs.get("name")
@@ -305,12 +334,13 @@ class Importer:
         if el.tag in _LONG_FORMS:
             node_id = el.attrs.get("ID")
             if not node_id:
-                raise BtXmlError(el.pos, f"<{el.tag}> has no ID, expected e.g. <{el.tag} ID=\"Name\">")
+                raise BtXmlError(el.pos, f'<{el.tag}> has no ID, expected e.g. <{el.tag} ID="Name">')
             return node_id, el.tag
         return el.tag, None
 
-    def dispatch(self, el: XElement, node_id: str, long_kind: str | None, ports: dict[str, str], ctx: _Tree,
-                 parent: str) -> dict:
+    def dispatch(
+        self, el: XElement, node_id: str, long_kind: str | None, ports: dict[str, str], ctx: _Tree, parent: str
+    ) -> dict:
         if long_kind == "SubTree":
             return self.subtree(el, node_id, ports, ctx)
         handler = BUILTINS.get(node_id)
@@ -331,17 +361,24 @@ class Importer:
         if spec is not None and spec.kind is NodeKind.SUBTREE or node_id in self.trees and self.dialect == "pytwb":
             return self.subtree(el, node_id, ports, ctx)
         if el.children:
-            choices = [*BUILTINS, *NAV2, *(n for n, s in self.model.nodes.items()
-                                           if s.kind in (NodeKind.CONTROL, NodeKind.DECORATOR))]
+            choices = [
+                *BUILTINS,
+                *NAV2,
+                *(n for n, s in self.model.nodes.items() if s.kind in (NodeKind.CONTROL, NodeKind.DECORATOR)),
+            ]
             raise UnknownXmlNodeError(
-                el.pos, f"unknown control node {node_id!r}{suggest(node_id, choices)}: it has child nodes, expected a "
-                        "built-in control or decorator, or one that a node model (--nodes) declares as <Control> "
-                        "or <Decorator>")
+                el.pos,
+                f"unknown control node {node_id!r}{suggest(node_id, choices)}: it has child nodes, expected a "
+                "built-in control or decorator, or one that a node model (--nodes) declares as <Control> "
+                "or <Decorator>",
+            )
         if self.has_model and spec is None and long_kind is None:
             choices = [*BUILTINS, *self.model.nodes, *self.trees]
             raise UnknownXmlNodeError(
-                el.pos, f"unknown node {node_id!r}{suggest(node_id, choices)}, expected a built-in node, a tree or a "
-                        f"node declared in the node model ({', '.join(self.model.files) or 'the XML'})")
+                el.pos,
+                f"unknown node {node_id!r}{suggest(node_id, choices)}, expected a built-in node, a tree or a "
+                f"node declared in the node model ({', '.join(self.model.files) or 'the XML'})",
+            )
         return self.leaf(el, node_id, ports, ctx, spec, condition=declared == "Condition")
 
     # ------------------------------------------------------------ values
@@ -355,8 +392,11 @@ class Importer:
         if key == "=":
             key = attr
         if key.startswith("@"):
-            raise UnsupportedXmlError(el.at(attr), f"{text}: the root blackboard ('@' keys) is not supported, "
-                                                   "expected a key of this tree (pass values through SubTree ports)")
+            raise UnsupportedXmlError(
+                el.at(attr),
+                f"{text}: the root blackboard ('@' keys) is not supported, "
+                "expected a key of this tree (pass values through SubTree ports)",
+            )
         if not _IDENT.match(key):
             raise BtXmlError(
                 el.at(attr), f"blackboard key {key!r} is not a valid key, expected letters, digits and '_'"
@@ -399,8 +439,9 @@ class Importer:
             ctx.read(key, el.at(attr))
         return value
 
-    def number(self, el: XElement, attr: str, text: str, ctx: _Tree, *, integer: bool, scale: float = 1.0,
-               ref_ok: bool = True) -> Any:
+    def number(
+        self, el: XElement, attr: str, text: str, ctx: _Tree, *, integer: bool, scale: float = 1.0, ref_ok: bool = True
+    ) -> Any:
         dotted = REF_TEXT.match(text.strip())
         if dotted is not None and dotted.group(2) and ref_ok:
             ctx.read(dotted.group(1), el.at(attr))
@@ -408,26 +449,34 @@ class Importer:
         key = self.key(el, attr, text)
         if key is not None:
             if not ref_ok:
-                raise UnsupportedXmlError(el.at(attr), f"{attr}={text!r}: a blackboard reference is not supported "
-                                                       "here (the unit differs), expected a number")
+                raise UnsupportedXmlError(
+                    el.at(attr),
+                    f"{attr}={text!r}: a blackboard reference is not supported "
+                    "here (the unit differs), expected a number",
+                )
             ctx.read(key, el.at(attr))
             return "{" + key + "}"
         try:
             value = convert_literal(text, "int" if integer else "double")
         except ValueError:
-            raise BtXmlError(el.at(attr), f"{attr} is {text!r}, expected {'an integer' if integer else 'a number'} "
-                                          "or a {key} reference") from None
+            raise BtXmlError(
+                el.at(attr),
+                f"{attr} is {text!r}, expected {'an integer' if integer else 'a number'} or a {{key}} reference",
+            ) from None
         return value * scale if scale != 1.0 else value
 
     def params(self, el: XElement, ports: dict[str, str], allowed: Iterable[str], required: Iterable[str] = ()) -> None:
         allowed = tuple(allowed)
         for attr in ports:
             if attr not in allowed and attr != "_autoremap":
-                raise BtXmlError(el.at(attr), f"<{el.tag}> has no attribute {attr!r}{suggest(attr, allowed)}, "
-                                              f"expected {', '.join(allowed) or 'none besides name'}")
+                raise BtXmlError(
+                    el.at(attr),
+                    f"<{el.tag}> has no attribute {attr!r}{suggest(attr, allowed)}, "
+                    f"expected {', '.join(allowed) or 'none besides name'}",
+                )
         for attr in required:
             if attr not in ports:
-                raise BtXmlError(el.pos, f"<{el.tag}> has no {attr!r}, expected {attr}=\"...\"")
+                raise BtXmlError(el.pos, f'<{el.tag}> has no {attr!r}, expected {attr}="..."')
 
     def children(self, el: XElement, ctx: _Tree, kind: str, count: tuple[int, int] | None = None) -> list[dict]:
         lo, hi = count or (1, 1_000_000)
@@ -476,8 +525,15 @@ class Importer:
 
     # ------------------------------------------------------------ leaves and subtrees
 
-    def leaf(self, el: XElement, node_id: str, ports: dict[str, str], ctx: _Tree, spec: NodeSpec | None,
-             condition: bool = False) -> dict:
+    def leaf(
+        self,
+        el: XElement,
+        node_id: str,
+        ports: dict[str, str],
+        ctx: _Tree,
+        spec: NodeSpec | None,
+        condition: bool = False,
+    ) -> dict:
         """An actor call: a ``condition:`` leaf for a node declared a Condition (it answers
         within the tick, as reactive parents need), else ``do:``."""
         if not _ACTOR.match(node_id):
@@ -490,8 +546,11 @@ class Importer:
                 raise BtXmlError(el.at(attr), "_autoremap applies to SubTree nodes only")
             port = spec.port(attr) if spec is not None else None
             if spec is not None and port is None:
-                raise BtXmlError(el.at(attr), f"node {node_id!r} has no port {attr!r}{suggest(attr, names)}, expected "
-                                              f"one of: {', '.join(names) or '(no ports)'}")
+                raise BtXmlError(
+                    el.at(attr),
+                    f"node {node_id!r} has no port {attr!r}{suggest(attr, names)}, expected "
+                    f"one of: {', '.join(names) or '(no ports)'}",
+                )
             if not _IDENT.match(attr):
                 raise BtXmlError(el.at(attr), f"port {attr!r} is not a valid argument name")
             if port is None or port.reads:
@@ -499,8 +558,9 @@ class Importer:
             if port is not None and port.writes:
                 key = self.key(el, attr, text) or (text.strip() if _IDENT.match(text.strip()) else None)
                 if key is None:
-                    raise BtXmlError(el.at(attr), f"output port {attr!r} is {text!r}, expected a blackboard key such "
-                                                  "as \"{path}\"")
+                    raise BtXmlError(
+                        el.at(attr), f'output port {attr!r} is {text!r}, expected a blackboard key such as "{{path}}"'
+                    )
                 outs.append((attr, key))
                 ctx.write(key, el.at(attr))
         for port in spec.ports if spec is not None else ():
@@ -517,8 +577,16 @@ class Importer:
                 ctx.write(key, el.pos)
         return self.call(node_id, args, outs, ctx, "condition" if condition else "do")
 
-    def plugin(self, el: XElement, node_id: str, kind: str, ports: dict[str, str], ctx: _Tree, spec: NodeSpec | None,
-               plugin: PluginSpec | None) -> dict:
+    def plugin(
+        self,
+        el: XElement,
+        node_id: str,
+        kind: str,
+        ports: dict[str, str],
+        ctx: _Tree,
+        spec: NodeSpec | None,
+        plugin: PluginSpec | None,
+    ) -> dict:
         """A control or decorator the model (or the long form) declares, or a registered
         plugin: a call of the plugin of that name, ``control:`` or ``decorator:``, its
         input ports as ``with:`` and its output ports as ``out:``. Ports come from the
@@ -532,8 +600,11 @@ class Importer:
         for attr, text in ports.items():
             port = declared.get(attr)
             if port is None and (spec is not None or plugin is not None):
-                raise BtXmlError(el.at(attr), f"node {node_id!r} has no port {attr!r}{suggest(attr, declared)}, "
-                                              f"expected one of: {', '.join(declared) or '(no ports)'}")
+                raise BtXmlError(
+                    el.at(attr),
+                    f"node {node_id!r} has no port {attr!r}{suggest(attr, declared)}, "
+                    f"expected one of: {', '.join(declared) or '(no ports)'}",
+                )
             if not _IDENT.match(attr):
                 raise BtXmlError(el.at(attr), f"port {attr!r} is not a valid port name")
             if port is None or port.reads:
@@ -541,8 +612,9 @@ class Importer:
             if port is not None and port.writes:
                 key = self.key(el, attr, text) or (text.strip() if _IDENT.match(text.strip()) else None)
                 if key is None:
-                    raise BtXmlError(el.at(attr), f"output port {attr!r} is {text!r}, expected a blackboard key such "
-                                                  "as \"{goal}\"")
+                    raise BtXmlError(
+                        el.at(attr), f'output port {attr!r} is {text!r}, expected a blackboard key such as "{{goal}}"'
+                    )
                 outs[attr] = key
                 ctx.write(key, el.at(attr))
         mission_kind = "control" if kind == "Control" else "decorator"
@@ -557,8 +629,7 @@ class Importer:
             node["child"] = self.child(el, ctx, "decorator")
         return node
 
-    def call(self, actor: str, args: dict[str, Any], outs: list[tuple[str, str]], ctx: _Tree,
-             kind: str = "do") -> dict:
+    def call(self, actor: str, args: dict[str, Any], outs: list[tuple[str, str]], ctx: _Tree, kind: str = "do") -> dict:
         node: dict[str, Any] = {kind: actor}
         if args:
             node["with"] = args
@@ -573,9 +644,11 @@ class Importer:
 
     def subtree(self, el: XElement, tree_id: str, ports: dict[str, str], ctx: _Tree) -> dict:
         if tree_id not in self.trees:
-            raise UnknownXmlNodeError(el.at("ID") if "ID" in el.attrs else el.pos,
-                                      f"unknown tree {tree_id!r}{suggest(tree_id, self.trees)}, expected one of the "
-                                      f"imported trees: {', '.join(self.trees)}")
+            raise UnknownXmlNodeError(
+                el.at("ID") if "ID" in el.attrs else el.pos,
+                f"unknown tree {tree_id!r}{suggest(tree_id, self.trees)}, expected one of the "
+                f"imported trees: {', '.join(self.trees)}",
+            )
         iface = self.convert(tree_id, el.pos)
         autoremap = ports.pop("_autoremap", "false").strip().lower() in ("true", "1")
         if ports.pop("__shared_blackboard", "false").strip().lower() in ("true", "1"):
@@ -590,7 +663,7 @@ class Importer:
                 raise BtXmlError(
                     el.at(iface.result_port),
                     f"port {iface.result_port!r} receives the result of tree {tree_id!r}, "
-                    f"expected a blackboard key such as \"{{result}}\"",
+                    f'expected a blackboard key such as "{{result}}"',
                 )
             ctx.write(result_key, el.at(iface.result_port))
         spec = self.model.get(tree_id)
@@ -609,8 +682,11 @@ class Importer:
                 key = self.key(el, port, text) if not text.strip().startswith(JSON_PREFIX) else None
                 if key is None:
                     if port not in iface.inputs:
-                        raise BtXmlError(el.at(port), f"port {port!r} of tree {tree_id!r} is an output, expected a "
-                                                      "blackboard key such as \"{" + port + "}\"")
+                        raise BtXmlError(
+                            el.at(port),
+                            f"port {port!r} of tree {tree_id!r} is an output, expected a "
+                            'blackboard key such as "{' + port + '}"',
+                        )
                     continue
                 outs.append((port, key))
                 ctx.write(key, el.at(port))
@@ -625,8 +701,11 @@ class Importer:
                     ctx.write(port, el.pos)
         for port, required in iface.inputs.items():
             if required and port not in args:
-                raise BtXmlError(el.pos, f"SubTree {tree_id!r} reads {port!r}, which nothing in it writes, but this "
-                                         f"call does not pass it, expected {port}=\"{{key}}\" or _autoremap=\"true\"")
+                raise BtXmlError(
+                    el.pos,
+                    f"SubTree {tree_id!r} reads {port!r}, which nothing in it writes, but this "
+                    f'call does not pass it, expected {port}="{{key}}" or _autoremap="true"',
+                )
         if result_key is not None:
             call = {"do": tree_id, **({"with": args} if args else {}), "out": result_key}
             if not outs:
@@ -649,8 +728,11 @@ class Importer:
 
     def wrap(self, el: XElement, node: dict, special: dict[str, str], ctx: _Tree, parent: str) -> dict:
         if "_onHalted" in special:
-            raise UnsupportedXmlError(el.at("_onHalted"), "_onHalted is not supported: a mission runs nothing when "
-                                                          "a node is halted (cancelled actors clean up themselves)")
+            raise UnsupportedXmlError(
+                el.at("_onHalted"),
+                "_onHalted is not supported: a mission runs nothing when "
+                "a node is halted (cancelled actors clean up themselves)",
+            )
         for attr in ("_onSuccess", "_onFailure", "_post"):
             if attr in special:
                 sets = self.script(el, attr, special[attr], ctx)
@@ -665,8 +747,11 @@ class Importer:
                     node = {"selector": [{"sequence": [node, action]}, {"force_failure": action}]}
         if "_while" in special:
             node = {"while_do_else": [self.check(el, "_while", special["_while"], ctx), node, self.skipped(parent)]}
-        outcomes = {"_skipIf": self.skipped(parent), "_successIf": {"name": "success", "check": "true"},
-                    "_failureIf": {"name": "failure", "check": "false"}}
+        outcomes = {
+            "_skipIf": self.skipped(parent),
+            "_successIf": {"name": "success", "check": "true"},
+            "_failureIf": {"name": "failure", "check": "false"},
+        }
         for attr in ("_skipIf", "_successIf", "_failureIf"):  # the last wrapped is checked first
             if attr in special:
                 node = {"if_then_else": [self.check(el, attr, special[attr], ctx), outcomes[attr], node]}
@@ -685,8 +770,9 @@ def _default(text: str, port: PortSpec, pos: Pos) -> Any:
     try:
         return convert_literal(text, port.type)
     except ValueError as exc:
-        raise BtXmlError(pos, f"the default of port {port.name!r} is declared {port.type or 'untyped'}, but "
-                              f"{exc}") from None
+        raise BtXmlError(
+            pos, f"the default of port {port.name!r} is declared {port.type or 'untyped'}, but {exc}"
+        ) from None
 
 
 def _convert(text: str, port: PortSpec, pos: Pos) -> Any:

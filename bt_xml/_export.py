@@ -26,11 +26,44 @@ from dataclasses import dataclass, field
 from typing import Any, Callable
 
 from bt_engine.errors import ActorbtError
-from bt_engine.trees import (UNSET, Check, Condition, Do, ForceFailure, ForceSuccess, IfThenElse, InputPort, Invert,
-                             Mission, Node, Parallel, ParallelPolicy, PipelineSequence, PluginNode, PluginSpec,
-                             RateController, ReactiveSelector, ReactiveSequence, Recovery, Ref, Repeat, ResumeSequence,
-                             Retry, RunOnce, RunOnceThen, Selector, Sequence, SetValues, Timeout, TreeLibrary,
-                             UseBehaviour, Wait, WhileDoElse, annotation_text, children_of)
+from bt_engine.trees import (
+    UNSET,
+    Check,
+    Condition,
+    Do,
+    ForceFailure,
+    ForceSuccess,
+    IfThenElse,
+    InputPort,
+    Invert,
+    Mission,
+    Node,
+    Parallel,
+    ParallelPolicy,
+    PipelineSequence,
+    PluginNode,
+    PluginSpec,
+    RateController,
+    ReactiveSelector,
+    ReactiveSequence,
+    Recovery,
+    Ref,
+    Repeat,
+    ResumeSequence,
+    Retry,
+    RunOnce,
+    RunOnceThen,
+    Selector,
+    Sequence,
+    SetValues,
+    Timeout,
+    TreeLibrary,
+    UseBehaviour,
+    Wait,
+    WhileDoElse,
+    annotation_text,
+    children_of,
+)
 from ._builtins import BUILTINS, NAV2, UNSUPPORTED
 from ._errors import BtXmlError
 from ._extensions import EXTENSIONS, LIST_SEPARATOR, NAV2_MODELS, NodeDecl, PortDecl
@@ -42,10 +75,19 @@ __all__ = ["ExportError", "Exporter", "export_tree"]
 _PORT_NAME = re.compile(r"[A-Za-z][A-Za-z0-9_]*\Z")
 _RESERVED = {"name", "ID", "_autoremap"}
 _SELECTORS = (Selector, ReactiveSelector)
-_SIMPLE = {Sequence: "Sequence", ReactiveSequence: "ReactiveSequence", Selector: "Fallback",
-           ReactiveSelector: "ReactiveFallback", ResumeSequence: "SequenceWithMemory",
-           PipelineSequence: "PipelineSequence", IfThenElse: "IfThenElse", WhileDoElse: "WhileDoElse",
-           Invert: "Inverter", ForceSuccess: "ForceSuccess", ForceFailure: "ForceFailure"}
+_SIMPLE = {
+    Sequence: "Sequence",
+    ReactiveSequence: "ReactiveSequence",
+    Selector: "Fallback",
+    ReactiveSelector: "ReactiveFallback",
+    ResumeSequence: "SequenceWithMemory",
+    PipelineSequence: "PipelineSequence",
+    IfThenElse: "IfThenElse",
+    WhileDoElse: "WhileDoElse",
+    Invert: "Inverter",
+    ForceSuccess: "ForceSuccess",
+    ForceFailure: "ForceFailure",
+}
 
 
 class ExportError(BtXmlError):
@@ -93,8 +135,11 @@ class Exporter:
             if current in order:
                 continue
             order.append(current)
-            todo.extend(n.actor for n in _walk(self.library[current].root)
-                        if isinstance(n, Do) and n.actor in self.library and n.actor not in order)
+            todo.extend(
+                n.actor
+                for n in _walk(self.library[current].root)
+                if isinstance(n, Do) and n.actor in self.library and n.actor not in order
+            )
         return [self.library[n] for n in order]
 
     def document(self, name: str) -> ET.Element:
@@ -186,16 +231,20 @@ class Exporter:
 
     def parallel(self, node: Parallel) -> tuple[str, dict[str, str]]:
         if node.counted:
-            return "Parallel", {"success_count": str(node.success_count if node.success_count is not None else -1),
-                                "failure_count": str(node.failure_count if node.failure_count is not None else 1)}
+            return "Parallel", {
+                "success_count": str(node.success_count if node.success_count is not None else -1),
+                "failure_count": str(node.failure_count if node.failure_count is not None else 1),
+            }
         if node.policy is ParallelPolicy.SUCCESS_ON_ONE:
             return "Parallel", {"success_count": "1", "failure_count": "1"}
         if node.policy is ParallelPolicy.SUCCESS_ON_ALL:
             return "Parallel", {"success_count": "-1", "failure_count": "1"}
         bad = next((n for n in node.selected if LIST_SEPARATOR in n), None)
         if bad is not None:
-            raise ExportError(node.at("selected"), f"selected child {bad!r} has a {LIST_SEPARATOR!r} in its name, "
-                                                   "expected names without one")
+            raise ExportError(
+                node.at("selected"),
+                f"selected child {bad!r} has a {LIST_SEPARATOR!r} in its name, expected names without one",
+            )
         return self.use("ActorbtParallel"), {"selected": LIST_SEPARATOR.join(node.selected)}
 
     def run_once(self, node: RunOnce, parent: Node | None) -> tuple[str, dict[str, str]]:
@@ -218,8 +267,11 @@ class Exporter:
         if spec is not None:
             self.declared[node.plugin] = _plugin_decl(spec)
         if node.plugin in BUILTINS or node.plugin in NAV2 or node.plugin in EXTENSIONS:
-            raise ExportError(node.at(node.kind), f"{node.kind} {node.plugin!r} has the name of a BehaviorTree.CPP "
-                                                  "node, expected a plugin named otherwise")
+            raise ExportError(
+                node.at(node.kind),
+                f"{node.kind} {node.plugin!r} has the name of a BehaviorTree.CPP "
+                "node, expected a plugin named otherwise",
+            )
         attrs: dict[str, str] = {}
         for name, value in node.ports.items():
             port = spec.ports.get(name) if spec is not None else None
@@ -246,9 +298,11 @@ class Exporter:
         attrs: dict[str, str] = {}
         for name, value in kwargs.items():
             if not _PORT_NAME.match(name) or name in _RESERVED:
-                raise ExportError(node.arg_pos.get(name, node.pos),
-                                  f"argument {name!r} of {node.actor!r} cannot be a BehaviorTree.CPP port name, "
-                                  "expected a name that starts with a letter and is not 'name' or 'ID'")
+                raise ExportError(
+                    node.arg_pos.get(name, node.pos),
+                    f"argument {name!r} of {node.actor!r} cannot be a BehaviorTree.CPP port name, "
+                    "expected a name that starts with a letter and is not 'name' or 'ID'",
+                )
             port = model.ports.get(name)
             if port is None:  # an argument the catalog does not list (**kwargs)
                 port = model.ports[name] = PortDecl("input_port", name, "", "")
@@ -261,10 +315,17 @@ class Exporter:
             return "SubTree", {"ID": node.actor, **attrs}
         if model.kind != _leaf_kind(node):  # the actor is also used the other way: say which
             return _leaf_kind(node), {"ID": node.actor, **attrs}
-        if node.actor in BUILTINS or node.actor in NAV2 or node.actor in UNSUPPORTED or node.actor in EXTENSIONS \
-                or node.actor in ("SubTree", "BehaviorTree", "root", "include", "TreeNodesModel"):
-            raise ExportError(node.at(node.kind), f"actor {node.actor!r} has the name of a BehaviorTree.CPP node, "
-                                             "expected an actor named otherwise")
+        if (
+            node.actor in BUILTINS
+            or node.actor in NAV2
+            or node.actor in UNSUPPORTED
+            or node.actor in EXTENSIONS
+            or node.actor in ("SubTree", "BehaviorTree", "root", "include", "TreeNodesModel")
+        ):
+            raise ExportError(
+                node.at(node.kind),
+                f"actor {node.actor!r} has the name of a BehaviorTree.CPP node, expected an actor named otherwise",
+            )
         return node.actor, attrs
 
     def keywords(self, node: Do, model: LeafModel) -> dict[str, Any]:
@@ -272,12 +333,18 @@ class Exporter:
         if not node.args:
             return dict(node.kwargs)
         signature = self.signature(node.actor)
-        names = [p.name for p in signature.parameters.values()
-                 if p.kind in (p.POSITIONAL_ONLY, p.POSITIONAL_OR_KEYWORD)] if signature is not None else []
+        names = (
+            [p.name for p in signature.parameters.values() if p.kind in (p.POSITIONAL_ONLY, p.POSITIONAL_OR_KEYWORD)]
+            if signature is not None
+            else []
+        )
         if len(names) < len(node.args):
-            raise ExportError(node.at("with"), f"{node.actor!r} is called with {len(node.args)} positional "
-                                               f"arguments, but only {len(names)} parameters have a name that a "
-                                               "port can take, expected keyword arguments (with: {name: value})")
+            raise ExportError(
+                node.at("with"),
+                f"{node.actor!r} is called with {len(node.args)} positional "
+                f"arguments, but only {len(names)} parameters have a name that a "
+                "port can take, expected keyword arguments (with: {name: value})",
+            )
         return {**dict(zip(names, node.args)), **node.kwargs}
 
     def signature(self, actor: str) -> inspect.Signature | None:
@@ -339,8 +406,13 @@ def _label_kept(node: Node, tag: str, attrs: dict[str, str]) -> bool:
     """Whether the importer gives an unnamed node the same label: a time or rate is read
     back as a float (from milliseconds for Sleep and Timeout), so ``wait 1s`` would
     become ``wait 1.0s``."""
-    value = getattr(node, "seconds", None) if isinstance(node, (Wait, Timeout)) else \
-        getattr(node, "hz", None) if isinstance(node, RateController) else None
+    value = (
+        getattr(node, "seconds", None)
+        if isinstance(node, (Wait, Timeout))
+        else getattr(node, "hz", None)
+        if isinstance(node, RateController)
+        else None
+    )
     if value is None or isinstance(value, Ref):
         return True
     back = int(attrs["msec"]) * 0.001 if "msec" in attrs else float(next(iter(attrs.values())))
@@ -373,22 +445,32 @@ def _tree_model(mission: Mission) -> LeafModel:
     model = LeafModel("SubTree", mission.name, (mission.doc or "").strip())
     for spec in mission.inputs:
         default = None if spec.required else encode_value(spec.default, port_type(spec.type), default=True)
-        model.ports[spec.name] = PortDecl("input_port", spec.name, port_type(spec.type), (spec.doc or "").strip(),
-                                          default)
+        model.ports[spec.name] = PortDecl(
+            "input_port", spec.name, port_type(spec.type), (spec.doc or "").strip(), default
+        )
     for out in mission.outputs:
         if out.name in model.ports:
-            raise ExportError(out.pos, f"{out.name!r} is both an input and an output of tree {mission.name!r}: "
-                                       "BehaviorTree.CPP would need an inout port, expected another output name")
+            raise ExportError(
+                out.pos,
+                f"{out.name!r} is both an input and an output of tree {mission.name!r}: "
+                "BehaviorTree.CPP would need an inout port, expected another output name",
+            )
         model.ports[out.name] = PortDecl("output_port", out.name, port_type(out.type), (out.doc or "").strip())
     for name, port in model.ports.items():
         if not _PORT_NAME.match(name) or name in _RESERVED:
-            raise ExportError(mission.pos, f"tree {mission.name!r} has the port {name!r}, which BehaviorTree.CPP "
-                                           "does not accept, expected a name that starts with a letter and is not "
-                                           "'name' or 'ID'")
+            raise ExportError(
+                mission.pos,
+                f"tree {mission.name!r} has the port {name!r}, which BehaviorTree.CPP "
+                "does not accept, expected a name that starts with a letter and is not "
+                "'name' or 'ID'",
+            )
     model.result_port = _result_port(set(model.ports))
     model.ports[model.result_port] = PortDecl(
-        "output_port", model.result_port, RESULT_TYPE,
-        "every output of the tree, as one mapping (what a mission's out: receives)")
+        "output_port",
+        model.result_port,
+        RESULT_TYPE,
+        "every output of the tree, as one mapping (what a mission's out: receives)",
+    )
     return model
 
 
@@ -400,8 +482,11 @@ def _plugin_decl(spec: PluginSpec) -> NodeDecl:
         if isinstance(port, InputPort):
             default = None
             if port.default is not UNSET:
-                default = port.default if isinstance(port.default, str) and port.default.startswith("{") \
+                default = (
+                    port.default
+                    if isinstance(port.default, str) and port.default.startswith("{")
                     else encode_value(port.default, ptype, default=True)
+                )
             ports.append(PortDecl("input_port", name, ptype, port.doc, default))
         else:
             ports.append(PortDecl("output_port", name, ptype, port.doc))
@@ -438,8 +523,9 @@ def _actor_model(actor: str, info: Any, kind: str) -> LeafModel:
 
 
 def _add_result(model: LeafModel, type_: str = "", description: str = "") -> None:
-    model.ports[model.result_port] = PortDecl("output_port", model.result_port, type_,
-                                              description or "the actor's result")
+    model.ports[model.result_port] = PortDecl(
+        "output_port", model.result_port, type_, description or "the actor's result"
+    )
 
 
 def _plain(value: Any) -> bool:
@@ -459,6 +545,7 @@ def _tool(info: Any) -> dict[str, Any]:
     if info is not None and hasattr(info, "impl") and hasattr(info, "path"):
         try:
             from bt_engine.catalog import tool_schema
+
             return tool_schema(info)
         except Exception:  # a description is a nicety; the ports come from the signature
             return {}
@@ -499,4 +586,3 @@ def export_tree(name: str, library: TreeLibrary, resolve: Resolver | None = None
 def _xml_text(root: ET.Element) -> str:
     ET.indent(root, space="  ")
     return '<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(root, encoding="unicode") + "\n"
-

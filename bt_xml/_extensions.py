@@ -67,38 +67,80 @@ def _in(name: str, type_: str, text: str, default: str | None = None) -> PortDec
 
 
 #: actorbt's nodes, by ID
-EXTENSIONS: dict[str, NodeDecl] = {d.id: d for d in (
-    NodeDecl("Condition", "ActorbtCheck", "Succeeds when the actorbt check: expression holds on the blackboard.",
-             (_in("expr", "std::string", "the expression, in actorbt's check language (docs/missions.md)"),)),
-    NodeDecl("Action", "ActorbtSet", "Writes values to the blackboard (actorbt set:); always succeeds.",
-             (_in("values", "dict", "json: a mapping of key to value; a string \"{key}\" reads that key"),)),
-    NodeDecl("Action", "ActorbtWait", "Running for the given time, then success (actorbt wait:).",
-             (_in("seconds", "double", "how long [s]"),)),
-    NodeDecl("Decorator", "ActorbtTimeout", "Halts the child and fails when it runs longer than the given time.",
-             (_in("seconds", "double", "the time the child may run [s]"),)),
-    NodeDecl("Control", "ActorbtParallel", "Ticks all children; succeeds when the selected ones have succeeded, "
-                                           "fails when any fails.",
-             (_in("selected", "std::string", "the names of the children that must succeed, separated by ';'"),)),
-    NodeDecl("Decorator", "ActorbtRunOnce", "Ticks the child until it finishes once; afterwards returns 'then' "
-                                            "without ticking it.",
-             (_in("then", "std::string", "SUCCESS, FAILURE or SAME (the status the child finished with)",
-                  "SAME"),)),
-    NodeDecl("Action", "ActorbtBehaviour", "A py_trees behaviour registered with actorbt, by name.",
-             (_in("behaviour", "std::string", "the registered name"),
-              _in("with", "dict", "json: its keyword arguments; a string \"{key}\" reads that key"),
-              _in("writes", "std::string", "the blackboard keys it writes, separated by ';'"))),
-)}
+EXTENSIONS: dict[str, NodeDecl] = {
+    d.id: d
+    for d in (
+        NodeDecl(
+            "Condition",
+            "ActorbtCheck",
+            "Succeeds when the actorbt check: expression holds on the blackboard.",
+            (_in("expr", "std::string", "the expression, in actorbt's check language (docs/missions.md)"),),
+        ),
+        NodeDecl(
+            "Action",
+            "ActorbtSet",
+            "Writes values to the blackboard (actorbt set:); always succeeds.",
+            (_in("values", "dict", 'json: a mapping of key to value; a string "{key}" reads that key'),),
+        ),
+        NodeDecl(
+            "Action",
+            "ActorbtWait",
+            "Running for the given time, then success (actorbt wait:).",
+            (_in("seconds", "double", "how long [s]"),),
+        ),
+        NodeDecl(
+            "Decorator",
+            "ActorbtTimeout",
+            "Halts the child and fails when it runs longer than the given time.",
+            (_in("seconds", "double", "the time the child may run [s]"),),
+        ),
+        NodeDecl(
+            "Control",
+            "ActorbtParallel",
+            "Ticks all children; succeeds when the selected ones have succeeded, fails when any fails.",
+            (_in("selected", "std::string", "the names of the children that must succeed, separated by ';'"),),
+        ),
+        NodeDecl(
+            "Decorator",
+            "ActorbtRunOnce",
+            "Ticks the child until it finishes once; afterwards returns 'then' without ticking it.",
+            (_in("then", "std::string", "SUCCESS, FAILURE or SAME (the status the child finished with)", "SAME"),),
+        ),
+        NodeDecl(
+            "Action",
+            "ActorbtBehaviour",
+            "A py_trees behaviour registered with actorbt, by name.",
+            (
+                _in("behaviour", "std::string", "the registered name"),
+                _in("with", "dict", 'json: its keyword arguments; a string "{key}" reads that key'),
+                _in("writes", "std::string", "the blackboard keys it writes, separated by ';'"),
+            ),
+        ),
+    )
+}
 
 #: Nav2's control nodes that missions have, declared so that importers (and Groot2) know them
-NAV2_MODELS: dict[str, NodeDecl] = {d.id: d for d in (
-    NodeDecl("Control", "PipelineSequence", "Nav2: ticks the children up to the furthest one reached, every tick.", ()),
-    NodeDecl("Control", "RecoveryNode", "Nav2: runs the second child when the first fails, then tries the first "
-                                        "again.",
-             (_in("number_of_retries", "int", "how many times the first child is tried again", "1"),)),
-    NodeDecl("Decorator", "RateController", "Nav2: ticks the child at most hz times a second.",
-             (_in("hz", "double", "the rate [Hz]", "10.0"),)),
-    NodeDecl("Decorator", "SingleTrigger", "Nav2: ticks the child until it finishes once; afterwards fails.", ()),
-)}
+NAV2_MODELS: dict[str, NodeDecl] = {
+    d.id: d
+    for d in (
+        NodeDecl(
+            "Control", "PipelineSequence", "Nav2: ticks the children up to the furthest one reached, every tick.", ()
+        ),
+        NodeDecl(
+            "Control",
+            "RecoveryNode",
+            "Nav2: runs the second child when the first fails, then tries the first again.",
+            (_in("number_of_retries", "int", "how many times the first child is tried again", "1"),),
+        ),
+        NodeDecl(
+            "Decorator",
+            "RateController",
+            "Nav2: ticks the child at most hz times a second.",
+            (_in("hz", "double", "the rate [Hz]", "10.0"),),
+        ),
+        NodeDecl("Decorator", "SingleTrigger", "Nav2: ticks the child until it finishes once; afterwards fails.", ()),
+    )
+}
 
 
 # ---------------------------------------------------------------- import
@@ -187,5 +229,12 @@ def _behaviour(imp: Importer, el: XElement, node_id: str, ports: dict[str, str],
 
 
 #: import handlers of actorbt's nodes (used when the node model declares them)
-HANDLERS = {"ActorbtCheck": _check, "ActorbtSet": _set, "ActorbtWait": _wait, "ActorbtTimeout": _timeout,
-            "ActorbtParallel": _parallel, "ActorbtRunOnce": _run_once, "ActorbtBehaviour": _behaviour}
+HANDLERS = {
+    "ActorbtCheck": _check,
+    "ActorbtSet": _set,
+    "ActorbtWait": _wait,
+    "ActorbtTimeout": _timeout,
+    "ActorbtParallel": _parallel,
+    "ActorbtRunOnce": _run_once,
+    "ActorbtBehaviour": _behaviour,
+}

@@ -24,8 +24,21 @@ from bt_engine.trees import UNSET, InputPort, OutputPort, PluginSpec
 from ._errors import BtXmlError, Pos, UnknownXmlNodeError
 from ._source import XElement, read_xml
 
-__all__ = ["JSON_PREFIX", "ModelResolver", "NodeKind", "NodeModel", "NodeSpec", "PortDirection", "PortSpec",
-           "convert_literal", "decode_json", "guess_literal", "plugin_ports", "python_type", "read_node_model"]
+__all__ = [
+    "JSON_PREFIX",
+    "ModelResolver",
+    "NodeKind",
+    "NodeModel",
+    "NodeSpec",
+    "PortDirection",
+    "PortSpec",
+    "convert_literal",
+    "decode_json",
+    "guess_literal",
+    "plugin_ports",
+    "python_type",
+    "read_node_model",
+]
 
 #: port text that holds a JSON value (BehaviorTree.CPP v4's prefix; see ``_values``)
 JSON_PREFIX = "json:"
@@ -117,8 +130,11 @@ class NodeSpec:
                 default = self._default(port)
             elif port.default is not None or port.writes:
                 default = None
-            params.append(inspect.Parameter(port.name, inspect.Parameter.KEYWORD_ONLY, default=default,
-                                            annotation=python_type(port.type)))
+            params.append(
+                inspect.Parameter(
+                    port.name, inspect.Parameter.KEYWORD_ONLY, default=default, annotation=python_type(port.type)
+                )
+            )
         return inspect.Signature(params, return_annotation=inspect.Signature.empty)
 
     def _default(self, port: PortSpec) -> Any:
@@ -175,10 +191,17 @@ _INT = re.compile(r"[+-]?[0-9]+\Z")
 #: a number as std::stod reads one (also inf, infinity and nan, in any case)
 _FLOAT = re.compile(r"[+-]?(([0-9]+\.[0-9]*|\.[0-9]+|[0-9]+)([eE][+-]?[0-9]+)?|inf|infinity|nan)\Z", re.I)
 #: a C++ numeric limit as node models write defaults: ``std::numeric_limits<double>::infinity()``
-_LIMIT = re.compile(r"(?P<sign>[+-]?)\s*(std::)?numeric_limits\s*<\s*(?P<type>[\w:\s]+?)\s*>\s*::\s*"
-                    r"(?P<which>infinity|max|lowest|min|epsilon)\s*\(\s*\)\Z")
-_FLOAT_LIMITS = {"infinity": math.inf, "max": sys.float_info.max, "lowest": -sys.float_info.max,
-                 "min": sys.float_info.min, "epsilon": sys.float_info.epsilon}
+_LIMIT = re.compile(
+    r"(?P<sign>[+-]?)\s*(std::)?numeric_limits\s*<\s*(?P<type>[\w:\s]+?)\s*>\s*::\s*"
+    r"(?P<which>infinity|max|lowest|min|epsilon)\s*\(\s*\)\Z"
+)
+_FLOAT_LIMITS = {
+    "infinity": math.inf,
+    "max": sys.float_info.max,
+    "lowest": -sys.float_info.max,
+    "min": sys.float_info.min,
+    "epsilon": sys.float_info.epsilon,
+}
 #: bits of the integer types a limit may name (signed unless ``unsigned``/``uint``)
 _INT_BITS = {"short": 16, "int": 32, "long": 64, "size_t": 64}
 
@@ -197,7 +220,7 @@ def numeric_limit(text: str) -> float | int | None:
         bits_match = re.search(r"(\d+)_t\Z", ctype)
         bits = int(bits_match.group(1)) if bits_match else _INT_BITS.get(ctype.split()[-1], 32)
         unsigned = ctype.startswith(("unsigned", "uint", "size_t"))
-        top = 2 ** bits - 1 if unsigned else 2 ** (bits - 1) - 1
+        top = 2**bits - 1 if unsigned else 2 ** (bits - 1) - 1
         bottom = 0 if unsigned else -top - 1
         limits = {"max": top, "lowest": bottom, "min": bottom, "infinity": 0, "epsilon": 0}
         value = limits[which]
@@ -227,7 +250,7 @@ def decode_json(text: str) -> Any:
         ValueError: the text after ``json:`` is not JSON.
     """
     try:
-        return json.loads(text.strip()[len(JSON_PREFIX):])
+        return json.loads(text.strip()[len(JSON_PREFIX) :])
     except json.JSONDecodeError as exc:
         raise ValueError(f"the text after 'json:' is not JSON ({exc.msg} at character {exc.pos + 1})") from None
 
@@ -295,12 +318,15 @@ class NodeModel:
         for element in model.children:
             if element.tag not in kinds:
                 from bt_engine.trees import suggest
+
                 raise UnknownXmlNodeError(
-                    element.pos, f"unknown node kind <{element.tag}> in TreeNodesModel{suggest(element.tag, kinds)}, "
-                    f"expected one of: {', '.join(kinds)}")
+                    element.pos,
+                    f"unknown node kind <{element.tag}> in TreeNodesModel{suggest(element.tag, kinds)}, "
+                    f"expected one of: {', '.join(kinds)}",
+                )
             node_id = element.attrs.get("ID")
             if not node_id:
-                raise BtXmlError(element.pos, f"<{element.tag}> has no ID, expected e.g. <{element.tag} ID=\"Name\">")
+                raise BtXmlError(element.pos, f'<{element.tag}> has no ID, expected e.g. <{element.tag} ID="Name">')
             ports = []
             description = ""
             for child in element.children:
@@ -313,9 +339,12 @@ class NodeModel:
                     continue  # Groot's metadata elements
                 name = child.attrs.get("name")
                 if not name:
-                    raise BtXmlError(child.pos, f"<{child.tag}> has no name, expected e.g. <{child.tag} name=\"goal\">")
-                ports.append(PortSpec(name, direction, child.attrs.get("type", ""), child.attrs.get("default"),
-                                      child.text, child.pos))
+                    raise BtXmlError(child.pos, f'<{child.tag}> has no name, expected e.g. <{child.tag} name="goal">')
+                ports.append(
+                    PortSpec(
+                        name, direction, child.attrs.get("type", ""), child.attrs.get("default"), child.text, child.pos
+                    )
+                )
             description = description or element.attrs.get("description", "") or element.text
             self.nodes[node_id] = NodeSpec(node_id, kinds[element.tag], tuple(ports), description, element.pos)
 

@@ -46,8 +46,9 @@ class PytwbImporter(Importer):
         if included_at is None and folder.is_dir():
             files = sorted(p for p in folder.iterdir() if p.suffix == ".xml" and p.is_file())
             if not files:
-                raise BtXmlError(Pos(str(folder), 1, 1), "the folder holds no .xml file, expected a pytwb "
-                                                         "workbench's trees folder")
+                raise BtXmlError(
+                    Pos(str(folder), 1, 1), "the folder holds no .xml file, expected a pytwb workbench's trees folder"
+                )
             for file in files:
                 super().load(file)
             return
@@ -67,8 +68,9 @@ class PytwbImporter(Importer):
     def identify(self, el: XElement) -> tuple[str, str | None]:
         return el.tag, None
 
-    def dispatch(self, el: XElement, node_id: str, long_kind: str | None, ports: dict[str, str], ctx: _Tree,
-                 parent: str) -> dict:
+    def dispatch(
+        self, el: XElement, node_id: str, long_kind: str | None, ports: dict[str, str], ctx: _Tree, parent: str
+    ) -> dict:
         if node_id in self.trees:
             ports.setdefault("_autoremap", "true")
             return self.subtree(el, node_id, ports, ctx)
@@ -78,8 +80,11 @@ class PytwbImporter(Importer):
         if node_id in PYTWB_UNSUPPORTED:
             raise UnsupportedXmlError(el.pos, f"<{node_id}> is not supported: {PYTWB_UNSUPPORTED[node_id]}")
         if el.children:
-            raise BtXmlError(el.pos, f"unknown composite {node_id!r}{suggest(node_id, [*PYTWB_NODES, *self.trees])}: "
-                                     "it has child nodes, expected a py_trees composite or decorator or a tree name")
+            raise BtXmlError(
+                el.pos,
+                f"unknown composite {node_id!r}{suggest(node_id, [*PYTWB_NODES, *self.trees])}: "
+                "it has child nodes, expected a py_trees composite or decorator or a tree name",
+            )
         return self.leaf(el, node_id, ports, ctx, self.model.get(node_id))
 
     def literal(self, el: XElement, attr: str, text: str, port: PortSpec | None) -> Any:
@@ -101,6 +106,7 @@ class PytwbImporter(Importer):
 
     def _dummy_pos(self) -> Any:
         from ._errors import Pos
+
         return Pos("<pytwb>", 1, 1)
 
 
@@ -145,6 +151,7 @@ def _memory(kind: str, reactive: str) -> Handler:
         imp.params(el, ports, ("memory",))
         chosen = kind if _flag(imp, el, ports, "memory", True) else reactive
         return {chosen: imp.children(el, ctx, chosen)}
+
     return handler
 
 
@@ -158,8 +165,10 @@ def _parallel(imp: Importer, el: XElement, node_id: str, ports: dict[str, str], 
         extra = ""
         if policy == "SuccessOnSelected":
             extra = " (SuccessOnSelected needs behaviour objects, which XML cannot name)"
-        raise BtXmlError(el.at("policy"), f"policy {policy!r}{suggest(policy, _POLICIES)}{extra}, expected one of: "
-                                          f"{', '.join(_POLICIES)}")
+        raise BtXmlError(
+            el.at("policy"),
+            f"policy {policy!r}{suggest(policy, _POLICIES)}{extra}, expected one of: {', '.join(_POLICIES)}",
+        )
     return {"parallel": {"policy": _POLICIES[policy], "children": imp.children(el, ctx, "parallel")}}
 
 
@@ -173,6 +182,7 @@ def _counted(kind: str, attr: str, forever: bool) -> Handler:
         if isinstance(times, int) and times < 1:
             raise BtXmlError(el.at(attr), f"{attr} is {times}, expected -1 or >= 1")
         return {kind: {"times": times, "child": child}}
+
     return handler
 
 
@@ -186,6 +196,7 @@ def _simple(kind: str) -> Handler:
     def handler(imp: Importer, el: XElement, node_id: str, ports: dict[str, str], ctx: _Tree, parent: str) -> dict:
         imp.params(el, ports, ("policy",) if kind == "run_once" else ())
         return {kind: imp.child(el, ctx, kind)}
+
     return handler
 
 
@@ -194,6 +205,7 @@ def _status(node: dict) -> Handler:
         imp.params(el, ports, ())
         imp.children(el, ctx, "leaf", (0, 0))
         return dict(node)
+
     return handler
 
 
@@ -216,6 +228,15 @@ PYTWB_NODES: dict[str, Handler] = {
 
 PYTWB_UNSUPPORTED: dict[str, str] = {
     name: "it takes a Python callable or status mapping that XML cannot express; write it as an actor"
-    for name in ("Condition", "EternalGuard", "StatusToBlackboard", "Count", "FailureIsRunning", "RunningIsFailure",
-                 "RunningIsSuccess", "SuccessIsRunning", "PassThrough")
+    for name in (
+        "Condition",
+        "EternalGuard",
+        "StatusToBlackboard",
+        "Count",
+        "FailureIsRunning",
+        "RunningIsFailure",
+        "RunningIsSuccess",
+        "SuccessIsRunning",
+        "PassThrough",
+    )
 }

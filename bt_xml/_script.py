@@ -27,26 +27,39 @@ class ScriptError(UnsupportedXmlError):
 
 @dataclass(frozen=True)
 class _Tok:
-    kind: str   # num str name op kw end
+    kind: str  # num str name op kw end
     text: str
     value: Any
     offset: int
 
 
-_TOKEN = re.compile(r"""
+_TOKEN = re.compile(
+    r"""
     (?P<ws>\s+)
   | (?P<num>0[xX][0-9a-fA-F]+
           | [0-9]+\.[0-9]*(?:[eE][+-]?[0-9]+)? | \.[0-9]+(?:[eE][+-]?[0-9]+)? | [0-9]+(?:[eE][+-]?[0-9]+)?)
   | (?P<str>'[^']*'|"[^"]*")
   | (?P<name>@?[A-Za-z_][A-Za-z0-9_]*)
   | (?P<op>:=|\+=|-=|\*=|/=|==|!=|<=|>=|&&|\|\||\.\.|[-+*/<>!()=;&|^~?:])
-""", re.X)
+""",
+    re.X,
+)
 
 _UNSUPPORTED = {
-    "+": "arithmetic ('+')", "*": "arithmetic ('*')", "/": "arithmetic ('/')", "..": "string concatenation ('..')",
-    "&": "bitwise '&'", "|": "bitwise '|'", "^": "bitwise '^'", "~": "bitwise '~'", "?": "the ternary '? :'",
-    ":": "the ternary '? :'", "+=": "compound assignment ('+=')", "-=": "compound assignment ('-=')",
-    "*=": "compound assignment ('*=')", "/=": "compound assignment ('/=')",
+    "+": "arithmetic ('+')",
+    "*": "arithmetic ('*')",
+    "/": "arithmetic ('/')",
+    "..": "string concatenation ('..')",
+    "&": "bitwise '&'",
+    "|": "bitwise '|'",
+    "^": "bitwise '^'",
+    "~": "bitwise '~'",
+    "?": "the ternary '? :'",
+    ":": "the ternary '? :'",
+    "+=": "compound assignment ('+=')",
+    "-=": "compound assignment ('-=')",
+    "*=": "compound assignment ('*=')",
+    "/=": "compound assignment ('/=')",
 }
 _WHY = "actorbt's check language has no arithmetic (docs/btxml.md); compute it in an actor"
 
@@ -57,20 +70,26 @@ def _tokens(text: str, locate: Locate) -> list[_Tok]:
     while i < len(text):
         m = _TOKEN.match(text, i)
         if m is None:
-            raise ScriptError(locate(i), f"unexpected character {text[i]!r} in script {text!r}, "
-                                         "expected a BehaviorTree.CPP script expression")
+            raise ScriptError(
+                locate(i),
+                f"unexpected character {text[i]!r} in script {text!r}, expected a BehaviorTree.CPP script expression",
+            )
         kind = m.lastgroup
         tok = m.group()
         if kind == "num":
-            value: Any = int(tok, 16) if tok[:2] in ("0x", "0X") else (
-                float(tok) if any(c in tok for c in ".eE") else int(tok))
+            value: Any = (
+                int(tok, 16) if tok[:2] in ("0x", "0X") else (float(tok) if any(c in tok for c in ".eE") else int(tok))
+            )
             out.append(_Tok("num", tok, value, i))
         elif kind == "str":
             out.append(_Tok("str", tok, tok[1:-1], i))
         elif kind == "name":
             if tok.startswith("@"):
-                raise ScriptError(locate(i), f"{tok}: the root blackboard ('@' keys) is not supported, expected a "
-                                             "key of this tree (pass values between trees through SubTree ports)")
+                raise ScriptError(
+                    locate(i),
+                    f"{tok}: the root blackboard ('@' keys) is not supported, expected a "
+                    "key of this tree (pass values between trees through SubTree ports)",
+                )
             out.append(_Tok("kw" if tok in ("true", "false") else "name", tok, None, i))
         elif kind == "op":
             out.append(_Tok("op", tok, None, i))
@@ -111,8 +130,10 @@ def _value(tokens: list[_Tok], text: str, locate: Locate) -> Any:
             return Ref(tok.text, (), locate(tok.offset))
     bad = next((t for t in tokens if t.text in _UNSUPPORTED), tokens[0] if tokens else None)
     what = _UNSUPPORTED.get(bad.text, "an expression") if bad is not None else "nothing"
-    raise ScriptError(locate(bad.offset if bad is not None else len(text)),
-                      f"cannot assign {what} in script {text!r}: only a literal or a key can be assigned, since {_WHY}")
+    raise ScriptError(
+        locate(bad.offset if bad is not None else len(text)),
+        f"cannot assign {what} in script {text!r}: only a literal or a key can be assigned, since {_WHY}",
+    )
 
 
 def statements(text: str, locate: Locate) -> list[Assignment | str]:
@@ -127,8 +148,10 @@ def statements(text: str, locate: Locate) -> list[Assignment | str]:
         if len(part) >= 2 and part[0].kind == "name" and part[1].kind == "op" and part[1].text in (":=", "="):
             result.append(Assignment(part[0].text, _value(part[2:], text, locate)))
         elif len(part) >= 2 and part[1].kind == "op" and part[1].text in _UNSUPPORTED:
-            raise ScriptError(locate(part[1].offset), f"{_UNSUPPORTED[part[1].text]} in script {text!r} is not "
-                                                      f"supported, since {_WHY}")
+            raise ScriptError(
+                locate(part[1].offset),
+                f"{_UNSUPPORTED[part[1].text]} in script {text!r} is not supported, since {_WHY}",
+            )
         else:
             result.append(_translate(part, text, locate))
     return result
@@ -158,8 +181,11 @@ def _translate(tokens: list[_Tok], text: str, locate: Locate) -> str:
                 locate(tok.offset), f"{_UNSUPPORTED[tok.text]} in {text!r} is not supported, since {_WHY}"
             )
         if tok.kind == "op" and tok.text in (":=", "="):
-            raise ScriptError(locate(tok.offset), f"assignment inside an expression in {text!r}, expected "
-                                                  "'key := value' as a statement of its own, or '==' to compare")
+            raise ScriptError(
+                locate(tok.offset),
+                f"assignment inside an expression in {text!r}, expected "
+                "'key := value' as a statement of its own, or '==' to compare",
+            )
         if tok.kind == "str":
             piece = '"' + tok.value.replace("\\", "\\\\").replace('"', '\\"') + '"'
         elif tok.kind == "num":

@@ -8,8 +8,21 @@ from __future__ import annotations
 
 import re
 
-from bt_engine.trees import (And, Check, Compare, Expr, ExprSyntaxError, Key, Literal, Neg, Not, Or, Ref, SetValues,
-                    parse_expression)
+from bt_engine.trees import (
+    And,
+    Check,
+    Compare,
+    Expr,
+    ExprSyntaxError,
+    Key,
+    Literal,
+    Neg,
+    Not,
+    Or,
+    Ref,
+    SetValues,
+    parse_expression,
+)
 from ._compare import expr_shape
 from ._errors import Pos
 from ._script import Assignment, ScriptError, condition, statements
@@ -108,7 +121,8 @@ def set_script(node: SetValues) -> str | None:
     except ScriptError:
         return None
     if len(back) != len(node.values) or not all(
-            isinstance(s, Assignment) and s.key == key and same_value(s.value, value)
-            for s, (key, value) in zip(back, node.values.items())):
+        isinstance(s, Assignment) and s.key == key and same_value(s.value, value)
+        for s, (key, value) in zip(back, node.values.items())
+    ):
         return None
     return script

@@ -116,8 +116,9 @@ def parse_xml(data: bytes, file: str) -> XElement:
             texts[-1].append(text)
 
     def doctype(*_args: object) -> None:
-        raise XmlSyntaxError(pos_of(parser.CurrentByteIndex),
-                             "a DOCTYPE is not accepted, expected a plain BehaviorTree.CPP XML file")
+        raise XmlSyntaxError(
+            pos_of(parser.CurrentByteIndex), "a DOCTYPE is not accepted, expected a plain BehaviorTree.CPP XML file"
+        )
 
     parser.StartElementHandler = start
     parser.EndElementHandler = end
@@ -129,8 +130,9 @@ def parse_xml(data: bytes, file: str) -> XElement:
         message = expat.ErrorString(exc.code)
         hint = {
             "mismatched tag": "expected the closing tag of the element opened before",
-            "not well-formed (invalid token)":
-                "expected well-formed XML (write & as &amp; and < as &lt; in attributes)",
+            "not well-formed (invalid token)": (
+                "expected well-formed XML (write & as &amp; and < as &lt; in attributes)"
+            ),
             "unclosed token": "expected the element or attribute to be closed",
             "no element found": "expected a <root> element",
             "junk after document element": "expected a single <root> element",

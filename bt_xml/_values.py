@@ -27,8 +27,18 @@ from typing import Any, Iterator
 from bt_engine.trees import Ref, ValueType
 from ._nodes import JSON_PREFIX, convert_literal, decode_json, python_type
 
-__all__ = ["JSON_PREFIX", "REF_TEXT", "RESULT_TYPE", "decode_json", "encode_value", "mission_form", "port_type",
-           "ref_keys", "same_value", "value_type_of_port"]
+__all__ = [
+    "JSON_PREFIX",
+    "REF_TEXT",
+    "RESULT_TYPE",
+    "decode_json",
+    "encode_value",
+    "mission_form",
+    "port_type",
+    "ref_keys",
+    "same_value",
+    "value_type_of_port",
+]
 
 #: the type of the output port of a ``<SubTree>`` model that receives the tree's whole
 #: result mapping (a mission's ``do: tree, out: key``)
@@ -38,8 +48,14 @@ REF_TEXT = re.compile(r"\{([A-Za-z_][A-Za-z0-9_]*)((?:\.[A-Za-z][A-Za-z0-9_]*)*)
 _ANY_REF = re.compile(r"\{([^{}]*)\}\Z")
 
 #: C++ type names for the mission value types BehaviorTree.CPP has a plain type for
-_CPP_TYPES = {ValueType.STR: "std::string", ValueType.INT: "int", ValueType.FLOAT: "double", ValueType.BOOL: "bool",
-              ValueType.LIST: "list", ValueType.DICT: "dict"}
+_CPP_TYPES = {
+    ValueType.STR: "std::string",
+    ValueType.INT: "int",
+    ValueType.FLOAT: "double",
+    ValueType.BOOL: "bool",
+    ValueType.LIST: "list",
+    ValueType.DICT: "dict",
+}
 
 
 def port_type(vtype: ValueType) -> str:
@@ -55,7 +71,8 @@ def value_type_of_port(type_name: str) -> ValueType:
         return ValueType(t)
     annotation = python_type(t)
     return {int: ValueType.INT, float: ValueType.FLOAT, bool: ValueType.BOOL, str: ValueType.STR}.get(
-        annotation, ValueType.ANY)
+        annotation, ValueType.ANY
+    )
 
 
 # ---------------------------------------------------------------- export
@@ -94,8 +111,14 @@ def encode_value(value: Any, type_name: str = "", *, default: bool = False) -> s
     if isinstance(value, Ref):
         return "{" + value.dotted + "}"
     text = _plain_text(value)
-    if text is not None and not text.startswith(JSON_PREFIX) and _ANY_REF.match(text.strip()) is None \
-            and "\n" not in text and "\r" not in text and "\t" not in text:
+    if (
+        text is not None
+        and not text.startswith(JSON_PREFIX)
+        and _ANY_REF.match(text.strip()) is None
+        and "\n" not in text
+        and "\r" not in text
+        and "\t" not in text
+    ):
         try:
             back = convert_literal(text, type_name)
         except ValueError:
@@ -117,8 +140,11 @@ def same_value(a: Any, b: Any) -> bool:
     if isinstance(a, bool) or isinstance(b, bool):
         return type(a) is type(b) and a == b
     if isinstance(a, (int, float)) and isinstance(b, (int, float)):
-        return a == b or (isinstance(a, float) and isinstance(b, float) and math.isnan(a) and math.isnan(b)) \
+        return (
+            a == b
+            or (isinstance(a, float) and isinstance(b, float) and math.isnan(a) and math.isnan(b))
             or math.isclose(a, b, rel_tol=1e-12, abs_tol=1e-15)
+        )
     if isinstance(a, dict) and isinstance(b, dict):
         return list(a) == list(b) and all(same_value(a[k], b[k]) for k in a)
     if isinstance(a, (list, tuple)) and isinstance(b, (list, tuple)):

@@ -14,8 +14,15 @@ from pathlib import Path
 from typing import Any
 
 from bt_engine.errors import ActorbtError
-from bt_engine.trees import (STANDARD_BEHAVIOURS, MissionError, TreeLibrary, check_files, node_plugins, read_mission,
-                     suggest)
+from bt_engine.trees import (
+    STANDARD_BEHAVIOURS,
+    MissionError,
+    TreeLibrary,
+    check_files,
+    node_plugins,
+    read_mission,
+    suggest,
+)
 from bt_tools.cli import cmd_check as check_missions
 from bt_tools.cli import unwritten_plugins
 from ._api import import_files
@@ -81,8 +88,10 @@ def _library(args: argparse.Namespace, app: Any) -> tuple[TreeLibrary, str]:
         return library, given.name
     if args.tree not in library:
         names = sorted(library.names)
-        raise ActorbtError(f"unknown tree {args.tree!r}{suggest(args.tree, names)}, expected a tree name "
-                           f"({', '.join(names) or 'none loaded'}) or a mission file")
+        raise ActorbtError(
+            f"unknown tree {args.tree!r}{suggest(args.tree, names)}, expected a tree name "
+            f"({', '.join(names) or 'none loaded'}) or a mission file"
+        )
     return library, args.tree
 
 
@@ -90,6 +99,7 @@ def cmd_xml_export(args: argparse.Namespace, app: Any) -> int:
     """Write a tree and the trees it calls as BehaviorTree.CPP v4 XML (with a node model
     from the actor catalog), after checking them as ``actorbt check`` does."""
     from ._export import Exporter, _xml_text
+
     library, name = _library(args, app)
     exporter = Exporter(library, library.resolver)
     trees = [m.name for m in exporter.trees_of(name)]
@@ -101,14 +111,17 @@ def cmd_xml_export(args: argparse.Namespace, app: Any) -> int:
     except OSError as exc:
         raise ActorbtError(f"cannot write {out}: {exc.strerror or exc}") from None
     actors = sum(1 for m in exporter.models.values() if m.kind != "SubTree")
-    print(f"wrote {out}: tree {name} with {len(trees) - 1} called tree{'s' if len(trees) != 2 else ''} "
-          f"and {actors} actor{'s' if actors != 1 else ''} in its node model")
+    print(
+        f"wrote {out}: tree {name} with {len(trees) - 1} called tree{'s' if len(trees) != 2 else ''} "
+        f"and {actors} actor{'s' if actors != 1 else ''} in its node model"
+    )
     return 0
 
 
 def cmd_xml_btlog(args: argparse.Namespace, app: Any) -> int:
     """Convert a trace to a Groot2 log (BehaviorTree.CPP's FileLogger2 format)."""
     from ._btlog import trace_to_btlog, write_btlog
+
     xml, first, records = trace_to_btlog(args.trace, trees=args.trees)
     out = write_btlog(args.out, xml, first, records)
     print(f"wrote {out}: {len(records)} transition{'s' if len(records) != 1 else ''}")

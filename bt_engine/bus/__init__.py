@@ -11,6 +11,7 @@ Layering: ``bus`` imports only ``bt_engine.errors`` and knows nothing of ROS. Th
 rclpy transport, :class:`bt_ros.transport.RosTransport`, lives in the ``ros``
 package, which sits above this one.
 """
+
 from .local import LocalBus
 from .transport import Transport, close_publishers
 

@@ -14,6 +14,7 @@ Outcomes as a client sees them: the ``Result`` of a succeeded goal; an aborted o
 canceled goal fails the call with :class:`ActionGoalError` (carrying the result, whose
 error fields say why); a rejected goal fails with :class:`GoalRejectedError`.
 """
+
 from __future__ import annotations
 
 import inspect
@@ -29,8 +30,15 @@ if TYPE_CHECKING:
     from ..handles import Done
 
 #: GoalStatus codes (action_msgs/msg/GoalStatus) by name
-STATUS_NAMES = {0: "unknown", 1: "accepted", 2: "executing", 3: "canceling", 4: "succeeded",
-                5: "canceled", 6: "aborted"}
+STATUS_NAMES = {
+    0: "unknown",
+    1: "accepted",
+    2: "executing",
+    3: "canceling",
+    4: "succeeded",
+    5: "canceled",
+    6: "aborted",
+}
 STATUS_SUCCEEDED, STATUS_CANCELED, STATUS_ABORTED = 4, 5, 6
 
 
@@ -60,8 +68,10 @@ class ActionGoalError(ActorbtError):
         self.server = server
         self.status = status
         self.result = result
-        super().__init__(f"goal on {server} ended {STATUS_NAMES.get(status, status)}"
-                         + (f": {result_detail(result)}" if result_detail(result) else ""))
+        super().__init__(
+            f"goal on {server} ended {STATUS_NAMES.get(status, status)}"
+            + (f": {result_detail(result)}" if result_detail(result) else "")
+        )
 
 
 def result_detail(result: Any) -> str:
@@ -86,8 +96,7 @@ def build_message(msg_type: type[RosMessage], value: Any, fields: dict[str, Any]
         msg = msg_type()
         fields = {**value, **fields}
     else:
-        raise TypeError(f"expected a {msg_type.__name__} or a mapping of its fields, "
-                        f"got {type(value).__name__}")
+        raise TypeError(f"expected a {msg_type.__name__} or a mapping of its fields, got {type(value).__name__}")
     known = msg_type.get_fields_and_field_types()
     for key, val in fields.items():
         if key not in known:
@@ -119,12 +128,15 @@ def message_signature(first: str, msg_type: type[RosMessage]) -> inspect.Signatu
 def message_doc(summary: str, first: str, msg_type: type[RosMessage]) -> str:
     """A client actor's docstring: ``summary`` and an ``Args:`` entry for ``first`` (the
     whole message) and for each field of ``msg_type`` (a goal or request type)."""
-    lines = [summary, "", "Args:",
-             f"    {first}: the whole message, or a mapping of its fields (fields given as "
-             "keywords override it)"]
+    lines = [
+        summary,
+        "",
+        "Args:",
+        f"    {first}: the whole message, or a mapping of its fields (fields given as keywords override it)",
+    ]
     default = msg_type()
     for field, ros_type in msg_type.get_fields_and_field_types().items():
-        if field != first:   # a nested message's class is in the catalog's type already
+        if field != first:  # a nested message's class is in the catalog's type already
             nested = hasattr(getattr(default, field), "get_fields_and_field_types")
             lines.append(f"    {field}: the message's {field}" + ("" if nested else f" ({ros_type})"))
     return "\n".join(lines)
@@ -148,8 +160,14 @@ class ServerGoal:
 
     _ids = itertools.count(1)
 
-    def __init__(self, server: str, action_type: type[RosAction], request: Any,
-                 finish: Callable[[int, Any], None], feedback: Callable[[Any], None]) -> None:
+    def __init__(
+        self,
+        server: str,
+        action_type: type[RosAction],
+        request: Any,
+        finish: Callable[[int, Any], None],
+        feedback: Callable[[Any], None],
+    ) -> None:
         self.server = server
         self.action_type = action_type
         self.request = request
@@ -201,8 +219,9 @@ OnGoal = Callable[[ServerGoal], None]
 class LocalActionServer:
     """An action served on the local bus (see ``LocalBus.action_server``)."""
 
-    def __init__(self, registry: dict[str, "LocalActionServer"], name: str, action_type: type[RosAction],
-                 on_goal: OnGoal) -> None:
+    def __init__(
+        self, registry: dict[str, "LocalActionServer"], name: str, action_type: type[RosAction], on_goal: OnGoal
+    ) -> None:
         self.name = name
         self.action_type = action_type
         self.on_goal = on_goal
@@ -221,8 +240,9 @@ class LocalActionServer:
             goal.abort()
 
 
-def local_client_actor(scope: Any, name: str, action_type: type[RosAction], server: str,
-                       servers: dict[str, LocalActionServer]) -> ActorRef:
+def local_client_actor(
+    scope: Any, name: str, action_type: type[RosAction], server: str, servers: dict[str, LocalActionServer]
+) -> ActorRef:
     """Async actor ``name(goal=None, **fields)`` sending goals to the local server
     ``server`` (see the module docstring for its outcomes). It completes only on the hub."""
 
@@ -248,12 +268,15 @@ def local_client_actor(scope: Any, name: str, action_type: type[RosAction], serv
             nonlocal withdrawn
             withdrawn = True
             goal.request_cancel()
+
         goal = ServerGoal(server, action_type, goal_msg, finish, feedback=lambda fb: None)
         target.goals[goal.id] = goal
         target.on_goal(goal)
         return cancel
 
-    doc = message_doc(f"Send a {public_name(action_type)} goal to action {server} and return "
-                      "its result.", "goal", action_type.Goal)
-    return scope.add_actor(name, send, Kind.ASYNC, doc=doc, hub_only=True,
-                           signature=message_signature("goal", action_type.Goal))
+    doc = message_doc(
+        f"Send a {public_name(action_type)} goal to action {server} and return its result.", "goal", action_type.Goal
+    )
+    return scope.add_actor(
+        name, send, Kind.ASYNC, doc=doc, hub_only=True, signature=message_signature("goal", action_type.Goal)
+    )

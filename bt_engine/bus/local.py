@@ -7,6 +7,7 @@ Durability as in DDS: a topic whose publisher is latched (transient local) keeps
 message, and a latched subscriber that comes later receives it at once (a map, the
 localiser's pose); a volatile subscriber only gets what is published after it subscribed.
 """
+
 from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any, Callable
@@ -59,8 +60,7 @@ class LocalPublisher:
     def publish(self, msg: Any) -> None:
         """Deliver ``msg`` to every current subscriber. Safe from any thread."""
         if not isinstance(msg, self._t.msg_type):
-            raise TopicTypeError(f"{self.topic} carries {self._t.msg_type.__name__}, "
-                                 f"not {type(msg).__name__}")
+            raise TopicTypeError(f"{self.topic} carries {self._t.msg_type.__name__}, not {type(msg).__name__}")
         self._bus._deliver(self._t, msg)
 
 
@@ -104,8 +104,10 @@ class LocalBus(Transport):
         if t is None:
             t = self._topics[name] = _Topic(name, msg_type)
         elif t.msg_type is not msg_type:
-            raise TopicTypeError(f"topic {name} already carries {t.msg_type.__module__}."
-                                 f"{t.msg_type.__name__}; cannot use it for {msg_type.__name__}")
+            raise TopicTypeError(
+                f"topic {name} already carries {t.msg_type.__module__}."
+                f"{t.msg_type.__name__}; cannot use it for {msg_type.__name__}"
+            )
         return t
 
     def publisher(self, topic: str, msg_type: type, qos: Any = 10) -> LocalPublisher:
@@ -115,8 +117,9 @@ class LocalBus(Transport):
         t.publishers += 1
         return LocalPublisher(self, t)
 
-    def subscribe(self, topic: str, msg_type: type, callback: Callable[[Any], None],
-                  qos: Any = 10) -> LocalSubscription:
+    def subscribe(
+        self, topic: str, msg_type: type, callback: Callable[[Any], None], qos: Any = 10
+    ) -> LocalSubscription:
         t = self._topic(topic, msg_type)
         sub = LocalSubscription(t, callback)
         t.subs.append(sub)
@@ -137,14 +140,16 @@ class LocalBus(Transport):
         """Every topic used in this process: its type, publishers made, live subscribers,
         and the QoS its first publisher asked for (the local bus delivers every message
         alike; a ROS robot would offer that QoS)."""
-        return [TopicInfo(t.name, type_name(t.msg_type), t.publishers, len(t.subs),
-                          qos_label(t.qos) if t.publishers else "")
-                for t in sorted(self._topics.values(), key=lambda t: t.name)]
+        return [
+            TopicInfo(
+                t.name, type_name(t.msg_type), t.publishers, len(t.subs), qos_label(t.qos) if t.publishers else ""
+            )
+            for t in sorted(self._topics.values(), key=lambda t: t.name)
+        ]
 
     def actions(self) -> list[EndpointInfo]:
         """The actions served on this bus."""
-        return [EndpointInfo(name, type_name(server.action_type))
-                for name, server in sorted(self._actions.items())]
+        return [EndpointInfo(name, type_name(server.action_type)) for name, server in sorted(self._actions.items())]
 
     def action_server(self, name: str, action_type: type[RosAction], on_goal: OnGoal) -> LocalActionServer:
         """Serve action ``name`` in this process (one server per name)."""

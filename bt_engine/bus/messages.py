@@ -14,6 +14,7 @@ a reader looks for, the frames of /tf_static's ``transforms``, a JointState's na
 ``ros2 topic echo --no-arr`` leaves every array out, those too. Values that must survive whole
 (an actor's result sent over ROS) go through :func:`bt_ros.yamlio.to_plain`.
 """
+
 from __future__ import annotations
 
 import array
@@ -59,6 +60,7 @@ class RosService(Protocol):
     Request: ClassVar[type[RosMessage]]
     Response: ClassVar[type[RosMessage]]
 
+
 #: how many items of a sequence (characters of a string) are shown by default (ros2's)
 TRUNCATE = 128
 
@@ -99,8 +101,7 @@ def _is_sequence(value: Any) -> bool:
     return type(value).__module__ == "numpy" and getattr(value, "ndim", 0) > 0
 
 
-def to_plain(msg: Any, *, truncate: int | None = TRUNCATE, arrays: bool = True,
-             finite: bool = False) -> Any:
+def to_plain(msg: Any, *, truncate: int | None = TRUNCATE, arrays: bool = True, finite: bool = False) -> Any:
     """``msg`` as plain data (see the module docstring).
 
     Args:
@@ -113,8 +114,7 @@ def to_plain(msg: Any, *, truncate: int | None = TRUNCATE, arrays: bool = True,
     return _plain(msg, None, truncate, arrays, finite)
 
 
-def _plain(value: Any, ros_type: str | None, truncate: int | None, arrays: bool,
-           finite: bool) -> Any:
+def _plain(value: Any, ros_type: str | None, truncate: int | None, arrays: bool, finite: bool) -> Any:
     if value is None or isinstance(value, (bool, int)):
         return value
     if isinstance(value, float):  # numpy's float64 is one too
@@ -127,8 +127,7 @@ def _plain(value: Any, ros_type: str | None, truncate: int | None, arrays: bool,
         return value
     if _is_message(value):
         fields = type(value).get_fields_and_field_types()
-        return {name: _plain(getattr(value, name), t, truncate, arrays, finite)
-                for name, t in fields.items()}
+        return {name: _plain(getattr(value, name), t, truncate, arrays, finite) for name, t in fields.items()}
     if _is_sequence(value):
         if not arrays and _primitive_items(value, ros_type):
             return f"<{ros_type or 'sequence'}, length: {len(value)}>"
@@ -164,9 +163,9 @@ def _element_type(ros_type: str | None) -> str | None:
     if not ros_type:
         return None
     if ros_type.startswith("sequence<") and ros_type.endswith(">"):
-        return ros_type[len("sequence<"):-1].split(",")[0].strip()
+        return ros_type[len("sequence<") : -1].split(",")[0].strip()
     if ros_type.endswith("]") and "[" in ros_type:
-        return ros_type[:ros_type.rindex("[")]
+        return ros_type[: ros_type.rindex("[")]
     return None
 
 

@@ -10,6 +10,7 @@
 - ``"reliable"``: reliable, volatile, keep last 10;
 - an ``rclpy.qos.QoSProfile``, used as is.
 """
+
 from __future__ import annotations
 
 from typing import Any
@@ -17,8 +18,7 @@ from typing import Any
 from ..errors import ActorbtError
 
 #: stream-buffer depth for each named setting (the latest N values are kept)
-NAMED_DEPTHS = {"sensor": 5, "sensor_data": 5, "latched": 1, "transient_local": 1,
-                "reliable": 10}
+NAMED_DEPTHS = {"sensor": 5, "sensor_data": 5, "latched": 1, "transient_local": 1, "reliable": 10}
 
 
 class QosError(ActorbtError, ValueError):
@@ -38,8 +38,9 @@ def qos_depth(qos: Any) -> int:
         try:
             return NAMED_DEPTHS[qos]
         except KeyError:
-            raise QosError(f"unknown QoS {qos!r}; expected a depth or one of "
-                           f"{', '.join(sorted(NAMED_DEPTHS))}") from None
+            raise QosError(
+                f"unknown QoS {qos!r}; expected a depth or one of {', '.join(sorted(NAMED_DEPTHS))}"
+            ) from None
     depth = getattr(qos, "depth", None)
     if isinstance(depth, int):
         return max(1, depth)

@@ -4,6 +4,7 @@
 default; :mod:`bt_ros.transport` implements the same interface over rclpy.
 ``qos`` is a depth or a name of :mod:`bt_engine.bus.qos`.
 """
+
 from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any, Callable, NamedTuple, Protocol
@@ -85,8 +86,7 @@ class Transport:
     def publisher(self, topic: str, msg_type: type, qos: Any = 10) -> Publisher:
         raise NotImplementedError
 
-    def subscribe(self, topic: str, msg_type: type, callback: Callable[[Any], None],
-                  qos: Any = 10) -> Subscription:
+    def subscribe(self, topic: str, msg_type: type, callback: Callable[[Any], None], qos: Any = 10) -> Subscription:
         """``callback(msg)`` runs on the hub and must not block."""
         raise NotImplementedError
 
@@ -105,8 +105,9 @@ class Transport:
         return "does it publish that seldom?"
 
     def register_action(self, scope: Any, name: str, action_type: type[RosAction], server: str) -> ActorRef:
-        raise ActorbtError(f"the {self.name} transport has no action clients; "
-                           "use the ros transport (transport: ros in actorbt.yaml)")
+        raise ActorbtError(
+            f"the {self.name} transport has no action clients; use the ros transport (transport: ros in actorbt.yaml)"
+        )
 
     def action_server(self, name: str, action_type: type[RosAction], on_goal: OnGoal) -> Any:
         """Serve action ``name``: ``on_goal(goal)`` runs on the hub with each goal's
@@ -114,8 +115,9 @@ class Transport:
         raise ActorbtError(f"the {self.name} transport cannot serve actions")
 
     def register_service(self, scope: Any, name: str, srv_type: type, server: str) -> ActorRef:
-        raise ActorbtError(f"the {self.name} transport has no service clients; "
-                           "use the ros transport (transport: ros in actorbt.yaml)")
+        raise ActorbtError(
+            f"the {self.name} transport has no service clients; use the ros transport (transport: ros in actorbt.yaml)"
+        )
 
     def topics(self) -> list[TopicInfo]:
         """Every topic the transport knows of, by name: with a publisher or a subscriber
@@ -138,6 +140,7 @@ def silence(bus: Transport, topic: str, msg_type: type, seconds: float) -> str:
     """What a subscriber that waited ``seconds`` for a message on ``topic`` in vain says:
     the topic, its type, and whether anything publishes it."""
     from .messages import type_name
+
     what = f"no message on {topic} ({type_name(msg_type)}) within {seconds:g} s"
     try:
         n = bus.publisher_count(topic)
@@ -147,5 +150,4 @@ def silence(bus: Transport, topic: str, msg_type: type, seconds: float) -> str:
         return what
     if n == 0:
         return f"{what}: nothing publishes it ({bus.silence_hint(0)})"
-    return f"{what}, though {n} publisher{'s' if n > 1 else ''} {'have' if n > 1 else 'has'} it " \
-           f"({bus.silence_hint(n)})"
+    return f"{what}, though {n} publisher{'s' if n > 1 else ''} {'have' if n > 1 else 'has'} it ({bus.silence_hint(n)})"

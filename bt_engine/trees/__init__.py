@@ -51,11 +51,9 @@ from ._errors import (
     TreeFailure,
     UnresolvedActorError,
 )
-from ._expr import (And, Compare, Expr, ExprSyntaxError, Key, Literal, Neg, Not, Or, evaluate, keys_of,
-                    parse_expression)
+from ._expr import And, Compare, Expr, ExprSyntaxError, Key, Literal, Neg, Not, Or, evaluate, keys_of, parse_expression
 from ._host import STANDARD_BEHAVIOURS, BehaviourFactory, TreeHost, register_tree_folder, tree_host
-from ._library import (BrokenDependencyError, SkippedTreeError, TreeInfo, TreeLibrary, check_files,
-                       load_mission)
+from ._library import BrokenDependencyError, SkippedTreeError, TreeInfo, TreeLibrary, check_files, load_mission
 from ._model import (
     REQUIRED,
     Check,
@@ -101,15 +99,32 @@ from ._model import (
 )
 from ._parse import NODE_TYPES, parse_mission, read_mission, suggest
 from ._plugin_nodes import ActorCall, ControlNode, DecoratorNode, PluginCallError
-from ._plugins import (UNSET, InputPort, OutputPort, PluginSpec, PortUnsetError, control_node, decorator_node,
-                       node_plugins, plugin_spec, register_node)
+from ._plugins import (
+    UNSET,
+    InputPort,
+    OutputPort,
+    PluginSpec,
+    PortUnsetError,
+    control_node,
+    decorator_node,
+    node_plugins,
+    plugin_spec,
+    register_node,
+)
 from ._run import TreeObserver, TreeRun, node_path
 from ._safety import mission_safety
 from ._trace import TRACE_FORMAT, TRACE_VERSION, EventBuilder, TraceRecorder, to_json
 from ._validate import ActorInfo, Resolver, annotation_text, annotation_type, validate_mission
+
 # imported here so that Nav2's controls and decorators are registered whenever missions load
-from .nav2_nodes import (DistanceController, GoalUpdatedController, GoalUpdater, PathLongerOnApproach, RoundRobin,
-                         SpeedController)
+from .nav2_nodes import (
+    DistanceController,
+    GoalUpdatedController,
+    GoalUpdater,
+    PathLongerOnApproach,
+    RoundRobin,
+    SpeedController,
+)
 
 __all__ = [
     "ActorCall",

@@ -22,8 +22,16 @@ from ._model import Check, Do, Ref, SetValues, refs_in, resolve_value
 from ._blackboard import RunBlackboard
 
 __all__ = [
-    "ActorLeaf", "CallSite", "CheckLeaf", "ConditionLeaf", "RepeatNode", "RetryNode", "RunContext", "SetLeaf",
-    "TimeoutNode", "WaitLeaf",
+    "ActorLeaf",
+    "CallSite",
+    "CheckLeaf",
+    "ConditionLeaf",
+    "RepeatNode",
+    "RetryNode",
+    "RunContext",
+    "SetLeaf",
+    "TimeoutNode",
+    "WaitLeaf",
 ]
 
 
@@ -83,7 +91,7 @@ def _outside_limits(ctx: RunContext, path: str, name: str, args: tuple, kwargs: 
         if pname not in limits:
             continue
         kind = ref.signature.parameters[pname].kind
-        for v in (value if kind is kind.VAR_POSITIONAL else (value,)):
+        for v in value if kind is kind.VAR_POSITIONAL else (value,):
             problem = out_of_range(f"argument {pname!r} of actor {name!r}", v, limits[pname])
             if problem is not None:
                 return problem
@@ -101,8 +109,9 @@ class ActorLeaf(py_trees.behaviour.Behaviour):
     #: the actor's end asks for a tick (the answer is news to the tree)
     wakes_tree = True
 
-    def __init__(self, name: str, ctx: RunContext, node: Do, actor_path: str, actor_kind: str = "sync",
-                 path: str = "") -> None:
+    def __init__(
+        self, name: str, ctx: RunContext, node: Do, actor_path: str, actor_kind: str = "sync", path: str = ""
+    ) -> None:
         super().__init__(name)
         self.ctx = ctx
         self.node = node
@@ -232,8 +241,9 @@ class CheckLeaf(py_trees.behaviour.Behaviour):
         return Status.SUCCESS if holds else Status.FAILURE
 
 
-def _number(value: Any, ctx: RunContext, what: str, integer: bool,
-            allow_none: bool = False, minimum: float | None = None) -> tuple[Any, str | None]:
+def _number(
+    value: Any, ctx: RunContext, what: str, integer: bool, allow_none: bool = False, minimum: float | None = None
+) -> tuple[Any, str | None]:
     """Resolve a literal-or-reference parameter; (value, None) or (None, error). It must
     be at least ``minimum`` (default: 1 for an integer, 0 for a number)."""
     if isinstance(value, Ref):
@@ -313,7 +323,7 @@ class TimeoutNode(_ParamDecorator):
         super().__init__(name=name, child=child)
         self.ctx = ctx
         self.seconds = seconds  # a number or a blackboard reference
-        self.resolved = 0.0     # the number it had when the child started [s]
+        self.resolved = 0.0  # the number it had when the child started [s]
         self.deadline = 0.0
         self.timer: Any = None
         self.error: str | None = None

@@ -27,11 +27,11 @@ class RunBlackboard:
         on_write: ``on_write(key, value)`` after every write (trace, progress).
     """
 
-    def __init__(self, tree: str, keys: Iterable[str] = (),
-                 on_write: Callable[[str, Any], None] | None = None) -> None:
+    def __init__(self, tree: str, keys: Iterable[str] = (), on_write: Callable[[str, Any], None] | None = None) -> None:
         self.namespace = f"/actorbt/{tree}/r{uuid.uuid4().hex[:16]}"
         self._client: py_trees.blackboard.Client | None = py_trees.blackboard.Client(
-            name=f"actorbt:{tree}", namespace=self.namespace)
+            name=f"actorbt:{tree}", namespace=self.namespace
+        )
         self._keys: set[str] = set()
         self._storage = py_trees.blackboard.Blackboard.storage
         self.on_write = on_write
@@ -71,7 +71,7 @@ class RunBlackboard:
     def items(self) -> dict[str, Any]:
         """Every key set in this run."""
         prefix = self.namespace + "/"
-        return {k[len(prefix):]: v for k, v in self._storage.items() if k.startswith(prefix)}
+        return {k[len(prefix) :]: v for k, v in self._storage.items() if k.startswith(prefix)}
 
     def close(self) -> None:
         """Remove the namespace and its keys from py_trees' global blackboard."""

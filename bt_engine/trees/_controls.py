@@ -21,8 +21,14 @@ from ._behaviours import RunContext, _number
 from ._model import RunOnceThen
 
 __all__ = [
-    "CountingParallel", "IfThenElseNode", "PipelineSequenceNode", "RateControllerNode", "RecoveryNode",
-    "ResumeSequenceNode", "RunOnceNode", "WhileDoElseNode",
+    "CountingParallel",
+    "IfThenElseNode",
+    "PipelineSequenceNode",
+    "RateControllerNode",
+    "RecoveryNode",
+    "ResumeSequenceNode",
+    "RunOnceNode",
+    "WhileDoElseNode",
 ]
 
 
@@ -87,7 +93,7 @@ class ResumeSequenceNode(_Control):
         self.index = 0
 
     def start(self) -> None:
-        for child in self.children[self.index:]:
+        for child in self.children[self.index :]:
             _halt(child)
 
     def step(self) -> Step:
@@ -271,9 +277,9 @@ class RateControllerNode(py_trees.decorators.Decorator):
         super().__init__(name=name, child=child)
         self.ctx = ctx
         self.hz = hz
-        self.period = 1.0   # [s]
-        self.since = 0.0    # runtime-clock time the current period started [s]
-        self.fresh = True   # the child is ticked whatever the time
+        self.period = 1.0  # [s]
+        self.since = 0.0  # runtime-clock time the current period started [s]
+        self.fresh = True  # the child is ticked whatever the time
         self.timer: Any = None
         self.error: str | None = None
 
@@ -336,8 +342,11 @@ class RunOnceNode(py_trees.decorators.Decorator):
 
     def tick(self) -> Iterator[Behaviour]:
         if self.result is not None:
-            status = self.result if self.then is RunOnceThen.SAME else (
-                Status.SUCCESS if self.then is RunOnceThen.SUCCESS else Status.FAILURE)
+            status = (
+                self.result
+                if self.then is RunOnceThen.SAME
+                else (Status.SUCCESS if self.then is RunOnceThen.SUCCESS else Status.FAILURE)
+            )
             self.feedback_message = "ran once already"
             self.stop(status)
             yield self

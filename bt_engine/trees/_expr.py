@@ -72,8 +72,10 @@ MAX_NUMBER_DIGITS = 100
 # ---------------------------------------------------------------- tokens
 
 # ASCII digits with single '_' between them, as in Python; a fraction; an exponent.
-_NUMBER = re.compile(r"[0-9](?:_?[0-9])*(?:\.[0-9](?:_?[0-9])*)?(?:[eE][+-]?[0-9](?:_?[0-9])*)?"
-                     r"|\.[0-9](?:_?[0-9])*(?:[eE][+-]?[0-9](?:_?[0-9])*)?")
+_NUMBER = re.compile(
+    r"[0-9](?:_?[0-9])*(?:\.[0-9](?:_?[0-9])*)?(?:[eE][+-]?[0-9](?:_?[0-9])*)?"
+    r"|\.[0-9](?:_?[0-9])*(?:[eE][+-]?[0-9](?:_?[0-9])*)?"
+)
 
 _KEYWORDS = {"and", "or", "not", "in", "true", "false", "null"}
 _OPERATORS = ("==", "!=", "<=", ">=", "<", ">", "(", ")", "[", "]", ",", ".", "-")
@@ -123,7 +125,7 @@ def _tokenize(source: str) -> list[_Token]:
                 raise ExprSyntaxError("'=' is not an operator, expected '==' to compare", i)
             if source.startswith("&&", i) or source.startswith("||", i) or c == "!":
                 word = {"&": "and", "|": "or", "!": "not"}[c]
-                raise ExprSyntaxError(f"unexpected {source[i:i + 2].rstrip()!r}, expected {word!r}", i)
+                raise ExprSyntaxError(f"unexpected {source[i : i + 2].rstrip()!r}, expected {word!r}", i)
             raise ExprSyntaxError(f"unexpected character {c!r}", i)
     tokens.append(_Token("end", "", None, n))
     return tokens
@@ -132,7 +134,7 @@ def _tokenize(source: str) -> list[_Token]:
 def _number_token(source: str, number: re.Match[str]) -> _Token:
     i, j, text = number.start(), number.end(), number.group()
     if j < len(source) and (source[j].isalnum() or source[j] == "_"):
-        raise ExprSyntaxError(f"malformed number {shorten(source[i:j + 1])}", i)
+        raise ExprSyntaxError(f"malformed number {shorten(source[i : j + 1])}", i)
     if sum(c.isdigit() for c in text) > MAX_NUMBER_DIGITS:
         raise ExprSyntaxError(f"number longer than {MAX_NUMBER_DIGITS} digits, expected a shorter number", i)
     is_float = any(c in ".eE" for c in text)
@@ -505,7 +507,6 @@ def evaluate(expr: Expr, lookup: Callable[[str], Any]) -> Any:
             return bool(_BINARY[expr.op](left, right))
         except TypeError:
             raise CheckEvaluationError(
-                f"cannot evaluate {left!r} {expr.op} {right!r} "
-                f"({type(left).__name__} vs {type(right).__name__})"
+                f"cannot evaluate {left!r} {expr.op} {right!r} ({type(left).__name__} vs {type(right).__name__})"
             ) from None
     raise TypeError(f"not an expression: {expr!r}")  # pragma: no cover

@@ -72,9 +72,15 @@ class TreeHost:
         observers: told about every run (progress display, trace recorder).
     """
 
-    def __init__(self, rt: Runtime, *, behaviours: Mapping[str, BehaviourFactory] | None = None,
-                 max_period: float | None = None, behaviour_period: float = 0.1,
-                 nodes: Iterable[type] = ()) -> None:
+    def __init__(
+        self,
+        rt: Runtime,
+        *,
+        behaviours: Mapping[str, BehaviourFactory] | None = None,
+        max_period: float | None = None,
+        behaviour_period: float = 0.1,
+        nodes: Iterable[type] = (),
+    ) -> None:
         self.rt = rt
         self.behaviours: dict[str, BehaviourFactory] = {**STANDARD_BEHAVIOURS, **(behaviours or {})}
         self.nodes: dict[str, PluginSpec] = node_plugins()
@@ -152,8 +158,13 @@ class TreeHost:
                 continue  # a real actor of that name: leave it
             error = self.library.broken[name]
             self.rt.run_on_hub(
-                self.rt.root.add_actor, name, _skipped_tree(name, error), "sync",
-                doc=f"Skipped tree {name}: {error}", signature=_ANY_ARGUMENTS, replace=True,
+                self.rt.root.add_actor,
+                name,
+                _skipped_tree(name, error),
+                "sync",
+                doc=f"Skipped tree {name}: {error}",
+                signature=_ANY_ARGUMENTS,
+                replace=True,
             )
             self._stubs.add(name)
 
@@ -220,12 +231,17 @@ class TreeHost:
         run_tree.__name__ = name
         run_tree.__doc__ = mission.doc
         # the catalog's parameter and result descriptions (bt_engine.catalog.tool_schema)
-        attach_docs(run_tree, {spec.name: spec.doc for spec in mission.inputs if spec.doc},
-                    _outputs_schema(mission))
+        attach_docs(run_tree, {spec.name: spec.doc for spec in mission.inputs if spec.doc}, _outputs_schema(mission))
         self.rt.run_on_hub(
-            self.rt.root.add_actor, name, run_tree, "sync",
-            doc=mission.doc or f"Tree {name} ({mission.file}).", signature=mission.signature(),
-            is_tree=True, replace=True, safety=mission_safety(mission, self.library.resolve),
+            self.rt.root.add_actor,
+            name,
+            run_tree,
+            "sync",
+            doc=mission.doc or f"Tree {name} ({mission.file}).",
+            signature=mission.signature(),
+            is_tree=True,
+            replace=True,
+            safety=mission_safety(mission, self.library.resolve),
         )
         self._stubs.discard(name)
 
@@ -253,8 +269,9 @@ class TreeHost:
         names (the library validated that it is there)."""
         return self.nodes[name]
 
-    def start_actor(self, run: TreeRun, leaf: CallSite, args: tuple, kwargs: dict,
-                    on_done: Callable[[Any], None]) -> Any:
+    def start_actor(
+        self, run: TreeRun, leaf: CallSite, args: tuple, kwargs: dict, on_done: Callable[[Any], None]
+    ) -> Any:
         """Start the actor of an actor leaf and return its Transaction; replay overrides
         this to answer from a recording."""
         return self.rt.start(leaf.actor_path, *args, on_done=on_done, **kwargs)
@@ -318,10 +335,12 @@ class TreeHost:
         return list(self._live.values())
 
 
-_ANY_ARGUMENTS = inspect.Signature([
-    inspect.Parameter("args", inspect.Parameter.VAR_POSITIONAL),
-    inspect.Parameter("kwargs", inspect.Parameter.VAR_KEYWORD),
-])
+_ANY_ARGUMENTS = inspect.Signature(
+    [
+        inspect.Parameter("args", inspect.Parameter.VAR_POSITIONAL),
+        inspect.Parameter("kwargs", inspect.Parameter.VAR_KEYWORD),
+    ]
+)
 
 
 def _outputs_schema(mission: Mission) -> dict[str, Any]:
@@ -336,12 +355,12 @@ def _outputs_schema(mission: Mission) -> dict[str, Any]:
             if unit:
                 schema["unit"] = unit
         props[spec.name] = schema
-    return {"type": "object", "description": "the outputs (null: not written in this run)",
-            "properties": props}
+    return {"type": "object", "description": "the outputs (null: not written in this run)", "properties": props}
 
 
 def _skipped_tree(name: str, error: MissionError) -> Callable[..., Any]:
     """The actor a skipped tree name stands for: it raises why the tree was skipped."""
+
     def skipped_tree(*args: Any, **kwargs: Any) -> Any:
         raise SkippedTreeError(name, error)
 

@@ -101,8 +101,10 @@ class TreeInfo:
 class _AnyActor:
     path: str = "?"
     signature: inspect.Signature = inspect.Signature(
-        [inspect.Parameter("args", inspect.Parameter.VAR_POSITIONAL),
-         inspect.Parameter("kwargs", inspect.Parameter.VAR_KEYWORD)]
+        [
+            inspect.Parameter("args", inspect.Parameter.VAR_POSITIONAL),
+            inspect.Parameter("kwargs", inspect.Parameter.VAR_KEYWORD),
+        ]
     )
     is_tree: bool = False
 
@@ -138,8 +140,12 @@ class TreeLibrary:
         lib.broken                        # {"bt_x": MissionError(...)}
     """
 
-    def __init__(self, resolver: Resolver | None = None, behaviours: Collection[str] | None = None,
-                 nodes: Mapping[str, PluginSpec] | None = None) -> None:
+    def __init__(
+        self,
+        resolver: Resolver | None = None,
+        behaviours: Collection[str] | None = None,
+        nodes: Mapping[str, PluginSpec] | None = None,
+    ) -> None:
         self.resolver = resolver
         self.behaviours = behaviours
         self.nodes: dict[str, PluginSpec] = dict(node_plugins() if nodes is None else nodes)
@@ -294,8 +300,13 @@ class TreeLibrary:
         errors: list[MissionError] = []
         for name in names if names is not None else list(self._missions):
             errors.extend(
-                validate_mission(self._missions[name], self.resolve, behaviours=self.behaviours, trees=self._missions,
-                                 nodes=self.nodes)
+                validate_mission(
+                    self._missions[name],
+                    self.resolve,
+                    behaviours=self.behaviours,
+                    trees=self._missions,
+                    nodes=self.nodes,
+                )
             )
         return sorted(errors, key=lambda e: (e.pos.file, e.pos.line, e.pos.column))
 
@@ -323,8 +334,9 @@ class TreeLibrary:
             mission = self._missions.get(name)
             if mission is None:
                 continue
-            errors = validate_mission(mission, self.resolve, behaviours=self.behaviours, trees=self._missions,
-                                      nodes=self.nodes)
+            errors = validate_mission(
+                mission, self.resolve, behaviours=self.behaviours, trees=self._missions, nodes=self.nodes
+            )
             if errors:
                 found[name] = min(errors, key=lambda e: (e.pos.line, e.pos.column))
         for name, error in found.items():

@@ -680,8 +680,11 @@ class Mission:
         params = []
         seen_default = False
         for spec in self.inputs:
-            kind = (inspect.Parameter.KEYWORD_ONLY if spec.required and seen_default
-                    else inspect.Parameter.POSITIONAL_OR_KEYWORD)
+            kind = (
+                inspect.Parameter.KEYWORD_ONLY
+                if spec.required and seen_default
+                else inspect.Parameter.POSITIONAL_OR_KEYWORD
+            )
             seen_default = seen_default or not spec.required
             params.append(
                 inspect.Parameter(

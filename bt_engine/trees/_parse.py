@@ -90,8 +90,13 @@ _COMPOSITES: dict[str, type[Composite]] = {
     "recovery": Recovery,
 }
 _SIMPLE_DECORATORS = {"invert": Invert, "force_success": ForceSuccess, "force_failure": ForceFailure}
-_DECORATOR_FIELDS = {"retry": ("times", "child"), "repeat": ("times", "child"), "timeout": ("seconds", "child"),
-                     "rate_controller": ("hz", "child"), "run_once": ("then", "child")}
+_DECORATOR_FIELDS = {
+    "retry": ("times", "child"),
+    "repeat": ("times", "child"),
+    "timeout": ("seconds", "child"),
+    "rate_controller": ("hz", "child"),
+    "run_once": ("then", "child"),
+}
 _DECORATOR_EXAMPLES = {
     "retry": "{times: 3, child: {do: pick}}",
     "repeat": "{times: 2, child: {do: scan}}",
@@ -109,10 +114,13 @@ _PLUGINS = ("control", "decorator")
 NODE_TYPES: tuple[str, ...] = (*_COMPOSITES, *_DECORATOR_FIELDS, *_SIMPLE_DECORATORS, *_PLUGINS, *_LEAVES)
 
 # Fields a node may carry besides its type keyword.
-_NODE_FIELDS: dict[str, tuple[str, ...]] = {"do": ("with", "out"), "condition": ("with", "out"),
-                                             "behaviour": ("with", "writes"),
-                                             "control": ("with", "out", "children"),
-                                             "decorator": ("with", "out", "child")}
+_NODE_FIELDS: dict[str, tuple[str, ...]] = {
+    "do": ("with", "out"),
+    "condition": ("with", "out"),
+    "behaviour": ("with", "writes"),
+    "control": ("with", "out", "children"),
+    "decorator": ("with", "out", "child"),
+}
 
 _IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
 _ACTOR_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*(\.[A-Za-z_][A-Za-z0-9_]*)*\Z")
@@ -196,9 +204,7 @@ class _Parser:
         value = node.value if isinstance(node, YScalar) else None
         ok_types = (int,) if integer else (int, float)
         if not isinstance(node, YScalar) or isinstance(value, bool) or not isinstance(value, ok_types):
-            raise InvalidValueError(
-                node.pos, f"{what} must be {expected} or a \"{{key}}\" reference, got {_kind(node)}"
-            )
+            raise InvalidValueError(node.pos, f'{what} must be {expected} or a "{{key}}" reference, got {_kind(node)}')
         if value < minimum or value != value:  # NaN
             raise InvalidValueError(node.pos, f"{what} is {value!r}, expected {base} >= {minimum:g}")
         return value
@@ -225,7 +231,7 @@ class _Parser:
                 raise InvalidValueError(
                     node.pos_at(inner.start()),
                     f"{inner.group(0)} inside the string {shorten(node.value)}: a blackboard reference must be "
-                    f"the whole string, expected \"{inner.group(0)}\" alone (write {{{{ }}}} for literal braces)",
+                    f'the whole string, expected "{inner.group(0)}" alone (write {{{{ }}}} for literal braces)',
                 )
             return node.value.replace("{{", "{").replace("}}", "}")
         if isinstance(node, YSeq):
@@ -235,7 +241,7 @@ class _Parser:
             if isinstance(val, YScalar) and val.value is None and val.raw == "" and _IDENT.match(key.raw):
                 raise InvalidValueError(
                     node.pos,
-                    f"unquoted {{{key.raw}}} is a YAML mapping, expected the quoted reference \"{{{key.raw}}}\"",
+                    f'unquoted {{{key.raw}}} is a YAML mapping, expected the quoted reference "{{{key.raw}}}"',
                 )
         return {k.raw: self.value(v) for k, v in node.items}
 
@@ -437,7 +443,8 @@ class _Parser:
                 raise InvalidValueError(
                     value.pos,
                     f"{kind} has {len(children)} children, expected 2 or 3: the condition, what runs when it "
-                    "succeeds and, optionally, what runs when it fails")
+                    "succeeds and, optionally, what runs when it fails",
+                )
             return _COMPOSITES[kind](children=children, **common)
         if kind != "parallel":
             return _COMPOSITES[kind](children=self.children(kind, value), **common)
@@ -498,7 +505,8 @@ class _Parser:
         for other in ("policy", "selected"):
             if other in m:
                 raise InvalidValueError(
-                    m.required(other).pos, f"parallel takes either {other!r} or success_count/failure_count, not both")
+                    m.required(other).pos, f"parallel takes either {other!r} or success_count/failure_count, not both"
+                )
         n = len(children)
         counts: dict[str, int] = {}
         for field_name in ("success_count", "failure_count"):
@@ -508,11 +516,17 @@ class _Parser:
             value = node.value if isinstance(node, YScalar) else None
             if isinstance(value, bool) or not isinstance(value, int) or value == 0 or not -n <= value <= n:
                 raise InvalidValueError(
-                    node.pos, f"parallel {field_name} is {_kind(node)}, expected an integer from 1 to {n} (the number "
-                    f"of children), or from -1 to -{n} to count from all of them (-1: all)")
+                    node.pos,
+                    f"parallel {field_name} is {_kind(node)}, expected an integer from 1 to {n} (the number "
+                    f"of children), or from -1 to -{n} to count from all of them (-1: all)",
+                )
             counts[field_name] = value
-        return Parallel(children=children, success_count=counts.get("success_count", -1),
-                        failure_count=counts.get("failure_count", 1), **common)
+        return Parallel(
+            children=children,
+            success_count=counts.get("success_count", -1),
+            failure_count=counts.get("failure_count", 1),
+            **common,
+        )
 
     def recovery(self, value: YNode, common: dict[str, Any]) -> Node:
         example = "{retries: 2, children: [{do: follow_path}, {do: clear_costmap}]}"
@@ -524,11 +538,11 @@ class _Parser:
         if len(children) != 2:
             raise InvalidValueError(
                 m.required("children").pos,
-                f"recovery has {len(children)} children, expected 2: the action and its recovery")
+                f"recovery has {len(children)} children, expected 2: the action and its recovery",
+            )
         common["field_pos"] = dict(common["field_pos"]) | {k.raw: v.pos for k, v in m.items}
         retries_node = m.get("retries")
-        retries = 1 if retries_node is None else self.number(
-            retries_node, "recovery retries", integer=True, minimum=0)
+        retries = 1 if retries_node is None else self.number(retries_node, "recovery retries", integer=True, minimum=0)
         return Recovery(children=children, retries=retries, **common)
 
     def decorator(self, kind: str, value: YNode, common: dict[str, Any]) -> Node:
@@ -544,8 +558,10 @@ class _Parser:
         common["field_pos"] = dict(common["field_pos"]) | {k.raw: v.pos for k, v in m.items}
         param_node = m.get(param)
         if kind == "repeat":
-            times = None if param_node is None else self.number(
-                param_node, "repeat times", integer=True, minimum=1, words={"forever": None}
+            times = (
+                None
+                if param_node is None
+                else self.number(param_node, "repeat times", integer=True, minimum=1, words={"forever": None})
             )
             return Repeat(child=child, times=times, **common)
         if kind == "run_once":
@@ -555,8 +571,9 @@ class _Parser:
                 names = [t.value for t in RunOnceThen]
                 if text not in names:
                     raise InvalidValueError(
-                        param_node.pos, f"run_once then is {shorten(text)}{suggest(text, names)}, expected one of: "
-                        f"{', '.join(names)}")
+                        param_node.pos,
+                        f"run_once then is {shorten(text)}{suggest(text, names)}, expected one of: {', '.join(names)}",
+                    )
                 then = RunOnceThen(text)
             return RunOnce(child=child, then=then, **common)
         if param_node is None:
@@ -580,13 +597,16 @@ class _Parser:
         name, ports and child count fit the plugin is checked in ``_validate``."""
         name = self.string(value, kind)
         if not _IDENT.match(name):
-            raise InvalidValueError(value.pos, f"{kind} {shorten(name)} is not a node name, expected the name a "
-                                               f"plugin is registered under, e.g. RoundRobin")
+            raise InvalidValueError(
+                value.pos,
+                f"{kind} {shorten(name)} is not a node name, expected the name a "
+                f"plugin is registered under, e.g. RoundRobin",
+            )
         ports: dict[str, Any] = {}
         port_pos: dict[str, Pos] = {}
         with_node = y.get("with")
         if with_node is not None and not (isinstance(with_node, YScalar) and with_node.value is None):
-            for key, val in self.mapping(with_node, "with", "{distance: 1.0, goal: \"{goal}\"}").items:
+            for key, val in self.mapping(with_node, "with", '{distance: 1.0, goal: "{goal}"}').items:
                 port = self.ident(key, "port name")
                 ports[port] = self.value(val)
                 port_pos[port] = val.pos
@@ -634,19 +654,19 @@ class _Parser:
         elif with_node is not None and not (isinstance(with_node, YScalar) and with_node.value is None):
             raise InvalidValueError(
                 with_node.pos,
-                f"with must be a mapping of arguments, got {_kind(with_node)}; "
-                f"expected e.g. {{target: \"{{found}}\"}}",
+                f'with must be a mapping of arguments, got {_kind(with_node)}; expected e.g. {{target: "{{found}}"}}',
             )
         out_node = y.get("out")
         out = self.ident(out_node, "out key") if out_node is not None else None
-        return node_class(actor=actor, args=args, kwargs=kwargs, out=out, arg_pos=arg_pos, arg_key_pos=arg_key_pos,
-                          **common)
+        return node_class(
+            actor=actor, args=args, kwargs=kwargs, out=out, arg_pos=arg_pos, arg_key_pos=arg_key_pos, **common
+        )
 
     def leaf_condition(self, y: YMap, value: YNode, common: dict[str, Any]) -> Node:
         return self.leaf_do(y, value, common, Condition)
 
     def leaf_set(self, y: YMap, value: YNode, common: dict[str, Any]) -> Node:
-        m = self.mapping(value, "set", "{attempts: 0, target: \"{found}\"}")
+        m = self.mapping(value, "set", '{attempts: 0, target: "{found}"}')
         if not m.items:
             raise InvalidValueError(m.pos, "set has nothing to write, expected at least one key: value")
         values = {}
@@ -731,7 +751,7 @@ def _decode(data: bytes, file: str) -> str:
     except UnicodeDecodeError as exc:
         line_start = data.rfind(b"\n", 0, exc.start) + 1
         line = data.count(b"\n", 0, exc.start) + 1
-        column = len(data[line_start:exc.start].decode("utf-8-sig" if line_start == 0 else "utf-8", "replace")) + 1
+        column = len(data[line_start : exc.start].decode("utf-8-sig" if line_start == 0 else "utf-8", "replace")) + 1
         raise MissionSyntaxError(
             Pos(file, line, column), f"file is not UTF-8 text (byte 0x{data[exc.start]:02X}), expected a YAML mission"
         ) from None

@@ -139,8 +139,9 @@ class _PluginMixin:
         if name in self.node.ports:
             value = self.node.ports[name]
         elif port.default is UNSET:
-            raise PortUnsetError(f"port {name!r} of {self.spec.name} is not set: the mission gives it no value and "
-                                 "it has no default")
+            raise PortUnsetError(
+                f"port {name!r} of {self.spec.name} is not set: the mission gives it no value and it has no default"
+            )
         else:
             value = _default_value(port)
         try:
@@ -260,12 +261,14 @@ def _default_value(port: InputPort) -> Any:
     if isinstance(default, str) and default.startswith("{") and default.endswith("}") and len(default) > 2:
         key, *fields = default[1:-1].split(".")
         from ._errors import Pos
+
         return Ref(key, tuple(fields), Pos("<default>", 1, 1))
     return default
 
 
 def _resolve(value: Any, ctx: RunContext) -> Any:
     from ._model import resolve_value
+
     return resolve_value(value, ctx.bb.get)
 
 
@@ -273,8 +276,9 @@ class ControlNode(_PluginMixin, py_trees.composites.Composite):
     """The base of a control written in Python (see the module docstring); mark the
     subclass with :func:`~._plugins.control_node`."""
 
-    def __init__(self, name: str, ctx: RunContext, node: PluginNode, path: str, spec: PluginSpec,
-                 children: list[Behaviour]) -> None:
+    def __init__(
+        self, name: str, ctx: RunContext, node: PluginNode, path: str, spec: PluginSpec, children: list[Behaviour]
+    ) -> None:
         py_trees.composites.Composite.__init__(self, name, children)
         self._plugin_init(ctx, node, path, spec)
         self.on_create()
@@ -323,8 +327,9 @@ class DecoratorNode(_PluginMixin, py_trees.decorators.Decorator):
     """The base of a decorator written in Python (see the module docstring); mark the
     subclass with :func:`~._plugins.decorator_node`. Its child is ``self.decorated``."""
 
-    def __init__(self, name: str, ctx: RunContext, node: PluginNode, path: str, spec: PluginSpec,
-                 children: list[Behaviour]) -> None:
+    def __init__(
+        self, name: str, ctx: RunContext, node: PluginNode, path: str, spec: PluginSpec, children: list[Behaviour]
+    ) -> None:
         py_trees.decorators.Decorator.__init__(self, child=children[0], name=name)
         self._plugin_init(ctx, node, path, spec)
         self.on_create()

@@ -20,8 +20,18 @@ from typing import Any, Callable, Mapping, TypeVar
 
 from ..errors import ActorbtError
 
-__all__ = ["UNSET", "InputPort", "OutputPort", "PluginSpec", "PortUnsetError", "control_node", "decorator_node",
-           "node_plugins", "plugin_spec", "register_node"]
+__all__ = [
+    "UNSET",
+    "InputPort",
+    "OutputPort",
+    "PluginSpec",
+    "PortUnsetError",
+    "control_node",
+    "decorator_node",
+    "node_plugins",
+    "plugin_spec",
+    "register_node",
+]
 
 
 class _Unset:
@@ -156,8 +166,9 @@ def _mark(kind: str, base: str, name: str | None, child_count: tuple[int, int | 
         ports = dict(getattr(cls, "ports", {}) or {})
         for port_name, port in ports.items():
             if not isinstance(port, (InputPort, OutputPort)):
-                raise TypeError(f"{cls.__qualname__}.ports[{port_name!r}] is {port!r}, expected InputPort or "
-                                "OutputPort")
+                raise TypeError(
+                    f"{cls.__qualname__}.ports[{port_name!r}] is {port!r}, expected InputPort or OutputPort"
+                )
         lo, hi = child_count
         if lo < 1 or hi is not None and hi < lo:
             raise TypeError(f"@{kind}_node: child_count {child_count!r} is not a range of at least one child")
@@ -165,6 +176,7 @@ def _mark(kind: str, base: str, name: str | None, child_count: tuple[int, int | 
         setattr(cls, SPEC_ATTR, spec)
         register_node(cls)
         return cls
+
     return mark
 
 

@@ -36,8 +36,10 @@ def xy(pose: Any) -> tuple[float, float]:
         if inner is None:
             break
         pose = inner
-    raise ValueError(f"cannot read a position from {type(pose).__name__} {str(pose)[:60]!r}, expected (x, y, ...), "
-                     "{'x': .., 'y': ..} or a PoseStamped")
+    raise ValueError(
+        f"cannot read a position from {type(pose).__name__} {str(pose)[:60]!r}, expected (x, y, ...), "
+        "{'x': .., 'y': ..} or a PoseStamped"
+    )
 
 
 def path_points(path: Any) -> list[tuple[float, float]]:

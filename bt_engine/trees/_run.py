@@ -16,11 +16,28 @@ import py_trees
 from py_trees.common import Status
 
 from ..signal import Signal
-from ._behaviours import (ActorLeaf, CallSite, CheckLeaf, ConditionLeaf, RepeatNode, RetryNode, SetLeaf, TimeoutNode,
-                          WaitLeaf)
+from ._behaviours import (
+    ActorLeaf,
+    CallSite,
+    CheckLeaf,
+    ConditionLeaf,
+    RepeatNode,
+    RetryNode,
+    SetLeaf,
+    TimeoutNode,
+    WaitLeaf,
+)
 from ._blackboard import RunBlackboard
-from ._controls import (CountingParallel, IfThenElseNode, PipelineSequenceNode, RateControllerNode, RecoveryNode,
-                        ResumeSequenceNode, RunOnceNode, WhileDoElseNode)
+from ._controls import (
+    CountingParallel,
+    IfThenElseNode,
+    PipelineSequenceNode,
+    RateControllerNode,
+    RecoveryNode,
+    ResumeSequenceNode,
+    RunOnceNode,
+    WhileDoElseNode,
+)
 from ._errors import TreeFailure
 from ._plugins import PluginSpec
 from ._model import (
@@ -114,8 +131,9 @@ class RunHost(Protocol):
 
     def actor_target(self, name: str) -> tuple[str, str]: ...
 
-    def start_actor(self, run: "TreeRun", leaf: CallSite, args: tuple, kwargs: dict,
-                    on_done: Callable[[Any], None]) -> Any: ...
+    def start_actor(
+        self, run: "TreeRun", leaf: CallSite, args: tuple, kwargs: dict, on_done: Callable[[Any], None]
+    ) -> Any: ...
 
     def node_plugin(self, name: str) -> PluginSpec: ...
 
@@ -165,8 +183,9 @@ class TreeRun:
         paths: node path of every behaviour (``sequence/retry x3/pick``).
     """
 
-    def __init__(self, host: RunHost, mission: Mission, inputs: Mapping[str, Any],
-                 parent: TreeRun | None = None) -> None:
+    def __init__(
+        self, host: RunHost, mission: Mission, inputs: Mapping[str, Any], parent: TreeRun | None = None
+    ) -> None:
         self.host = host
         self.rt = host.rt
         self.mission = mission
@@ -181,8 +200,9 @@ class TreeRun:
         self.max_period = host.period_for(mission)
         self._halt_reason: str | None = None
         self._closed = False
-        self.bb = RunBlackboard(mission.name, written_keys(mission),
-                                on_write=self._on_write if self.observers else None)
+        self.bb = RunBlackboard(
+            mission.name, written_keys(mission), on_write=self._on_write if self.observers else None
+        )
         self.inputs = dict(inputs)
         self.paths: dict[py_trees.behaviour.Behaviour, str] = {}
         self.nodes: dict[py_trees.behaviour.Behaviour, Node] = {}
@@ -234,8 +254,10 @@ class TreeRun:
         if isinstance(node, PluginNode):
             spec = self.host.node_plugin(node.plugin)
             if spec.cls is None:
-                raise TypeError(f"{node.kind} {node.plugin!r} is declared but not implemented: write it (see "
-                                "docs/missions.md, 'Controls and decorators in Python')")
+                raise TypeError(
+                    f"{node.kind} {node.plugin!r} is declared but not implemented: write it (see "
+                    "docs/missions.md, 'Controls and decorators in Python')"
+                )
             b = spec.cls(label, self, node, path, spec, kids)
         elif isinstance(node, Do):
             leaf_class = ConditionLeaf if isinstance(node, Condition) else ActorLeaf
@@ -299,7 +321,8 @@ class TreeRun:
         if node.policy is ParallelPolicy.SUCCESS_ON_SELECTED:
             by_name = {child.name: kid for child, kid in zip(node.children, kids) if child.name is not None}
             return py_trees.common.ParallelPolicy.SuccessOnSelected(
-                children=[by_name[name] for name in node.selected], synchronise=True)
+                children=[by_name[name] for name in node.selected], synchronise=True
+            )
         return py_trees.common.ParallelPolicy.SuccessOnAll(synchronise=True)
 
     def _behaviour(self, node: UseBehaviour, label: str) -> py_trees.behaviour.Behaviour:
@@ -356,8 +379,9 @@ class TreeRun:
         if changes:
             self._report_in_order(self.root, changes)
 
-    def _report_in_order(self, b: py_trees.behaviour.Behaviour,
-                         changes: dict[py_trees.behaviour.Behaviour, tuple[Status, Status]]) -> None:
+    def _report_in_order(
+        self, b: py_trees.behaviour.Behaviour, changes: dict[py_trees.behaviour.Behaviour, tuple[Status, Status]]
+    ) -> None:
         change = changes.get(b)
         started = change is not None and change[1] is Status.RUNNING
         if change is not None and started:
@@ -418,8 +442,7 @@ class TreeRun:
 
     def outputs(self) -> dict[str, Any]:
         """The declared outputs as they are on the blackboard now."""
-        return {spec.name: (self.bb.get(spec.name) if spec.name in self.bb else None)
-                for spec in self.mission.outputs}
+        return {spec.name: (self.bb.get(spec.name) if spec.name in self.bb else None) for spec in self.mission.outputs}
 
     def failure(self) -> TreeFailure:
         """Why the root failed: the deepest failed node and its feedback."""

@@ -53,8 +53,7 @@ if TYPE_CHECKING:
     from ._behaviours import CallSite
     from ._host import TreeHost
 
-__all__ = ["TRACE_FORMAT", "TRACE_VERSION", "EventBuilder", "TraceRecorder", "plugin_modules", "to_json",
-           "tree_files"]
+__all__ = ["TRACE_FORMAT", "TRACE_VERSION", "EventBuilder", "TraceRecorder", "plugin_modules", "to_json", "tree_files"]
 
 TRACE_FORMAT = "actorbt-trace"
 TRACE_VERSION = 1
@@ -140,8 +139,7 @@ class EventBuilder(TreeObserver):
     executions of the same tree give the same events whatever the transaction ids.
     """
 
-    def __init__(self, sink: Callable[[dict[str, Any]], None],
-                 accept: Callable[[TreeRun], bool] | None = None) -> None:
+    def __init__(self, sink: Callable[[dict[str, Any]], None], accept: Callable[[TreeRun], bool] | None = None) -> None:
         self.sink = sink
         self.accept = accept  # which runs to report (None: all)
         self._runs: dict[int, int] = {}
@@ -183,17 +181,31 @@ class EventBuilder(TreeObserver):
             return
         self._call_count += 1
         number = self._calls[id(txn)] = self._call_count
-        self._emit(run, {
-            "type": "call", "run": self._run(run), "path": leaf.path, "call": number,
-            "actor": leaf.node.actor, "target": leaf.actor_path, "kind": leaf.actor_kind,
-            "args": to_json(list(args)), "kwargs": to_json(kwargs),
-        })
+        self._emit(
+            run,
+            {
+                "type": "call",
+                "run": self._run(run),
+                "path": leaf.path,
+                "call": number,
+                "actor": leaf.node.actor,
+                "target": leaf.actor_path,
+                "kind": leaf.actor_kind,
+                "args": to_json(list(args)),
+                "kwargs": to_json(kwargs),
+            },
+        )
 
     def actor_finished(self, run: TreeRun, leaf: CallSite, txn: Any) -> None:
         if self._skip(run):
             return
-        event: dict[str, Any] = {"type": "return", "run": self._run(run), "path": leaf.path,
-                                 "call": self._calls.pop(id(txn), 0), "actor": leaf.node.actor}
+        event: dict[str, Any] = {
+            "type": "return",
+            "run": self._run(run),
+            "path": leaf.path,
+            "call": self._calls.pop(id(txn), 0),
+            "actor": leaf.node.actor,
+        }
         if txn.state is TxnState.DONE:
             event.update(state="done", value=to_json(txn.result))
         elif txn.state is TxnState.CANCELLED:
@@ -220,8 +232,9 @@ class _LogHandler(logging.Handler):
 
     def emit(self, record: logging.LogRecord) -> None:
         try:
-            self.recorder.emit({"type": "log", "level": record.levelname, "logger": record.name,
-                                "msg": record.getMessage()})
+            self.recorder.emit(
+                {"type": "log", "level": record.levelname, "logger": record.name, "msg": record.getMessage()}
+            )
         except Exception:  # a log line must never break the run
             self.handleError(record)
 
@@ -237,16 +250,25 @@ class _RuntimeHooks:
     def call_started(self, txn: Any) -> None:
         if self.recorder.transactions and self.recorder.followed(txn):
             parent = txn.parent.id if txn.parent is not None else None
-            self.recorder.emit({"type": "txn", "phase": "start", "txn": txn.id, "parent": parent,
-                                "actor": txn.path, "mode": txn.mode.value})
+            self.recorder.emit(
+                {
+                    "type": "txn",
+                    "phase": "start",
+                    "txn": txn.id,
+                    "parent": parent,
+                    "actor": txn.path,
+                    "mode": txn.mode.value,
+                }
+            )
         previous = self.recorder._previous_recorder
         if previous is not None:
             previous.call_started(txn)
 
     def call_finished(self, txn: Any) -> None:
         if self.recorder.transactions and self.recorder.followed(txn):
-            self.recorder.emit({"type": "txn", "phase": "end", "txn": txn.id, "actor": txn.path,
-                                "state": txn.state.value})
+            self.recorder.emit(
+                {"type": "txn", "phase": "end", "txn": txn.id, "actor": txn.path, "state": txn.state.value}
+            )
         previous = self.recorder._previous_recorder
         if previous is not None:
             previous.call_finished(txn)
@@ -285,9 +307,16 @@ class TraceRecorder:
         transactions: also record every runtime transaction (start and end).
     """
 
-    def __init__(self, sink: str | Path | TextSink, host: TreeHost, *, tree: str,
-                 inputs: dict[str, Any] | None = None, seed: int | None = None,
-                 transactions: bool = False) -> None:
+    def __init__(
+        self,
+        sink: str | Path | TextSink,
+        host: TreeHost,
+        *,
+        tree: str,
+        inputs: dict[str, Any] | None = None,
+        seed: int | None = None,
+        transactions: bool = False,
+    ) -> None:
         self.host = host
         self.rt = host.rt
         self.transactions = transactions
@@ -304,12 +333,19 @@ class TraceRecorder:
         self._closed = False
         self._lock = threading.Lock()  # log records may come from other threads
         header = {
-            "type": "header", "format": TRACE_FORMAT, "version": TRACE_VERSION, "tree": tree,
-            "inputs": to_json(dict(inputs or {})), "seed": seed, "start": self.rt.now(),
+            "type": "header",
+            "format": TRACE_FORMAT,
+            "version": TRACE_VERSION,
+            "tree": tree,
+            "inputs": to_json(dict(inputs or {})),
+            "seed": seed,
+            "start": self.rt.now(),
             "clock": "virtual" if getattr(self.rt.clock, "virtual", False) else "wall",
             "recorded": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
-            "max_period": host.max_period, "behaviour_period": host.behaviour_period,
-            "versions": _versions(), "trees": tree_files(host, tree),
+            "max_period": host.max_period,
+            "behaviour_period": host.behaviour_period,
+            "versions": _versions(),
+            "trees": tree_files(host, tree),
             "nodes": plugin_modules(host, tree),
         }
         self._write(header)

@@ -49,8 +49,15 @@ from ._model import (
 from ._parse import suggest
 from ._plugins import InputPort, PluginSpec
 
-__all__ = ["MAX_ERRORS", "ActorInfo", "Resolver", "annotation_text", "annotation_type", "format_signature",
-           "validate_mission"]
+__all__ = [
+    "MAX_ERRORS",
+    "ActorInfo",
+    "Resolver",
+    "annotation_text",
+    "annotation_type",
+    "format_signature",
+    "validate_mission",
+]
 
 
 class ActorInfo(Protocol):
@@ -73,10 +80,23 @@ Resolver = Callable[[str], ActorInfo]
 #: each may search for close matches (a megabyte of bad keys would take hours).
 MAX_ERRORS = 100
 
-_BUILTIN_TYPES = {str: ValueType.STR, int: ValueType.INT, float: ValueType.FLOAT, bool: ValueType.BOOL,
-                  list: ValueType.LIST, tuple: ValueType.LIST, dict: ValueType.DICT}
-_TYPE_NAMES = {"str": ValueType.STR, "int": ValueType.INT, "float": ValueType.FLOAT, "bool": ValueType.BOOL,
-               "list": ValueType.LIST, "dict": ValueType.DICT}
+_BUILTIN_TYPES = {
+    str: ValueType.STR,
+    int: ValueType.INT,
+    float: ValueType.FLOAT,
+    bool: ValueType.BOOL,
+    list: ValueType.LIST,
+    tuple: ValueType.LIST,
+    dict: ValueType.DICT,
+}
+_TYPE_NAMES = {
+    "str": ValueType.STR,
+    "int": ValueType.INT,
+    "float": ValueType.FLOAT,
+    "bool": ValueType.BOOL,
+    "list": ValueType.LIST,
+    "dict": ValueType.DICT,
+}
 
 
 def _choices(info: Any, name: str) -> list | None:
@@ -85,6 +105,7 @@ def _choices(info: Any, name: str) -> list | None:
     tool = getattr(info, "tool", None)
     if tool is None:
         from ..catalog import tool_schema
+
         tool = tool_schema(info)
     schema = tool.get("parameters", {}).get("properties", {}).get(name, {})
     return schema.get("enum") or schema.get("items", {}).get("enum")
@@ -204,18 +225,25 @@ class _Validator:
                 self.check_plugin(node)
         for spec in self.mission.outputs:
             if spec.name not in self.key_types and not self.full:
-                self.errors.append(UnknownBlackboardKeyError(
-                    spec.pos,
-                    f"output {spec.name!r} is never written, expected a key set by out:, set: or writes: in the tree"
-                    f"{suggest(spec.name, self.key_types)}",
-                ))
+                self.errors.append(
+                    UnknownBlackboardKeyError(
+                        spec.pos,
+                        f"output {spec.name!r} is never written, "
+                        "expected a key set by out:, set: or writes: in the tree"
+                        f"{suggest(spec.name, self.key_types)}",
+                    )
+                )
         self.check_cycles()
         errors = sorted(self.errors, key=lambda e: (e.pos.line, e.pos.column))
         if not self.full:
             return errors
         errors = errors[:MAX_ERRORS]
-        return [*errors, LimitError(errors[-1].pos, f"more than {MAX_ERRORS} problems in this mission, "
-                                                    "stopped checking (fix these first)")]
+        return [
+            *errors,
+            LimitError(
+                errors[-1].pos, f"more than {MAX_ERRORS} problems in this mission, stopped checking (fix these first)"
+            ),
+        ]
 
     # ------------------------------------------------------------ actors
 
@@ -254,18 +282,22 @@ class _Validator:
                 param is not None and param.kind in (param.POSITIONAL_ONLY, param.VAR_POSITIONAL, param.VAR_KEYWORD)
             ):
                 names = [p.name for p in params.values() if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)]
-                self.errors.append(ArgumentMismatchError(
-                    node.arg_key_pos.get(name, node.at("with")),
-                    f"actor {node.actor!r} has no parameter {name!r}{suggest(name, names)}, expected {shown}",
-                ))
+                self.errors.append(
+                    ArgumentMismatchError(
+                        node.arg_key_pos.get(name, node.at("with")),
+                        f"actor {node.actor!r} has no parameter {name!r}{suggest(name, names)}, expected {shown}",
+                    )
+                )
                 return
         try:
             bound = sig.bind(*node.args, **node.kwargs)
         except TypeError as exc:
-            self.errors.append(ArgumentMismatchError(
-                node.at("with") if "with" in node.field_pos else node.at(node.kind),
-                f"arguments do not fit actor {node.actor!r}: {exc}, expected {shown}",
-            ))
+            self.errors.append(
+                ArgumentMismatchError(
+                    node.at("with") if "with" in node.field_pos else node.at(node.kind),
+                    f"arguments do not fit actor {node.actor!r}: {exc}, expected {shown}",
+                )
+            )
             return
         limits = getattr(getattr(info, "safety", None), "limits", None) or {}
         for name, value in bound.arguments.items():
@@ -275,7 +307,7 @@ class _Validator:
                 index = list(params).index(name)
                 pos = node.arg_pos.get(str(index), node.at("with"))
             what = f"argument {name!r} of actor {node.actor!r}"
-            if param.kind is param.VAR_POSITIONAL:    # each value where it is written
+            if param.kind is param.VAR_POSITIONAL:  # each value where it is written
                 first = list(params).index(name)
                 placed = [(v, node.arg_pos.get(str(first + k), pos)) for k, v in enumerate(value)]
             else:
@@ -306,21 +338,27 @@ class _Validator:
             return
         for value, pos in placed:
             if not any(refs_in(value)) and value not in choices:
-                self.errors.append(ArgumentMismatchError(
-                    pos, f"{what} is {shorten(value)}, expected one of {', '.join(repr(c) for c in choices)}"
-                         f"{suggest(str(value), [str(c) for c in choices])}"))
+                self.errors.append(
+                    ArgumentMismatchError(
+                        pos,
+                        f"{what} is {shorten(value)}, expected one of {', '.join(repr(c) for c in choices)}"
+                        f"{suggest(str(value), [str(c) for c in choices])}",
+                    )
+                )
 
     def check_type(self, value: Any, expected: ValueType, pos: Pos, what: str) -> None:
         if isinstance(value, Ref):
             actual = self.ref_type(value)
             if not _fits(expected, actual):
-                self.errors.append(ArgumentMismatchError(
-                    value.pos, f"{what} expects {_a(expected)}, but {value} holds {_a(actual)}"
-                ))
+                self.errors.append(
+                    ArgumentMismatchError(value.pos, f"{what} expects {_a(expected)}, but {value} holds {_a(actual)}")
+                )
         elif not any(refs_in(value)) and not expected.accepts(value):
-            self.errors.append(ArgumentMismatchError(
-                pos, f"{what} expects {_a(expected)}, got {type(value).__name__} {shorten(value)}"
-            ))
+            self.errors.append(
+                ArgumentMismatchError(
+                    pos, f"{what} expects {_a(expected)}, got {type(value).__name__} {shorten(value)}"
+                )
+            )
 
     # ------------------------------------------------------------ blackboard
 
@@ -337,8 +375,11 @@ class _Validator:
                 info = self.resolved.get(id(node))
                 vtype = ValueType.ANY
                 if info is not None:
-                    vtype = ValueType.DICT if info.is_tree else (
-                        annotation_type(info.signature.return_annotation) or ValueType.ANY)
+                    vtype = (
+                        ValueType.DICT
+                        if info.is_tree
+                        else (annotation_type(info.signature.return_annotation) or ValueType.ANY)
+                    )
                 wrote(node.out, vtype)
             elif isinstance(node, SetValues):
                 for key, value in node.values.items():
@@ -350,8 +391,9 @@ class _Validator:
                 plugin = self.nodes.get(node.plugin) if self.nodes is not None else None
                 for port, key in node.outs.items():
                     declared = plugin.outputs.get(port) if plugin is not None else None
-                    wrote(key, annotation_type(declared.type) or ValueType.ANY if declared is not None
-                          else ValueType.ANY)
+                    wrote(
+                        key, annotation_type(declared.type) or ValueType.ANY if declared is not None else ValueType.ANY
+                    )
         self.key_types = {k: (next(iter(v)) if len(v) == 1 else ValueType.ANY) for k, v in types.items()}
 
     def ref_type(self, ref: Ref) -> ValueType:
@@ -362,11 +404,13 @@ class _Validator:
     def check_key(self, key: str, pos: Pos) -> bool:
         if key in self.key_types:
             return True
-        self.errors.append(UnknownBlackboardKeyError(
-            pos,
-            f"blackboard key {key!r} is never written{suggest(key, self.key_types)}, "
-            "expected an input or a key set by out:, set: or writes:",
-        ))
+        self.errors.append(
+            UnknownBlackboardKeyError(
+                pos,
+                f"blackboard key {key!r} is never written{suggest(key, self.key_types)}, "
+                "expected an input or a key set by out:, set: or writes:",
+            )
+        )
         return False
 
     def check_refs(self, value: Any) -> None:
@@ -377,11 +421,13 @@ class _Validator:
         if isinstance(value, Ref) and self.check_key(value.key, value.pos):
             actual = self.ref_type(value)
             if not _fits(expected, actual):
-                self.errors.append(InvalidValueError(
-                    value.pos,
-                    f"{what} {value} holds {_a(actual)}, "
-                    f"expected {'an int' if expected is ValueType.INT else 'a number'}",
-                ))
+                self.errors.append(
+                    InvalidValueError(
+                        value.pos,
+                        f"{what} {value} holds {_a(actual)}, "
+                        f"expected {'an int' if expected is ValueType.INT else 'a number'}",
+                    )
+                )
 
     # ------------------------------------------------------------ behaviours and trees
 
@@ -391,19 +437,23 @@ class _Validator:
             for ref in refs_in(value):
                 # A behaviour is built when the run starts, before anything else is written.
                 if ref.key not in inputs:
-                    self.errors.append(UnknownBlackboardKeyError(
-                        ref.pos,
-                        f"behaviour arguments are fixed when the tree starts, so {ref} must name an input, "
-                        f"expected one of: {', '.join(sorted(inputs)) or '(no inputs declared)'}",
-                    ))
+                    self.errors.append(
+                        UnknownBlackboardKeyError(
+                            ref.pos,
+                            f"behaviour arguments are fixed when the tree starts, so {ref} must name an input, "
+                            f"expected one of: {', '.join(sorted(inputs)) or '(no inputs declared)'}",
+                        )
+                    )
         if self.behaviours is None or node.behaviour in self.behaviours:
             return
         known = sorted(self.behaviours)
-        self.errors.append(UnknownBehaviourError(
-            node.at("behaviour"),
-            f"unknown behaviour {node.behaviour!r}{suggest(node.behaviour, known)}, "
-            f"expected a registered behaviour: {', '.join(known) or '(none registered)'}",
-        ))
+        self.errors.append(
+            UnknownBehaviourError(
+                node.at("behaviour"),
+                f"unknown behaviour {node.behaviour!r}{suggest(node.behaviour, known)}, "
+                f"expected a registered behaviour: {', '.join(known) or '(none registered)'}",
+            )
+        )
 
     def check_plugin(self, node: PluginNode) -> None:
         """A control or decorator written in Python: its name, child count, ports (names
@@ -415,46 +465,68 @@ class _Validator:
         spec = self.nodes.get(node.plugin)
         if spec is None:
             known = sorted(n for n, s in self.nodes.items() if s.kind == node.kind)
-            self.errors.append(UnknownNodeError(
-                node.at(node.kind),
-                f"unknown {node.kind} {node.plugin!r}{suggest(node.plugin, known)}, expected a registered "
-                f"{node.kind} node: {', '.join(known) or '(none registered)'}"))
+            self.errors.append(
+                UnknownNodeError(
+                    node.at(node.kind),
+                    f"unknown {node.kind} {node.plugin!r}{suggest(node.plugin, known)}, expected a registered "
+                    f"{node.kind} node: {', '.join(known) or '(none registered)'}",
+                )
+            )
             return
         if spec.kind != node.kind:
             field = "children: [...]" if spec.kind == "control" else "child: {...}"
-            self.errors.append(InvalidValueError(
-                node.at(node.kind), f"{node.plugin!r} is a {spec.kind} node, expected {spec.kind}: {node.plugin} "
-                                    f"with {field}"))
+            self.errors.append(
+                InvalidValueError(
+                    node.at(node.kind),
+                    f"{node.plugin!r} is a {spec.kind} node, expected {spec.kind}: {node.plugin} with {field}",
+                )
+            )
             return
         if isinstance(node, PluginControl):
             lo, hi = spec.child_count
             n = len(node.children)
             if n < lo or hi is not None and n > hi:
                 wanted = f"{lo}" if lo == hi else f"{lo} to {hi}" if hi is not None else f"at least {lo}"
-                self.errors.append(InvalidValueError(
-                    node.at("children"), f"control {node.plugin!r} has {n} children, expected {wanted}"))
+                self.errors.append(
+                    InvalidValueError(
+                        node.at("children"), f"control {node.plugin!r} has {n} children, expected {wanted}"
+                    )
+                )
         inputs = spec.inputs
         for name, value in node.ports.items():
             port = spec.ports.get(name)
             if not isinstance(port, InputPort):
-                what = "is an output port, expected it under out:" if port is not None else \
-                    f"is not a port of it{suggest(name, inputs)}, expected one of: {', '.join(inputs) or '(none)'}"
-                self.errors.append(ArgumentMismatchError(node.port_pos.get(name, node.at("with")),
-                                                         f"{node.kind} {node.plugin!r}: {name!r} {what}"))
+                what = (
+                    "is an output port, expected it under out:"
+                    if port is not None
+                    else f"is not a port of it{suggest(name, inputs)}, expected one of: {', '.join(inputs) or '(none)'}"
+                )
+                self.errors.append(
+                    ArgumentMismatchError(
+                        node.port_pos.get(name, node.at("with")), f"{node.kind} {node.plugin!r}: {name!r} {what}"
+                    )
+                )
                 continue
             expected = annotation_type(port.type)
             if expected is not None:
-                self.check_type(value, expected, node.port_pos.get(name, node.at("with")),
-                                f"port {name!r} of {node.kind} {node.plugin!r}")
+                self.check_type(
+                    value,
+                    expected,
+                    node.port_pos.get(name, node.at("with")),
+                    f"port {name!r} of {node.kind} {node.plugin!r}",
+                )
             if port.actor and isinstance(value, str) and self.resolver is not None:
                 self.check_named_actor(value, node.port_pos.get(name, node.at("with")))
         outputs = spec.outputs
         for name in node.outs:
             if name not in outputs:
-                self.errors.append(ArgumentMismatchError(
-                    node.out_pos.get(name, node.at("out")),
-                    f"{node.kind} {node.plugin!r} has no output port {name!r}{suggest(name, outputs)}, "
-                    f"expected one of: {', '.join(outputs) or '(none)'}"))
+                self.errors.append(
+                    ArgumentMismatchError(
+                        node.out_pos.get(name, node.at("out")),
+                        f"{node.kind} {node.plugin!r} has no output port {name!r}{suggest(name, outputs)}, "
+                        f"expected one of: {', '.join(outputs) or '(none)'}",
+                    )
+                )
 
     def check_named_actor(self, name: str, pos: Pos) -> None:
         """An actor a plugin's port names, resolved as a ``do:`` target is."""
@@ -464,8 +536,11 @@ class _Validator:
         except (LookupError, ActorbtError) as exc:
             suggestions = getattr(exc, "suggestions", None) or []
             hint = f" (did you mean {' or '.join(repr(s) for s in suggestions)}?)" if suggestions else ""
-            self.errors.append(UnresolvedActorError(pos, f"unknown actor {shorten(name)}{hint}, expected a "
-                                                         "registered actor or tree name"))
+            self.errors.append(
+                UnresolvedActorError(
+                    pos, f"unknown actor {shorten(name)}{hint}, expected a registered actor or tree name"
+                )
+            )
 
     def tree_calls(self, mission: Mission) -> Iterator[tuple[str, Do]]:
         assert self.trees is not None
@@ -507,11 +582,13 @@ class _Validator:
                 break
             cycle = self.path_back(callee)
             if cycle is not None:
-                self.errors.append(SubtreeCycleError(
-                    node.at(node.kind),
-                    f"subtree cycle {' -> '.join([start, *cycle])}, expected trees that do not call "
-                    "themselves directly or through other trees",
-                ))
+                self.errors.append(
+                    SubtreeCycleError(
+                        node.at(node.kind),
+                        f"subtree cycle {' -> '.join([start, *cycle])}, expected trees that do not call "
+                        "themselves directly or through other trees",
+                    )
+                )
 
 
 def validate_mission(

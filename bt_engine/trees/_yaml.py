@@ -24,8 +24,17 @@ from yaml.reader import Reader
 from ._errors import DuplicateKeyError, LimitError, MissionSyntaxError, Pos, shorten
 from ..yaml_hints import syntax_mark, syntax_message
 
-__all__ = ["MAX_NUMBER_DIGITS", "MAX_SCALAR_LENGTH", "MAX_YAML_DEPTH", "YMap", "YNode", "YScalar", "YSeq",
-           "parse_yaml", "plain"]
+__all__ = [
+    "MAX_NUMBER_DIGITS",
+    "MAX_SCALAR_LENGTH",
+    "MAX_YAML_DEPTH",
+    "YMap",
+    "YNode",
+    "YScalar",
+    "YSeq",
+    "parse_yaml",
+    "plain",
+]
 
 #: Deepest nesting of YAML mappings and lists. Composing, walking and parsing recurse
 #: once per level; 100 keeps every stage far below Python's recursion limit and allows
@@ -233,12 +242,15 @@ class _Walker:
             raise LimitError(pos, f"YAML value longer than {MAX_SCALAR_LENGTH} characters, expected a shorter value")
         if node.tag == _VALUE_TAG:
             return YScalar(text, text, node.style, pos)
-        if not (node.tag.startswith(_CORE) and node.tag[len(_CORE):] in _PLAIN_TAGS):
+        if not (node.tag.startswith(_CORE) and node.tag[len(_CORE) :] in _PLAIN_TAGS):
             raise MissionSyntaxError(pos, f"unsupported YAML tag {shorten(node.tag, 80)}, expected plain YAML values")
-        kind = node.tag[len(_CORE):]
+        kind = node.tag[len(_CORE) :]
         if node.tag in _NUMBER_TAGS and len(text) > MAX_NUMBER_DIGITS:
-            raise LimitError(pos, f"number longer than {MAX_NUMBER_DIGITS} digits, expected a shorter number "
-                                  "(quote it to keep it as text)")
+            raise LimitError(
+                pos,
+                f"number longer than {MAX_NUMBER_DIGITS} digits, expected a shorter number "
+                "(quote it to keep it as text)",
+            )
         # An explicit tag must agree with the text: SafeLoader's constructors assume it
         # does and fail with KeyError or AttributeError on `!!bool maybe`, `!!timestamp x`.
         if kind not in ("str", "binary"):
@@ -250,8 +262,9 @@ class _Walker:
         except yaml.MarkedYAMLError as exc:
             raise _syntax_error(self.file, exc) from None
         except (ValueError, OverflowError) as exc:  # dates that do not exist: 2001-02-30
-            raise MissionSyntaxError(pos, f"invalid {kind} {shorten(text)}: {exc}, expected a valid {kind} "
-                                          "(quote it to keep it as text)") from None
+            raise MissionSyntaxError(
+                pos, f"invalid {kind} {shorten(text)}: {exc}, expected a valid {kind} (quote it to keep it as text)"
+            ) from None
         return YScalar(value, text, node.style, pos)
 
 

@@ -23,8 +23,14 @@ from ._plugin_nodes import ControlNode, DecoratorNode
 from ._plugins import InputPort, OutputPort, control_node, decorator_node
 from ._poses import path_length, path_points, xy
 
-__all__ = ["DistanceController", "GoalUpdatedController", "GoalUpdater", "PathLongerOnApproach", "RoundRobin",
-           "SpeedController"]
+__all__ = [
+    "DistanceController",
+    "GoalUpdatedController",
+    "GoalUpdater",
+    "PathLongerOnApproach",
+    "RoundRobin",
+    "SpeedController",
+]
 
 #: the actor that answers the robot's pose, unless a mission names another
 POSE_ACTOR = "get_pose"
@@ -32,8 +38,7 @@ POSE_ACTOR = "get_pose"
 _POSE_PORTS = {
     "global_frame": InputPort(str, doc="the frame of the pose (Nav2's tf lookup); the pose actor answers in its own"),
     "robot_base_frame": InputPort(str, doc="the robot's base frame (Nav2's tf lookup)"),
-    "pose_actor": InputPort(str, POSE_ACTOR, "the actor asked for the robot's pose, answering (x, y, ...)",
-                            actor=True),
+    "pose_actor": InputPort(str, POSE_ACTOR, "the actor asked for the robot's pose, answering (x, y, ...)", actor=True),
 }
 
 
@@ -123,8 +128,10 @@ class SpeedController(DecoratorNode):
     }
 
     def _goals(self) -> tuple[Any, Any]:
-        return (self.input("goal") if self.has_input("goal") else None,
-                self.input("goals") if self.has_input("goals") else None)
+        return (
+            self.input("goal") if self.has_input("goal") else None,
+            self.input("goals") if self.has_input("goals") else None,
+        )
 
     def _restart(self) -> None:
         self.period = 1.0 / float(self.input("max_rate"))
@@ -202,8 +209,10 @@ class GoalUpdatedController(DecoratorNode):
     }
 
     def _goals(self) -> tuple[Any, Any]:
-        return (self.input("goal") if self.has_input("goal") else None,
-                self.input("goals") if self.has_input("goals") else None)
+        return (
+            self.input("goal") if self.has_input("goal") else None,
+            self.input("goals") if self.has_input("goals") else None,
+        )
 
     def on_start(self) -> None:
         self.goals = self._goals()
@@ -243,9 +252,14 @@ class PathLongerOnApproach(DecoratorNode):
         old = self.old
         if not self.first and (not old or not new or old[-1] != new[-1]):
             self.first = True  # another goal: compare from now on
-        longer = (new != old and bool(old) and bool(new) and old[-1] == new[-1]
-                  and path_length(old) < float(self.input("prox_len"))
-                  and path_length(new) > float(self.input("length_factor")) * path_length(old))
+        longer = (
+            new != old
+            and bool(old)
+            and bool(new)
+            and old[-1] == new[-1]
+            and path_length(old) < float(self.input("prox_len"))
+            and path_length(new) > float(self.input("length_factor")) * path_length(old)
+        )
         if longer and not self.first:
             status = self.tick_child()
             if status is not Status.RUNNING:

@@ -16,7 +16,12 @@ from ..errors import Cancelled, UnknownActorError
 from ..subsystem import SubSystem
 
 __all__ = [
-    "DEMO_BEHAVIOURS", "FakeActor", "FakeResolver", "ManualClock", "ScriptedActors", "demo_resolver",
+    "DEMO_BEHAVIOURS",
+    "FakeActor",
+    "FakeResolver",
+    "ManualClock",
+    "ScriptedActors",
+    "demo_resolver",
 ]
 
 #: Behaviour names the bad-mission corpus is checked against.
@@ -91,8 +96,13 @@ def demo_resolver() -> FakeResolver:
         """Log a line."""
 
     return FakeResolver(
-        sleep=sleep, navigate=navigate, watch=watch, open_gripper=open_gripper, pick=pick,
-        count_objects=count_objects, say=say,
+        sleep=sleep,
+        navigate=navigate,
+        watch=watch,
+        open_gripper=open_gripper,
+        pick=pick,
+        count_objects=count_objects,
+        say=say,
     )
 
 
@@ -125,6 +135,7 @@ class ScriptedActors(SubSystem):
         def close() -> None:
             self.cancelled.append(tag)
             self.pending.pop(tag, None)
+
         return close
 
     @actor
