@@ -61,7 +61,7 @@ GRIPPER_MAX_OPENING = 0.09
 
 
 class Robot:
-    def __init__(self, cid: int, start=(0.0, 0.0, 0.0), arm_home=ARM_HOME):
+    def __init__(self, cid: int, start=(0.0, 0.0, 0.0), arm_home=ARM_HOME, friction_anchors: bool = True):
         self.cid = cid
         x, y, yaw = start
         flags = (p.URDF_USE_INERTIA_FROM_FILE | p.URDF_USE_IMPLICIT_CYLINDER | p.URDF_USE_SELF_COLLISION
@@ -98,7 +98,7 @@ class Robot:
         self.grip_setpoint = [self.gripper_width / 2] * 2   # per finger, the profile's [m]
         for j in self.grip_idx:
             p.changeDynamics(b, j, contactStiffness=PAD_STIFFNESS, contactDamping=PAD_DAMPING,
-                             physicsClientId=cid)
+                             frictionAnchor=int(friction_anchors), physicsClientId=cid)
         self.wheel_target = [0.0, 0.0]
         self.wheel_setpoint = [0.0, 0.0]
         self.apply(0.0)
@@ -157,11 +157,11 @@ class Robot:
                                     force=GRIPPER_FORCE, maxVelocity=GRIPPER_CATCH_UP,
                                     positionGain=GRIPPER_GAIN, physicsClientId=cid)
 
-    def gripper_busy(self, finger_positions) -> bool:
-        """Whether the servo's setpoint is still on its way to the goal, or a finger stands
-        more than a millimetre short of it (it squeezes what it holds)."""
+    def gripper_busy(self) -> bool:
+        """Whether the servo's setpoint is still on its way to the goal (closing or
+        opening). Fingers that stand still on what they hold are not busy."""
         goal = self.gripper_width / 2
-        return any(sp != goal for sp in self.grip_setpoint) or self.squeezing(finger_positions)
+        return any(sp != goal for sp in self.grip_setpoint)
 
     def holding(self, finger_positions) -> bool:
         """Whether the servo's setpoint has reached its goal and a finger stands short of
