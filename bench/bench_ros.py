@@ -4,6 +4,9 @@
 
 - goal -> result latency of a trivial tree (``/actorbt/tree/trivial``), client and server
   in one process, and across two processes after discovery (targets <= 5 ms, <= 15 ms);
+- the same from a plain rclpy ActionClient in a third process (target <= 5 ms), beside
+  the floor: that client against a plain rclpy ActionServer that succeeds at once, with
+  the same feedback and result retention;
 - cancel latency: from the cancel request to (a) every transaction of the goal cancelled
   in the server and (b) the client holding the CANCELED result (target <= 50 ms);
 - topic throughput: 320x240 rgb8 Images from another process through a subscriber
@@ -14,6 +17,7 @@ All figures are medians. A private ROS domain keeps other processes out.
 """
 from __future__ import annotations
 
+import json
 import os
 import pathlib
 import random
@@ -146,6 +150,101 @@ def bench_in_process(tmp: pathlib.Path) -> None:
         rt.close()
 
 
+# A plain rclpy client, as a robot's own code would write it: send the goal, wait for the
+# acceptance, ask for the result, wait for it. It spins with spin_once: rclpy 7.1's
+# spin_until_future_complete adds a wake-up callback to the future on every turn, they
+# pile up over hundreds of goals and the client ends up spinning flat out (the "tutorial"
+# line shows what that costs).
+PLAIN_CLIENT = """
+import json, sys, time
+import rclpy
+from rclpy.action import ActionClient
+from rclpy.executors import SingleThreadedExecutor
+from actorbt_interfaces.action import RunTree
+name, goals, warm, way = sys.argv[1], int(sys.argv[2]), int(sys.argv[3]), sys.argv[4]
+rclpy.init(args=[])
+node = rclpy.create_node("bench_plain_client")
+client = ActionClient(node, RunTree, name)
+ex = SingleThreadedExecutor()
+ex.add_node(node)
+assert client.wait_for_server(timeout_sec=15.0), "no server"
+
+def wait(fut):
+    if way == "tutorial":
+        ex.spin_until_future_complete(fut, 10.0)
+    end = time.monotonic() + 10.0
+    while not fut.done() and time.monotonic() < end:
+        ex.spin_once(timeout_sec=1.0)
+    return fut.result()
+
+def one(i):
+    t0 = time.perf_counter()
+    handle = wait(client.send_goal_async(RunTree.Goal(inputs_yaml=f"{{x: {i}}}")))
+    assert handle is not None and handle.accepted
+    res = wait(handle.get_result_async())
+    assert res is not None and res.result.success, res
+    return time.perf_counter() - t0
+for i in range(warm):
+    one(i)
+print(json.dumps([one(i) for i in range(goals)]), flush=True)
+"""
+
+# The floor: a plain rclpy server of the same action, succeeding at once, with the two
+# feedback messages and the result retention of ``actorbt serve``.
+FLOOR_SERVER = """
+import sys
+import rclpy
+from rclpy.action import ActionServer
+from rclpy.executors import SingleThreadedExecutor
+from actorbt_interfaces.action import RunTree
+from bt_engine.ros.server import RESULT_TIMEOUT
+rclpy.init(args=[])
+node = rclpy.create_node("bench_floor_server")
+
+def execute(handle):
+    handle.publish_feedback(RunTree.Feedback(status="running", active_node="trivial"))
+    handle.publish_feedback(RunTree.Feedback(status="success", active_node="trivial"))
+    handle.succeed()
+    return RunTree.Result(success=True, status="succeeded", outputs_yaml="y: 1\\n")
+ActionServer(node, RunTree, sys.argv[1], execute, result_timeout=RESULT_TIMEOUT)
+ex = SingleThreadedExecutor()
+ex.add_node(node)
+print("ready", flush=True)
+ex.spin()
+"""
+
+
+def plain_client_latency(action: str, way: str = "spin_once") -> float:
+    """Median goal -> result latency [s] of a plain rclpy client in its own process."""
+    out = subprocess.run([sys.executable, "-c", PLAIN_CLIENT, action, str(GOALS), "30", way],
+                         cwd=ROOT, capture_output=True, text=True, timeout=120)
+    if out.returncode != 0:
+        raise RuntimeError(f"plain client failed: {out.stderr[-2000:]}")
+    return statistics.median(json.loads(out.stdout.strip().splitlines()[-1]))
+
+
+def drain(stream) -> None:
+    """Read a server's output to its end, so it never blocks on a full pipe."""
+    threading.Thread(target=lambda: stream.read(), daemon=True).start()
+
+
+def bench_floor() -> None:
+    print("\n-- the floor: a plain rclpy server that succeeds at once + the plain client --")
+    action = "/bench/floor/trivial"
+    proc = subprocess.Popen([sys.executable, "-c", FLOOR_SERVER, action], cwd=ROOT,
+                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    try:
+        for line in proc.stdout:
+            if "ready" in line:
+                break
+        drain(proc.stdout)
+        lat = plain_client_latency(action)
+        print(f"goal -> result, plain rclpy client {ms(lat)}   ({GOALS} goals, another process)")
+    finally:
+        proc.terminate()
+        proc.wait(15)
+
+
 def bench_two_processes(tmp: pathlib.Path) -> None:
     print("\n-- two processes: `actorbt serve` on the ROS bus + client --")
     cfg = tmp / "actorbt.yaml"
@@ -157,6 +256,7 @@ def bench_two_processes(tmp: pathlib.Path) -> None:
         for line in proc.stdout:
             if "ready" in line:
                 break
+        drain(proc.stdout)  # a line per goal
         from actorbt_interfaces.action import RunTree
         remote = Remote()
         try:
@@ -173,6 +273,11 @@ def bench_two_processes(tmp: pathlib.Path) -> None:
             print(f"cancel -> CANCELED at the client  {ms(c)}   ({CANCELS} cancels; {verdict(c, 0.05)})")
         finally:
             remote.close()
+        lat = plain_client_latency("/actorbt/tree/trivial")
+        print(f"goal -> result, plain rclpy client {ms(lat)}   ({GOALS} goals from a third process;"
+              f" {verdict(lat, 0.005)})")
+        lat = plain_client_latency("/actorbt/tree/trivial", "tutorial")
+        print(f"  the same, spin_until_future_complete {ms(lat)}   (rclpy 7.1: the client spins flat out)")
     finally:
         proc.send_signal(2)
         proc.wait(15)
@@ -270,6 +375,7 @@ def main() -> int:
         tmp = pathlib.Path(d)
         bench_in_process(tmp)
         bench_two_processes(tmp)
+    bench_floor()
     print("\n-- 320x240 rgb8 images from another process, sensor QoS (best effort, depth 5) --")
     bench_images(30.0)
     bench_images(0.0)
