@@ -197,7 +197,7 @@ import rclpy
 from rclpy.action import ActionServer
 from rclpy.executors import SingleThreadedExecutor
 from actorbt_interfaces.action import RunTree
-from bt_engine.ros.server import RESULT_TIMEOUT
+from bt_ros.server import RESULT_TIMEOUT
 rclpy.init(args=[])
 node = rclpy.create_node("bench_floor_server")
 
