@@ -40,16 +40,23 @@ Nothing here imports rclpy until it is used, so ``actorbt`` starts quickly and
 builds without ROS still run the local bus. Discovery stays on this machine unless
 ``ROS_AUTOMATIC_DISCOVERY_RANGE`` says otherwise (see ``host.py``).
 """
+
 from __future__ import annotations
 
 from typing import Any
 
-__all__ = ["LiveOptions", "LiveSession", "Remote", "RosHost", "RosTransport", "Server", "add_live_options",
-           "serve"]
+__all__ = ["LiveOptions", "LiveSession", "Remote", "RosHost", "RosTransport", "Server", "add_live_options", "serve"]
 
-_HOMES = {"Remote": "remote", "RosHost": "host", "RosTransport": "transport",
-          "Server": "server", "serve": "server", "LiveSession": "live", "LiveOptions": "live_options",
-          "add_live_options": "live_options"}
+_HOMES = {
+    "Remote": "remote",
+    "RosHost": "host",
+    "RosTransport": "transport",
+    "Server": "server",
+    "serve": "server",
+    "LiveSession": "live",
+    "LiveOptions": "live_options",
+    "add_live_options": "live_options",
+}
 
 
 def __getattr__(name: str) -> Any:
@@ -57,4 +64,5 @@ def __getattr__(name: str) -> Any:
     if home is None:
         raise AttributeError(name)
     import importlib
+
     return getattr(importlib.import_module(f"{__name__}.{home}"), name)

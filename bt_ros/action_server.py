@@ -15,6 +15,7 @@ A goal's way through (thread in brackets):
 Servers validate goals themselves and abort a bad one with the reason in its result, as
 ROS 2 controllers and Nav2 do, so a stock client sees why.
 """
+
 from __future__ import annotations
 
 import logging
@@ -31,9 +32,11 @@ class RosActionServer:
     """One action served by a :class:`~bt_ros.transport.RosTransport`'s node
     (``transport``: its ``node``, ``host`` and ``rt`` are used)."""
 
-    def __init__(self, transport: Any, name: str, action_type: type[RosAction],
-                 on_goal: Callable[[ServerGoal], None]) -> None:
+    def __init__(
+        self, transport: Any, name: str, action_type: type[RosAction], on_goal: Callable[[ServerGoal], None]
+    ) -> None:
         from rclpy.action import ActionServer
+
         self.name = name
         self.action_type = action_type
         self.on_goal = on_goal
@@ -42,12 +45,12 @@ class RosActionServer:
         self.closed = False
         # created on this thread, like the action clients: the hub never waits for the
         # executor thread (which may be waiting for the hub)
-        self._server = ActionServer(transport.node, action_type, name, self._execute,
-                                    cancel_callback=self._on_cancel)
+        self._server = ActionServer(transport.node, action_type, name, self._execute, cancel_callback=self._on_cancel)
 
     # -- executor thread ---------------------------------------------------------------
     async def _execute(self, handle: Any) -> Any:
         from rclpy.task import Future
+
         rt = self._transport.rt
         ended: Future = Future()
         key = bytes(handle.goal_id.uuid)
@@ -80,6 +83,7 @@ class RosActionServer:
 
     def _on_cancel(self, handle: Any) -> Any:
         from rclpy.action import CancelResponse
+
         goal = self._goals.get(bytes(handle.goal_id.uuid))
         if goal is not None:
             try:
@@ -118,6 +122,7 @@ class RosActionServer:
 
         def destroy() -> None:
             server.destroy()
+
         self._post(destroy)
 
 
@@ -129,4 +134,3 @@ def _with_error(result: Any, text: str) -> Any:
             setattr(result, name, text)
             break
     return result
-

@@ -24,6 +24,7 @@ its colour camera, recorded as image_transport's compressed topic
 (``/camera/color/image_raw/compressed``, sensor_msgs/CompressedImage, JPEG), and the
 camera info.
 """
+
 from __future__ import annotations
 
 import collections
@@ -93,8 +94,10 @@ def check_bag_path(path: str | Path) -> Path:
     path = Path(path)
     if path.is_dir():
         if any(path.iterdir()):
-            raise BagError(f"--bag {path}: the folder exists and is not empty; a bag is written "
-                           "to a new folder (choose another name or remove it)")
+            raise BagError(
+                f"--bag {path}: the folder exists and is not empty; a bag is written "
+                "to a new folder (choose another name or remove it)"
+            )
     elif path.exists():
         raise BagError(f"--bag {path}: that is a file; a bag is a folder (give a new folder's name)")
     return path
@@ -102,17 +105,22 @@ def check_bag_path(path: str | Path) -> Path:
 
 def _offered_qos(qos: Any) -> Any:
     """The rosbags Qos a publisher with our setting offers (metadata.yaml)."""
-    from rosbags.interfaces import (Qos, QosDurability, QosHistory, QosLiveliness,
-                                    QosReliability, QosTime)
+    from rosbags.interfaces import Qos, QosDurability, QosHistory, QosLiveliness, QosReliability, QosTime
     from bt_engine.bus.qos import qos_depth
+
     default = QosTime(0, 0)  # deadline, lifespan, lease: the defaults (none)
     best_effort = isinstance(qos, str) and qos in ("sensor", "sensor_data")
-    return Qos(history=QosHistory.KEEP_LAST, depth=qos_depth(qos),
-               reliability=QosReliability.BEST_EFFORT if best_effort else QosReliability.RELIABLE,
-               durability=QosDurability.TRANSIENT_LOCAL if is_latched(qos) else QosDurability.VOLATILE,
-               deadline=default, lifespan=default, liveliness=QosLiveliness.AUTOMATIC,
-               liveliness_lease_duration=default,
-               avoid_ros_namespace_conventions=False)
+    return Qos(
+        history=QosHistory.KEEP_LAST,
+        depth=qos_depth(qos),
+        reliability=QosReliability.BEST_EFFORT if best_effort else QosReliability.RELIABLE,
+        durability=QosDurability.TRANSIENT_LOCAL if is_latched(qos) else QosDurability.VOLATILE,
+        deadline=default,
+        lifespan=default,
+        liveliness=QosLiveliness.AUTOMATIC,
+        liveliness_lease_duration=default,
+        avoid_ros_namespace_conventions=False,
+    )
 
 
 class _TraceSink:
@@ -125,6 +133,7 @@ class _TraceSink:
 
     def write(self, text: str) -> int:
         from std_msgs.msg import String
+
         lines = (self._partial + text).split("\n")
         self._partial = lines.pop()
         for line in lines:
@@ -147,9 +156,16 @@ class BagRecorder:
         BagError: ``path`` exists and is not an empty folder.
     """
 
-    def __init__(self, rt: Any, path: str | Path, topics: tuple[BagTopic, ...] = DEFAULT_TOPICS, *,
-                 jpeg_quality: int = JPEG_QUALITY) -> None:
+    def __init__(
+        self,
+        rt: Any,
+        path: str | Path,
+        topics: tuple[BagTopic, ...] = DEFAULT_TOPICS,
+        *,
+        jpeg_quality: int = JPEG_QUALITY,
+    ) -> None:
         from rosbags.rosbag2 import StoragePlugin, Writer
+
         self.rt = rt
         self.path = check_bag_path(path)
         if self.path.is_dir():
@@ -177,13 +193,19 @@ class BagRecorder:
 
     def _add_connection(self, name: str, type_name: str, qos: Any) -> None:
         self._connections[name] = self._writer.add_connection(
-            name, type_name, msgdef=message_definition(type_name), rihs01=type_hash(type_name),
-            serialization_format="cdr", offered_qos_profiles=[_offered_qos(qos)])
+            name,
+            type_name,
+            msgdef=message_definition(type_name),
+            rihs01=type_hash(type_name),
+            serialization_format="cdr",
+            offered_qos_profiles=[_offered_qos(qos)],
+        )
 
     def _subscribe(self) -> None:
         for topic in self.topics:
-            self._subs.append(self.rt.bus.subscribe(topic.name, message_class(topic.type),
-                                                    self._receiver(topic), topic.qos))
+            self._subs.append(
+                self.rt.bus.subscribe(topic.name, message_class(topic.type), self._receiver(topic), topic.qos)
+            )
 
     def _receiver(self, topic: BagTopic) -> Callable[[Any], None]:
         name = topic.bag_name
@@ -197,6 +219,7 @@ class BagRecorder:
                 if name not in self._warned:  # say it once, keep recording the rest
                     self._warned.add(name)
                     log.warning("not recording %s: %s", name, exc)
+
         return compress
 
     def trace_sink(self) -> _TraceSink:

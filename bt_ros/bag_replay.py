@@ -9,6 +9,7 @@ status changes but not the actor results replay answers calls with.
 
 Reading needs only ``rosbags`` (pure Python): no rclpy, no simulator.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -42,6 +43,7 @@ def trace_lines(path: str | Path) -> list[str]:
     from rosbags.rosbag2.errors import ReaderError
 
     from .cdr import typestore
+
     folder = bag_folder(path)
     if folder is None:
         raise ReplayError(f"{path}: not a rosbag2 folder (no metadata.yaml)")
@@ -49,12 +51,13 @@ def trace_lines(path: str | Path) -> list[str]:
         with Reader(folder) as reader:
             connections = [c for c in reader.connections if c.topic == TRACE_TOPIC and c.msgtype == STRING]
             if not connections:
-                raise ReplayError(f"{folder}: the bag holds no {TRACE_TOPIC} topic, so no tree run to "
-                                  "replay (`serve --bag` records none: replay the goal traces of "
-                                  "--record-dir)")
+                raise ReplayError(
+                    f"{folder}: the bag holds no {TRACE_TOPIC} topic, so no tree run to "
+                    "replay (`serve --bag` records none: replay the goal traces of "
+                    "--record-dir)"
+                )
             store = typestore()
-            return [store.deserialize_cdr(raw, STRING).data
-                    for _, _, raw in reader.messages(connections=connections)]
+            return [store.deserialize_cdr(raw, STRING).data for _, _, raw in reader.messages(connections=connections)]
     except ReaderError as exc:
         raise ReplayError(f"{folder}: cannot read the bag: {exc}") from None
 
@@ -64,6 +67,7 @@ def cmd_replay(args: argparse.Namespace, app: Any) -> int:
     folder = bag_folder(args.trace)
     if folder is None:
         from bt_tools.cli import cmd_replay as replay_jsonl
+
         return replay_jsonl(args, app)
     report = replay(folder, trees=args.trees, lines=trace_lines(folder))
     print(report)

@@ -7,6 +7,7 @@ The call runs on the hub like any goal; after ``timeout`` seconds (default
 slow belongs to the action ``/actorbt/call``, which has feedback and cancel. The
 callback is a coroutine, so a slow call never holds the executor thread.
 """
+
 from __future__ import annotations
 
 import logging
@@ -38,6 +39,7 @@ class CallNowService:
 
     def create(self, node: Any) -> None:
         from actorbt_interfaces.srv import CallActorNow
+
         self._node = node
         self._service = node.create_service(CallActorNow, self.name, self._on_request)
 
@@ -55,6 +57,7 @@ class CallNowService:
             response.error_msg = text
             response.result_yaml = dump(value) if response.success else ""
             return response
+
         try:
             call = decode_call_goal(self.rt, request.actor, request.args_yaml)
         except GoalError as e:
@@ -80,7 +83,9 @@ class CallNowService:
                 if not txn.done:
                     timed_out.append(True)
                     txn.cancel(f"took longer than {timeout:g} s")
+
             self.rt.call_later(timeout, expire)
+
         try:
             self.rt.call_soon_threadsafe(start)
         except Exception:
@@ -90,8 +95,10 @@ class CallNowService:
             return answer(Ending.SUCCEEDED, value=value)
         exc = value.exception
         if timed_out:
-            return answer(Ending.TIMEOUT, f"{call.path} took longer than {timeout:g} s (cancelled); "
-                                          "call it through the action /actorbt/call")
+            return answer(
+                Ending.TIMEOUT,
+                f"{call.path} took longer than {timeout:g} s (cancelled); call it through the action /actorbt/call",
+            )
         if value.cancelled or isinstance(exc, Cancelled):
             return answer(Ending.SHUTDOWN, getattr(exc, "reason", "") or str(exc))
         return answer(Ending.FAILED, f"{type(exc).__name__}: {exc}")

@@ -8,6 +8,7 @@ concurrently; the feedback is ``running`` when the call starts and ``success`` o
 ``failure`` before the result, each with ``elapsed``. ``actorbt serve`` prints one line
 per call when it ends (or is refused): the actor and its arguments, the outcome, the time.
 """
+
 from __future__ import annotations
 
 from typing import Any

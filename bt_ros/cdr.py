@@ -9,6 +9,7 @@
 The bytes come from rclpy, the definitions from rosbags: both are Jazzy's interfaces, so
 a bag or a Foxglove channel decodes with tools that know nothing of actorbt.
 """
+
 from __future__ import annotations
 
 import functools
@@ -26,6 +27,7 @@ class UnknownDefinitionError(ActorbtError, LookupError):
 def serialize(msg: Any) -> bytes:
     """``msg`` (a ROS 2 Python message) as CDR bytes, encapsulation header included."""
     from rclpy.serialization import serialize_message
+
     return serialize_message(msg)
 
 
@@ -33,6 +35,7 @@ def serialize(msg: Any) -> bytes:
 def typestore() -> Any:
     """rosbags' type store for ROS 2 Jazzy (built once: it is immutable)."""
     from rosbags.typesys import Stores, get_typestore
+
     return get_typestore(Stores.ROS2_JAZZY)
 
 

@@ -18,6 +18,7 @@ watched trees folder adds or withdraws.
 
 Nothing here imports rclpy until a command runs.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -34,86 +35,132 @@ from bt_engine.clock import process_uptime
 from .live_options import LiveOptions, add_live_options
 
 
-
 def register(sub: Any, common: Callable[[argparse.ArgumentParser], None]) -> None:
     p = sub.add_parser(
-        "serve", help="Serve the trees and actors as ROS 2 actions until Ctrl-C.",
+        "serve",
+        help="Serve the trees and actors as ROS 2 actions until Ctrl-C.",
         description="Serve every tree as its own ROS 2 action (/actorbt/tree/<name>) and any "
-                    "actor through /actorbt/call, until Ctrl-C. One line per goal tells what "
-                    "was asked and how it ended.")
+        "actor through /actorbt/call, until Ctrl-C. One line per goal tells what "
+        "was asked and how it ended.",
+    )
     common(p)
-    p.add_argument("--preempt", action="store_true",
-                   help="A new goal for a tree that is running cancels the running goal "
-                        "(default: the new goal is refused: aborted at once, BUSY).")
-    p.add_argument("--record-dir", metavar="DIR",
-                   help="The folder where each tree goal's trace is written "
-                        "(default: .actorbt/goals beside actorbt.yaml).")
-    p.add_argument("--no-record", action="store_true",
-                   help="Do not write a trace of each tree goal.")
-    p.add_argument("--namespace", metavar="NS",
-                   help="Serve in this ROS namespace (robot1: /robot1/actorbt/call ...), so "
-                        "several robots share a ROS domain.")
-    p.add_argument("--no-watch", action="store_true",
-                   help="Serve the trees loaded at start-up only (default: watch the trees "
-                        "folder; trees added get an action, removed ones are withdrawn).")
-    p.add_argument("--ros-args", dest="ros_args", nargs=argparse.REMAINDER, metavar="ARG",
-                   help="Arguments of rclpy for the serve's node, last on the line (e.g. "
-                        "--ros-args -r __ns:=/robot1 -r /actorbt/tree/x:=/foo).")
+    p.add_argument(
+        "--preempt",
+        action="store_true",
+        help="A new goal for a tree that is running cancels the running goal "
+        "(default: the new goal is refused: aborted at once, BUSY).",
+    )
+    p.add_argument(
+        "--record-dir",
+        metavar="DIR",
+        help="The folder where each tree goal's trace is written (default: .actorbt/goals beside actorbt.yaml).",
+    )
+    p.add_argument("--no-record", action="store_true", help="Do not write a trace of each tree goal.")
+    p.add_argument(
+        "--namespace",
+        metavar="NS",
+        help="Serve in this ROS namespace (robot1: /robot1/actorbt/call ...), so several robots share a ROS domain.",
+    )
+    p.add_argument(
+        "--no-watch",
+        action="store_true",
+        help="Serve the trees loaded at start-up only (default: watch the trees "
+        "folder; trees added get an action, removed ones are withdrawn).",
+    )
+    p.add_argument(
+        "--ros-args",
+        dest="ros_args",
+        nargs=argparse.REMAINDER,
+        metavar="ARG",
+        help="Arguments of rclpy for the serve's node, last on the line (e.g. "
+        "--ros-args -r __ns:=/robot1 -r /actorbt/tree/x:=/foo).",
+    )
     add_live_options(p, trace=False)
     p.set_defaults(func=cmd_serve)
 
     p = sub.add_parser(
-        "goal", help="Run a tree of a running `actorbt serve`: TREE --args '{yaml}'.",
+        "goal",
+        help="Run a tree of a running `actorbt serve`: TREE --args '{yaml}'.",
         description="Run a tree of a running `actorbt serve` as a ROS 2 goal, printing its "
-                    "feedback as it comes; Ctrl-C cancels the goal. A tree the serve does not "
-                    "offer fails at once, with the close matches.")
-    p.add_argument("tree", help="The tree's name, as in /actorbt/tree/<name> (dots or slashes "
-                                "for a tree in a subsystem).")
-    p.add_argument("--args", dest="inputs", default="", metavar="YAML",
-                   help="The tree's inputs as a YAML mapping, e.g. '{category: can}'.")
-    p.add_argument("--wait", type=float, default=10.0, metavar="S",
-                   help="Seconds to wait for a running `actorbt serve` before giving up "
-                        "(default 10).")
-    p.add_argument("--timeout", type=float, metavar="S",
-                   help="Cancel the goal after this many seconds (default: wait for its end).")
-    p.add_argument("--namespace", metavar="NS",
-                   help="The namespace of the `actorbt serve` (as its --namespace).")
-    p.add_argument("-q", "--quiet", action="store_true",
-                   help="Print only the outcome, not each feedback line.")
+        "feedback as it comes; Ctrl-C cancels the goal. A tree the serve does not "
+        "offer fails at once, with the close matches.",
+    )
+    p.add_argument(
+        "tree", help="The tree's name, as in /actorbt/tree/<name> (dots or slashes for a tree in a subsystem)."
+    )
+    p.add_argument(
+        "--args",
+        dest="inputs",
+        default="",
+        metavar="YAML",
+        help="The tree's inputs as a YAML mapping, e.g. '{category: can}'.",
+    )
+    p.add_argument(
+        "--wait",
+        type=float,
+        default=10.0,
+        metavar="S",
+        help="Seconds to wait for a running `actorbt serve` before giving up (default 10).",
+    )
+    p.add_argument(
+        "--timeout",
+        type=float,
+        metavar="S",
+        help="Cancel the goal after this many seconds (default: wait for its end).",
+    )
+    p.add_argument("--namespace", metavar="NS", help="The namespace of the `actorbt serve` (as its --namespace).")
+    p.add_argument("-q", "--quiet", action="store_true", help="Print only the outcome, not each feedback line.")
     p.set_defaults(func=cmd_goal)
 
     p = sub.add_parser(
-        "rcall", help="Call an actor of a running `actorbt serve`: ACTOR ARG... (Python literals, k=v).",
+        "rcall",
+        help="Call an actor of a running `actorbt serve`: ACTOR ARG... (Python literals, k=v).",
         description="Call one actor of a running `actorbt serve` over ROS 2 and print its "
-                    "result. Each rcall is a new process and node; for many calls, "
-                    "`actorbt rshell` keeps one.")
-    p.add_argument("actor", help="The actor's name, as the serve resolves it (e.g. get_pose "
-                                 "or robot.navigation.get_pose).")
-    p.add_argument("args", nargs="*",
-                   help="The actor's arguments: Python literals, and NAME=VALUE for keywords.")
-    p.add_argument("--wait", type=float, default=10.0, metavar="S",
-                   help="Seconds to wait for a running `actorbt serve` before giving up "
-                        "(default 10).")
-    p.add_argument("--timeout", type=float, metavar="S",
-                   help="Cancel the call after this many seconds (default: wait for its end).")
-    p.add_argument("--namespace", metavar="NS",
-                   help="The namespace of the `actorbt serve` (as its --namespace).")
-    p.add_argument("--json", action="store_true",
-                   help="Print the result as JSON (default: as Python would print it).")
+        "result. Each rcall is a new process and node; for many calls, "
+        "`actorbt rshell` keeps one.",
+    )
+    p.add_argument(
+        "actor", help="The actor's name, as the serve resolves it (e.g. get_pose or robot.navigation.get_pose)."
+    )
+    p.add_argument("args", nargs="*", help="The actor's arguments: Python literals, and NAME=VALUE for keywords.")
+    p.add_argument(
+        "--wait",
+        type=float,
+        default=10.0,
+        metavar="S",
+        help="Seconds to wait for a running `actorbt serve` before giving up (default 10).",
+    )
+    p.add_argument(
+        "--timeout",
+        type=float,
+        metavar="S",
+        help="Cancel the call after this many seconds (default: wait for its end).",
+    )
+    p.add_argument("--namespace", metavar="NS", help="The namespace of the `actorbt serve` (as its --namespace).")
+    p.add_argument("--json", action="store_true", help="Print the result as JSON (default: as Python would print it).")
     p.set_defaults(func=cmd_rcall)
 
     p = sub.add_parser(
-        "rshell", help="An interactive actor shell on a running `actorbt serve`.",
+        "rshell",
+        help="An interactive actor shell on a running `actorbt serve`.",
         description="Call actors of a running `actorbt serve` interactively, one call per "
-                    "line, with tab completion and `help NAME`. The shell keeps one ROS node, "
-                    "so each call after the first takes a round trip, not a start-up.")
-    p.add_argument("--wait", type=float, default=10.0, metavar="S",
-                   help="Seconds to wait for a running `actorbt serve` before giving up "
-                        "(default 10).")
-    p.add_argument("--timeout", type=float, metavar="S",
-                   help="Cancel each call after this many seconds (default: wait for its end).")
-    p.add_argument("--namespace", metavar="NS",
-                   help="The namespace of the `actorbt serve` (as its --namespace).")
+        "line, with tab completion and `help NAME`. The shell keeps one ROS node, "
+        "so each call after the first takes a round trip, not a start-up.",
+    )
+    p.add_argument(
+        "--wait",
+        type=float,
+        default=10.0,
+        metavar="S",
+        help="Seconds to wait for a running `actorbt serve` before giving up (default 10).",
+    )
+    p.add_argument(
+        "--timeout",
+        type=float,
+        metavar="S",
+        help="Cancel each call after this many seconds (default: wait for its end).",
+    )
+    p.add_argument("--namespace", metavar="NS", help="The namespace of the `actorbt serve` (as its --namespace).")
     p.set_defaults(func=cmd_rshell)
 
 
@@ -124,10 +171,12 @@ def _progress(text: str) -> None:
 # -- serve -------------------------------------------------------------------------------
 def cmd_serve(args: argparse.Namespace, app: Any) -> int:
     from .server import serve
+
     previous = signal.getsignal(signal.SIGTERM)
 
     def on_term(signum: int, frame: Any) -> None:
         raise KeyboardInterrupt
+
     rt = server = session = None
     live = LiveOptions.of(args, app.cfg.robot)
     live.check()
@@ -147,36 +196,43 @@ def cmd_serve(args: argparse.Namespace, app: Any) -> int:
 
         def world_up(world: Any) -> None:
             _progress(f"world {spec['name']} up at {process_uptime():.1f} s; {loading}")
-        rt = app.runtime(clock=getattr(args, "clock", None) or "wall", world_first=True,
-                         world_setup=world_up)
+
+        rt = app.runtime(clock=getattr(args, "clock", None) or "wall", world_first=True, world_setup=world_up)
         _progress(f"actors and trees loaded at {process_uptime():.1f} s; starting the ROS node...")
         record_dir = None
         if not getattr(args, "no_record", False):
             record_dir = getattr(args, "record_dir", None) or str(app.cfg.base / ".actorbt" / "goals")
         watch = folder if folder and folder.is_dir() and not getattr(args, "no_watch", False) else None
         try:
-            server = serve(rt, preempt=bool(getattr(args, "preempt", False)), record_dir=record_dir,
-                           on_event=lambda line: print(line, flush=True),
-                           namespace=getattr(args, "namespace", None),
-                           ros_args=getattr(args, "ros_args", None), trees_folder=watch)
+            server = serve(
+                rt,
+                preempt=bool(getattr(args, "preempt", False)),
+                record_dir=record_dir,
+                on_event=lambda line: print(line, flush=True),
+                namespace=getattr(args, "namespace", None),
+                ros_args=getattr(args, "ros_args", None),
+                trees_folder=watch,
+            )
         except ValueError as e:  # a bad namespace or --ros-args
             print(f"actorbt serve: error: {e}", file=sys.stderr, flush=True)
             return 2
         transport = "ros" if rt.bus.name == "ros" else "local"
         node = server.node.get_fully_qualified_name()
-        print(f"actorbt serve: node {node} ({transport} bus, "
-              f"{'preempting' if server.preempt else 'refusing'} a second goal per tree)",
-              flush=True)
+        print(
+            f"actorbt serve: node {node} ({transport} bus, "
+            f"{'preempting' if server.preempt else 'refusing'} a second goal per tree)",
+            flush=True,
+        )
         for name in server.actions + server.services:
             print(f"  {name}", flush=True)
         if watch is not None:
-            print(f"actorbt serve: watching {os.path.relpath(watch)} for trees added or removed",
-                  flush=True)
+            print(f"actorbt serve: watching {os.path.relpath(watch)} for trees added or removed", flush=True)
         if record_dir:
             print(f"actorbt serve: recording tree goals in {record_dir}", flush=True)
         if live:
             from bt_engine.trees import tree_host
             from .live import LiveSession
+
             session = LiveSession(rt, tree_host(rt, create=True), live, out=sys.stdout)
             if live.bag:
                 print(f"actorbt serve: recording a bag in {live.bag}", flush=True)
@@ -233,13 +289,13 @@ def _not_sent(err: BaseException | None, what: str = "goal") -> int | None:
     server); None otherwise."""
     from .client import ActionGoalError, GoalRejectedError, ServerUnavailableError
     from .remote import GoalRefusedError, NoServeError
+
     if err is None or isinstance(err, ActionGoalError):
         return None
     if isinstance(err, GoalRefusedError):
         print(f"actorbt: {err.server} refused the {what} ({err.code}): {err.reason}", file=sys.stderr)
     elif isinstance(err, GoalRejectedError):
-        print(f"actorbt: {err.server} rejected the {what}" + (f": {err.reason}" if err.reason else ""),
-              file=sys.stderr)
+        print(f"actorbt: {err.server} rejected the {what}" + (f": {err.reason}" if err.reason else ""), file=sys.stderr)
     elif isinstance(err, ServerUnavailableError):
         print(f"actorbt: {NoServeError(err.seconds)}", file=sys.stderr)
     else:
@@ -249,14 +305,14 @@ def _not_sent(err: BaseException | None, what: str = "goal") -> int | None:
 
 def cmd_goal(args: argparse.Namespace, app: Any) -> int:
     from .remote import NoServeError, Remote, UnknownTreeError
+
     with Remote(wait=args.wait, namespace=args.namespace) as remote:
         try:
             remote.check_tree(args.tree)
         except (NoServeError, UnknownTreeError) as e:
             print(f"actorbt: {e}", file=sys.stderr)
             return 2
-        goal = remote.tree_goal(args.tree, args.inputs or "",
-                                on_feedback=None if args.quiet else _print_feedback)
+        goal = remote.tree_goal(args.tree, args.inputs or "", on_feedback=None if args.quiet else _print_feedback)
         rc = _follow(goal, args.timeout)
         if rc is not None:
             return rc
@@ -281,6 +337,7 @@ def cmd_rcall(args: argparse.Namespace, app: Any) -> int:
 
     from bt_engine.literals import parse_args
     from .remote import Remote
+
     pos, kw = parse_args(list(args.args))
     with Remote(wait=args.wait, namespace=args.namespace) as remote:
         goal = remote.call_goal(args.actor, *pos, **kw)
@@ -304,6 +361,7 @@ def cmd_rcall(args: argparse.Namespace, app: Any) -> int:
 def cmd_rshell(args: argparse.Namespace, app: Any) -> int:
     from .remote import NoServeError, Remote
     from .shell import RemoteShell
+
     print("actorbt rshell: looking for a running `actorbt serve`...", file=sys.stderr, flush=True)
     with Remote(wait=args.wait, namespace=args.namespace) as remote:
         try:
@@ -311,10 +369,14 @@ def cmd_rshell(args: argparse.Namespace, app: Any) -> int:
         except NoServeError as e:
             print(f"actorbt: {e}", file=sys.stderr)
             return 2
-        print(f"actorbt rshell: connected in {process_uptime():.1f} s ({len(trees)} trees served)",
-              file=sys.stderr, flush=True)
+        print(
+            f"actorbt rshell: connected in {process_uptime():.1f} s ({len(trees)} trees served)",
+            file=sys.stderr,
+            flush=True,
+        )
         interactive = sys.stdin.isatty()
-        shell = RemoteShell(remote, app.actors_with_trees, timeout=args.timeout,
-                            stdin=None if interactive else sys.stdin)
+        shell = RemoteShell(
+            remote, app.actors_with_trees, timeout=args.timeout, stdin=None if interactive else sys.stdin
+        )
         shell.cmdloop()
     return 0

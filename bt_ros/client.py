@@ -5,21 +5,37 @@ request here is sent from the executor thread (post ``start``/``cancel`` with
 ``host.post``). Callbacks (``on_result`` …) run on the executor thread too; hand results
 to the hub with ``rt.call_soon_threadsafe`` or the thread-safe ``done``.
 """
+
 from __future__ import annotations
 
 import time
 from typing import Any, Callable
 
-from bt_engine.bus.actions import (STATUS_NAMES, STATUS_SUCCEEDED, ActionGoalError, GoalRejectedError,
-                           ServerUnavailableError, build_message)
+from bt_engine.bus.actions import (
+    STATUS_NAMES,
+    STATUS_SUCCEEDED,
+    ActionGoalError,
+    GoalRejectedError,
+    ServerUnavailableError,
+    build_message,
+)
 from bt_engine.errors import ActorbtError
 
-__all__ = ["STATUS_NAMES", "ActionGoalError", "GoalCall", "GoalNotSentError", "GoalRejectedError",
-           "ServerLostError", "ServerUnavailableError", "ServerWait", "ServiceCall", "build_message"]
+__all__ = [
+    "STATUS_NAMES",
+    "ActionGoalError",
+    "GoalCall",
+    "GoalNotSentError",
+    "GoalRejectedError",
+    "ServerLostError",
+    "ServerUnavailableError",
+    "ServerWait",
+    "ServiceCall",
+    "build_message",
+]
 
 #: why a ROS server may not be found (the hint of ServerUnavailableError)
-DISCOVERY_HINT = ("is it running? ROS_AUTOMATIC_DISCOVERY_RANGE and ROS_DOMAIN_ID must match "
-                  "on both sides")
+DISCOVERY_HINT = "is it running? ROS_AUTOMATIC_DISCOVERY_RANGE and ROS_DOMAIN_ID must match on both sides"
 
 
 #: [s] an action server missing from the graph this long has lost the goals it ran
@@ -40,8 +56,10 @@ class ServerLostError(ActorbtError):
 
     def __init__(self, server: str, grace: float) -> None:
         self.server = server
-        super().__init__(f"the action server {server} went away while it ran the goal (gone for "
-                         f"{grace:g} s): the goal is lost; is the robot's process running?")
+        super().__init__(
+            f"the action server {server} went away while it ran the goal (gone for "
+            f"{grace:g} s): the goal is lost; is the robot's process running?"
+        )
 
 
 class ServerWait:
@@ -59,8 +77,9 @@ class ServerWait:
         self._watched: list[list] = []
         self._watch_timer: Any = None
 
-    def when_ready(self, is_ready: Callable[[], bool], timeout: float,
-                   on_ready: Callable[[], None], on_timeout: Callable[[], None]) -> list:
+    def when_ready(
+        self, is_ready: Callable[[], bool], timeout: float, on_ready: Callable[[], None], on_timeout: Callable[[], None]
+    ) -> list:
         """Call ``on_ready`` once ``is_ready()``, or ``on_timeout`` after ``timeout`` s."""
         if is_ready():
             on_ready()
@@ -122,12 +141,20 @@ class GoalCall:
     goal was accepted.
     """
 
-    def __init__(self, client: Any, server: str, waiter: ServerWait, goal: Any, *,
-                 server_timeout: float, on_result: Callable[[Any], None],
-                 on_error: Callable[[BaseException], None],
-                 on_accepted: Callable[[Any], None] | None = None,
-                 on_status: Callable[[int, Any], None] | None = None,
-                 goal_uuid: Any = None) -> None:
+    def __init__(
+        self,
+        client: Any,
+        server: str,
+        waiter: ServerWait,
+        goal: Any,
+        *,
+        server_timeout: float,
+        on_result: Callable[[Any], None],
+        on_error: Callable[[BaseException], None],
+        on_accepted: Callable[[Any], None] | None = None,
+        on_status: Callable[[int, Any], None] | None = None,
+        goal_uuid: Any = None,
+    ) -> None:
         self.client = client
         self.goal_uuid = goal_uuid
         self.server = server
@@ -149,7 +176,8 @@ class GoalCall:
 
     def start(self) -> None:
         self._wait_entry = self._waiter.when_ready(
-            self.client.server_is_ready, self._timeout, self._send, self._unavailable)
+            self.client.server_is_ready, self._timeout, self._send, self._unavailable
+        )
 
     def _unavailable(self) -> None:
         self._finish_error(ServerUnavailableError(self.server, self._timeout, DISCOVERY_HINT))
@@ -230,9 +258,17 @@ class ServiceCall:
     """One service request: wait for the server, call, deliver the response, or drop it
     on cancel. Executor thread only."""
 
-    def __init__(self, client: Any, server: str, waiter: ServerWait, request: Any, *,
-                 server_timeout: float, on_result: Callable[[Any], None],
-                 on_error: Callable[[BaseException], None]) -> None:
+    def __init__(
+        self,
+        client: Any,
+        server: str,
+        waiter: ServerWait,
+        request: Any,
+        *,
+        server_timeout: float,
+        on_result: Callable[[Any], None],
+        on_error: Callable[[BaseException], None],
+    ) -> None:
         self.client = client
         self.server = server
         self.request = request
@@ -246,8 +282,11 @@ class ServiceCall:
 
     def start(self) -> None:
         self._wait_entry = self._waiter.when_ready(
-            self.client.service_is_ready, self._timeout, self._send,
-            lambda: self._on_error(ServerUnavailableError(self.server, self._timeout, DISCOVERY_HINT)))
+            self.client.service_is_ready,
+            self._timeout,
+            self._send,
+            lambda: self._on_error(ServerUnavailableError(self.server, self._timeout, DISCOVERY_HINT)),
+        )
 
     def _send(self) -> None:
         if self.cancelled:

@@ -6,6 +6,7 @@ Colour and mono 8-bit images become JPEG (``format``: ``"rgb8; jpeg compressed b
 image_transport's spelling, which Foxglove and rqt_image_view read); 16-bit images PNG.
 Float images (depth in metres) have no lossless 8/16-bit form here and are refused.
 """
+
 from __future__ import annotations
 
 from typing import Any
@@ -16,8 +17,7 @@ __all__ = ["CompressionError", "JPEG_QUALITY", "compress_image", "compressed_top
 
 #: JPEG quality (image_transport's default is 80; the camera is small: keep detail)
 JPEG_QUALITY = 90
-_CHANNELS = {"rgb8": 3, "bgr8": 3, "rgba8": 4, "bgra8": 4, "mono8": 1, "8UC1": 1, "8UC3": 3,
-             "mono16": 1, "16UC1": 1}
+_CHANNELS = {"rgb8": 3, "bgr8": 3, "rgba8": 4, "bgra8": 4, "mono8": 1, "8UC1": 1, "8UC3": 3, "mono16": 1, "16UC1": 1}
 
 
 class CompressionError(ActorbtError, ValueError):
@@ -33,8 +33,9 @@ def _cv2() -> Any:
     try:
         import cv2
     except ImportError as exc:
-        raise CompressionError("compressing camera images needs OpenCV: pip install "
-                               "opencv-python-headless (the sim extra installs it)") from exc
+        raise CompressionError(
+            "compressing camera images needs OpenCV: pip install opencv-python-headless (the sim extra installs it)"
+        ) from exc
     return cv2
 
 
@@ -42,6 +43,7 @@ def compress_image(msg: Any, quality: int = JPEG_QUALITY) -> Any:
     """``msg`` (sensor_msgs/Image) as a sensor_msgs/CompressedImage with the same header."""
     import numpy as np
     from sensor_msgs.msg import CompressedImage
+
     enc = msg.encoding
     channels = _CHANNELS.get(enc)
     if channels is None:
@@ -50,7 +52,7 @@ def compress_image(msg: Any, quality: int = JPEG_QUALITY) -> Any:
     wide = enc in ("mono16", "16UC1")
     dtype = np.dtype((">u2" if msg.is_bigendian else "<u2") if wide else "u1")
     rows = np.frombuffer(bytes(msg.data), dtype=dtype).reshape(msg.height, msg.step // dtype.itemsize)
-    pixels = rows[:, :msg.width * channels].reshape(msg.height, msg.width, channels)
+    pixels = rows[:, : msg.width * channels].reshape(msg.height, msg.width, channels)
     if channels > 1:  # JPEG keeps no alpha; OpenCV writes BGR
         code = {"rgb8": cv2.COLOR_RGB2BGR, "rgba8": cv2.COLOR_RGBA2BGR, "bgra8": cv2.COLOR_BGRA2BGR}.get(enc)
         if code is not None:

@@ -15,6 +15,7 @@ RunTree action, any other actor ``/actorbt/call``. The request's ``name`` narrow
 list to one tree or actor (its path; else every actor of that name) or a subsystem's
 actors; a name that matches nothing answers ``UNKNOWN_NAME`` with close matches.
 """
+
 from __future__ import annotations
 
 import difflib
@@ -32,13 +33,13 @@ RUN_TREE = "actorbt_interfaces/action/RunTree"
 CALL_ACTOR = "actorbt_interfaces/action/CallActor"
 
 
-def describe(refs: list[Any], tree_actions: dict[str, str], call_action: str,
-             namespace: str, name: str = "") -> tuple[dict[str, Any], list[str]]:
+def describe(
+    refs: list[Any], tree_actions: dict[str, str], call_action: str, namespace: str, name: str = ""
+) -> tuple[dict[str, Any], list[str]]:
     """The describe document for actors ``refs`` (``tree_actions``: tree path -> its
     action), narrowed to ``name``; and, when nothing matched, the close matches."""
     # an exact path wins: "steps_tree" is the tree, not also some "nav.steps_tree"
-    chosen = ([r for r in refs if r.path == name] or [r for r in refs if _matches(r, name)]
-              if name else list(refs))
+    chosen = [r for r in refs if r.path == name] or [r for r in refs if _matches(r, name)] if name else list(refs)
     tools = []
     for ref in sorted(chosen, key=lambda r: r.path):
         try:
@@ -51,8 +52,11 @@ def describe(refs: list[Any], tree_actions: dict[str, str], call_action: str,
         tool["action_type"] = RUN_TREE if action else CALL_ACTOR
         tools.append(tool)
     doc = {"namespace": namespace or "/", "call_action": call_action, "tools": tools}
-    missing = [] if tools or not name else difflib.get_close_matches(
-        name, sorted({r.path for r in refs} | {r.name for r in refs}), n=5, cutoff=0.5)
+    missing = (
+        []
+        if tools or not name
+        else difflib.get_close_matches(name, sorted({r.path for r in refs} | {r.name for r in refs}), n=5, cutoff=0.5)
+    )
     return doc, missing
 
 
@@ -70,8 +74,7 @@ class DescribeService:
             namespace, now (trees come and go with the watched folder).
     """
 
-    def __init__(self, rt: Any, name: str,
-                 served: Callable[[], tuple[dict[str, str], str, str]]) -> None:
+    def __init__(self, rt: Any, name: str, served: Callable[[], tuple[dict[str, str], str, str]]) -> None:
         self.rt = rt
         self.name = name
         self._served = served
@@ -80,6 +83,7 @@ class DescribeService:
 
     def create(self, node: Any) -> None:
         from actorbt_interfaces.srv import Describe
+
         self._node = node
         self._service = node.create_service(Describe, self.name, self._on_request)
 
@@ -92,8 +96,9 @@ class DescribeService:
         try:
             trees, call_action, namespace = self._served()
             # the actors, and the trees that have an action
-            refs = self.rt.run_on_hub(lambda: [r for r in self.rt.root.all_actors()
-                                               if not r.is_tree or r.path in trees])
+            refs = self.rt.run_on_hub(
+                lambda: [r for r in self.rt.root.all_actors() if not r.is_tree or r.path in trees]
+            )
             doc, close = describe(refs, trees, call_action, namespace, request.name.strip())
         except Exception as e:
             log.exception("describe failed")

@@ -6,6 +6,7 @@ action wherever it is logged (RunTree 1000-1099, CallActor 1100-1199, Describe
 1200-1299). The server thinks in :class:`Ending`; :func:`error_code` looks the matching
 constant up on the result type, so the numbers live in one place, the interface files.
 """
+
 from __future__ import annotations
 
 import enum
@@ -18,14 +19,14 @@ class Ending(enum.Enum):
     """Why a goal ended; the value is the constant's name on the result type."""
 
     SUCCEEDED = "NONE"
-    INVALID_GOAL = "INVALID_GOAL"   # bad YAML, unknown input or actor, wrong type
-    BUSY = "BUSY"                   # the tree runs another goal
-    FAILED = "FAILED"               # TREE_FAILED / ACTOR_FAILED
-    CANCELED = "CANCELED"           # the client asked
-    PREEMPTED = "PREEMPTED"         # a newer goal for the same tree
-    SHUTDOWN = "SHUTDOWN"           # the server (or its runtime) is closing
-    TREE_REMOVED = "TREE_REMOVED"   # the tree's file left the watched folder
-    TIMEOUT = "TIMEOUT"             # a service call took too long
+    INVALID_GOAL = "INVALID_GOAL"  # bad YAML, unknown input or actor, wrong type
+    BUSY = "BUSY"  # the tree runs another goal
+    FAILED = "FAILED"  # TREE_FAILED / ACTOR_FAILED
+    CANCELED = "CANCELED"  # the client asked
+    PREEMPTED = "PREEMPTED"  # a newer goal for the same tree
+    SHUTDOWN = "SHUTDOWN"  # the server (or its runtime) is closing
+    TREE_REMOVED = "TREE_REMOVED"  # the tree's file left the watched folder
+    TIMEOUT = "TIMEOUT"  # a service call took too long
     UNKNOWN = "UNKNOWN"
 
 

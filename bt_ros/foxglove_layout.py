@@ -11,6 +11,7 @@ exist only in the live view.)
 Regenerate the file after changing it: ``python -m bt_ros.foxglove_layout
 docs/foxglove_layout.json`` (a test compares them).
 """
+
 from __future__ import annotations
 
 import json
@@ -29,30 +30,47 @@ CAMERA_INFO = "/camera/camera_info"
 def layout() -> Any:
     """The layout, as a ``foxglove.layouts.Layout``."""
     import foxglove.layouts as fl
+
     scene = fl.ThreeDeePanel(
         title="map, robot, path, scan, detections and goals",
         config=fl.ThreeDeeConfig(
-            follow_tf="base_footprint", follow_mode="follow-position",
+            follow_tf="base_footprint",
+            follow_mode="follow-position",
             topics={
                 "/map": fl.BaseRendererRosOccupancyGridTopicSettings(visible=True, color_mode="map"),
-                "/scan": fl.BaseRendererLaserScanTopicSettings(visible=True, point_size=4.0, color_mode="flat",
-                                                               flat_color="#ff453aff"),
+                "/scan": fl.BaseRendererLaserScanTopicSettings(
+                    visible=True, point_size=4.0, color_mode="flat", flat_color="#ff453aff"
+                ),
                 SCENE_TOPIC: fl.BaseRendererSceneUpdateTopicSettings(visible=True),
-                PATH_TOPIC: fl.BaseRendererPosesTopicSettings(visible=True, type="line", line_width=0.03,
-                                                              gradient=("#2f6fffff", "#2f6fffff")),
-            }))
-    camera = fl.ImagePanel(title="camera", config=fl.ImageConfig(
-        image_mode=fl.ImageModeConfig(image_topic=CAMERA, calibration_topic=CAMERA_INFO)))
-    status = fl.DiagnosticsSummaryPanel(title="tree status", config=fl.DiagnosticsSummaryConfig(
-        topic_to_render=STATUS_TOPIC, sort_by_level=False))
-    last = fl.RawMessagesPanel(title="last status change", config=fl.RawMessagesConfig(
-        topic_path=f"{STATUS_TOPIC}.status[0]", expansion="all"))
-    side = fl.SplitContainer(direction="column", items=[
-        fl.SplitItem(proportion=3, content=camera),
-        fl.SplitItem(proportion=3, content=status),
-        fl.SplitItem(proportion=2, content=last)])
-    return fl.Layout(content=fl.SplitContainer(direction="row", items=[
-        fl.SplitItem(proportion=3, content=scene), fl.SplitItem(proportion=2, content=side)]))
+                PATH_TOPIC: fl.BaseRendererPosesTopicSettings(
+                    visible=True, type="line", line_width=0.03, gradient=("#2f6fffff", "#2f6fffff")
+                ),
+            },
+        ),
+    )
+    camera = fl.ImagePanel(
+        title="camera",
+        config=fl.ImageConfig(image_mode=fl.ImageModeConfig(image_topic=CAMERA, calibration_topic=CAMERA_INFO)),
+    )
+    status = fl.DiagnosticsSummaryPanel(
+        title="tree status", config=fl.DiagnosticsSummaryConfig(topic_to_render=STATUS_TOPIC, sort_by_level=False)
+    )
+    last = fl.RawMessagesPanel(
+        title="last status change", config=fl.RawMessagesConfig(topic_path=f"{STATUS_TOPIC}.status[0]", expansion="all")
+    )
+    side = fl.SplitContainer(
+        direction="column",
+        items=[
+            fl.SplitItem(proportion=3, content=camera),
+            fl.SplitItem(proportion=3, content=status),
+            fl.SplitItem(proportion=2, content=last),
+        ],
+    )
+    return fl.Layout(
+        content=fl.SplitContainer(
+            direction="row", items=[fl.SplitItem(proportion=3, content=scene), fl.SplitItem(proportion=2, content=side)]
+        )
+    )
 
 
 def layout_json() -> str:

@@ -14,6 +14,7 @@ Where the data comes from (the view watches every actor call, see there):
 - the **path** is the odometry (``/odom``, in its ``odom`` frame): a pose every
   :data:`PATH_STEP` metres or :data:`PATH_TURN` radians.
 """
+
 from __future__ import annotations
 
 import math
@@ -74,8 +75,13 @@ def detections_in(value: Any, depth: int = 3) -> Iterator[Detection]:
     if isinstance(value, dict):
         if isinstance(value.get("category"), str) and _number(value.get("x")) and _number(value.get("y")):
             z = value.get("z")
-            yield Detection(value["category"], float(value["x"]), float(value["y"]),
-                            float(z) if _number(z) else 0.0, str(value.get("frame", "map")))
+            yield Detection(
+                value["category"],
+                float(value["x"]),
+                float(value["y"]),
+                float(z) if _number(z) else 0.0,
+                str(value.get("frame", "map")),
+            )
             return
         children: Any = value.values()
     elif isinstance(value, (list, tuple)):
@@ -104,6 +110,7 @@ def goal_of(args: tuple) -> Goal | None:
 def _hue(name: str) -> tuple[float, float, float]:
     """A steady colour per category name."""
     import colorsys
+
     h = (sum(name.encode()) * 0.618033988749895) % 1.0
     return colorsys.hsv_to_rgb(h, 0.75, 0.95)
 
@@ -116,7 +123,7 @@ class Scene:
         self.body = body
         self.detections: list[Detection] = []
         self.goals: list[Goal] = []
-        self.path: list[tuple[float, float, float]] = []   # (x, y, yaw) in the odom frame
+        self.path: list[tuple[float, float, float]] = []  # (x, y, yaw) in the odom frame
         self.path_frame = "odom"
 
     # -- what happens ----------------------------------------------------------------------
@@ -153,54 +160,95 @@ class Scene:
         """Every entity, as one foxglove SceneUpdate (entities with an id replace the
         ones the client has)."""
         import foxglove.messages as fm
+
         stamp = _timestamp(t)
         entities = [] if self.body is None else [self._robot(fm, stamp, self.body)]
         entities += [self._detection(fm, stamp, i, d) for i, d in enumerate(self.detections)]
-        entities += [self._goal(fm, stamp, i, g, latest=i == len(self.goals) - 1)
-                     for i, g in enumerate(self.goals)]
+        entities += [self._goal(fm, stamp, i, g, latest=i == len(self.goals) - 1) for i, g in enumerate(self.goals)]
         return fm.SceneUpdate(entities=entities)
 
     def path_message(self, t: float) -> Any:
         import foxglove.messages as fm
-        return fm.PosesInFrame(timestamp=_timestamp(t), frame_id=self.path_frame,
-                               poses=[_pose(fm, x, y, 0.0, yaw) for x, y, yaw in self.path])
+
+        return fm.PosesInFrame(
+            timestamp=_timestamp(t),
+            frame_id=self.path_frame,
+            poses=[_pose(fm, x, y, 0.0, yaw) for x, y, yaw in self.path],
+        )
 
     @staticmethod
     def _robot(fm: Any, stamp: Any, body: Body) -> Any:
-        return fm.SceneEntity(timestamp=stamp, frame_id="base_footprint", id="robot", frame_locked=True,
-                              cubes=[fm.CubePrimitive(pose=_pose(fm, body.x, 0.0, body.sz / 2 + 0.01, 0.0),
-                                                      size=fm.Vector3(x=body.sx, y=body.sy, z=body.sz),
-                                                      color=fm.Color(r=0.25, g=0.35, b=0.45, a=0.6))])
+        return fm.SceneEntity(
+            timestamp=stamp,
+            frame_id="base_footprint",
+            id="robot",
+            frame_locked=True,
+            cubes=[
+                fm.CubePrimitive(
+                    pose=_pose(fm, body.x, 0.0, body.sz / 2 + 0.01, 0.0),
+                    size=fm.Vector3(x=body.sx, y=body.sy, z=body.sz),
+                    color=fm.Color(r=0.25, g=0.35, b=0.45, a=0.6),
+                )
+            ],
+        )
 
     @staticmethod
     def _detection(fm: Any, stamp: Any, i: int, d: Detection) -> Any:
         r, g, b = _hue(d.category)
         return fm.SceneEntity(
-            timestamp=stamp, frame_id=d.frame, id=f"detection/{i}",
-            cylinders=[fm.CylinderPrimitive(pose=_pose(fm, d.x, d.y, d.z + 0.06, 0.0),
-                                            size=fm.Vector3(x=0.08, y=0.08, z=0.12),
-                                            bottom_scale=1.0, top_scale=1.0,
-                                            color=fm.Color(r=r, g=g, b=b, a=0.8))],
-            texts=[fm.TextPrimitive(pose=_pose(fm, d.x, d.y, d.z + 0.25, 0.0), billboard=True,
-                                    font_size=14.0, scale_invariant=True, text=d.category,
-                                    color=fm.Color(r=1.0, g=1.0, b=1.0, a=1.0))])
+            timestamp=stamp,
+            frame_id=d.frame,
+            id=f"detection/{i}",
+            cylinders=[
+                fm.CylinderPrimitive(
+                    pose=_pose(fm, d.x, d.y, d.z + 0.06, 0.0),
+                    size=fm.Vector3(x=0.08, y=0.08, z=0.12),
+                    bottom_scale=1.0,
+                    top_scale=1.0,
+                    color=fm.Color(r=r, g=g, b=b, a=0.8),
+                )
+            ],
+            texts=[
+                fm.TextPrimitive(
+                    pose=_pose(fm, d.x, d.y, d.z + 0.25, 0.0),
+                    billboard=True,
+                    font_size=14.0,
+                    scale_invariant=True,
+                    text=d.category,
+                    color=fm.Color(r=1.0, g=1.0, b=1.0, a=1.0),
+                )
+            ],
+        )
 
     @staticmethod
     def _goal(fm: Any, stamp: Any, i: int, g: Goal, latest: bool) -> Any:
         a = 1.0 if latest else 0.35
         return fm.SceneEntity(
-            timestamp=stamp, frame_id=g.frame, id=f"goal/{i}",
-            arrows=[fm.ArrowPrimitive(pose=_pose(fm, g.x, g.y, 0.02, g.yaw), shaft_length=0.25,
-                                      shaft_diameter=0.04, head_length=0.1, head_diameter=0.1,
-                                      color=fm.Color(r=0.1, g=0.9, b=0.2, a=a))])
+            timestamp=stamp,
+            frame_id=g.frame,
+            id=f"goal/{i}",
+            arrows=[
+                fm.ArrowPrimitive(
+                    pose=_pose(fm, g.x, g.y, 0.02, g.yaw),
+                    shaft_length=0.25,
+                    shaft_diameter=0.04,
+                    head_length=0.1,
+                    head_diameter=0.1,
+                    color=fm.Color(r=0.1, g=0.9, b=0.2, a=a),
+                )
+            ],
+        )
 
 
 def _timestamp(t: float) -> Any:
     import foxglove.messages as fm
+
     sec, nsec = divmod(int(round(t * 1e9)), 1_000_000_000)
     return fm.Timestamp(sec, nsec)
 
 
 def _pose(fm: Any, x: float, y: float, z: float, yaw: float) -> Any:
-    return fm.Pose(position=fm.Vector3(x=x, y=y, z=z),
-                   orientation=fm.Quaternion(x=0.0, y=0.0, z=math.sin(yaw / 2), w=math.cos(yaw / 2)))
+    return fm.Pose(
+        position=fm.Vector3(x=x, y=y, z=z),
+        orientation=fm.Quaternion(x=0.0, y=0.0, z=math.sin(yaw / 2), w=math.cos(yaw / 2)),
+    )

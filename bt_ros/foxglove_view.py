@@ -20,6 +20,7 @@ broadcasts that clock (the ``time`` capability), so Foxglove's time is the robot
 even under the virtual clock. The view watches actor calls through ``rt.recorder``
 (it chains to the hooks that were there), on the hub.
 """
+
 from __future__ import annotations
 
 import logging
@@ -103,10 +104,18 @@ class FoxgloveView:
         FoxgloveError: the server cannot bind ``host:port``.
     """
 
-    def __init__(self, rt: Any, *, port: int = DEFAULT_PORT, host: str = "127.0.0.1",
-                 topics: tuple[BagTopic, ...] = DEFAULT_TOPICS, body: Body | None = None) -> None:
+    def __init__(
+        self,
+        rt: Any,
+        *,
+        port: int = DEFAULT_PORT,
+        host: str = "127.0.0.1",
+        topics: tuple[BagTopic, ...] = DEFAULT_TOPICS,
+        body: Body | None = None,
+    ) -> None:
         import foxglove
         from foxglove.channels import PosesInFrameChannel, SceneUpdateChannel
+
         self.rt = rt
         self.closed = False
         self.scene = Scene(body)
@@ -114,10 +123,15 @@ class FoxgloveView:
         self._topics = {t.bag_name: t for t in topics}
         self._channels = {
             t.bag_name: foxglove.Channel(
-                t.bag_name, message_encoding="cdr", context=self.ctx,
-                schema=foxglove.Schema(name=t.bag_type, encoding="ros2msg",
-                                       data=message_definition(t.bag_type).encode()))
-            for t in topics}
+                t.bag_name,
+                message_encoding="cdr",
+                context=self.ctx,
+                schema=foxglove.Schema(
+                    name=t.bag_type, encoding="ros2msg", data=message_definition(t.bag_type).encode()
+                ),
+            )
+            for t in topics
+        }
         self._scene_channel = SceneUpdateChannel(SCENE_TOPIC, context=self.ctx)
         self._path_channel = PosesInFrameChannel(PATH_TOPIC, context=self.ctx)
         self._demanded: dict[str, int] = {}
@@ -128,8 +142,13 @@ class FoxgloveView:
         self._sent = {"path": -1.0, "time": -1.0}
         try:
             self.server = foxglove.start_server(
-                name="actorbt", host=host, port=port, context=self.ctx, server_listener=_listener(self),
-                capabilities=[foxglove.Capability.Time])
+                name="actorbt",
+                host=host,
+                port=port,
+                context=self.ctx,
+                server_listener=_listener(self),
+                capabilities=[foxglove.Capability.Time],
+            )
         except RuntimeError as exc:
             reason = str(exc).split("FoxgloveError:", 1)[-1].strip()
             raise FoxgloveError(f"--foxglove: cannot serve on {host}:{port}: {reason}") from None
@@ -148,6 +167,7 @@ class FoxgloveView:
     # -- on the hub ------------------------------------------------------------------------
     def _start(self) -> None:
         from nav_msgs.msg import Odometry
+
         self._odom = self.rt.bus.subscribe("/odom", Odometry, self._on_odom, 50)
         self._hooks = _Hooks(self, self.rt.recorder)
         self.rt.recorder = self._hooks
@@ -199,6 +219,7 @@ class FoxgloveView:
                     return
             channel.log(serialize(msg), log_time=self._now_ns())
             self._tell_time()
+
         return forward
 
     def _tell_time(self) -> None:

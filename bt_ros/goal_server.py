@@ -27,6 +27,7 @@ Each goal is told to the owner's :meth:`Owner.announce` in one line per event, e
     call 5e6f7a8b robot.navigation.goto(1.0, 2.0, 0.0): succeeded in 8.21 s
     goal 9a8b7c6d bt_pick {category: 3}: refused (INVALID_GOAL): input 'category' expects str, got int
 """
+
 from __future__ import annotations
 
 import os
@@ -66,9 +67,11 @@ class ServedGoal:
 
     ``call`` is what it runs; None for a goal that cannot run (``refusal`` says why)."""
 
-    def __init__(self, server: "GoalServer", handle: Any, call: Invocation | None,
-                 refusal: GoalError | None = None) -> None:
+    def __init__(
+        self, server: "GoalServer", handle: Any, call: Invocation | None, refusal: GoalError | None = None
+    ) -> None:
         from rclpy.task import Future
+
         self.server = server
         self.rt = server.owner.rt
         self.handle = handle
@@ -79,7 +82,7 @@ class ServedGoal:
         self.cancel_reason: str | None = None
         self.cancel_ending = Ending.UNKNOWN  # why the server cancelled it (not the client)
         self.resolved = False
-        self.outcome = Future()   # the work's result or Failure; set on the executor thread
+        self.outcome = Future()  # the work's result or Failure; set on the executor thread
         self.finished = Future()  # set when the execute coroutine has ended
         self.accepted_at = time.monotonic()
         self.started_at: float | None = None  # when the work started (monotonic)
@@ -214,8 +217,7 @@ class GoalServer:
         """The call ``goal`` asks for, or GoalError with the reason it cannot run."""
         raise NotImplementedError
 
-    def new_goal(self, handle: Any, call: Invocation | None,
-                 refusal: GoalError | None = None) -> ServedGoal:
+    def new_goal(self, handle: Any, call: Invocation | None, refusal: GoalError | None = None) -> ServedGoal:
         return ServedGoal(self, handle, call, refusal)
 
     def feedback(self, g: ServedGoal, status: str) -> Any:
@@ -240,8 +242,7 @@ class GoalServer:
     def concluding(self, g: ServedGoal, outcome: Any) -> None:
         """The work of ``g`` ended with ``outcome``; the result goes out next: the last
         feedback goes out now."""
-        g.handle.publish_feedback(self.feedback(
-            g, "failure" if isinstance(outcome, Failure) else "success"))
+        g.handle.publish_feedback(self.feedback(g, "failure" if isinstance(outcome, Failure) else "success"))
 
     def describe(self, call: Invocation) -> str:
         """What an accepted goal runs, short, for announce lines."""
@@ -263,23 +264,33 @@ class GoalServer:
 
     def _announce_end(self, g: ServedGoal) -> None:
         if g.refusal is not None:
-            self._announce(f"{self.label} {g.short_id} {self.describe_request(g.handle.request)}: "
-                           f"refused ({g.refusal.ending.value}): {one_line(str(g.refusal))}")
+            self._announce(
+                f"{self.label} {g.short_id} {self.describe_request(g.handle.request)}: "
+                f"refused ({g.refusal.ending.value}): {one_line(str(g.refusal))}"
+            )
             return
         took = time.monotonic() - g.accepted_at
         # the arguments are in the accepted line, when there is one
         assert g.call is not None
         subject = g.call.path if self.announce_accepted else self.describe(g.call)
-        self._announce(f"{self.label} {g.short_id} {subject}: {one_line(g.end_status)} "
-                       f"in {seconds(took)}{self.end_note(g)}")
+        self._announce(
+            f"{self.label} {g.short_id} {subject}: {one_line(g.end_status)} in {seconds(took)}{self.end_note(g)}"
+        )
 
     # -- rclpy (executor thread) -----------------------------------------------------------
     def create(self, node: Any, result_timeout: int) -> None:
         from rclpy.action import ActionServer
+
         self._server = ActionServer(
-            node, self.action_type, self.action, self._execute, result_timeout=result_timeout,
-            goal_callback=self._on_goal, handle_accepted_callback=self._on_accepted,
-            cancel_callback=self._on_cancel)
+            node,
+            self.action_type,
+            self.action,
+            self._execute,
+            result_timeout=result_timeout,
+            goal_callback=self._on_goal,
+            handle_accepted_callback=self._on_accepted,
+            cancel_callback=self._on_cancel,
+        )
 
     def destroy(self) -> None:
         if self._server is not None:
@@ -288,6 +299,7 @@ class GoalServer:
 
     def _on_goal(self, goal: Any) -> Any:
         from rclpy.action import GoalResponse
+
         call: Invocation | None = None
         refusal: GoalError | None = None
         try:
@@ -315,6 +327,7 @@ class GoalServer:
 
     def _on_cancel(self, handle: Any) -> Any:
         from rclpy.action import CancelResponse
+
         g = self.goals.get(bytes(handle.goal_id.uuid))
         if g is not None:
             g.cancel("goal canceled")
@@ -325,8 +338,7 @@ class GoalServer:
         try:
             if g.refusal is not None:
                 handle.abort()
-                return self._result(g, g.refusal.ending, f"aborted: {g.refusal}", None,
-                                    str(g.refusal))
+                return self._result(g, g.refusal.ending, f"aborted: {g.refusal}", None, str(g.refusal))
             await self.take_turn(g)
             if handle.is_cancel_requested:
                 handle.canceled()
@@ -347,8 +359,9 @@ class GoalServer:
 
     def _result(self, g: ServedGoal, ending: Ending, status: str, value: Any, error: str) -> Any:
         g.end_status = status
-        return self.result(ending is Ending.SUCCEEDED, status, value, error,
-                           error_code(self.action_type.Result, ending))
+        return self.result(
+            ending is Ending.SUCCEEDED, status, value, error, error_code(self.action_type.Result, ending)
+        )
 
     def _conclude(self, g: ServedGoal, outcome: Any) -> Any:
         handle = g.handle
@@ -365,8 +378,7 @@ class GoalServer:
             handle.abort()
             return self._result(g, g.cancel_ending, f"aborted: {reason}", None, reason)
         handle.abort()
-        return self._result(g, Ending.FAILED, f"failed: {exc}", None,
-                            f"{type(exc).__name__}: {exc}")
+        return self._result(g, Ending.FAILED, f"failed: {exc}", None, f"{type(exc).__name__}: {exc}")
 
 
 # -- announce lines -------------------------------------------------------------------------
@@ -377,7 +389,7 @@ LINE_PIECE = 160
 def one_line(text: str, limit: int = LINE_PIECE) -> str:
     """``text`` on one line (whitespace runs become one space), cut at ``limit``."""
     text = " ".join(str(text).split())
-    return text if len(text) <= limit else text[:limit - 1] + "\u2026"
+    return text if len(text) <= limit else text[: limit - 1] + "\u2026"
 
 
 def seconds(value: float) -> str:

@@ -12,6 +12,7 @@ once with that reason in ``error_msg`` and ``INVALID_GOAL`` in ``error_code``, a
 does, so a stock client sees why. The server decodes each goal once, when it arrives,
 and runs exactly what was decoded.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -23,8 +24,7 @@ from bt_engine.errors import ActorbtError
 from bt_engine.yaml_hints import syntax_mark, syntax_message
 from .error_codes import Ending
 
-__all__ = ["GoalError", "Invocation", "decode_call_goal", "decode_tree_goal",
-           "parse_call_args", "parse_inputs"]
+__all__ = ["GoalError", "Invocation", "decode_call_goal", "decode_tree_goal", "parse_call_args", "parse_inputs"]
 
 
 class GoalError(ActorbtError, ValueError):
@@ -86,6 +86,7 @@ def _mission(rt: Any, ref: Any) -> Any:
     """The trees layer's Mission behind a tree actor, when it has one (it checks types)."""
     try:
         from bt_engine.trees import tree_host
+
         host = tree_host(rt)
         if host is None or ref.path != ref.name:
             return None
@@ -121,8 +122,7 @@ def parse_inputs(text: str) -> dict[str, Any]:
     if data is None:
         return {}
     if not isinstance(data, dict):
-        raise GoalError(f"inputs_yaml must be a mapping of input names to values, "
-                        f"not a {type(data).__name__}")
+        raise GoalError(f"inputs_yaml must be a mapping of input names to values, not a {type(data).__name__}")
     _check_keys(data, "inputs_yaml")
     return data
 

@@ -6,6 +6,7 @@ them on its executor thread (:meth:`bt_ros.transport.RosTransport.topics`).
 Hidden names (a part starting with ``_``, such as an action's ``/_action/`` topics and
 services) are left out, as ``ros2 topic list`` leaves them out.
 """
+
 from __future__ import annotations
 
 from typing import Any
@@ -28,8 +29,7 @@ def topic_infos(node: Any) -> list[TopicInfo]:
         if hidden(name):
             continue
         pubs = node.get_publishers_info_by_topic(name)
-        found.append(TopicInfo(name, ", ".join(types), len(pubs), node.count_subscribers(name),
-                               _offered(pubs)))
+        found.append(TopicInfo(name, ", ".join(types), len(pubs), node.count_subscribers(name), _offered(pubs)))
     return found
 
 
@@ -46,14 +46,17 @@ def _offered(publishers: list[Any]) -> str:
 def action_infos(node: Any) -> list[EndpointInfo]:
     """Every action of the graph (with a server or a client)."""
     from rclpy.action import get_action_names_and_types
-    return [EndpointInfo(name, ", ".join(types))
-            for name, types in sorted(get_action_names_and_types(node))]
+
+    return [EndpointInfo(name, ", ".join(types)) for name, types in sorted(get_action_names_and_types(node))]
 
 
 def service_infos(node: Any) -> list[EndpointInfo]:
     """Every visible service of the graph."""
-    return [EndpointInfo(name, ", ".join(types))
-            for name, types in sorted(node.get_service_names_and_types()) if not hidden(name)]
+    return [
+        EndpointInfo(name, ", ".join(types))
+        for name, types in sorted(node.get_service_names_and_types())
+        if not hidden(name)
+    ]
 
 
 def matching_qos(node: Any, topic: str, depth: int = 10) -> Any:
@@ -63,10 +66,14 @@ def matching_qos(node: Any, topic: str, depth: int = 10) -> Any:
     yet, best effort and volatile, which hears any publisher that comes but a latched one's
     past message."""
     from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+
     offered = _offered(node.get_publishers_info_by_topic(topic)) or "best effort"
     return QoSProfile(
         depth=depth,
-        reliability=(ReliabilityPolicy.BEST_EFFORT if offered.startswith("best effort")
-                     else ReliabilityPolicy.RELIABLE),
-        durability=(DurabilityPolicy.TRANSIENT_LOCAL if offered.endswith("transient local")
-                    else DurabilityPolicy.VOLATILE))
+        reliability=(
+            ReliabilityPolicy.BEST_EFFORT if offered.startswith("best effort") else ReliabilityPolicy.RELIABLE
+        ),
+        durability=(
+            DurabilityPolicy.TRANSIENT_LOCAL if offered.endswith("transient local") else DurabilityPolicy.VOLATILE
+        ),
+    )

@@ -26,6 +26,7 @@ waited up to 3 s for discovery (about 1 s on average, measured on loopback), and
 few tenths of a second. The profile is written to the temporary folder and named in
 ``FASTRTPS_DEFAULT_PROFILES_FILE`` for this process and its children.
 """
+
 from __future__ import annotations
 
 import collections
@@ -129,13 +130,13 @@ class RosHost:
         self._drain_scheduled = False
         self._stopping = False
         self._closed = False
-        self._thread = threading.Thread(target=self._spin, name=f"actorbt-ros-{name}-{self.id}",
-                                        daemon=True)
+        self._thread = threading.Thread(target=self._spin, name=f"actorbt-ros-{name}-{self.id}", daemon=True)
         self._thread.start()
 
     # -- nodes -------------------------------------------------------------------------
-    def create_node(self, name: str, namespace: str | None = None, *, lean: bool = False,
-                    ros_args: list[str] | None = None) -> Any:
+    def create_node(
+        self, name: str, namespace: str | None = None, *, lean: bool = False, ros_args: list[str] | None = None
+    ) -> Any:
         """A node in this context, spun by this host's executor.
 
         ``lean``: a client's node, without ``/rosout`` and the type description service
@@ -147,17 +148,22 @@ class RosHost:
             ValueError: ``ros_args`` that rcl does not understand."""
         import rclpy
         import rclpy.exceptions
+
         self._check_open()
         options: dict[str, Any] = {}
         if lean:
             from rclpy.parameter import Parameter
-            options = {"enable_rosout": False, "parameter_overrides": [
-                Parameter("start_type_description_service", value=False)]}
+
+            options = {
+                "enable_rosout": False,
+                "parameter_overrides": [Parameter("start_type_description_service", value=False)],
+            }
         if ros_args:
             options["cli_args"] = ros_args if ros_args[0] == "--ros-args" else ["--ros-args", *ros_args]
         try:
-            node = rclpy.create_node(name, context=self.context, namespace=namespace,
-                                     start_parameter_services=False, **options)
+            node = rclpy.create_node(
+                name, context=self.context, namespace=namespace, start_parameter_services=False, **options
+            )
         except rclpy.exceptions.InvalidNamespaceException as e:
             raise ValueError(f"invalid namespace {namespace!r}: {e}") from None
         # rclpy has no stub of its pybind11 module, where RCLError is defined
@@ -178,6 +184,7 @@ class RosHost:
         def destroy() -> None:
             self.executor.remove_node(node)
             _destroy_node(node)
+
         if self._stopping:
             destroy()
         else:
@@ -213,6 +220,7 @@ class RosHost:
                 fut.set_result(fn(*args))
             except BaseException as e:  # handed to the caller
                 fut.set_exception(e)
+
         self.post(run)
         done, _ = concurrent.futures.wait([fut], timeout)
         if not done:
@@ -237,11 +245,11 @@ class RosHost:
             try:
                 fn(*args)
             except Exception:
-                log.exception("ROS host %s: posted call %s failed", self.name,
-                              getattr(fn, "__qualname__", fn))
+                log.exception("ROS host %s: posted call %s failed", self.name, getattr(fn, "__qualname__", fn))
 
     def _spin(self) -> None:
         from rclpy.executors import ExternalShutdownException, ShutdownException
+
         ex = self.executor
         while not self._stopping:
             try:

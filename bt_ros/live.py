@@ -2,6 +2,7 @@
 tree's status on /actorbt/status, a bag recorder (with the run's trace, when there is
 one run), and a Foxglove view, opened together on one runtime and closed in reverse.
 """
+
 from __future__ import annotations
 
 import sys
@@ -25,9 +26,17 @@ class LiveSession:
         BagError, FoxgloveError: the bag folder is not new, the port is taken.
     """
 
-    def __init__(self, rt: Any, host: Any, options: LiveOptions, *, tree: str | None = None,
-                 inputs: dict | None = None, seed: int | None = None,
-                 out: TextIO | None = None) -> None:
+    def __init__(
+        self,
+        rt: Any,
+        host: Any,
+        options: LiveOptions,
+        *,
+        tree: str | None = None,
+        inputs: dict | None = None,
+        seed: int | None = None,
+        out: TextIO | None = None,
+    ) -> None:
         self.options = options
         self.status: TreeStatusPublisher | None = None
         self.view: Any = None
@@ -41,17 +50,23 @@ class LiveSession:
             if options.foxglove is not None:
                 from .foxglove_scene import Body
                 from .foxglove_view import FoxgloveView
+
                 body = None if options.body is None else Body(*options.body)
-                self.view = FoxgloveView(rt, port=options.foxglove, host=options.foxglove_host,
-                                         topics=topics, body=body)
-                print(f"actorbt: Foxglove view on {self.view.url} (open it in Foxglove: "
-                      "Open connection, Foxglove WebSocket)", file=out or sys.stderr, flush=True)
+                self.view = FoxgloveView(
+                    rt, port=options.foxglove, host=options.foxglove_host, topics=topics, body=body
+                )
+                print(
+                    f"actorbt: Foxglove view on {self.view.url} (open it in Foxglove: "
+                    "Open connection, Foxglove WebSocket)",
+                    file=out or sys.stderr,
+                    flush=True,
+                )
             if options.bag is not None:
                 self.bag = BagRecorder(rt, options.bag, topics)
                 if tree is not None:
                     from bt_engine.trees import TraceRecorder
-                    self.trace = TraceRecorder(self.bag.trace_sink(), host, tree=tree, inputs=inputs,
-                                               seed=seed)
+
+                    self.trace = TraceRecorder(self.bag.trace_sink(), host, tree=tree, inputs=inputs, seed=seed)
         except BaseException:
             self.close()
             raise
@@ -75,6 +90,8 @@ class LiveSession:
 
 def around_run(options: LiveOptions, seed: int | None = None) -> Callable[..., LiveSession]:
     """For ``run``: ``around(rt, host, mission, inputs)`` opens the session of one run."""
+
     def around(rt: Any, host: Any, mission: Any, inputs: dict) -> LiveSession:
         return LiveSession(rt, host, options, tree=mission.name, inputs=inputs, seed=seed)
+
     return around

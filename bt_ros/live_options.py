@@ -2,6 +2,7 @@
 ``run``, ``demo`` and ``serve`` that record a rosbag2 folder and serve a live Foxglove
 view (docs/recording.md). Declaring them imports nothing heavy: the parser is built on
 every ``actorbt`` start."""
+
 from __future__ import annotations
 
 import argparse
@@ -35,19 +36,34 @@ def _port(text: str) -> int:
 def add_live_options(p: argparse.ArgumentParser, *, trace: bool = True) -> None:
     """Add the options to a command's parser; ``trace``: the command runs one tree, whose
     trace the bag also holds (``run``, ``demo``; not ``serve``)."""
-    holds = ("the robot's topics, the tree's status and the run's trace" if trace
-             else "the robot's topics and the trees' status")
-    p.add_argument("--bag", metavar="DIR",
-                   help=f"Record a rosbag2 folder (MCAP, CDR) in the new folder DIR: {holds}, for "
-                        + ("`ros2 bag play`, Foxglove and `actorbt replay DIR`." if trace
-                           else "`ros2 bag play` and Foxglove."))
-    p.add_argument("--foxglove", nargs="?", const=FOXGLOVE_PORT, type=_port, metavar="PORT",
-                   help="Serve a live view for the Foxglove app on ws://127.0.0.1:PORT (default "
-                        f"{FOXGLOVE_PORT}): the map, the robot and its path, the scan, the camera, "
-                        "the detections, the goals and the tree's status (docs/recording.md).")
-    p.add_argument("--foxglove-host", default="127.0.0.1", metavar="ADDR",
-                   help="The address the Foxglove view listens on (default 127.0.0.1, this machine "
-                        "only; 0.0.0.0 serves every network interface).")
+    holds = (
+        "the robot's topics, the tree's status and the run's trace"
+        if trace
+        else "the robot's topics and the trees' status"
+    )
+    p.add_argument(
+        "--bag",
+        metavar="DIR",
+        help=f"Record a rosbag2 folder (MCAP, CDR) in the new folder DIR: {holds}, for "
+        + ("`ros2 bag play`, Foxglove and `actorbt replay DIR`." if trace else "`ros2 bag play` and Foxglove."),
+    )
+    p.add_argument(
+        "--foxglove",
+        nargs="?",
+        const=FOXGLOVE_PORT,
+        type=_port,
+        metavar="PORT",
+        help="Serve a live view for the Foxglove app on ws://127.0.0.1:PORT (default "
+        f"{FOXGLOVE_PORT}): the map, the robot and its path, the scan, the camera, "
+        "the detections, the goals and the tree's status (docs/recording.md).",
+    )
+    p.add_argument(
+        "--foxglove-host",
+        default="127.0.0.1",
+        metavar="ADDR",
+        help="The address the Foxglove view listens on (default 127.0.0.1, this machine "
+        "only; 0.0.0.0 serves every network interface).",
+    )
 
 
 @dataclass(frozen=True)
@@ -70,9 +86,13 @@ class LiveOptions:
         """The options of a command's ``args``, with the configuration's ``robot:`` section
         (:attr:`bt_cli.config.Config.robot`)."""
         robot = robot or {}
-        return cls(getattr(args, "bag", None), getattr(args, "foxglove", None),
-                   getattr(args, "foxglove_host", None) or "127.0.0.1",
-                   body=robot.get("body"), topics=tuple(robot.get("topics") or ()))
+        return cls(
+            getattr(args, "bag", None),
+            getattr(args, "foxglove", None),
+            getattr(args, "foxglove_host", None) or "127.0.0.1",
+            body=robot.get("body"),
+            topics=tuple(robot.get("topics") or ()),
+        )
 
     def __bool__(self) -> bool:
         return self.bag is not None or self.foxglove is not None
@@ -82,6 +102,7 @@ class LiveOptions:
         that is taken (one-line errors)."""
         if self.bag is not None:
             from .bag import check_bag_path
+
             check_bag_path(self.bag)
         if self.foxglove:
             family = socket.AF_INET6 if ":" in self.foxglove_host else socket.AF_INET
@@ -90,9 +111,11 @@ class LiveOptions:
                 try:
                     s.bind((self.foxglove_host, self.foxglove))
                 except socket.gaierror as exc:
-                    raise FoxgloveError(f"--foxglove-host {self.foxglove_host}: not an address "
-                                        f"of this machine ({exc.strerror})") from None
+                    raise FoxgloveError(
+                        f"--foxglove-host {self.foxglove_host}: not an address of this machine ({exc.strerror})"
+                    ) from None
                 except OSError as exc:
                     why = "the port is in use" if exc.errno == errno.EADDRINUSE else (exc.strerror or str(exc))
-                    raise FoxgloveError(f"--foxglove {self.foxglove}: cannot listen on "
-                                        f"{self.foxglove_host}:{self.foxglove}: {why}") from None
+                    raise FoxgloveError(
+                        f"--foxglove {self.foxglove}: cannot listen on {self.foxglove_host}:{self.foxglove}: {why}"
+                    ) from None

@@ -11,6 +11,7 @@ under their relative names (:func:`relative`), so ``serve --namespace robot1`` (
 ``--ros-args -r __ns:=/robot1``) serves ``/robot1/actorbt/call``; a client names the
 same namespace (:func:`in_namespace`).
 """
+
 from __future__ import annotations
 
 import re
@@ -21,8 +22,18 @@ TREE_PREFIX = "/actorbt/tree/"
 DESCRIBE_SERVICE = "/actorbt/describe"
 CALL_NOW_SERVICE = "/actorbt/call_now"
 
-__all__ = ["CALL_ACTION", "CALL_NOW_SERVICE", "DESCRIBE_SERVICE", "NODE_NAME", "TREE_PREFIX",
-           "in_namespace", "namespace_of", "relative", "tree_action_name", "tree_of_action"]
+__all__ = [
+    "CALL_ACTION",
+    "CALL_NOW_SERVICE",
+    "DESCRIBE_SERVICE",
+    "NODE_NAME",
+    "TREE_PREFIX",
+    "in_namespace",
+    "namespace_of",
+    "relative",
+    "tree_action_name",
+    "tree_of_action",
+]
 
 
 def tree_action_name(tree: str, namespace: str = "") -> str:
@@ -43,7 +54,7 @@ def tree_of_action(action: str, namespace: str = "") -> str | None:
     prefix = in_namespace(TREE_PREFIX, namespace)
     if not action.startswith(prefix) or len(action) == len(prefix):
         return None
-    return action[len(prefix):].replace("/", ".")
+    return action[len(prefix) :].replace("/", ".")
 
 
 def namespace_of(namespace: str | None) -> str:

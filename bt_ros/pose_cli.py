@@ -19,6 +19,7 @@ Exit status: 0 published to a subscriber; 1 no subscriber within ``--wait``; 2 o
 the local bus or a bad option; 130 on Ctrl-C. Nothing here imports rclpy or geometry_msgs
 until the command runs.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -43,41 +44,66 @@ KEEP_ALIVE = 0.5
 
 def register(sub: Any, common: Callable[[argparse.ArgumentParser], None]) -> None:
     p = sub.add_parser(
-        "pose", help="the robot's pose: init X Y YAW (like RViz's 2D Pose Estimate)",
-        description="Tell the robot's localisation where the robot is, as RViz's \"2D Pose "
-                    "Estimate\" does.")
+        "pose",
+        help="the robot's pose: init X Y YAW (like RViz's 2D Pose Estimate)",
+        description="Tell the robot's localisation where the robot is, as RViz's \"2D Pose Estimate\" does.",
+    )
     psub = p.add_subparsers(dest="pose_command", metavar="POSE_COMMAND")
     psub.required = True
 
     i = psub.add_parser(
-        "init", help="publish an initial pose on /initialpose: X Y YAW",
+        "init",
+        help="publish an initial pose on /initialpose: X Y YAW",
         description="Publish one geometry_msgs/PoseWithCovarianceStamped on /initialpose, as "
-                    "RViz's \"2D Pose Estimate\" does, for AMCL (or the simulator's navstack) "
-                    "to start localising from. Over ROS only (--bus ros, or transport: ros in "
-                    "actorbt.yaml); in a runtime on the local bus, call the navigation's "
-                    "set_initial_pose actor instead. Exit status 1 when nothing subscribes to "
-                    "/initialpose within --wait.")
+        "RViz's \"2D Pose Estimate\" does, for AMCL (or the simulator's navstack) "
+        "to start localising from. Over ROS only (--bus ros, or transport: ros in "
+        "actorbt.yaml); in a runtime on the local bus, call the navigation's "
+        "set_initial_pose actor instead. Exit status 1 when nothing subscribes to "
+        "/initialpose within --wait.",
+    )
     i.add_argument("x", type=float, help="The robot's x in the frame, in metres.")
     i.add_argument("y", type=float, help="The robot's y in the frame, in metres.")
-    i.add_argument("yaw", type=float,
-                   help="The robot's heading in radians, counter-clockwise from the frame's x "
-                        "axis (a negative one is fine: pose init 1 2 -1.57).")
-    i.add_argument("--std-xy", type=_non_negative, default=RVIZ_STD_XY, metavar="M",
-                   help="The standard deviation of x and of y, in metres (default 0.5, RViz's "
-                        "\"2D Pose Estimate\" default).")
-    i.add_argument("--std-yaw", type=_non_negative, default=RVIZ_STD_YAW, metavar="RAD",
-                   help="The standard deviation of the heading, in radians (default π/12 = "
-                        "0.2618, RViz's \"2D Pose Estimate\" default).")
-    i.add_argument("--frame", default="map",
-                   help="The frame of the pose (default map: AMCL ignores an initial pose "
-                        "outside its global frame).")
-    i.add_argument("--wait", type=float, default=5.0, metavar="S",
-                   help="Wait up to S seconds for a subscriber of /initialpose to be discovered "
-                        "before giving up with exit status 1 (default 5).")
-    i.add_argument("--bus", choices=["local", "ros"],
-                   help="Where the robot is: 'ros' over ROS 2 (DDS), a robot or an `actorbt sim "
-                        "run --bus ros`; 'local' is refused, as the pose would reach only this "
-                        "command's own runtime. Overrides 'transport:' in actorbt.yaml.")
+    i.add_argument(
+        "yaw",
+        type=float,
+        help="The robot's heading in radians, counter-clockwise from the frame's x "
+        "axis (a negative one is fine: pose init 1 2 -1.57).",
+    )
+    i.add_argument(
+        "--std-xy",
+        type=_non_negative,
+        default=RVIZ_STD_XY,
+        metavar="M",
+        help='The standard deviation of x and of y, in metres (default 0.5, RViz\'s "2D Pose Estimate" default).',
+    )
+    i.add_argument(
+        "--std-yaw",
+        type=_non_negative,
+        default=RVIZ_STD_YAW,
+        metavar="RAD",
+        help="The standard deviation of the heading, in radians (default π/12 = "
+        '0.2618, RViz\'s "2D Pose Estimate" default).',
+    )
+    i.add_argument(
+        "--frame",
+        default="map",
+        help="The frame of the pose (default map: AMCL ignores an initial pose outside its global frame).",
+    )
+    i.add_argument(
+        "--wait",
+        type=float,
+        default=5.0,
+        metavar="S",
+        help="Wait up to S seconds for a subscriber of /initialpose to be discovered "
+        "before giving up with exit status 1 (default 5).",
+    )
+    i.add_argument(
+        "--bus",
+        choices=["local", "ros"],
+        help="Where the robot is: 'ros' over ROS 2 (DDS), a robot or an `actorbt sim "
+        "run --bus ros`; 'local' is refused, as the pose would reach only this "
+        "command's own runtime. Overrides 'transport:' in actorbt.yaml.",
+    )
     i.set_defaults(func=cmd_init)
 
 
@@ -88,12 +114,14 @@ def _non_negative(text: str) -> float:
     return value
 
 
-def initial_pose_msg(x: float, y: float, yaw: float, std_xy: float = RVIZ_STD_XY,
-                     std_yaw: float = RVIZ_STD_YAW, frame: str = "map") -> Any:
+def initial_pose_msg(
+    x: float, y: float, yaw: float, std_xy: float = RVIZ_STD_XY, std_yaw: float = RVIZ_STD_YAW, frame: str = "map"
+) -> Any:
     """The PoseWithCovarianceStamped RViz's "2D Pose Estimate" sends (unstamped): pose
     (x, y, yaw) in ``frame``; covariance (row-major 6x6 over x, y, z, roll, pitch, yaw)
     ``std_xy``² for x and y, ``std_yaw``² for yaw, zero elsewhere."""
     from geometry_msgs.msg import PoseWithCovarianceStamped
+
     msg = PoseWithCovarianceStamped()
     msg.header.frame_id = frame
     msg.pose.pose.position.x, msg.pose.pose.position.y = float(x), float(y)
@@ -115,7 +143,8 @@ def cmd_init(args: argparse.Namespace, app: Any) -> int:
             f"shell`, `set_initial_pose {args.x:g} {args.y:g} {args.yaw:g}`; to a running "
             f"`actorbt serve`, `actorbt rcall set_initial_pose {args.x:g} {args.y:g} "
             f"{args.yaw:g}`; or as a step of a mission. For a robot on ROS 2: --bus ros (or "
-            "transport: ros in actorbt.yaml).")
+            "transport: ros in actorbt.yaml)."
+        )
     return publish_over_ros(args)
 
 
@@ -124,6 +153,7 @@ def publish_over_ros(args: argparse.Namespace) -> int:
     keep the node alive while it goes out."""
     from .host import RosHost
     from .qos import qos_profile
+
     msg = initial_pose_msg(args.x, args.y, args.yaw, args.std_xy, args.std_yaw, args.frame)
     with RosHost("pose") as host:
         node = host.create_node(f"actorbt_pose_{os.getpid()}_{host.id}", lean=True)
@@ -134,9 +164,12 @@ def publish_over_ros(args: argparse.Namespace) -> int:
             if time.monotonic() >= deadline:
                 domain = os.environ.get("ROS_DOMAIN_ID", "0")
                 scope = os.environ.get("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
-                print(f"actorbt pose init: nobody subscribes to {TOPIC} after {args.wait:g} s: "
-                      f"is AMCL / the navstack running? (ROS_DOMAIN_ID {domain}, discovery "
-                      f"range {scope})", file=sys.stderr)
+                print(
+                    f"actorbt pose init: nobody subscribes to {TOPIC} after {args.wait:g} s: "
+                    f"is AMCL / the navstack running? (ROS_DOMAIN_ID {domain}, discovery "
+                    f"range {scope})",
+                    file=sys.stderr,
+                )
                 return 1
             time.sleep(0.05)
         msg.header.stamp = node.get_clock().now().to_msg()  # as RViz stamps it
@@ -145,9 +178,11 @@ def publish_over_ros(args: argparse.Namespace) -> int:
         listeners = _listeners(host, node, KEEP_ALIVE)
         # the writer sends from its own thread: the node lives on until it has
         time.sleep(max(0.0, end - time.monotonic()))
-    print(f"{TOPIC}: x {args.x:.3f} m, y {args.y:.3f} m, yaw {args.yaw:.3f} rad "
-          f"({math.degrees(args.yaw):.1f} deg) in {args.frame}; std {args.std_xy:g} m, "
-          f"{args.std_yaw:.4g} rad; to {listeners}")
+    print(
+        f"{TOPIC}: x {args.x:.3f} m, y {args.y:.3f} m, yaw {args.yaw:.3f} rad "
+        f"({math.degrees(args.yaw):.1f} deg) in {args.frame}; std {args.std_xy:g} m, "
+        f"{args.std_yaw:.4g} rad; to {listeners}"
+    )
     return 0
 
 

@@ -1,4 +1,5 @@
 """rclpy QoS profiles for the named settings of :mod:`bt_engine.bus.qos`."""
+
 from __future__ import annotations
 
 from typing import Any
@@ -10,8 +11,8 @@ __all__ = ["qos_profile"]
 
 def qos_profile(qos: Any) -> Any:
     """The rclpy QoSProfile for a setting (see :mod:`bt_engine.bus.qos`)."""
-    from rclpy.qos import (DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy,
-                           qos_profile_sensor_data)
+    from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
+
     if isinstance(qos, QoSProfile):
         return qos
     qos_depth(qos)  # validates
@@ -20,7 +21,10 @@ def qos_profile(qos: Any) -> Any:
     if qos in ("sensor", "sensor_data"):
         return qos_profile_sensor_data
     if qos in ("latched", "transient_local"):
-        return QoSProfile(depth=1, history=HistoryPolicy.KEEP_LAST,
-                          reliability=ReliabilityPolicy.RELIABLE,
-                          durability=DurabilityPolicy.TRANSIENT_LOCAL)
+        return QoSProfile(
+            depth=1,
+            history=HistoryPolicy.KEEP_LAST,
+            reliability=ReliabilityPolicy.RELIABLE,
+            durability=DurabilityPolicy.TRANSIENT_LOCAL,
+        )
     return QoSProfile(depth=10)

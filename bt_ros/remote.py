@@ -20,6 +20,7 @@ A goal the server cannot run is accepted and aborted at once with ``INVALID_GOAL
 tells it as refused: status ``rejected``, error :class:`GoalRefusedError` (a
 GoalRejectedError) with the reason, since the goal never ran.
 """
+
 from __future__ import annotations
 
 import difflib
@@ -33,15 +34,21 @@ import yaml
 
 from bt_engine.bus.messages import RosAction
 from bt_engine.errors import ActorbtError, ActorTimeout
-from .client import (STATUS_NAMES, ActionGoalError, GoalCall, GoalNotSentError,
-                     GoalRejectedError, ServerUnavailableError, ServerWait)
+from .client import (
+    STATUS_NAMES,
+    ActionGoalError,
+    GoalCall,
+    GoalNotSentError,
+    GoalRejectedError,
+    ServerUnavailableError,
+    ServerWait,
+)
 from .error_codes import REFUSED, ending_of
 from .host import RosClosedError, RosHost
 from .names import CALL_ACTION, NODE_NAME, in_namespace, tree_action_name, tree_of_action
 from .yamlio import dump
 
-__all__ = ["GoalRefusedError", "NoServeError", "Remote", "RemoteCallError", "RemoteGoal",
-           "UnknownTreeError"]
+__all__ = ["GoalRefusedError", "NoServeError", "Remote", "RemoteCallError", "RemoteGoal", "UnknownTreeError"]
 
 #: what every action of ``actorbt serve`` starts with (in the root namespace)
 SERVE_PREFIX = f"/{NODE_NAME}/"
@@ -65,9 +72,11 @@ class NoServeError(ServerUnavailableError):
         self.args = (str(self),)
 
     def __str__(self) -> str:
-        return (f"no actorbt serve found within {self.seconds:g} s; start one with "
-                "`actorbt serve` (ROS_DOMAIN_ID and ROS_AUTOMATIC_DISCOVERY_RANGE must match "
-                "on both sides)")
+        return (
+            f"no actorbt serve found within {self.seconds:g} s; start one with "
+            "`actorbt serve` (ROS_DOMAIN_ID and ROS_AUTOMATIC_DISCOVERY_RANGE must match "
+            "on both sides)"
+        )
 
 
 class UnknownTreeError(ActorbtError, LookupError):
@@ -185,8 +194,7 @@ class Remote:
         namespace: the namespace of the ``actorbt serve`` to talk to (``robot1``).
     """
 
-    def __init__(self, node_name: str | None = None, *, wait: float = 10.0,
-                 namespace: str | None = None) -> None:
+    def __init__(self, node_name: str | None = None, *, wait: float = 10.0, namespace: str | None = None) -> None:
         self.wait = wait
         self.namespace = namespace or ""
         #: what every action of the serve starts with (``/robot1/actorbt/``)
@@ -194,8 +202,7 @@ class Remote:
         self.call_action = in_namespace(CALL_ACTION, self.namespace)
         self.host = RosHost("client")
         try:
-            self.node = self.host.create_node(
-                node_name or f"actorbt_client_{os.getpid()}_{self.host.id}", lean=True)
+            self.node = self.host.create_node(node_name or f"actorbt_client_{os.getpid()}_{self.host.id}", lean=True)
             self._waiter = ServerWait(self.node)
             self._clients: dict[str, Any] = {}
             self._created: dict[str, float] = {}
@@ -211,12 +218,17 @@ class Remote:
 
     def served_actions(self) -> list[str]:
         """The ``/actorbt/...`` actions that have a server in the ROS graph now."""
+
         def query() -> list[str]:
             from rclpy.action.graph import get_action_names_and_types
+
             node = self.node
-            return sorted(name for name, _ in get_action_names_and_types(node)
-                          if name.startswith(self.prefix)
-                          and node.count_services(f"{name}/_action/send_goal") > 0)
+            return sorted(
+                name
+                for name, _ in get_action_names_and_types(node)
+                if name.startswith(self.prefix) and node.count_services(f"{name}/_action/send_goal") > 0
+            )
+
         return self.host.call(query)
 
     def served_trees(self) -> list[str]:
@@ -255,8 +267,7 @@ class Remote:
         while action not in actions:
             now = time.monotonic()
             if now - changed >= self.GRAPH_SETTLE or now >= deadline:
-                raise UnknownTreeError(tree, [t for t in (tree_of_action(a, self.namespace)
-                                                          for a in actions) if t])
+                raise UnknownTreeError(tree, [t for t in (tree_of_action(a, self.namespace) for a in actions) if t])
             time.sleep(0.02)
             latest = self.served_actions()
             if latest != actions:
@@ -272,6 +283,7 @@ class Remote:
     def _client(self, action_type: type[RosAction], action: str) -> Any:
         from rclpy.action import ActionClient
         from rclpy.qos import QoSProfile
+
         client = self._clients.get(action)
         if client is None:
             client = self._clients[action] = ActionClient(self.node, action_type, action)
@@ -279,9 +291,9 @@ class Remote:
             # Feedback through our own subscription: rclpy drops a goal's feedback
             # callback when its result arrives, and the result (a service reply) often
             # overtakes the last feedback message (a topic).
-            self.node.create_subscription(action_type.Impl.FeedbackMessage,
-                                          f"{action}/_action/feedback", self._on_feedback,
-                                          QoSProfile(depth=100))
+            self.node.create_subscription(
+                action_type.Impl.FeedbackMessage, f"{action}/_action/feedback", self._on_feedback, QoSProfile(depth=100)
+            )
         return client
 
     #: how long a finished goal still receives feedback that arrives late [s]
@@ -308,9 +320,15 @@ class Remote:
             time.sleep(0.01)
         return True
 
-    def send(self, action_type: type[RosAction], action: str, goal: Any, *,
-             on_feedback: Callable[[Any], None] | None = None,
-             wait: float | None = None) -> RemoteGoal:
+    def send(
+        self,
+        action_type: type[RosAction],
+        action: str,
+        goal: Any,
+        *,
+        on_feedback: Callable[[Any], None] | None = None,
+        wait: float | None = None,
+    ) -> RemoteGoal:
         """Send ``goal`` (waiting up to ``wait`` s for the server) and return at once."""
         g = RemoteGoal(self, action, goal)
 
@@ -322,33 +340,58 @@ class Remote:
 
         def begin() -> None:
             from unique_identifier_msgs.msg import UUID
+
             client = self._client(action_type, action)
             settled = self._created[action] + (self.SETTLE if on_feedback is not None else 0.0)
             goal_id = uuid.uuid4().bytes
             self._prune_feedback()
             if on_feedback is not None:
                 self._feedback[goal_id] = (g, on_feedback)
-            g.call = GoalCall(_Settling(client, settled), action, self._waiter, goal,
-                              server_timeout=self.wait if wait is None else wait,
-                              on_result=g._on_result, on_error=g._on_error,
-                              on_accepted=g._on_accepted, on_status=g._on_status,
-                              goal_uuid=UUID(uuid=list(goal_id)))
+            g.call = GoalCall(
+                _Settling(client, settled),
+                action,
+                self._waiter,
+                goal,
+                server_timeout=self.wait if wait is None else wait,
+                on_result=g._on_result,
+                on_error=g._on_error,
+                on_accepted=g._on_accepted,
+                on_status=g._on_status,
+                goal_uuid=UUID(uuid=list(goal_id)),
+            )
             g.call.start()
+
         self.host.post(start)  # cancel() is posted after it, so it finds g.call
         return g
 
-    def tree_goal(self, tree: str, inputs: "dict | str | None" = None, *,
-                  on_feedback: Callable[[Any], None] | None = None,
-                  wait: float | None = None) -> RemoteGoal:
+    def tree_goal(
+        self,
+        tree: str,
+        inputs: "dict | str | None" = None,
+        *,
+        on_feedback: Callable[[Any], None] | None = None,
+        wait: float | None = None,
+    ) -> RemoteGoal:
         """Start a goal on ``/actorbt/tree/<tree>``; ``inputs`` a mapping or YAML text."""
         from actorbt_interfaces.action import RunTree
-        text = inputs if isinstance(inputs, str) else (dump(inputs) if inputs else "")
-        return self.send(RunTree, tree_action_name(tree, self.namespace), RunTree.Goal(inputs_yaml=text),
-                         on_feedback=on_feedback, wait=wait)
 
-    def run_tree(self, tree: str, inputs: "dict | str | None" = None, *,
-                 timeout: float | None = None,
-                 on_feedback: Callable[[Any], None] | None = None) -> Any:
+        text = inputs if isinstance(inputs, str) else (dump(inputs) if inputs else "")
+        return self.send(
+            RunTree,
+            tree_action_name(tree, self.namespace),
+            RunTree.Goal(inputs_yaml=text),
+            on_feedback=on_feedback,
+            wait=wait,
+        )
+
+    def run_tree(
+        self,
+        tree: str,
+        inputs: "dict | str | None" = None,
+        *,
+        timeout: float | None = None,
+        on_feedback: Callable[[Any], None] | None = None,
+    ) -> Any:
         """Run a tree to the end and return its outputs; raise RemoteCallError (failed,
         canceled), GoalRejectedError or ActorTimeout (then the goal is cancelled)."""
         g = self.tree_goal(tree, inputs, on_feedback=on_feedback)
@@ -358,6 +401,7 @@ class Remote:
     def call_goal(self, actor: str, *args: Any, **kwargs: Any) -> RemoteGoal:
         """Start a call of ``actor`` through ``/actorbt/call``."""
         from actorbt_interfaces.action import CallActor
+
         text = dump({"args": list(args), "kwargs": kwargs}) if (args or kwargs) else ""
         return self.send(CallActor, self.call_action, CallActor.Goal(actor=actor, args_yaml=text))
 

@@ -52,6 +52,7 @@ Goal semantics (the goal's way through is in :mod:`bt_ros.goal_server`):
 With the ROS transport (``--bus ros``, ``transport: ros``) the node lives in the transport's context and
 executor thread; otherwise the server makes its own :class:`RosHost`.
 """
+
 from __future__ import annotations
 
 import logging
@@ -67,8 +68,7 @@ from .error_codes import Ending
 from .goal_server import GoalServer
 from .goals import GoalError
 from .host import RosClosedError, RosHost
-from .names import (CALL_ACTION, CALL_NOW_SERVICE, DESCRIBE_SERVICE, NODE_NAME, relative,
-                    tree_action_name)
+from .names import CALL_ACTION, CALL_NOW_SERVICE, DESCRIBE_SERVICE, NODE_NAME, relative, tree_action_name
 from .transport import RosTransport
 from .tree_server import TreeProgress, TreeServer
 from .tree_watch import TreeFolderWatch
@@ -106,13 +106,20 @@ class Server:
         watch_period: seconds between two looks at ``trees_folder``.
     """
 
-    def __init__(self, rt: Any, *, preempt: bool = False, node_name: str = NODE_NAME,
-                 namespace: str | None = None, ros_args: list[str] | None = None,
-                 record_dir: "str | pathlib.Path | None" = None,
-                 result_timeout: int = RESULT_TIMEOUT,
-                 on_event: Callable[[str], None] | None = None,
-                 trees_folder: "str | pathlib.Path | None" = None,
-                 watch_period: float = 1.0) -> None:
+    def __init__(
+        self,
+        rt: Any,
+        *,
+        preempt: bool = False,
+        node_name: str = NODE_NAME,
+        namespace: str | None = None,
+        ros_args: list[str] | None = None,
+        record_dir: "str | pathlib.Path | None" = None,
+        result_timeout: int = RESULT_TIMEOUT,
+        on_event: Callable[[str], None] | None = None,
+        trees_folder: "str | pathlib.Path | None" = None,
+        watch_period: float = 1.0,
+    ) -> None:
         from actorbt_interfaces.action import CallActor
 
         self.rt = rt
@@ -133,20 +140,19 @@ class Server:
             self._progress = TreeProgress(rt)
             self.call_server = CallServer(self, self.resolve(CALL_ACTION), CallActor)
             self.trees: dict[str, TreeServer] = {}  # tree path -> its action server
-            self.describe = DescribeService(rt, self.resolve(DESCRIBE_SERVICE, service=True),
-                                            self._served)
+            self.describe = DescribeService(rt, self.resolve(DESCRIBE_SERVICE, service=True), self._served)
             self.call_now = CallNowService(rt, self.host, self.resolve(CALL_NOW_SERVICE, service=True))
 
             def create() -> None:
                 self.call_server.create(self.node, result_timeout)
                 self.describe.create(self.node)
                 self.call_now.create(self.node)
+
             self.host.call(create)
             self.sync_trees(announce=False)
             self._progress.install()
             if trees_folder is not None:
-                self._watch = TreeFolderWatch(rt, trees_folder, self._reloaded,
-                                              watch_period).start()
+                self._watch = TreeFolderWatch(rt, trees_folder, self._reloaded, watch_period).start()
         except BaseException:
             if self._own_host:
                 self.host.close()
@@ -189,8 +195,9 @@ class Server:
     def sync_trees(self, *, announce: bool = True, grace: float = 3.0) -> None:
         """Serve exactly the runtime's tree actors now: new ones get an action, gone ones
         are withdrawn (their goals end ``TREE_REMOVED``). Not on the hub or executor."""
-        refs = self.rt.run_on_hub(lambda: sorted((r for r in self.rt.root.all_actors() if r.is_tree),
-                                                 key=lambda r: r.path))
+        refs = self.rt.run_on_hub(
+            lambda: sorted((r for r in self.rt.root.all_actors() if r.is_tree), key=lambda r: r.path)
+        )
         gone = self.host.call(self._apply_trees, refs, announce)
         if not gone:
             return
@@ -205,12 +212,14 @@ class Server:
     def _apply_trees(self, refs: list[Any], announce: bool) -> list[TreeServer]:
         """(executor thread) Create and withdraw tree action servers; the withdrawn."""
         from actorbt_interfaces.action import RunTree
+
         wanted = {ref.path: ref for ref in refs}
         gone = []
         for path in [p for p in self.trees if p not in wanted]:
             ep = self.trees.pop(path)
-            ep.withdrawn = GoalError(f"tree {path} is no longer served: its file was removed "
-                                     "from the trees folder", Ending.TREE_REMOVED)
+            ep.withdrawn = GoalError(
+                f"tree {path} is no longer served: its file was removed from the trees folder", Ending.TREE_REMOVED
+            )
             for g in list(ep.goals.values()):
                 g.cancel("the tree's file was removed", Ending.TREE_REMOVED)
             gone.append(ep)
@@ -242,8 +251,8 @@ class Server:
             self.sync_trees()
 
     def _flush_results(self) -> None:
-        self.host.flush(timeout=1.0)   # the execute coroutines finish
-        self.host.flush(timeout=1.0)   # their results go out
+        self.host.flush(timeout=1.0)  # the execute coroutines finish
+        self.host.flush(timeout=1.0)  # their results go out
 
     # -- lifecycle -----------------------------------------------------------------------
     def close(self, grace: float = 3.0) -> None:
@@ -270,11 +279,13 @@ class Server:
             self._flush_results()
         self._progress.remove()
         if not host.closed:
+
             def destroy() -> None:
                 for ep in self.endpoints:
                     ep.destroy()
                 self.describe.destroy()
                 self.call_now.destroy()
+
             try:
                 host.call(destroy)
                 host.destroy_node(self.node)
@@ -297,15 +308,28 @@ def _wait_finished(goals: list[Any], grace: float) -> None:
         time.sleep(0.005)
 
 
-def serve(rt: Any, *, preempt: bool = False, node_name: str = NODE_NAME,
-          namespace: str | None = None, ros_args: list[str] | None = None,
-          record_dir: "str | pathlib.Path | None" = None,
-          on_event: Callable[[str], None] | None = None,
-          trees_folder: "str | pathlib.Path | None" = None) -> Server:
+def serve(
+    rt: Any,
+    *,
+    preempt: bool = False,
+    node_name: str = NODE_NAME,
+    namespace: str | None = None,
+    ros_args: list[str] | None = None,
+    record_dir: "str | pathlib.Path | None" = None,
+    on_event: Callable[[str], None] | None = None,
+    trees_folder: "str | pathlib.Path | None" = None,
+) -> Server:
     """Expose ``rt``'s actors and trees as ROS 2 actions (see the module docstring).
 
     Returns the :class:`Server`; ``close()`` it before closing the runtime.
     """
-    return Server(rt, preempt=preempt, node_name=node_name, namespace=namespace,
-                  ros_args=ros_args, record_dir=record_dir, on_event=on_event,
-                  trees_folder=trees_folder)
+    return Server(
+        rt,
+        preempt=preempt,
+        node_name=node_name,
+        namespace=namespace,
+        ros_args=ros_args,
+        record_dir=record_dir,
+        on_event=on_event,
+        trees_folder=trees_folder,
+    )

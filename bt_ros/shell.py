@@ -21,6 +21,7 @@ during a call cancels the call; the shell carries on. History is shared with
 This module does not import the ``actorbt`` command line (the layer above): the actor
 index comes in as a function.
 """
+
 from __future__ import annotations
 
 import pprint
@@ -45,15 +46,24 @@ class RemoteShell(ShellBase):
         timeout: cancel a call after this many seconds (None: wait for it).
     """
 
-    intro = ("actorbt rshell: calls actors of the running `actorbt serve`. Type an actor and "
-             "its arguments (Python literals), e.g. `get_pose`.\n`list [TEXT]` shows actors, "
-             "`trees` the served trees, `help NAME` describes one, `quit` leaves.")
+    intro = (
+        "actorbt rshell: calls actors of the running `actorbt serve`. Type an actor and "
+        "its arguments (Python literals), e.g. `get_pose`.\n`list [TEXT]` shows actors, "
+        "`trees` the served trees, `help NAME` describes one, `quit` leaves."
+    )
     prompt = "rshell> "
     #: the shell's own commands (the rest of a line is an actor call)
     commands = ["help", "list", "quit", "trees"]
 
-    def __init__(self, remote: Remote, index: Callable[[], list[Any]] | None = None, *,
-                 timeout: float | None = None, stdin: Any = None, stdout: Any = None) -> None:
+    def __init__(
+        self,
+        remote: Remote,
+        index: Callable[[], list[Any]] | None = None,
+        *,
+        timeout: float | None = None,
+        stdin: Any = None,
+        stdout: Any = None,
+    ) -> None:
         super().__init__(stdin=stdin, stdout=stdout)
         if stdin is not None:  # lines from a file or a pipe: no prompt, no banner
             self.use_rawinput = False
@@ -111,9 +121,11 @@ class RemoteShell(ShellBase):
         """help NAME: the actor's signature and docstring."""
         arg = arg.strip()
         if not arg:
-            self.stdout.write("Commands: list [TEXT], trees, help NAME, quit.\n"
-                              "Anything else: ACTOR ARG... (key=value for keywords), called "
-                              "in the serve; Ctrl-C cancels it.\n")
+            self.stdout.write(
+                "Commands: list [TEXT], trees, help NAME, quit.\n"
+                "Anything else: ACTOR ARG... (key=value for keywords), called "
+                "in the serve; Ctrl-C cancels it.\n"
+            )
             return
         entries = self.entries()
         found = [e for e in entries if e.path == arg] or [e for e in entries if e.name == arg]
@@ -126,8 +138,9 @@ class RemoteShell(ShellBase):
                 self.stdout.write(f"{arg}  [tree]  (served; not in the local actor index)\n")
                 return
             hint = close_matches(arg, self._names())
-            self.stdout.write(f"error: unknown actor {arg!r}"
-                              + (f"; did you mean: {', '.join(hint)}?" if hint else "") + "\n")
+            self.stdout.write(
+                f"error: unknown actor {arg!r}" + (f"; did you mean: {', '.join(hint)}?" if hint else "") + "\n"
+            )
             return
         if len(found) > 1:
             self.stdout.write(f"{arg} is ambiguous: {', '.join(e.path for e in found)}\n")

@@ -14,6 +14,7 @@ Everything here completes from the executor thread, so under the virtual clock a
 a request or a subscriber waiting for a message keeps virtual time at wall pace (the
 rule of :class:`bt_engine.clock.VirtualClock`): a deadline never overtakes a reply.
 """
+
 from __future__ import annotations
 
 import logging
@@ -34,8 +35,7 @@ if TYPE_CHECKING:
 log = logging.getLogger("actorbt.ros")
 
 #: why a topic's publisher may not be found (in a subscriber's ActorTimeout)
-DISCOVERY_RANGE_HINT = ("ROS_DOMAIN_ID and ROS_AUTOMATIC_DISCOVERY_RANGE must match on both "
-                        "sides")
+DISCOVERY_RANGE_HINT = "ROS_DOMAIN_ID and ROS_AUTOMATIC_DISCOVERY_RANGE must match on both sides"
 
 __all__ = ["RosPublisher", "RosSubscription", "RosTransport"]
 
@@ -99,15 +99,17 @@ def _destroy_later(host: RosHost, destroy: Callable[[Any], Any], entity: Any, to
     """Destroy a publisher or subscription on the executor thread: destroyed from another
     thread while the executor waits on it, rclpy fails in the executor ("cannot use
     Destroyable because destruction was requested")."""
+
     def run() -> None:
         try:
             destroy(entity)
         except Exception:
             log.exception("destroying an endpoint of %s failed", topic)
+
     try:
         host.post(run)
     except RosClosedError:
-        pass                          # the node goes with the host
+        pass  # the node goes with the host
 
 
 class RosTransport(Transport):
@@ -122,8 +124,7 @@ class RosTransport(Transport):
 
     name = "ros"
 
-    def __init__(self, rt: "Runtime", node_name: str | None = None, *,
-                 server_timeout: float = 10.0) -> None:
+    def __init__(self, rt: "Runtime", node_name: str | None = None, *, server_timeout: float = 10.0) -> None:
         self._rt = rt
         self.server_timeout = server_timeout
         self.host = RosHost("bus")
@@ -142,8 +143,7 @@ class RosTransport(Transport):
         pub = self.node.create_publisher(msg_type, topic, qos_profile(qos))
         return RosPublisher(self.host, pub, topic, self.node)
 
-    def subscribe(self, topic: str, msg_type: type, callback: Callable[[Any], None],
-                  qos: Any = 10) -> RosSubscription:
+    def subscribe(self, topic: str, msg_type: type, callback: Callable[[Any], None], qos: Any = 10) -> RosSubscription:
         """``callback(msg)`` runs on the hub, in arrival order."""
         sub = RosSubscription(self, topic, callback)
         sub._sub = self.node.create_subscription(msg_type, topic, sub._on_message, qos_profile(qos))
@@ -166,30 +166,36 @@ class RosTransport(Transport):
     def silence_hint(self, publishers: int) -> str:
         if publishers == 0:
             return f"is the robot or the simulator running? {DISCOVERY_RANGE_HINT}"
-        return ("does it publish that seldom, or do its QoS and the subscriber's not match? "
-                "`actorbt topic list --json --bus ros` shows what it offers")
+        return (
+            "does it publish that seldom, or do its QoS and the subscriber's not match? "
+            "`actorbt topic list --json --bus ros` shows what it offers"
+        )
 
     # -- the graph (not from the hub: these wait for the executor thread) ----------------
     def topics(self) -> list[TopicInfo]:
         """Every visible topic this node has discovered, in every process (see
         :mod:`bt_ros.graph`); discovery takes a moment after the node starts."""
         from .graph import topic_infos
+
         return self.host.call(topic_infos, self.node)
 
     def actions(self) -> list[EndpointInfo]:
         """Every action discovered (served or called anywhere in the graph)."""
         from .graph import action_infos
+
         return self.host.call(action_infos, self.node)
 
     def services(self) -> list[EndpointInfo]:
         """Every visible service discovered."""
         from .graph import service_infos
+
         return self.host.call(service_infos, self.node)
 
     def matching_qos(self, topic: str) -> Any:
         """A subscription QoS that hears every publisher of ``topic`` now (best effort if
         any publisher is, transient local if all are), as ``ros2 topic echo`` picks it."""
         from .graph import matching_qos
+
         return self.host.call(matching_qos, self.node, topic)
 
     # -- actions and services ----------------------------------------------------------
@@ -202,18 +208,22 @@ class RosTransport(Transport):
         GoalRejectedError. Cancelling the transaction cancels the goal.
         """
         from rclpy.action import ActionClient
+
         # Created here, not through host.call: the hub never waits for the executor
         # thread (which may be waiting for the hub), see RosHost.
         client = ActionClient(self.node, action_type, server)
-        doc = message_doc(f"Send a {public_name(action_type)} goal to action {server} and return "
-                          "its result.", "goal", action_type.Goal)
-        return self._client_actor(scope, name, GoalCall, client, server, action_type.Goal,
-                                  "goal", doc)
+        doc = message_doc(
+            f"Send a {public_name(action_type)} goal to action {server} and return its result.",
+            "goal",
+            action_type.Goal,
+        )
+        return self._client_actor(scope, name, GoalCall, client, server, action_type.Goal, "goal", doc)
 
     def action_server(self, name: str, action_type: type[RosAction], on_goal: Callable[[Any], None]) -> Any:
         """Serve action ``name`` from this node; ``on_goal(goal)`` runs on the hub with a
         :class:`~bt_engine.bus.actions.ServerGoal` (see :mod:`bt_ros.action_server`)."""
         from .action_server import RosActionServer
+
         server = RosActionServer(self, name, action_type, on_goal)
         self._servers.append(server)
         return server
@@ -226,13 +236,22 @@ class RosTransport(Transport):
         """Make async actor ``name(request=None, **fields)`` calling service ``server``;
         the result is the response. Cancelling drops the pending request."""
         client = self.node.create_client(srv_type, server)
-        doc = message_doc(f"Call service {server} ({public_name(srv_type)}) and return the response.",
-                          "request", srv_type.Request)
-        return self._client_actor(scope, name, ServiceCall, client, server, srv_type.Request,
-                                  "request", doc)
+        doc = message_doc(
+            f"Call service {server} ({public_name(srv_type)}) and return the response.", "request", srv_type.Request
+        )
+        return self._client_actor(scope, name, ServiceCall, client, server, srv_type.Request, "request", doc)
 
-    def _client_actor(self, scope: Any, name: str, call_type: type, client: Any, server: str,
-                      msg_type: type[RosMessage], param: str, doc: str) -> Any:
+    def _client_actor(
+        self,
+        scope: Any,
+        name: str,
+        call_type: type,
+        client: Any,
+        server: str,
+        msg_type: type[RosMessage],
+        param: str,
+        doc: str,
+    ) -> Any:
         """An async actor ``name(<param>=None, **fields)`` that sends one message through
         ``client`` as a ``call_type`` (GoalCall or ServiceCall) from the executor thread."""
         host, waiter = self.host, self._waiter
@@ -240,14 +259,19 @@ class RosTransport(Transport):
         def send(done: Any, *args: Any, **fields: Any) -> Callable[[], None]:
             # the signature is (<param>=None, **fields), checked by the runtime
             message = args[0] if args else fields.pop(param, None)
-            call = call_type(client, server, waiter, build_message(msg_type, message, fields),
-                             server_timeout=self.server_timeout, on_result=done,
-                             on_error=done.fail)
+            call = call_type(
+                client,
+                server,
+                waiter,
+                build_message(msg_type, message, fields),
+                server_timeout=self.server_timeout,
+                on_result=done,
+                on_error=done.fail,
+            )
             host.post(call.start)
             return lambda: self._post_quietly(call.cancel)
 
-        return scope.add_actor(name, send, Kind.ASYNC, doc=doc,
-                               signature=message_signature(param, msg_type))
+        return scope.add_actor(name, send, Kind.ASYNC, doc=doc, signature=message_signature(param, msg_type))
 
     def _post_quietly(self, fn: Callable[[], Any]) -> None:
         try:

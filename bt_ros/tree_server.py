@@ -18,6 +18,7 @@ feedback from the trees layer's progress, and a trace of every goal.
   (``clock: wall`` in the header): the replay compares times relative to the run's
   start, with a tolerance (see :mod:`bt_tools.replay`).
 """
+
 from __future__ import annotations
 
 import logging
@@ -101,10 +102,11 @@ class TreeGoal(ServedGoal):
 
     server: "TreeServer"
 
-    def __init__(self, server: "TreeServer", handle: Any, call: Invocation | None,
-                 refusal: GoalError | None = None) -> None:
+    def __init__(
+        self, server: "TreeServer", handle: Any, call: Invocation | None, refusal: GoalError | None = None
+    ) -> None:
         super().__init__(server, handle, call, refusal)
-        self.top: Any = None      # the root TreeRun, once the trees layer reports one
+        self.top: Any = None  # the root TreeRun, once the trees layer reports one
         self.last_run: Any = None
         self.final: str | None = None
         self.flush_scheduled = False
@@ -168,8 +170,9 @@ class TreeGoal(ServedGoal):
             if tip:
                 tips.append(tip if r is top else f"{r.mission.name}:{tip}")
         status = self.final or _status_name(getattr(top, "status", None))
-        self.send_feedback(self.server.feedback(self, status, " > ".join(tips) or self.subject,
-                                                int(getattr(top, "ticks", 0))))
+        self.send_feedback(
+            self.server.feedback(self, status, " > ".join(tips) or self.subject, int(getattr(top, "ticks", 0)))
+        )
 
     def _open_trace(self, record_dir: str | pathlib.Path) -> None:
         call = self.call
@@ -178,6 +181,7 @@ class TreeGoal(ServedGoal):
         path = call.path
         try:
             from bt_engine.trees import TraceRecorder, tree_host
+
             host = tree_host(self.rt)
             if host is None:
                 return
@@ -186,8 +190,7 @@ class TreeGoal(ServedGoal):
             stamp = time.strftime("%Y%m%d-%H%M%S")
             gid = self.key.hex()[:8]
             file = folder / f"{stamp}-{path.replace('.', '_')}-{gid}.jsonl"
-            self.recorder = TraceRecorder(file, host, tree=path, inputs=call.kwargs,
-                                          transactions=True)
+            self.recorder = TraceRecorder(file, host, tree=path, inputs=call.kwargs, transactions=True)
             self.trace_path = str(file)
         except Exception:
             log.exception("cannot record the goal for %s", path)
@@ -211,8 +214,9 @@ def _tree_goal(g: ServedGoal) -> TreeGoal:
 class TreeServer(GoalServer):
     """``/actorbt/tree/<name>`` for tree actor ``ref`` (see the module docstring)."""
 
-    def __init__(self, owner: Owner, action: str, action_type: type[RosAction], ref: Any,
-                 progress: TreeProgress) -> None:
+    def __init__(
+        self, owner: Owner, action: str, action_type: type[RosAction], ref: Any, progress: TreeProgress
+    ) -> None:
         super().__init__(owner, action, action_type)
         self.ref = ref
         self.progress = progress
@@ -221,17 +225,19 @@ class TreeServer(GoalServer):
     def admit(self, goal: Any) -> Invocation:
         call = decode_tree_goal(self.owner.rt, self.ref, goal.inputs_yaml)
         if self.active_goals() and not self.owner.preempt:
-            raise GoalError(f"tree {self.ref.path} is already running a goal; cancel it "
-                            "first (this server refuses a second goal: it was started "
-                            "without preempt)", Ending.BUSY)
+            raise GoalError(
+                f"tree {self.ref.path} is already running a goal; cancel it "
+                "first (this server refuses a second goal: it was started "
+                "without preempt)",
+                Ending.BUSY,
+            )
         return call
 
     def active_goals(self) -> list[ServedGoal]:
         """The goals that run or wait to run (not the refused ones, ending now)."""
         return [g for g in self.goals.values() if g.refusal is None]
 
-    def new_goal(self, handle: Any, call: Invocation | None,
-                 refusal: GoalError | None = None) -> TreeGoal:
+    def new_goal(self, handle: Any, call: Invocation | None, refusal: GoalError | None = None) -> TreeGoal:
         return TreeGoal(self, handle, call, refusal)
 
     def describe(self, call: Invocation) -> str:
@@ -246,8 +252,9 @@ class TreeServer(GoalServer):
         return f" (trace {shown_path(path)})" if path else ""
 
     def feedback(self, g: ServedGoal, status: str, active: str = "", ticks: int = 0) -> Any:
-        return self.action_type.Feedback(status=status, active_node=active or g.subject,
-                                         tick_count=max(0, ticks), elapsed=g.elapsed())
+        return self.action_type.Feedback(
+            status=status, active_node=active or g.subject, tick_count=max(0, ticks), elapsed=g.elapsed()
+        )
 
     def first_feedback(self, g: ServedGoal) -> None:
         """Sent from the hub once the work starts (TreeGoal.starting)."""

@@ -22,6 +22,7 @@ A publisher of these messages is a :class:`~bt_engine.trees.TreeObserver`; it pu
 on the runtime's bus, so the bag recorder and the Foxglove view take it like any topic,
 and on the ``ros`` bus ROS tools see it live.
 """
+
 from __future__ import annotations
 
 from typing import Any
@@ -39,19 +40,29 @@ STATUS_DEPTH = 100
 
 def _stamp(t: float) -> Any:
     from builtin_interfaces.msg import Time
+
     sec, nsec = divmod(int(round(t * 1e9)), 1_000_000_000)
     return Time(sec=sec, nanosec=nsec)
 
 
-def status_message(tree: str, path: str, old: str, new: str, t: float, *, run: int = 0,
-                   depth: int = 0) -> Any:
+def status_message(tree: str, path: str, old: str, new: str, t: float, *, run: int = 0, depth: int = 0) -> Any:
     """The DiagnosticArray for node ``path`` of ``tree`` going ``old`` -> ``new`` at ``t`` [s]."""
     from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-    status = DiagnosticStatus(level=bytes([LEVELS.get(new, 1)]), name=f"{tree}/{path}",
-                              message=new, hardware_id="actorbt")
-    status.values = [KeyValue(key=k, value=str(v)) for k, v in
-                     (("tree", tree), ("path", path), ("previous", old), ("run", run),
-                      ("depth", depth), ("time", repr(float(t))))]
+
+    status = DiagnosticStatus(
+        level=bytes([LEVELS.get(new, 1)]), name=f"{tree}/{path}", message=new, hardware_id="actorbt"
+    )
+    status.values = [
+        KeyValue(key=k, value=str(v))
+        for k, v in (
+            ("tree", tree),
+            ("path", path),
+            ("previous", old),
+            ("run", run),
+            ("depth", depth),
+            ("time", repr(float(t))),
+        )
+    ]
     msg = DiagnosticArray(status=[status])
     msg.header.stamp = _stamp(t)
     return msg
@@ -65,6 +76,7 @@ class TreeStatusPublisher(TreeObserver):
 
     def __init__(self, host: Any, topic: str = STATUS_TOPIC) -> None:
         from diagnostic_msgs.msg import DiagnosticArray
+
         self.host = host
         self.rt = host.rt
         self.topic = topic
@@ -74,8 +86,9 @@ class TreeStatusPublisher(TreeObserver):
         host.observers.append(self)
 
     def status_changed(self, run: Any, path: str, old: Any, new: Any) -> None:
-        self._pub.publish(status_message(run.mission.name, path, old.name, new.name, self.rt.now(),
-                                         run=run.id, depth=run.depth))
+        self._pub.publish(
+            status_message(run.mission.name, path, old.name, new.name, self.rt.now(), run=run.id, depth=run.depth)
+        )
         self.published += 1
 
     def close(self) -> None:

@@ -7,6 +7,7 @@ Polling, not inotify: every :data:`PERIOD` seconds a thread compares the folder'
 loaded again on the hub (:meth:`bt_engine.trees.TreeHost.reload_folder`), and
 ``on_reloaded`` hears which tree files do not load (``file:line:column: message``).
 """
+
 from __future__ import annotations
 
 import logging
@@ -50,8 +51,9 @@ class TreeFolderWatch:
         period: seconds between two looks.
     """
 
-    def __init__(self, rt: Any, folder: "str | pathlib.Path",
-                 on_reloaded: Callable[[list[str]], None], period: float = PERIOD) -> None:
+    def __init__(
+        self, rt: Any, folder: "str | pathlib.Path", on_reloaded: Callable[[list[str]], None], period: float = PERIOD
+    ) -> None:
         self.rt = rt
         self.folder = pathlib.Path(folder)
         self.on_reloaded = on_reloaded
@@ -90,10 +92,10 @@ class TreeFolderWatch:
     def reload(self) -> list[str]:
         """Load the folder again now; the errors of its files that did not load."""
         from bt_engine.trees import tree_host
+
         host = tree_host(self.rt, create=True)
         assert host is not None
         self.rt.run_on_hub(host.reload_folder, self.folder)
         where = self.folder.resolve()
-        errors = [e for e in host.library.broken.values()
-                  if pathlib.Path(e.pos.file).resolve().parent == where]
+        errors = [e for e in host.library.broken.values() if pathlib.Path(e.pos.file).resolve().parent == where]
         return [str(e) for e in sorted(errors, key=lambda e: (e.pos.file, e.pos.line, e.pos.column))]
