@@ -98,7 +98,9 @@ class Robot:
         self.grip_setpoint = [self.gripper_width / 2] * 2   # per finger, the profile's [m]
         for j in self.grip_idx:
             p.changeDynamics(b, j, contactStiffness=PAD_STIFFNESS, contactDamping=PAD_DAMPING,
-                             frictionAnchor=int(friction_anchors), physicsClientId=cid)
+                             physicsClientId=cid)
+        self.friction_anchors = friction_anchors
+        self._anchored = False
         self.wheel_target = [0.0, 0.0]
         self.wheel_setpoint = [0.0, 0.0]
         self.apply(0.0)
@@ -156,6 +158,16 @@ class Robot:
             p.setJointMotorControl2(b, j, p.POSITION_CONTROL, targetPosition=sp, targetVelocity=speed,
                                     force=GRIPPER_FORCE, maxVelocity=GRIPPER_CATCH_UP,
                                     positionGain=GRIPPER_GAIN, physicsClientId=cid)
+
+    def anchor_pads(self, on: bool) -> None:
+        """Anchor the pads' friction while they hold something (static friction that does
+        not creep), and free it before they let go: an anchored pad sliding off an object
+        it released drags the object along."""
+        on = on and self.friction_anchors
+        if on != self._anchored:
+            for j in self.grip_idx:
+                p.changeDynamics(self.body, j, frictionAnchor=int(on), physicsClientId=self.cid)
+            self._anchored = on
 
     def gripper_busy(self) -> bool:
         """Whether the servo's setpoint is still on its way to the goal (closing or

@@ -57,10 +57,9 @@ def _static_boxes(cid, boxes: list[Box]) -> list[int]:
 class Scene:
     """The static world and the movable objects of one pybullet client."""
 
-    def __init__(self, cid: int, spec: WorldSpec, friction_anchors: bool = True):
+    def __init__(self, cid: int, spec: WorldSpec):
         self.cid = cid
         self.spec = spec
-        self.friction_anchors = friction_anchors
         x0, y0, x1, y1 = spec.bounds
         half = [(x1 - x0) / 2 + 1.0, (y1 - y0) / 2 + 1.0, 0.05]
         col = p.createCollisionShape(p.GEOM_BOX, halfExtents=half, physicsClientId=cid)
@@ -86,13 +85,6 @@ class Scene:
         # A body at rest leaves the contact solver until something touches it: a house's
         # resting objects were a quarter of a driving robot's physics time.
         p.changeDynamics(body, -1, activationState=p.ACTIVATION_STATE_ENABLE_SLEEPING, physicsClientId=self.cid)
-        if self.friction_anchors:
-            # Static friction that holds without creeping: Bullet's iterative friction,
-            # stopped short of converging, lets a body held between two pads creep about
-            # their line; an anchor keeps each contact where it stuck until it slips
-            # (sim/simworld.py HOLDING_SOLVER_ITERATIONS).
-            for link in range(-1, p.getNumJoints(body, physicsClientId=self.cid)):
-                p.changeDynamics(body, link, frictionAnchor=1, physicsClientId=self.cid)
         self.objects[obj.name] = body
         self.categories[obj.name] = obj.category
         return body

@@ -46,8 +46,8 @@ SOLVER_RESIDUAL = None
 #: the contact solver's iterations while the fingers hold something (the servo's setpoint
 #: has reached its goal and a finger stands short of it; a grasp still closing is solved
 #: with the usual ones). Friction alone keeps a held body, and a solver stopped short of
-#: converging lets it creep about the line between the pads; the friction anchors
-#: (sim/scene.py) hold each contact where it stuck. Over a 21 s carry
+#: converging lets it creep about the line between the pads; the pads' friction anchors
+#: (sim/robot.py anchor_pads) hold each contact where it stuck. Over a 21 s carry
 #: (tests/test_sim_grip_hold.py), 9 grasps of bottles, cans and cartons turned in the hand,
 #: in degrees (median / worst): 4.4 / 13.7 at 50 iterations without anchors, 1.1 / 5.0 at
 #: 300 without anchors (both at 240 Hz); with anchors, 0.9 / 2.2 at 150 iterations and
@@ -104,10 +104,10 @@ class SimWorld:
     the controllers, then steps ``physics_hz/control_hz`` substeps, then integrates the wheel
     odometry); at ``still_hand_physics_hz`` while the arm and the gripper are still, holding
     something or not (None: always ``physics_hz``; by default :data:`STILL_HAND_PHYSICS_HZ`
-    or ``ACTORBT_SIM_STILL_HAND_HZ``). ``friction_anchors`` (default on): the objects' and
-    the finger pads' contacts keep static friction without creeping (sim/scene.py). Robot state topics go out at
-    ``publish_hz``, the lidar at ``lidar.rate_hz`` and the camera at ``camera_hz``, each
-    only while someone subscribes.
+    or ``ACTORBT_SIM_STILL_HAND_HZ``). ``friction_anchors`` (default on): while the fingers
+    hold something, the pads' contacts keep static friction without creeping (sim/robot.py).
+    Robot state topics go out at ``publish_hz``, the lidar at ``lidar.rate_hz`` and the
+    camera at ``camera_hz``, each only while someone subscribes.
 
     Senses: ``odom_noise`` (an :class:`~sim.odometry.OdomNoise`; ``OdomNoise.exact()`` for
     none) and ``lidar`` (a :class:`~sim.lidar.LidarModel`; ``lidar_noise=False`` for exact
@@ -216,7 +216,7 @@ class SimWorld:
         # the EGL plugin only sees visual shapes created after it loads: load it first
         self._renderer: Renderer | None = (Renderer(cid, prefer_egl=self.prefer_egl and not self.gui)
                                            if self._camera_enabled else None)
-        self.scene = Scene(cid, self.spec, friction_anchors=self.friction_anchors)
+        self.scene = Scene(cid, self.spec)
         # varied poses: the objects come to rest before the robot is there and time starts
         self.settle_steps = self.scene.settle(self.spec.settle_steps) if self.spec.settle_steps else 0
         self.robot = Robot(cid, self.spec.robot_start, friction_anchors=self.friction_anchors)
@@ -361,6 +361,7 @@ class SimWorld:
     def _choose_iterations(self, holding: bool) -> None:
         """More solver iterations for the next control period while the fingers hold
         something (friction alone keeps it), the usual ones otherwise."""
+        self.robot.anchor_pads(holding)
         n = self.holding_solver_iterations if holding else self.solver_iterations
         if n != self._iterations_now:
             p.setPhysicsEngineParameter(numSolverIterations=n, physicsClientId=self.cid)

@@ -1,5 +1,5 @@
 """A held object stays as the fingers took it (sim/simworld.py HOLDING_SOLVER_ITERATIONS,
-the friction anchors of sim/scene.py).
+the pads' friction anchors of sim/robot.py).
 
 pybullet's friction is solved iteratively; stopped short of converging, it lets a body
 held by friction alone creep about the line between the pads. At the contact solver's
