@@ -161,8 +161,8 @@ class Robot:
 
     def anchor_pads(self, on: bool) -> None:
         """Anchor the pads' friction while they hold something (static friction that does
-        not creep), and free it before they let go: an anchored pad sliding off an object
-        it released drags the object along."""
+        not creep), and free it as they let go: an anchor keeps a contact where it stuck,
+        so kept through the release it would hold the object to a pad moving away."""
         on = on and self.friction_anchors
         if on != self._anchored:
             for j in self.grip_idx:
