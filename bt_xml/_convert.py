@@ -538,31 +538,10 @@ class Importer:
         within the tick, as reactive parents need), else ``do:``."""
         if not _ACTOR.match(node_id):
             raise BtXmlError(el.pos, f"node {node_id!r} is not a valid actor name, expected letters, digits and '_'")
-        args: dict[str, Any] = {}
-        outs: list[tuple[str, str]] = []
-        names = [p.name for p in spec.ports] if spec is not None else []
-        for attr, text in ports.items():
-            if attr == "_autoremap":
-                raise BtXmlError(el.at(attr), "_autoremap applies to SubTree nodes only")
-            port = spec.port(attr) if spec is not None else None
-            if spec is not None and port is None:
-                raise BtXmlError(
-                    el.at(attr),
-                    f"node {node_id!r} has no port {attr!r}{suggest(attr, names)}, expected "
-                    f"one of: {', '.join(names) or '(no ports)'}",
-                )
-            if not _IDENT.match(attr):
-                raise BtXmlError(el.at(attr), f"port {attr!r} is not a valid argument name")
-            if port is None or port.reads:
-                args[attr] = self.input_value(el, attr, text, ctx, port)
-            if port is not None and port.writes:
-                key = self.key(el, attr, text) or (text.strip() if _IDENT.match(text.strip()) else None)
-                if key is None:
-                    raise BtXmlError(
-                        el.at(attr), f'output port {attr!r} is {text!r}, expected a blackboard key such as "{{path}}"'
-                    )
-                outs.append((attr, key))
-                ctx.write(key, el.at(attr))
+        if "_autoremap" in ports:
+            raise BtXmlError(el.at("_autoremap"), "_autoremap applies to SubTree nodes only")
+        declared = {p.name: p for p in spec.ports} if spec is not None else None
+        args, outs = self.port_values(el, node_id, ports, declared, ctx)
         for port in spec.ports if spec is not None else ():
             if port.name in ports or port.default is None:
                 continue
@@ -594,29 +573,12 @@ class Importer:
         ``{key}`` defaults included, or unset)."""
         if not _IDENT.match(node_id):
             raise BtXmlError(el.pos, f"node {node_id!r} is not a valid plugin name, expected letters, digits and '_'")
-        declared = {p.name: p for p in spec.ports} if spec is not None else plugin_ports(plugin, el.pos)
-        args: dict[str, Any] = {}
-        outs: dict[str, str] = {}
-        for attr, text in ports.items():
-            port = declared.get(attr)
-            if port is None and (spec is not None or plugin is not None):
-                raise BtXmlError(
-                    el.at(attr),
-                    f"node {node_id!r} has no port {attr!r}{suggest(attr, declared)}, "
-                    f"expected one of: {', '.join(declared) or '(no ports)'}",
-                )
-            if not _IDENT.match(attr):
-                raise BtXmlError(el.at(attr), f"port {attr!r} is not a valid port name")
-            if port is None or port.reads:
-                args[attr] = self.input_value(el, attr, text, ctx, port)
-            if port is not None and port.writes:
-                key = self.key(el, attr, text) or (text.strip() if _IDENT.match(text.strip()) else None)
-                if key is None:
-                    raise BtXmlError(
-                        el.at(attr), f'output port {attr!r} is {text!r}, expected a blackboard key such as "{{goal}}"'
-                    )
-                outs[attr] = key
-                ctx.write(key, el.at(attr))
+        if spec is not None:
+            declared: dict[str, PortSpec] | None = {p.name: p for p in spec.ports}
+        else:
+            declared = plugin_ports(plugin, el.pos) if plugin is not None else None
+        args, out_list = self.port_values(el, node_id, ports, declared, ctx)
+        outs = dict(out_list)
         mission_kind = "control" if kind == "Control" else "decorator"
         node: dict[str, Any] = {mission_kind: node_id}
         if args:
@@ -628,6 +590,41 @@ class Importer:
         else:
             node["child"] = self.child(el, ctx, "decorator")
         return node
+
+    def port_values(
+        self,
+        el: XElement,
+        node_id: str,
+        ports: dict[str, str],
+        declared: dict[str, PortSpec] | None,
+        ctx: _Tree,
+    ) -> tuple[dict[str, Any], list[tuple[str, str]]]:
+        """A node's attributes as the inputs it reads and the (port, key) pairs it writes.
+        ``declared``: its ports (the model's, or a plugin's), each attribute checked against
+        them; None: nothing declares the node, so every attribute is an input."""
+        args: dict[str, Any] = {}
+        outs: list[tuple[str, str]] = []
+        for attr, text in ports.items():
+            port = declared.get(attr) if declared is not None else None
+            if declared is not None and port is None:
+                raise BtXmlError(
+                    el.at(attr),
+                    f"node {node_id!r} has no port {attr!r}{suggest(attr, declared)}, "
+                    f"expected one of: {', '.join(declared) or '(no ports)'}",
+                )
+            if not _IDENT.match(attr):
+                raise BtXmlError(el.at(attr), f"port {attr!r} is not a valid argument name")
+            if port is None or port.reads:
+                args[attr] = self.input_value(el, attr, text, ctx, port)
+            if port is not None and port.writes:
+                key = self.key(el, attr, text) or (text.strip() if _IDENT.match(text.strip()) else None)
+                if key is None:
+                    raise BtXmlError(
+                        el.at(attr), f'output port {attr!r} is {text!r}, expected a blackboard key such as "{{goal}}"'
+                    )
+                outs.append((attr, key))
+                ctx.write(key, el.at(attr))
+        return args, outs
 
     def call(self, actor: str, args: dict[str, Any], outs: list[tuple[str, str]], ctx: _Tree, kind: str = "do") -> dict:
         node: dict[str, Any] = {kind: actor}
