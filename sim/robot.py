@@ -169,11 +169,11 @@ class Robot:
                 p.changeDynamics(self.body, j, frictionAnchor=int(on), physicsClientId=self.cid)
             self._anchored = on
 
-    def gripper_busy(self) -> bool:
-        """Whether the servo's setpoint is still on its way to the goal (closing or
-        opening). Fingers that stand still on what they hold are not busy."""
+    def gripper_busy(self, finger_positions) -> bool:
+        """Whether the servo's setpoint is still on its way to the goal, or a finger stands
+        more than a millimetre short of it (it squeezes what it holds)."""
         goal = self.gripper_width / 2
-        return any(sp != goal for sp in self.grip_setpoint)
+        return any(sp != goal for sp in self.grip_setpoint) or self.squeezing(finger_positions)
 
     def holding(self, finger_positions) -> bool:
         """Whether the servo's setpoint has reached its goal and a finger stands short of

@@ -49,18 +49,19 @@ SOLVER_RESIDUAL = None
 #: converging lets it creep about the line between the pads; the pads' friction anchors
 #: (sim/robot.py anchor_pads) hold each contact where it stuck. Over a 21 s carry
 #: (tests/test_sim_grip_hold.py), 9 grasps of bottles, cans and cartons turned in the hand,
-#: in degrees (median / worst): 4.4 / 13.7 at 50 iterations without anchors, 1.1 / 5.0 at
-#: 300 without anchors (both at 240 Hz); with anchors, 0.9 / 2.2 at 150 iterations and
-#: 120 Hz, 2.0 / 8.6 at 100 and 120 Hz, 1.9 / 5.9 at 50 and 240 Hz. 150 at 120 Hz cost a
-#: third of a tick of 300 at 240 Hz.
+#: in degrees (median / worst), at 240 Hz: 4.4 / 13.7 at 50 iterations without anchors,
+#: 1.1 / 5.0 at 300 without anchors, 0.8 / 2.5 at 150 with anchors, which took the demo
+#: from 117 to 102 ms per simulated second (bench/bench_sim_budget.py). Carried at the
+#: still hand's 120 Hz instead, two of 19 house_hard bottles ended beside the pallet after
+#: their release (seeds 2008 and 2017).
 HOLDING_SOLVER_ITERATIONS = 150
-#: [Hz] physics substeps while the arm or the gripper moves: grasps, lifts and placements
-#: are solved at this rate
+#: [Hz] physics substeps while the arm or the gripper moves or holds something: grasps,
+#: carries and placements are solved at this rate
 PHYSICS_HZ = 240
-#: [Hz] physics substeps while the hand is still (driving, looking, standing, carrying what
-#: it holds); None: always PHYSICS_HZ. Resting objects and the wheel odometry behave as at
-#: 240 Hz (bench/bench_physics.py) for 0.4 of the cost, and a held body keeps still in the
-#: hand at HOLDING_SOLVER_ITERATIONS with the friction anchors.
+#: [Hz] physics substeps while the hand is still and empty (driving, looking, standing);
+#: None: always PHYSICS_HZ. Resting objects and the wheel odometry behave as at 240 Hz
+#: (bench/bench_physics.py) for 0.4 of the cost. A held body stays at the full rate (see
+#: HOLDING_SOLVER_ITERATIONS).
 #: ``ACTORBT_SIM_STILL_HAND_HZ=240`` (or none) sets one rate for every world of a run, also
 #: in an evaluation's worker processes.
 STILL_HAND_PHYSICS_HZ: int | None = 120
@@ -102,9 +103,9 @@ class SimWorld:
 
     Timing: physics runs at ``physics_hz`` in ``control_hz`` timer ticks (each tick applies
     the controllers, then steps ``physics_hz/control_hz`` substeps, then integrates the wheel
-    odometry); at ``still_hand_physics_hz`` while the arm and the gripper are still, holding
-    something or not (None: always ``physics_hz``; by default :data:`STILL_HAND_PHYSICS_HZ`
-    or ``ACTORBT_SIM_STILL_HAND_HZ``). ``friction_anchors`` (default on): while the fingers
+    odometry); at ``still_hand_physics_hz`` while the arm and the gripper are still and
+    hold nothing (None: always ``physics_hz``; by default :data:`STILL_HAND_PHYSICS_HZ` or
+    ``ACTORBT_SIM_STILL_HAND_HZ``). ``friction_anchors`` (default on): while the fingers
     hold something, the pads' contacts keep static friction without creeping (sim/robot.py).
     Robot state topics go out at ``publish_hz``, the lidar at ``lidar.rate_hz`` and the
     camera at ``camera_hz``, each only while someone subscribes.
@@ -351,7 +352,7 @@ class SimWorld:
         q, v, _ = self.robot.joint_states()
         self._choose_iterations(self.robot.holding(q[6:8]))
         if follows_hand and (max(map(abs, v[2:6])) > ARM_STILL or max(map(abs, v[6:8])) > FINGER_STILL
-                             or self.robot.gripper_busy()):
+                             or self.robot.gripper_busy(q[6:8])):
             self._hand_moved_at = self.t
         yaw = self.robot.base_pose()[0][2]
         # the encoders see the wheel joints; the gyro the body's true rotation
