@@ -56,8 +56,9 @@ $(STAMP): pyproject.toml | $(IFACE_STAMP)
 
 venv: $(STAMP)
 
-# the linter, the format check and the engine's type check first (seconds), then the suite on one worker
-# per core (pytest-xdist); a test file stays in one worker; the slowest tests are listed at the end
+# the linter, the format check and the engine's type check first (seconds), then the suite
+# on one worker per core (pytest-xdist); a test file stays in one worker; the slowest tests
+# are listed at the end
 test: $(STAMP)
 	$(PY) -m ruff check .
 	$(PY) -m ruff format --check .
