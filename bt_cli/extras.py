@@ -8,6 +8,7 @@ marked, and running it says which extra to install instead of a bare ImportError
 from __future__ import annotations
 
 import argparse
+import functools
 import importlib.util
 from typing import Callable
 
@@ -47,6 +48,7 @@ EXTRA_OF = {
 SOURCE_BUILT = {"actorbt_interfaces", "tf2_msgs", "control_msgs", "nav2_msgs"}
 
 
+@functools.cache  # several command modules ask about the same extra at every start
 def installed(extra: str) -> bool:
     return importlib.util.find_spec(MARKER[extra]) is not None
 

@@ -30,7 +30,7 @@ trace events and the safety of a mission. Replaying, drawing and plotting a miss
 trace, and the tree commands, are ``bt_tools``.
 """
 
-from ._behaviours import ActorLeaf, CallSite
+from ._behaviours import CallSite
 from ._errors import (
     ArgumentMismatchError,
     CheckEvaluationError,
@@ -129,7 +129,6 @@ from .nav2_nodes import (
 __all__ = [
     "ActorCall",
     "ActorInfo",
-    "ActorLeaf",
     "And",
     "ArgumentMismatchError",
     "BehaviourFactory",
