@@ -58,10 +58,15 @@ GRIPPER_CATCH_UP = 0.5    # m/s
 PAD_STIFFNESS = 5.0e4     # N/m
 PAD_DAMPING = 200.0       # N s/m: no bounce when a pad meets a 60 g carton
 GRIPPER_MAX_OPENING = 0.09
+# The fingers' linkage: stiff against what a held object pushes sideways with (its weight
+# and the base's accelerations, a few newtons), and a positional drift of the two fingers
+# corrected over a few substeps
+FINGER_COUPLING_FORCE = 200.0   # N
+FINGER_COUPLING_ERP = 0.2
 
 
 class Robot:
-    def __init__(self, cid: int, start=(0.0, 0.0, 0.0), arm_home=ARM_HOME):
+    def __init__(self, cid: int, start=(0.0, 0.0, 0.0), arm_home=ARM_HOME, friction_anchors: bool = True):
         self.cid = cid
         x, y, yaw = start
         flags = (p.URDF_USE_INERTIA_FROM_FILE | p.URDF_USE_IMPLICIT_CYLINDER | p.URDF_USE_SELF_COLLISION
@@ -99,9 +104,25 @@ class Robot:
         for j in self.grip_idx:
             p.changeDynamics(b, j, contactStiffness=PAD_STIFFNESS, contactDamping=PAD_DAMPING,
                              physicsClientId=cid)
+        self._couple_fingers()
+        self.friction_anchors = friction_anchors
+        self._anchored = False
         self.wheel_target = [0.0, 0.0]
         self.wheel_setpoint = [0.0, 0.0]
         self.apply(0.0)
+
+    def _couple_fingers(self) -> None:
+        """One servo drives both fingers through a linkage (ROBOTIS' URDF:
+        gripper_right_joint mimics gripper_left_joint, multiplier 1), so they always stand
+        symmetric about the tool's axis. Independent fingers, each pushing with the same
+        force limit, would leave what they hold free to slide sideways between them with
+        every jolt of the base, until one finger reaches its end stop."""
+        left, right = self.grip_idx
+        coupling = p.createConstraint(self.body, left, self.body, right, p.JOINT_GEAR, [0, 1, 0],
+                                      [0, 0, 0], [0, 0, 0], physicsClientId=self.cid)
+        # joint velocities: left - right = 0; the erp pulls a drift of the positions back
+        p.changeConstraint(coupling, gearRatio=-1, erp=FINGER_COUPLING_ERP, maxForce=FINGER_COUPLING_FORCE,
+                           physicsClientId=self.cid)
 
     # ---------------- commands ----------------
     def set_base_velocity(self, v: float, w: float):
@@ -156,6 +177,16 @@ class Robot:
             p.setJointMotorControl2(b, j, p.POSITION_CONTROL, targetPosition=sp, targetVelocity=speed,
                                     force=GRIPPER_FORCE, maxVelocity=GRIPPER_CATCH_UP,
                                     positionGain=GRIPPER_GAIN, physicsClientId=cid)
+
+    def anchor_pads(self, on: bool) -> None:
+        """Anchor the pads' friction while they hold something (static friction that does
+        not creep), and free it as they let go: an anchor keeps a contact where it stuck,
+        so kept through the release it would hold the object to a pad moving away."""
+        on = on and self.friction_anchors
+        if on != self._anchored:
+            for j in self.grip_idx:
+                p.changeDynamics(self.body, j, frictionAnchor=int(on), physicsClientId=self.cid)
+            self._anchored = on
 
     def gripper_busy(self, finger_positions) -> bool:
         """Whether the servo's setpoint is still on its way to the goal, or a finger stands

@@ -16,6 +16,7 @@ from control_msgs.msg import GripperCommand as GripperCommandMsg
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 from bt_engine import Runtime
+from planning import ArmKinematics
 from sim import SimWorld
 from sim.actuators import gripper_position
 from sim.topics import CMD_VEL
@@ -170,7 +171,46 @@ def test_friction_grasp_holds_a_can(robot):
     z2 = sim.object_pose("can_1")[2]
     assert sim.in_gripper("can_1")
     assert abs(z2 - z1) < 0.005, (z1, z2)
-    assert p.getNumConstraints(physicsClientId=sim.cid) == 0      # friction only
+    assert _constraints_on(sim, sim.scene.objects["can_1"]) == []     # friction only
+
+
+def _constraints_on(sim, body):
+    cid = sim.cid
+    infos = [p.getConstraintInfo(p.getConstraintUniqueId(i, physicsClientId=cid), physicsClientId=cid)
+             for i in range(p.getNumConstraints(physicsClientId=cid))]
+    return [info for info in infos if body in (info[0], info[2])]
+
+
+def test_the_fingers_move_as_one_and_a_held_can_does_not_slide_between_them():
+    """One servo drives both fingers through a linkage (the right finger mimics the left in
+    ROBOTIS' URDF): pushed sideways, a held can takes both fingers with it or neither."""
+    sim = SimWorld(None, "open_floor", seed=0, camera=False, cmd_vel_timeout=0)
+    try:
+        kin, reach = ArmKinematics.from_urdf(), 0.26
+        sim.robot.set_gripper(0.09)
+        sim.robot.set_arm(kin.ik(reach, 0.0, 0.062, 0.0).best)
+        sim.advance(2.0)
+        ee = sim.link_pose("end_effector_link")[0]
+        sim.set_object_pose("can_1", ee[0], ee[1])
+        sim.robot.set_gripper(0.0)
+        sim.advance(1.5)
+        sim.set_arm_positions(kin.ik(reach, 0.0, 0.162, 0.0).best, 1.5)
+        sim.advance(2.0)
+        can = sim.scene.objects["can_1"]
+
+        def fingers():
+            return [s[0] for s in p.getJointStates(sim.robot.body, sim.robot.grip_idx, physicsClientId=sim.cid)]
+
+        left, right = fingers()
+        assert left == pytest.approx(right, abs=0.0005)
+        for _ in range(round(1.0 / sim.dt)):     # 3 N sideways for a second, about its weight
+            p.applyExternalForce(can, -1, [0.0, 3.0, 0.0], [0, 0, 0], p.LINK_FRAME, physicsClientId=sim.cid)
+            sim.step()
+        left, right = fingers()
+        assert left == pytest.approx(right, abs=0.001)
+        assert sim.in_gripper("can_1")
+    finally:
+        sim.close()
 
 
 def _scripted_run(seed):
