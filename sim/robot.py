@@ -66,7 +66,7 @@ FINGER_COUPLING_ERP = 0.2
 
 
 class Robot:
-    def __init__(self, cid: int, start=(0.0, 0.0, 0.0), arm_home=ARM_HOME, friction_anchors: bool = True):
+    def __init__(self, cid: int, start=(0.0, 0.0, 0.0), arm_home=ARM_HOME):
         self.cid = cid
         x, y, yaw = start
         flags = (p.URDF_USE_INERTIA_FROM_FILE | p.URDF_USE_IMPLICIT_CYLINDER | p.URDF_USE_SELF_COLLISION
@@ -105,8 +105,6 @@ class Robot:
             p.changeDynamics(b, j, contactStiffness=PAD_STIFFNESS, contactDamping=PAD_DAMPING,
                              physicsClientId=cid)
         self._couple_fingers()
-        self.friction_anchors = friction_anchors
-        self._anchored = False
         self.wheel_target = [0.0, 0.0]
         self.wheel_setpoint = [0.0, 0.0]
         self.apply(0.0)
@@ -177,16 +175,6 @@ class Robot:
             p.setJointMotorControl2(b, j, p.POSITION_CONTROL, targetPosition=sp, targetVelocity=speed,
                                     force=GRIPPER_FORCE, maxVelocity=GRIPPER_CATCH_UP,
                                     positionGain=GRIPPER_GAIN, physicsClientId=cid)
-
-    def anchor_pads(self, on: bool) -> None:
-        """Anchor the pads' friction while they hold something (static friction that does
-        not creep), and free it as they let go: an anchor keeps a contact where it stuck,
-        so kept through the release it would hold the object to a pad moving away."""
-        on = on and self.friction_anchors
-        if on != self._anchored:
-            for j in self.grip_idx:
-                p.changeDynamics(self.body, j, frictionAnchor=int(on), physicsClientId=self.cid)
-            self._anchored = on
 
     def gripper_busy(self, finger_positions) -> bool:
         """Whether the servo's setpoint is still on its way to the goal, or a finger stands

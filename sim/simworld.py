@@ -46,13 +46,13 @@ SOLVER_RESIDUAL = None
 #: the contact solver's iterations while the fingers hold something (the servo's setpoint
 #: has reached its goal and a finger stands short of it; a grasp still closing is solved
 #: with the usual ones). Friction alone keeps a held body, and a solver stopped short of
-#: converging lets it creep about the line between the pads; the pads' friction anchors
-#: (sim/robot.py anchor_pads) hold each contact where it stuck. Over a 21 s carry
+#: converging lets it creep about the line between the pads. Over a 21 s carry
 #: (tests/test_sim_grip_hold.py), 9 grasps of bottles, cans and cartons turned in the hand,
 #: in degrees (median / worst), at 240 Hz with the fingers coupled as on the real gripper:
-#: 3.3 / 17.4 at 50 iterations without anchors, 2.1 / 4.4 at 100 without, 2.7 / 8.8 at 50
-#: with anchors and 1.0 / 2.3 at 100 with them; the fingers uncoupled and no anchors, the
-#: previous 300 iterations: 1.1 / 5.0 at 2.2 ms a control tick against 1.4 here.
+#: 3.3 / 17.4 at 50 iterations, 2.1 / 4.4 at 100, 1.7 / 4.2 at 150, 2.4 / 2.9 at 200; with
+#: the fingers uncoupled, 1.1 / 5.0 at 300, for 1.6 times the cost of 100. Bullet's
+#: friction anchors on the pads held better (1.0 / 2.3 at 100) but kept stale contacts
+#: after the fingers opened: a tilted can stayed wedged between open-commanded pads.
 HOLDING_SOLVER_ITERATIONS = 100
 #: [Hz] physics substeps while the arm or the gripper moves or holds something: grasps,
 #: carries and placements are solved at this rate
@@ -104,10 +104,8 @@ class SimWorld:
     the controllers, then steps ``physics_hz/control_hz`` substeps, then integrates the wheel
     odometry); at ``still_hand_physics_hz`` while the arm and the gripper are still and
     hold nothing (None: always ``physics_hz``; by default :data:`STILL_HAND_PHYSICS_HZ` or
-    ``ACTORBT_SIM_STILL_HAND_HZ``). ``friction_anchors`` (default on): while the fingers
-    hold something, the pads' contacts keep static friction without creeping (sim/robot.py).
-    Robot state topics go out at ``publish_hz``, the lidar at ``lidar.rate_hz`` and the
-    camera at ``camera_hz``, each only while someone subscribes.
+    ``ACTORBT_SIM_STILL_HAND_HZ``). Robot state topics go out at ``publish_hz``, the lidar at
+    ``lidar.rate_hz`` and the camera at ``camera_hz``, each only while someone subscribes.
 
     Senses: ``odom_noise`` (an :class:`~sim.odometry.OdomNoise`; ``OdomNoise.exact()`` for
     none) and ``lidar`` (a :class:`~sim.lidar.LidarModel`; ``lidar_noise=False`` for exact
@@ -135,7 +133,7 @@ class SimWorld:
                  lidar_noise: bool = True, debug_ground_truth: bool | None = None,
                  locations=None, initial_pose: bool = True, faults=None,
                  solver_iterations: int = SOLVER_ITERATIONS, solver_residual: float | None = SOLVER_RESIDUAL,
-                 holding_solver_iterations: int = HOLDING_SOLVER_ITERATIONS, friction_anchors: bool = True):
+                 holding_solver_iterations: int = HOLDING_SOLVER_ITERATIONS):
         if still_hand_physics_hz == "env":
             still_hand_physics_hz = _still_hand_hz()
         still_hz = physics_hz if still_hand_physics_hz is None else still_hand_physics_hz
@@ -150,7 +148,6 @@ class SimWorld:
         self.still_hand_substeps = still_hz // control_hz
         self.solver_iterations, self.solver_residual = int(solver_iterations), solver_residual
         self.holding_solver_iterations = int(holding_solver_iterations)
-        self.friction_anchors = bool(friction_anchors)
         self.publish_every = max(1, round(control_hz / publish_hz))
         self.lidar_model = lidar or LidarModel()
         self.scan_every = max(1, round(control_hz / self.lidar_model.rate_hz))
@@ -219,7 +216,7 @@ class SimWorld:
         self.scene = Scene(cid, self.spec)
         # varied poses: the objects come to rest before the robot is there and time starts
         self.settle_steps = self.scene.settle(self.spec.settle_steps) if self.spec.settle_steps else 0
-        self.robot = Robot(cid, self.spec.robot_start, friction_anchors=self.friction_anchors)
+        self.robot = Robot(cid, self.spec.robot_start)
         self.odometry = WheelOdometry(self._odom_noise or OdomNoise(), odometry_rng(self.seed))
         self.gyro = Gyro(self._odom_noise or OdomNoise(), gyro_rng(self.seed))
         self.lidar = Lidar(cid, self.lidar_model, lidar_rng(self.seed),
@@ -361,7 +358,6 @@ class SimWorld:
     def _choose_iterations(self, holding: bool) -> None:
         """More solver iterations for the next control period while the fingers hold
         something (friction alone keeps it), the usual ones otherwise."""
-        self.robot.anchor_pads(holding)
         n = self.holding_solver_iterations if holding else self.solver_iterations
         if n != self._iterations_now:
             p.setPhysicsEngineParameter(numSolverIterations=n, physicsClientId=self.cid)
