@@ -1,5 +1,6 @@
 """ROS 2 (rclpy) side of the engine, one concept per module. Imports go down this list:
 
+    rostypes     names for the values of no fixed type (an actor's result, a QoS setting)
     names        node, action and service names of ``actorbt serve`` (and namespaces)
     error_codes  why a goal ended -> the ``error_code`` constants of the interface files
     yamlio       values as YAML text (results, and the arguments a client sends)

@@ -14,10 +14,13 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, cast
 
 from bt_tools.replay import ReplayError, replay
 from .bag import STRING, TRACE_TOPIC
+
+if TYPE_CHECKING:
+    from rosbags.typesys.stores.ros2_jazzy import std_msgs__msg__String
 
 __all__ = ["bag_folder", "cmd_replay", "trace_lines"]
 
@@ -57,7 +60,11 @@ def trace_lines(path: str | Path) -> list[str]:
                     "--record-dir)"
                 )
             store = typestore()
-            return [store.deserialize_cdr(raw, STRING).data for _, _, raw in reader.messages(connections=connections)]
+            # deserialize_cdr is typed to return object; these connections are std_msgs/String
+            return [
+                cast("std_msgs__msg__String", store.deserialize_cdr(raw, STRING)).data
+                for _, _, raw in reader.messages(connections=connections)
+            ]
     except ReaderError as exc:
         raise ReplayError(f"{folder}: cannot read the bag: {exc}") from None
 

@@ -13,9 +13,13 @@ a bag or a Foxglove channel decodes with tools that know nothing of actorbt.
 from __future__ import annotations
 
 import functools
-from typing import Any
+from typing import TYPE_CHECKING
 
+from bt_engine.bus.messages import RosMessage
 from bt_engine.errors import ActorbtError
+
+if TYPE_CHECKING:
+    from rosbags.typesys.store import Typestore
 
 __all__ = ["UnknownDefinitionError", "message_definition", "serialize", "type_hash", "typestore"]
 
@@ -24,7 +28,7 @@ class UnknownDefinitionError(ActorbtError, LookupError):
     """A message type the rosbags type store does not define."""
 
 
-def serialize(msg: Any) -> bytes:
+def serialize(msg: RosMessage) -> bytes:
     """``msg`` (a ROS 2 Python message) as CDR bytes, encapsulation header included."""
     from rclpy.serialization import serialize_message
 
@@ -32,7 +36,7 @@ def serialize(msg: Any) -> bytes:
 
 
 @functools.lru_cache(maxsize=1)
-def typestore() -> Any:
+def typestore() -> Typestore:
     """rosbags' type store for ROS 2 Jazzy (built once: it is immutable)."""
     from rosbags.typesys import Stores, get_typestore
 

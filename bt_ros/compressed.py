@@ -9,8 +9,9 @@ Float images (depth in metres) have no lossless 8/16-bit form here and are refus
 
 from __future__ import annotations
 
-from typing import Any
+from types import ModuleType
 
+from bt_engine.bus.messages import RosMessage
 from bt_engine.errors import ActorbtError
 
 __all__ = ["CompressionError", "JPEG_QUALITY", "compress_image", "compressed_topic"]
@@ -29,7 +30,7 @@ def compressed_topic(topic: str) -> str:
     return topic.rstrip("/") + "/compressed"
 
 
-def _cv2() -> Any:
+def _cv2() -> ModuleType:
     try:
         import cv2
     except ImportError as exc:
@@ -39,7 +40,7 @@ def _cv2() -> Any:
     return cv2
 
 
-def compress_image(msg: Any, quality: int = JPEG_QUALITY) -> Any:
+def compress_image(msg: RosMessage, quality: int = JPEG_QUALITY) -> RosMessage:
     """``msg`` (sensor_msgs/Image) as a sensor_msgs/CompressedImage with the same header."""
     import numpy as np
     from sensor_msgs.msg import CompressedImage

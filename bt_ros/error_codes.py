@@ -10,7 +10,7 @@ constant up on the result type, so the numbers live in one place, the interface 
 from __future__ import annotations
 
 import enum
-from typing import Any
+from bt_engine.bus.messages import RosMessage
 
 __all__ = ["Ending", "REFUSED", "error_code", "ending_of"]
 
@@ -37,7 +37,7 @@ REFUSED = (Ending.INVALID_GOAL, Ending.BUSY)
 _FAILED_NAMES = ("TREE_FAILED", "ACTOR_FAILED")
 
 
-def error_code(result_type: Any, ending: Ending) -> int:
+def error_code(result_type: type[RosMessage], ending: Ending) -> int:
     """The ``error_code`` constant for ``ending`` on ``result_type`` (a Result or
     Response class); ``UNKNOWN`` when the type has no such constant."""
     code = _constant(result_type, ending)
@@ -46,7 +46,7 @@ def error_code(result_type: Any, ending: Ending) -> int:
     return code or 0
 
 
-def ending_of(result_type: Any, code: int) -> Ending:
+def ending_of(result_type: type[RosMessage], code: int) -> Ending:
     """The :class:`Ending` a result's ``error_code`` stands for (clients)."""
     for ending in Ending:
         if _constant(result_type, ending) == code:
@@ -54,7 +54,7 @@ def ending_of(result_type: Any, code: int) -> Ending:
     return Ending.UNKNOWN
 
 
-def _constant(result_type: Any, ending: Ending) -> int | None:
+def _constant(result_type: type[RosMessage], ending: Ending) -> int | None:
     names = _FAILED_NAMES if ending is Ending.FAILED else (ending.value,)
     for name in names:
         code = getattr(result_type, name, None)

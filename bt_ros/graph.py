@@ -9,9 +9,14 @@ services) are left out, as ``ros2 topic list`` leaves them out.
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING
 
 from bt_engine.bus.transport import EndpointInfo, TopicInfo, qos_label
+
+if TYPE_CHECKING:
+    from rclpy.node import Node
+    from rclpy.qos import QoSProfile
+    from rclpy.topic_endpoint_info import TopicEndpointInfo
 
 __all__ = ["action_infos", "hidden", "matching_qos", "service_infos", "topic_infos"]
 
@@ -21,7 +26,7 @@ def hidden(name: str) -> bool:
     return any(part.startswith("_") for part in name.split("/"))
 
 
-def topic_infos(node: Any) -> list[TopicInfo]:
+def topic_infos(node: Node) -> list[TopicInfo]:
     """Every visible topic of the graph: its type(s), publishers, subscribers and what
     its publishers offer."""
     found = []
@@ -33,7 +38,7 @@ def topic_infos(node: Any) -> list[TopicInfo]:
     return found
 
 
-def _offered(publishers: list[Any]) -> str:
+def _offered(publishers: list[TopicEndpointInfo]) -> str:
     """The QoS every publisher offers (the weakest reliability and durability)."""
     if not publishers:
         return ""
@@ -43,14 +48,14 @@ def _offered(publishers: list[Any]) -> str:
     return ("best effort" if best_effort else "reliable") + (", transient local" if latched else "")
 
 
-def action_infos(node: Any) -> list[EndpointInfo]:
+def action_infos(node: Node) -> list[EndpointInfo]:
     """Every action of the graph (with a server or a client)."""
     from rclpy.action import get_action_names_and_types
 
     return [EndpointInfo(name, ", ".join(types)) for name, types in sorted(get_action_names_and_types(node))]
 
 
-def service_infos(node: Any) -> list[EndpointInfo]:
+def service_infos(node: Node) -> list[EndpointInfo]:
     """Every visible service of the graph."""
     return [
         EndpointInfo(name, ", ".join(types))
@@ -59,7 +64,7 @@ def service_infos(node: Any) -> list[EndpointInfo]:
     ]
 
 
-def matching_qos(node: Any, topic: str, depth: int = 10) -> Any:
+def matching_qos(node: Node, topic: str, depth: int = 10) -> QoSProfile:
     """A subscription QoS that hears every publisher of ``topic`` (as ``ros2 topic echo``
     chooses it): best effort if any publisher is, transient local (a latched topic's last
     message too) if all publishers are; reliable and volatile otherwise. With no publisher

@@ -37,9 +37,14 @@ import pathlib
 import tempfile
 import threading
 import uuid
-from typing import Any, Callable
+from typing import TYPE_CHECKING, Any, Callable, TypeVar
 
 from bt_engine.errors import ActorbtError
+
+if TYPE_CHECKING:
+    from rclpy.node import Node
+
+T = TypeVar("T")
 
 log = logging.getLogger("actorbt.ros")
 
@@ -124,9 +129,9 @@ class RosHost:
         # Context.init (not rclpy.init): no signal handlers, no ROS args from sys.argv.
         self.context.init(args=[], domain_id=domain_id)
         self.executor = SingleThreadedExecutor(context=self.context)
-        self._nodes: list[Any] = []
+        self._nodes: list[Node] = []
         self._lock = threading.Lock()
-        self._queue: collections.deque = collections.deque()
+        self._queue: collections.deque[tuple[Callable[..., object], tuple[Any, ...]]] = collections.deque()
         self._drain_scheduled = False
         self._stopping = False
         self._closed = False
@@ -136,7 +141,7 @@ class RosHost:
     # -- nodes -------------------------------------------------------------------------
     def create_node(
         self, name: str, namespace: str | None = None, *, lean: bool = False, ros_args: list[str] | None = None
-    ) -> Any:
+    ) -> Node:
         """A node in this context, spun by this host's executor.
 
         ``lean``: a client's node, without ``/rosout`` and the type description service
@@ -174,7 +179,7 @@ class RosHost:
         self.executor.add_node(node)
         return node
 
-    def destroy_node(self, node: Any) -> None:
+    def destroy_node(self, node: Node) -> None:
         """Remove ``node`` from the executor and destroy it (on the executor thread)."""
         with self._lock:
             if node not in self._nodes:
@@ -194,7 +199,7 @@ class RosHost:
     def in_executor_thread(self) -> bool:
         return threading.current_thread() is self._thread
 
-    def post(self, fn: Callable, *args: Any) -> None:
+    def post(self, fn: Callable[..., object], *args: Any) -> None:
         """Run ``fn(*args)`` on the executor thread soon, after earlier posts. Any thread.
 
         Raises:
@@ -209,11 +214,11 @@ class RosHost:
             self._drain_scheduled = True
             self.executor.create_task(self._drain)
 
-    def call(self, fn: Callable, *args: Any, timeout: float = 10.0) -> Any:
+    def call(self, fn: Callable[..., T], *args: Any, timeout: float = 10.0) -> T:
         """Run ``fn(*args)`` on the executor thread and return its result."""
         if self.in_executor_thread():
             return fn(*args)
-        fut: concurrent.futures.Future = concurrent.futures.Future()
+        fut: concurrent.futures.Future[T] = concurrent.futures.Future()
 
         def run() -> None:
             try:
@@ -303,14 +308,14 @@ class RosHost:
     def __enter__(self) -> "RosHost":
         return self
 
-    def __exit__(self, *exc: Any) -> None:
+    def __exit__(self, *exc: object) -> None:
         self.close()
 
     def __repr__(self) -> str:
         return f"<RosHost {self.name} {'closed' if self._stopping else 'open'}>"
 
 
-def _destroy_node(node: Any) -> None:
+def _destroy_node(node: Node) -> None:
     """Destroy a node and its waitables. ``Node.destroy_node`` leaves action clients and
     servers alive; their handles keep the node, and so the DDS participant (its
     threads and shared memory), alive until the process ends."""

@@ -2,14 +2,18 @@
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING
 
 from bt_engine.bus.qos import qos_depth
+from .rostypes import QosSetting
+
+if TYPE_CHECKING:
+    from rclpy.qos import QoSProfile
 
 __all__ = ["qos_profile"]
 
 
-def qos_profile(qos: Any) -> Any:
+def qos_profile(qos: QosSetting) -> QoSProfile:
     """The rclpy QoSProfile for a setting (see :mod:`bt_engine.bus.qos`)."""
     from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
 

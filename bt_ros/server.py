@@ -207,7 +207,12 @@ class Server:
         # a result forever
         self._flush_results()
         time.sleep(WITHDRAW_DELAY)
-        self.host.call(lambda: [ep.destroy() for ep in gone])
+
+        def destroy_gone() -> None:
+            for ep in gone:
+                ep.destroy()
+
+        self.host.call(destroy_gone)
 
     def _apply_trees(self, refs: list[Any], announce: bool) -> list[TreeServer]:
         """(executor thread) Create and withdraw tree action servers; the withdrawn."""

@@ -25,9 +25,15 @@ and on the ``ros`` bus ROS tools see it live.
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING
 
+from bt_engine.bus.messages import RosMessage
 from bt_engine.trees import TreeObserver
+
+if TYPE_CHECKING:
+    from py_trees.common import Status
+
+    from bt_engine.trees import TreeHost, TreeRun
 
 __all__ = ["LEVELS", "STATUS_TOPIC", "TreeStatusPublisher", "status_message"]
 
@@ -38,14 +44,14 @@ LEVELS = {"RUNNING": 0, "SUCCESS": 0, "FAILURE": 2, "INVALID": 3}
 STATUS_DEPTH = 100
 
 
-def _stamp(t: float) -> Any:
+def _stamp(t: float) -> RosMessage:
     from builtin_interfaces.msg import Time
 
     sec, nsec = divmod(int(round(t * 1e9)), 1_000_000_000)
     return Time(sec=sec, nanosec=nsec)
 
 
-def status_message(tree: str, path: str, old: str, new: str, t: float, *, run: int = 0, depth: int = 0) -> Any:
+def status_message(tree: str, path: str, old: str, new: str, t: float, *, run: int = 0, depth: int = 0) -> RosMessage:
     """The DiagnosticArray for node ``path`` of ``tree`` going ``old`` -> ``new`` at ``t`` [s]."""
     from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 
@@ -74,7 +80,7 @@ class TreeStatusPublisher(TreeObserver):
     Add it to ``host.observers`` before the runs to watch start; :meth:`close` removes it.
     """
 
-    def __init__(self, host: Any, topic: str = STATUS_TOPIC) -> None:
+    def __init__(self, host: TreeHost, topic: str = STATUS_TOPIC) -> None:
         from diagnostic_msgs.msg import DiagnosticArray
 
         self.host = host
@@ -85,7 +91,7 @@ class TreeStatusPublisher(TreeObserver):
         self.published = 0
         host.observers.append(self)
 
-    def status_changed(self, run: Any, path: str, old: Any, new: Any) -> None:
+    def status_changed(self, run: TreeRun, path: str, old: Status, new: Status) -> None:
         self._pub.publish(
             status_message(run.mission.name, path, old.name, new.name, self.rt.now(), run=run.id, depth=run.depth)
         )
