@@ -9,7 +9,7 @@ to the hub with ``rt.call_soon_threadsafe`` or the thread-safe ``done``.
 from __future__ import annotations
 
 import time
-from typing import Any, Callable
+from typing import TYPE_CHECKING, Callable, Protocol
 
 from bt_engine.bus.actions import (
     STATUS_NAMES,
@@ -19,7 +19,15 @@ from bt_engine.bus.actions import (
     ServerUnavailableError,
     build_message,
 )
+from bt_engine.bus.messages import RosMessage
 from bt_engine.errors import ActorbtError
+
+if TYPE_CHECKING:
+    from rclpy.action.client import ClientGoalHandle
+    from rclpy.client import Client
+    from rclpy.node import Node
+    from rclpy.task import Future
+    from rclpy.timer import Timer
 
 __all__ = [
     "STATUS_NAMES",
@@ -70,12 +78,12 @@ class ServerWait:
     #: [s] between two looks at a running goal's server
     WATCH_PERIOD = 0.5
 
-    def __init__(self, node: Any) -> None:
+    def __init__(self, node: Node) -> None:
         self._node = node
         self._waiting: list[list] = []
-        self._timer: Any = None
+        self._timer: Timer | None = None
         self._watched: list[list] = []
-        self._watch_timer: Any = None
+        self._watch_timer: Timer | None = None
 
     def when_ready(
         self, is_ready: Callable[[], bool], timeout: float, on_ready: Callable[[], None], on_timeout: Callable[[], None]
@@ -133,6 +141,14 @@ class ServerWait:
             self._timer = None
 
 
+class GoalClient(Protocol):
+    """What a GoalCall needs of its rclpy ActionClient (a wrapper may stand in for it)."""
+
+    def server_is_ready(self) -> bool: ...
+
+    def send_goal_async(self, goal: RosMessage, *, goal_uuid: RosMessage | None = None) -> Future: ...
+
+
 class GoalCall:
     """One goal: wait for the server, send, get the result, cancel.
 
@@ -143,23 +159,24 @@ class GoalCall:
 
     def __init__(
         self,
-        client: Any,
+        client: GoalClient,
         server: str,
         waiter: ServerWait,
-        goal: Any,
+        goal: RosMessage,
         *,
         server_timeout: float,
-        on_result: Callable[[Any], None],
+        on_result: Callable[[RosMessage], None],
         on_error: Callable[[BaseException], None],
-        on_accepted: Callable[[Any], None] | None = None,
-        on_status: Callable[[int, Any], None] | None = None,
-        goal_uuid: Any = None,
+        on_accepted: Callable[[ClientGoalHandle], None] | None = None,
+        on_status: Callable[[int, RosMessage], None] | None = None,
+        # a unique_identifier_msgs/UUID (rclpy makes one when None)
+        goal_uuid: RosMessage | None = None,
     ) -> None:
         self.client = client
         self.goal_uuid = goal_uuid
         self.server = server
         self.goal = goal
-        self.handle: Any = None
+        self.handle: ClientGoalHandle | None = None
         self.cancelled = False
         self.sent = False
         self.finished = False
@@ -189,7 +206,7 @@ class GoalCall:
         fut = self.client.send_goal_async(self.goal, goal_uuid=self.goal_uuid)
         fut.add_done_callback(self._on_response)
 
-    def _on_response(self, fut: Any) -> None:
+    def _on_response(self, fut: Future) -> None:
         try:
             gh = fut.result()
         except Exception as e:
@@ -210,7 +227,7 @@ class GoalCall:
     def _lost(self) -> None:
         self._finish_error(ServerLostError(self.server, self._lost_grace))
 
-    def _on_result_response(self, fut: Any) -> None:
+    def _on_result_response(self, fut: Future) -> None:
         try:
             resp = fut.result()
         except Exception as e:
@@ -237,7 +254,7 @@ class GoalCall:
             self._waiter.forget(self._watch_entry)
             self._watch_entry = None
 
-    def cancel(self) -> Any:
+    def cancel(self) -> Future | None:
         """Ask the server to cancel the goal (now, or as soon as it is accepted); a goal
         not sent yet is not sent and ends with GoalNotSentError. Returns the
         cancel-response future when a request was sent."""
@@ -260,13 +277,13 @@ class ServiceCall:
 
     def __init__(
         self,
-        client: Any,
+        client: Client,
         server: str,
         waiter: ServerWait,
-        request: Any,
+        request: RosMessage,
         *,
         server_timeout: float,
-        on_result: Callable[[Any], None],
+        on_result: Callable[[RosMessage], None],
         on_error: Callable[[BaseException], None],
     ) -> None:
         self.client = client
@@ -276,7 +293,7 @@ class ServiceCall:
         self._waiter = waiter
         self._wait_entry: list | None = None
         self._timeout = server_timeout
-        self._future: Any = None
+        self._future: Future | None = None
         self._on_result = on_result
         self._on_error = on_error
 
@@ -294,7 +311,7 @@ class ServiceCall:
         self._future = self.client.call_async(self.request)
         self._future.add_done_callback(self._done)
 
-    def _done(self, fut: Any) -> None:
+    def _done(self, fut: Future) -> None:
         if self.cancelled:
             return
         try:

@@ -19,20 +19,35 @@ from __future__ import annotations
 
 import logging
 import os
-from typing import TYPE_CHECKING, Any, Callable
+from typing import TYPE_CHECKING, Any, Callable, TypeVar
 
 from bt_engine.bus.messages import RosAction, RosMessage, RosService
 from bt_engine.bus.transport import EndpointInfo, TopicInfo, Transport
 from bt_engine.modes import Kind
-from bt_engine.bus.actions import build_message, message_doc, message_signature, public_name
+from bt_engine.bus.actions import ServerGoal, build_message, message_doc, message_signature, public_name
 from .client import GoalCall, ServerWait, ServiceCall
 from .host import RosClosedError, RosHost
 from .qos import qos_profile
+from .rostypes import QosSetting
 
 if TYPE_CHECKING:
+    from rclpy.action import ActionClient
+    from rclpy.client import Client
+    from rclpy.node import Node
+    from rclpy.publisher import Publisher
+    from rclpy.qos import QoSProfile
+    from rclpy.subscription import Subscription
+
+    from bt_engine.actor import ActorRef
+    from bt_engine.handles import Done
     from bt_engine.runtime import Runtime
+    from bt_engine.subsystem import SubSystem
+    from .action_server import RosActionServer
 
 log = logging.getLogger("actorbt.ros")
+
+#: a publisher or a subscription (what _destroy_later destroys)
+_Endpoint = TypeVar("_Endpoint")
 
 #: why a topic's publisher may not be found (in a subscriber's ActorTimeout)
 DISCOVERY_RANGE_HINT = "ROS_DOMAIN_ID and ROS_AUTOMATIC_DISCOVERY_RANGE must match on both sides"
@@ -46,13 +61,13 @@ class RosPublisher:
 
     __slots__ = ("topic", "_pub", "_host", "_node")
 
-    def __init__(self, host: RosHost, pub: Any, topic: str, node: Any = None) -> None:
+    def __init__(self, host: RosHost, pub: Publisher, topic: str, node: Node | None = None) -> None:
         self.topic = topic
-        self._pub = pub
+        self._pub: Publisher | None = pub
         self._host = host
         self._node = node
 
-    def publish(self, msg: Any) -> None:
+    def publish(self, msg: RosMessage) -> None:
         if self._host.closed:
             raise RosClosedError(f"cannot publish on {self.topic}: the ROS transport is closed")
         if self._pub is None:
@@ -70,18 +85,18 @@ class RosSubscription:
 
     __slots__ = ("topic", "callback", "closed", "_sub", "_transport")
 
-    def __init__(self, transport: "RosTransport", topic: str, callback: Callable[[Any], None]) -> None:
+    def __init__(self, transport: "RosTransport", topic: str, callback: Callable[[RosMessage], None]) -> None:
         self.topic = topic
         self.callback = callback
         self.closed = False
-        self._sub: Any = None
+        self._sub: Subscription | None = None
         self._transport = transport
 
-    def _on_message(self, msg: Any) -> None:  # executor thread
+    def _on_message(self, msg: RosMessage) -> None:  # executor thread
         if not self.closed:
             self._transport._rt.call_soon_threadsafe(self._receive, msg)
 
-    def _receive(self, msg: Any) -> None:  # hub
+    def _receive(self, msg: RosMessage) -> None:  # hub
         if not self.closed:
             self.callback(msg)
 
@@ -95,7 +110,7 @@ class RosSubscription:
             _destroy_later(t.host, t.node.destroy_subscription, self._sub, self.topic)
 
 
-def _destroy_later(host: RosHost, destroy: Callable[[Any], Any], entity: Any, topic: str) -> None:
+def _destroy_later(host: RosHost, destroy: Callable[[_Endpoint], bool], entity: _Endpoint, topic: str) -> None:
     """Destroy a publisher or subscription on the executor thread: destroyed from another
     thread while the executor waits on it, rclpy fails in the executor ("cannot use
     Destroyable because destruction was requested")."""
@@ -135,15 +150,17 @@ class RosTransport(Transport):
             raise
         self._waiter = ServerWait(self.node)
         self._subs: set[RosSubscription] = set()
-        self._servers: list[Any] = []
+        self._servers: list[RosActionServer] = []
         self._closed = False
 
     # -- topics --------------------------------------------------------------------------
-    def publisher(self, topic: str, msg_type: type, qos: Any = 10) -> RosPublisher:
+    def publisher(self, topic: str, msg_type: type, qos: QosSetting = 10) -> RosPublisher:
         pub = self.node.create_publisher(msg_type, topic, qos_profile(qos))
         return RosPublisher(self.host, pub, topic, self.node)
 
-    def subscribe(self, topic: str, msg_type: type, callback: Callable[[Any], None], qos: Any = 10) -> RosSubscription:
+    def subscribe(
+        self, topic: str, msg_type: type, callback: Callable[[RosMessage], None], qos: QosSetting = 10
+    ) -> RosSubscription:
         """``callback(msg)`` runs on the hub, in arrival order."""
         sub = RosSubscription(self, topic, callback)
         sub._sub = self.node.create_subscription(msg_type, topic, sub._on_message, qos_profile(qos))
@@ -191,7 +208,7 @@ class RosTransport(Transport):
 
         return self.host.call(service_infos, self.node)
 
-    def matching_qos(self, topic: str) -> Any:
+    def matching_qos(self, topic: str) -> QoSProfile:
         """A subscription QoS that hears every publisher of ``topic`` now (best effort if
         any publisher is, transient local if all are), as ``ros2 topic echo`` picks it."""
         from .graph import matching_qos
@@ -199,7 +216,7 @@ class RosTransport(Transport):
         return self.host.call(matching_qos, self.node, topic)
 
     # -- actions and services ----------------------------------------------------------
-    def register_action(self, scope: Any, name: str, action_type: type[RosAction], server: str) -> Any:
+    def register_action(self, scope: SubSystem, name: str, action_type: type[RosAction], server: str) -> ActorRef:
         """Make async actor ``name(goal=None, **fields)`` sending goals to ``server``.
 
         ``goal`` is an ``action_type.Goal`` or a mapping of its fields; keyword fields
@@ -219,7 +236,9 @@ class RosTransport(Transport):
         )
         return self._client_actor(scope, name, GoalCall, client, server, action_type.Goal, "goal", doc)
 
-    def action_server(self, name: str, action_type: type[RosAction], on_goal: Callable[[Any], None]) -> Any:
+    def action_server(
+        self, name: str, action_type: type[RosAction], on_goal: Callable[[ServerGoal], None]
+    ) -> RosActionServer:
         """Serve action ``name`` from this node; ``on_goal(goal)`` runs on the hub with a
         :class:`~bt_engine.bus.actions.ServerGoal` (see :mod:`bt_ros.action_server`)."""
         from .action_server import RosActionServer
@@ -232,7 +251,7 @@ class RosTransport(Transport):
     def rt(self) -> "Runtime":
         return self._rt
 
-    def register_service(self, scope: Any, name: str, srv_type: type[RosService], server: str) -> Any:
+    def register_service(self, scope: SubSystem, name: str, srv_type: type[RosService], server: str) -> ActorRef:
         """Make async actor ``name(request=None, **fields)`` calling service ``server``;
         the result is the response. Cancelling drops the pending request."""
         client = self.node.create_client(srv_type, server)
@@ -243,20 +262,20 @@ class RosTransport(Transport):
 
     def _client_actor(
         self,
-        scope: Any,
+        scope: SubSystem,
         name: str,
-        call_type: type,
-        client: Any,
+        call_type: Callable[..., GoalCall | ServiceCall],
+        client: ActionClient | Client,
         server: str,
         msg_type: type[RosMessage],
         param: str,
         doc: str,
-    ) -> Any:
+    ) -> ActorRef:
         """An async actor ``name(<param>=None, **fields)`` that sends one message through
         ``client`` as a ``call_type`` (GoalCall or ServiceCall) from the executor thread."""
         host, waiter = self.host, self._waiter
 
-        def send(done: Any, *args: Any, **fields: Any) -> Callable[[], None]:
+        def send(done: Done, *args: object, **fields: Any) -> Callable[[], None]:
             # the signature is (<param>=None, **fields), checked by the runtime
             message = args[0] if args else fields.pop(param, None)
             call = call_type(
@@ -273,7 +292,7 @@ class RosTransport(Transport):
 
         return scope.add_actor(name, send, Kind.ASYNC, doc=doc, signature=message_signature(param, msg_type))
 
-    def _post_quietly(self, fn: Callable[[], Any]) -> None:
+    def _post_quietly(self, fn: Callable[[], object]) -> None:
         try:
             self.host.post(fn)
         except RosClosedError:
