@@ -11,10 +11,13 @@ per call when it ends (or is refused): the actor and its arguments, the outcome,
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Iterable
+
+from bt_engine.bus.messages import RosMessage
 
 from .goal_server import GoalServer, one_line
 from .goals import GoalError, Invocation, decode_call_goal, parse_call_args
+from .rostypes import Value
 from .yamlio import dump
 
 __all__ = ["CallServer"]
@@ -29,7 +32,7 @@ class CallServer(GoalServer):
     def describe(self, call: Invocation) -> str:
         return _call_text(call.path, call.args, call.kwargs)
 
-    def describe_request(self, goal: Any) -> str:
+    def describe_request(self, goal: RosMessage) -> str:
         name = goal.actor.strip() or "(no actor)"
         try:
             args, kwargs = parse_call_args(goal.args_yaml)
@@ -38,10 +41,10 @@ class CallServer(GoalServer):
             return f"{name} {text}" if text else name
         return _call_text(name, args, kwargs)
 
-    def admit(self, goal: Any) -> Invocation:
+    def admit(self, goal: RosMessage) -> Invocation:
         return decode_call_goal(self.owner.rt, goal.actor, goal.args_yaml)
 
-    def result(self, success: bool, status: str, value: Any, error: str, code: int) -> Any:
+    def result(self, success: bool, status: str, value: Value, error: str, code: int) -> RosMessage:
         res = self.action_type.Result()
         res.success = success
         res.result_yaml = dump(value) if success else ""
@@ -50,7 +53,7 @@ class CallServer(GoalServer):
         return res
 
 
-def _call_text(name: str, args: Any, kwargs: dict) -> str:
+def _call_text(name: str, args: Iterable[object], kwargs: dict[str, object]) -> str:
     """``name(1.0, 'a', k=2)``, cut to one line."""
     shown = [repr(a) for a in args] + [f"{k}={v!r}" for k, v in kwargs.items()]
     return f"{name}({one_line(', '.join(shown))})"

@@ -32,16 +32,23 @@ from __future__ import annotations
 
 import os
 import time
-from typing import TYPE_CHECKING, Any, Protocol
+from typing import TYPE_CHECKING, Callable, Protocol
 
-from bt_engine.bus.messages import RosAction
+from bt_engine.bus.messages import RosAction, RosMessage
 from bt_engine.errors import Cancelled, Failure
 from .error_codes import Ending, error_code
 from .goals import GoalError, Invocation
 from .host import RosClosedError, RosHost
+from .rostypes import Outcome, Value
 
 if TYPE_CHECKING:
     import pathlib
+
+    from rclpy.action import ActionServer, CancelResponse, GoalResponse
+    from rclpy.action.server import ServerGoalHandle
+    from rclpy.node import Node
+
+    from bt_engine import Runtime, Transaction
 
 __all__ = ["GoalServer", "Owner", "ServedGoal"]
 
@@ -49,7 +56,7 @@ __all__ = ["GoalServer", "Owner", "ServedGoal"]
 class Owner(Protocol):
     """What a GoalServer needs from the server that owns it (see ``server.Server``)."""
 
-    rt: Any
+    rt: Runtime
     host: RosHost
     #: no new goals: the server is shutting down
     closing: bool
@@ -68,7 +75,7 @@ class ServedGoal:
     ``call`` is what it runs; None for a goal that cannot run (``refusal`` says why)."""
 
     def __init__(
-        self, server: "GoalServer", handle: Any, call: Invocation | None, refusal: GoalError | None = None
+        self, server: "GoalServer", handle: ServerGoalHandle, call: Invocation | None, refusal: GoalError | None = None
     ) -> None:
         from rclpy.task import Future
 
@@ -78,7 +85,7 @@ class ServedGoal:
         self.key = bytes(handle.goal_id.uuid)
         self.call = call
         self.refusal = refusal
-        self.txn: Any = None
+        self.txn: Transaction | None = None
         self.cancel_reason: str | None = None
         self.cancel_ending = Ending.UNKNOWN  # why the server cancelled it (not the client)
         self.resolved = False
@@ -114,7 +121,7 @@ class ServedGoal:
             self.cancel_ending = ending
         self._to_hub(self._cancel_on_hub, reason)
 
-    def resolve(self, outcome: Any) -> None:
+    def resolve(self, outcome: Outcome) -> None:
         """Hand the outcome to the execute coroutine; the first outcome wins."""
         if self.resolved:
             return
@@ -124,7 +131,7 @@ class ServedGoal:
         except RosClosedError:
             pass
 
-    def send_feedback(self, fb: Any) -> None:
+    def send_feedback(self, fb: RosMessage) -> None:
         """Publish feedback message ``fb`` (it is sent from the executor thread)."""
         host = self.server.owner.host
         if host.in_executor_thread():
@@ -135,7 +142,7 @@ class ServedGoal:
         except RosClosedError:
             pass
 
-    def _to_hub(self, fn: Any, *args: Any) -> None:
+    def _to_hub(self, fn: Callable[..., object], *args: object) -> None:
         try:
             self.rt.call_soon_threadsafe(fn, *args)
         except Exception:  # the runtime is gone: the work cannot run any more
@@ -161,7 +168,7 @@ class ServedGoal:
         if not self.resolved:
             self.started(txn)
 
-    def _on_done(self, outcome: Any) -> None:
+    def _on_done(self, outcome: Outcome) -> None:
         self.ended()
         self.resolve(outcome)
 
@@ -175,14 +182,14 @@ class ServedGoal:
     def starting(self) -> None:
         pass
 
-    def started(self, txn: Any) -> None:
+    def started(self, txn: Transaction) -> None:
         pass
 
     def ended(self) -> None:
         pass
 
     # -- executor thread -----------------------------------------------------------------
-    def _set_outcome(self, outcome: Any) -> None:
+    def _set_outcome(self, outcome: Outcome) -> None:
         if not self.outcome.done():
             self.outcome.set_result(outcome)
 
@@ -207,27 +214,29 @@ class GoalServer:
         self.action_type = action_type
         self.goals: dict[bytes, ServedGoal] = {}  # accepted, not ended; executor thread
         # goal callback -> accepted callback: the request and its call, or why it cannot run
-        self._admitted: tuple[Any, Invocation | None, GoalError | None] | None = None
-        self._server: Any = None
+        self._admitted: tuple[RosMessage, Invocation | None, GoalError | None] | None = None
+        self._server: ActionServer | None = None
         #: no new goals: the action is being withdrawn (its tree left the folder)
         self.withdrawn: GoalError | None = None
 
     # -- what a goal means (subclasses) ----------------------------------------------------
-    def admit(self, goal: Any) -> Invocation:
+    def admit(self, goal: RosMessage) -> Invocation:
         """The call ``goal`` asks for, or GoalError with the reason it cannot run."""
         raise NotImplementedError
 
-    def new_goal(self, handle: Any, call: Invocation | None, refusal: GoalError | None = None) -> ServedGoal:
+    def new_goal(
+        self, handle: ServerGoalHandle, call: Invocation | None, refusal: GoalError | None = None
+    ) -> ServedGoal:
         return ServedGoal(self, handle, call, refusal)
 
-    def feedback(self, g: ServedGoal, status: str) -> Any:
+    def feedback(self, g: ServedGoal, status: str) -> RosMessage:
         return self.action_type.Feedback(status=status, elapsed=g.elapsed())
 
     def first_feedback(self, g: ServedGoal) -> None:
         """Publish the feedback that tells the work has started (executor thread)."""
         g.send_feedback(self.feedback(g, "running"))
 
-    def result(self, success: bool, status: str, value: Any, error: str, code: int) -> Any:
+    def result(self, success: bool, status: str, value: Value, error: str, code: int) -> RosMessage:
         """The Result message: ``status`` as in ``succeeded``, ``canceled``, ``failed: …``;
         ``value`` what the work returned (success only); ``error`` the reason otherwise;
         ``code`` the ``error_code``."""
@@ -239,7 +248,7 @@ class GoalServer:
     def leave(self, g: ServedGoal) -> None:
         """``g`` has ended (executor thread)."""
 
-    def concluding(self, g: ServedGoal, outcome: Any) -> None:
+    def concluding(self, g: ServedGoal, outcome: Outcome) -> None:
         """The work of ``g`` ended with ``outcome``; the result goes out next: the last
         feedback goes out now."""
         g.handle.publish_feedback(self.feedback(g, "failure" if isinstance(outcome, Failure) else "success"))
@@ -248,7 +257,7 @@ class GoalServer:
         """What an accepted goal runs, short, for announce lines."""
         return call.path
 
-    def describe_request(self, goal: Any) -> str:
+    def describe_request(self, goal: RosMessage) -> str:
         """A goal message (perhaps malformed), short, for announce lines."""
         return self.action
 
@@ -278,7 +287,7 @@ class GoalServer:
         )
 
     # -- rclpy (executor thread) -----------------------------------------------------------
-    def create(self, node: Any, result_timeout: int) -> None:
+    def create(self, node: Node, result_timeout: int) -> None:
         from rclpy.action import ActionServer
 
         self._server = ActionServer(
@@ -297,7 +306,7 @@ class GoalServer:
             self._server.destroy()
             self._server = None
 
-    def _on_goal(self, goal: Any) -> Any:
+    def _on_goal(self, goal: RosMessage) -> GoalResponse:
         from rclpy.action import GoalResponse
 
         call: Invocation | None = None
@@ -313,7 +322,7 @@ class GoalServer:
         self._admitted = (goal, call, refusal)
         return GoalResponse.ACCEPT
 
-    def _on_accepted(self, handle: Any) -> None:
+    def _on_accepted(self, handle: ServerGoalHandle) -> None:
         admitted, self._admitted = self._admitted, None
         # rclpy calls this right after the goal callback accepted this very request, on
         # the same thread (ActionServer._execute_goal_request).
@@ -325,7 +334,7 @@ class GoalServer:
             self._announce(f"{self.label} {g.short_id} {self.describe(g.call)}: accepted")
         handle.execute()
 
-    def _on_cancel(self, handle: Any) -> Any:
+    def _on_cancel(self, handle: ServerGoalHandle) -> CancelResponse:
         from rclpy.action import CancelResponse
 
         g = self.goals.get(bytes(handle.goal_id.uuid))
@@ -333,7 +342,7 @@ class GoalServer:
             g.cancel("goal canceled")
         return CancelResponse.ACCEPT
 
-    async def _execute(self, handle: Any) -> Any:
+    async def _execute(self, handle: ServerGoalHandle) -> RosMessage:
         g = self.goals[bytes(handle.goal_id.uuid)]
         try:
             if g.refusal is not None:
@@ -357,13 +366,13 @@ class GoalServer:
             g.finished.set_result(True)
             self._announce_end(g)
 
-    def _result(self, g: ServedGoal, ending: Ending, status: str, value: Any, error: str) -> Any:
+    def _result(self, g: ServedGoal, ending: Ending, status: str, value: Value, error: str) -> RosMessage:
         g.end_status = status
         return self.result(
             ending is Ending.SUCCEEDED, status, value, error, error_code(self.action_type.Result, ending)
         )
 
-    def _conclude(self, g: ServedGoal, outcome: Any) -> Any:
+    def _conclude(self, g: ServedGoal, outcome: Outcome) -> RosMessage:
         handle = g.handle
         self.concluding(g, outcome)
         if not isinstance(outcome, Failure):

@@ -24,20 +24,28 @@ from __future__ import annotations
 import logging
 import pathlib
 import time
-from typing import Any
+from typing import TYPE_CHECKING
 
-from bt_engine.bus.messages import RosAction
+from bt_engine.bus.messages import RosAction, RosMessage
 from .error_codes import Ending
 from .goal_server import GoalServer, Owner, ServedGoal, one_line, shown_path
 from .goals import GoalError, Invocation, decode_tree_goal
+from .rostypes import Outcome, Value
 from .yamlio import dump, flow
+
+if TYPE_CHECKING:
+    from py_trees.common import Status
+    from rclpy.action.server import ServerGoalHandle
+
+    from bt_engine import ActorRef, Runtime, Transaction
+    from bt_engine.trees import TraceRecorder, TreeHost, TreeObserver, TreeRun
 
 log = logging.getLogger("actorbt.ros.server")
 
 __all__ = ["TreeGoal", "TreeProgress", "TreeServer"]
 
 
-def _status_name(status: Any) -> str:
+def _status_name(status: Status | None) -> str:
     name = (getattr(status, "name", None) or str(status or "running")).lower()
     return "halted" if name == "invalid" else name
 
@@ -46,11 +54,11 @@ class TreeProgress:
     """Routes the trees layer's run events to the goal whose transaction runs the root
     run. One per server; its table is touched on the hub only."""
 
-    def __init__(self, rt: Any) -> None:
+    def __init__(self, rt: Runtime) -> None:
         self.rt = rt
         self.goals: dict[int, TreeGoal] = {}  # transaction id -> goal
-        self._host: Any = None
-        self._observer: Any = None
+        self._host: TreeHost | None = None
+        self._observer: TreeObserver | None = None
 
     def install(self) -> None:
         """Observe the runtime's tree runs (not on the hub: it waits for the hub)."""
@@ -64,13 +72,13 @@ class TreeProgress:
         progress = self
 
         class Observer(TreeObserver):
-            def run_started(self, run: Any) -> None:
+            def run_started(self, run: TreeRun) -> None:
                 progress._changed(run)
 
-            def status_changed(self, run: Any, path: str, old: Any, new: Any) -> None:
+            def status_changed(self, run: TreeRun, path: str, old: Status, new: Status) -> None:
                 progress._changed(run)
 
-            def run_finished(self, run: Any, status: Any, outcome: Any) -> None:
+            def run_finished(self, run: TreeRun, status: Status, outcome: Outcome) -> None:
                 progress._changed(run, status)
 
         observer = Observer()
@@ -78,7 +86,7 @@ class TreeProgress:
         self._host, self._observer = host, observer
 
     def remove(self) -> None:
-        if self._observer is None:
+        if self._observer is None or self._host is None:  # install() sets both
             return
         try:
             self.rt.run_on_hub(self._host.observers.remove, self._observer)
@@ -86,11 +94,11 @@ class TreeProgress:
             pass
         self._observer = None
 
-    def _changed(self, run: Any, finished: Any = None) -> None:
+    def _changed(self, run: TreeRun, finished: Status | None = None) -> None:
         top = run
-        while getattr(top, "parent", None) is not None:
+        while top.parent is not None:
             top = top.parent
-        txn_id = getattr(top, "txn_id", None)
+        txn_id = top.txn_id
         g = self.goals.get(txn_id) if txn_id is not None else None
         if g is not None:
             final = _status_name(finished) if finished is not None and run is top else None
@@ -103,14 +111,14 @@ class TreeGoal(ServedGoal):
     server: "TreeServer"
 
     def __init__(
-        self, server: "TreeServer", handle: Any, call: Invocation | None, refusal: GoalError | None = None
+        self, server: "TreeServer", handle: ServerGoalHandle, call: Invocation | None, refusal: GoalError | None = None
     ) -> None:
         super().__init__(server, handle, call, refusal)
-        self.top: Any = None  # the root TreeRun, once the trees layer reports one
-        self.last_run: Any = None
+        self.top: TreeRun | None = None  # the root TreeRun, once the trees layer reports one
+        self.last_run: TreeRun | None = None
         self.final: str | None = None
         self.flush_scheduled = False
-        self.recorder: Any = None
+        self.recorder: TraceRecorder | None = None
         self.trace_path: str | None = None
 
     # -- hub -------------------------------------------------------------------------------
@@ -123,7 +131,7 @@ class TreeGoal(ServedGoal):
         self.flush_scheduled = True
         self.rt.hub.call_soon(self.flush)
 
-    def started(self, txn: Any) -> None:
+    def started(self, txn: Transaction) -> None:
         self.server.progress.goals[txn.id] = self
         if self.recorder is not None:
             self.recorder.follow(txn)  # only this goal's runs and transactions
@@ -135,7 +143,7 @@ class TreeGoal(ServedGoal):
             self.flush()
         self._close_trace()
 
-    def progress(self, run: Any, top: Any, final: str | None = None) -> None:
+    def progress(self, run: TreeRun, top: TreeRun, final: str | None = None) -> None:
         """A tree run under this goal changed."""
         self.top = top
         self.last_run = run
@@ -215,14 +223,14 @@ class TreeServer(GoalServer):
     """``/actorbt/tree/<name>`` for tree actor ``ref`` (see the module docstring)."""
 
     def __init__(
-        self, owner: Owner, action: str, action_type: type[RosAction], ref: Any, progress: TreeProgress
+        self, owner: Owner, action: str, action_type: type[RosAction], ref: ActorRef, progress: TreeProgress
     ) -> None:
         super().__init__(owner, action, action_type)
         self.ref = ref
         self.progress = progress
         self.active: TreeGoal | None = None  # the goal whose work runs (executor thread)
 
-    def admit(self, goal: Any) -> Invocation:
+    def admit(self, goal: RosMessage) -> Invocation:
         call = decode_tree_goal(self.owner.rt, self.ref, goal.inputs_yaml)
         if self.active_goals() and not self.owner.preempt:
             raise GoalError(
@@ -237,13 +245,13 @@ class TreeServer(GoalServer):
         """The goals that run or wait to run (not the refused ones, ending now)."""
         return [g for g in self.goals.values() if g.refusal is None]
 
-    def new_goal(self, handle: Any, call: Invocation | None, refusal: GoalError | None = None) -> TreeGoal:
+    def new_goal(self, handle: ServerGoalHandle, call: Invocation | None, refusal: GoalError | None = None) -> TreeGoal:
         return TreeGoal(self, handle, call, refusal)
 
     def describe(self, call: Invocation) -> str:
         return f"{call.path} {one_line(flow(call.kwargs))}" if call.kwargs else call.path
 
-    def describe_request(self, goal: Any) -> str:
+    def describe_request(self, goal: RosMessage) -> str:
         text = one_line(goal.inputs_yaml)
         return f"{self.ref.path} {text}" if text else self.ref.path
 
@@ -251,7 +259,7 @@ class TreeServer(GoalServer):
         path = getattr(g, "trace_path", None)
         return f" (trace {shown_path(path)})" if path else ""
 
-    def feedback(self, g: ServedGoal, status: str, active: str = "", ticks: int = 0) -> Any:
+    def feedback(self, g: ServedGoal, status: str, active: str = "", ticks: int = 0) -> RosMessage:
         return self.action_type.Feedback(
             status=status, active_node=active or g.subject, tick_count=max(0, ticks), elapsed=g.elapsed()
         )
@@ -259,7 +267,7 @@ class TreeServer(GoalServer):
     def first_feedback(self, g: ServedGoal) -> None:
         """Sent from the hub once the work starts (TreeGoal.starting)."""
 
-    def result(self, success: bool, status: str, value: Any, error: str, code: int) -> Any:
+    def result(self, success: bool, status: str, value: Value, error: str, code: int) -> RosMessage:
         res = self.action_type.Result()
         res.success = success
         res.status = status
@@ -280,7 +288,7 @@ class TreeServer(GoalServer):
         if self.active is g:
             self.active = None
 
-    def concluding(self, g: ServedGoal, outcome: Any) -> None:
+    def concluding(self, g: ServedGoal, outcome: Outcome) -> None:
         if _tree_goal(g).top is None:
             # No progress from the trees layer for this actor: a last feedback at the end.
             super().concluding(g, outcome)
