@@ -19,13 +19,30 @@ ROS 2 controllers and Nav2 do, so a stock client sees why.
 from __future__ import annotations
 
 import logging
-from typing import Any, Callable
+from typing import TYPE_CHECKING, Callable, Protocol
 
 from bt_engine.bus.actions import STATUS_CANCELED, STATUS_SUCCEEDED, ServerGoal
-from bt_engine.bus.messages import RosAction
-from .host import RosClosedError
+from bt_engine.bus.messages import RosAction, RosMessage
+from .host import RosClosedError, RosHost
+
+if TYPE_CHECKING:
+    from rclpy.action import CancelResponse
+    from rclpy.action.server import ServerGoalHandle
+    from rclpy.node import Node
+
+    from bt_engine import Runtime
 
 log = logging.getLogger("actorbt.ros")
+
+
+class Serving(Protocol):
+    """What an action server uses of its RosTransport (which imports this module)."""
+
+    node: Node
+    host: RosHost
+
+    @property
+    def rt(self) -> Runtime: ...
 
 
 class RosActionServer:
@@ -33,7 +50,7 @@ class RosActionServer:
     (``transport``: its ``node``, ``host`` and ``rt`` are used)."""
 
     def __init__(
-        self, transport: Any, name: str, action_type: type[RosAction], on_goal: Callable[[ServerGoal], None]
+        self, transport: Serving, name: str, action_type: type[RosAction], on_goal: Callable[[ServerGoal], None]
     ) -> None:
         from rclpy.action import ActionServer
 
@@ -48,17 +65,17 @@ class RosActionServer:
         self._server = ActionServer(transport.node, action_type, name, self._execute, cancel_callback=self._on_cancel)
 
     # -- executor thread ---------------------------------------------------------------
-    async def _execute(self, handle: Any) -> Any:
+    async def _execute(self, handle: ServerGoalHandle) -> RosMessage:
         from rclpy.task import Future
 
         rt = self._transport.rt
         ended: Future = Future()
         key = bytes(handle.goal_id.uuid)
 
-        def finish(status: int, result: Any) -> None:  # hub
+        def finish(status: int, result: RosMessage) -> None:  # hub
             self._post(lambda: ended.done() or ended.set_result((status, result)))
 
-        def feedback(msg: Any) -> None:  # hub
+        def feedback(msg: RosMessage) -> None:  # hub
             self._post(lambda: handle.is_active and handle.publish_feedback(msg))
 
         goal = ServerGoal(self.name, self.action_type, handle.request, finish, feedback)
@@ -81,7 +98,7 @@ class RosActionServer:
             handle.abort()
         return result
 
-    def _on_cancel(self, handle: Any) -> Any:
+    def _on_cancel(self, handle: ServerGoalHandle) -> CancelResponse:
         from rclpy.action import CancelResponse
 
         goal = self._goals.get(bytes(handle.goal_id.uuid))
@@ -104,7 +121,7 @@ class RosActionServer:
             if goal.active:
                 goal.abort(_with_error(self.action_type.Result(), f"{type(e).__name__}: {e}"))
 
-    def _post(self, fn: Callable[[], Any]) -> None:
+    def _post(self, fn: Callable[[], object]) -> None:
         try:
             self._transport.host.post(fn)
         except RosClosedError:
@@ -126,7 +143,7 @@ class RosActionServer:
         self._post(destroy)
 
 
-def _with_error(result: Any, text: str) -> Any:
+def _with_error(result: RosMessage, text: str) -> RosMessage:
     """``result`` with ``text`` in its error text field, whichever the action names it."""
     fields = result.get_fields_and_field_types()
     for name in ("error_msg", "error_string", "error"):

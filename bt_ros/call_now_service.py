@@ -11,13 +11,21 @@ callback is a coroutine, so a slow call never holds the executor thread.
 from __future__ import annotations
 
 import logging
-from typing import Any
+from typing import TYPE_CHECKING
 
 from bt_engine.errors import Cancelled, Failure
 from .error_codes import Ending, error_code
 from .goals import GoalError, decode_call_goal
 from .host import RosClosedError, RosHost
+from .rostypes import Outcome, Value
 from .yamlio import dump
+
+if TYPE_CHECKING:
+    from rclpy.node import Node
+    from rclpy.service import Service
+
+    from bt_engine import Runtime
+    from bt_engine.bus.messages import RosMessage
 
 log = logging.getLogger("actorbt.ros.server")
 
@@ -30,28 +38,30 @@ DEFAULT_TIMEOUT = 5.0
 class CallNowService:
     """The service on the server's node; see the module docstring."""
 
-    def __init__(self, rt: Any, host: RosHost, name: str) -> None:
+    def __init__(self, rt: Runtime, host: RosHost, name: str) -> None:
         self.rt = rt
         self.host = host
         self.name = name
-        self._service: Any = None
-        self._node: Any = None
+        self._service: Service | None = None
+        self._node: Node | None = None
 
-    def create(self, node: Any) -> None:
+    def create(self, node: Node) -> None:
         from actorbt_interfaces.srv import CallActorNow
 
         self._node = node
-        self._service = node.create_service(CallActorNow, self.name, self._on_request)
+        # rclpy's executor awaits a coroutine callback, but create_service's annotation
+        # (a callback that returns the response) has no room for one
+        self._service = node.create_service(CallActorNow, self.name, self._on_request)  # type: ignore[misc]
 
     def destroy(self) -> None:
-        if self._service is not None:
+        if self._service is not None and self._node is not None:  # create() sets both
             self._node.destroy_service(self._service)
             self._service = None
 
-    async def _on_request(self, request: Any, response: Any) -> Any:
+    async def _on_request(self, request: RosMessage, response: RosMessage) -> RosMessage:
         from rclpy.task import Future
 
-        def answer(ending: Ending, text: str = "", value: Any = None) -> Any:
+        def answer(ending: Ending, text: str = "", value: Value = None) -> RosMessage:
             response.success = ending is Ending.SUCCEEDED
             response.error_code = error_code(type(response), ending)
             response.error_msg = text
@@ -66,7 +76,7 @@ class CallNowService:
         outcome: Future = Future()
         timed_out = []
 
-        def done(value: Any) -> None:  # hub
+        def done(value: Outcome) -> None:  # hub
             try:
                 self.host.post(lambda: outcome.done() or outcome.set_result(value))
             except RosClosedError:

@@ -21,9 +21,17 @@ from __future__ import annotations
 import difflib
 import json
 import logging
-from typing import Any, Callable
+from typing import TYPE_CHECKING, Callable, TypedDict
 
 from bt_engine.catalog import tool_schema
+from .rostypes import Json
+
+if TYPE_CHECKING:
+    from rclpy.node import Node
+    from rclpy.service import Service
+
+    from bt_engine import ActorRef, Runtime
+    from bt_engine.bus.messages import RosMessage
 
 log = logging.getLogger("actorbt.ros.server")
 
@@ -33,9 +41,18 @@ RUN_TREE = "actorbt_interfaces/action/RunTree"
 CALL_ACTOR = "actorbt_interfaces/action/CallActor"
 
 
+class Description(TypedDict):
+    """The describe document (``tools_json``)."""
+
+    namespace: str
+    call_action: str
+    #: each actor's JSON Schema (bt_engine.catalog.tool_schema) with ``action`` and ``action_type``
+    tools: list[dict[str, Json]]
+
+
 def describe(
-    refs: list[Any], tree_actions: dict[str, str], call_action: str, namespace: str, name: str = ""
-) -> tuple[dict[str, Any], list[str]]:
+    refs: list[ActorRef], tree_actions: dict[str, str], call_action: str, namespace: str, name: str = ""
+) -> tuple[Description, list[str]]:
     """The describe document for actors ``refs`` (``tree_actions``: tree path -> its
     action), narrowed to ``name``; and, when nothing matched, the close matches."""
     # an exact path wins: "steps_tree" is the tree, not also some "nav.steps_tree"
@@ -51,7 +68,7 @@ def describe(
         tool["action"] = action or call_action
         tool["action_type"] = RUN_TREE if action else CALL_ACTOR
         tools.append(tool)
-    doc = {"namespace": namespace or "/", "call_action": call_action, "tools": tools}
+    doc: Description = {"namespace": namespace or "/", "call_action": call_action, "tools": tools}
     missing = (
         []
         if tools or not name
@@ -60,7 +77,7 @@ def describe(
     return doc, missing
 
 
-def _matches(ref: Any, name: str) -> bool:
+def _matches(ref: ActorRef, name: str) -> bool:
     return ref.path == name or ref.name == name or ref.path.startswith(name + ".")
 
 
@@ -74,25 +91,25 @@ class DescribeService:
             namespace, now (trees come and go with the watched folder).
     """
 
-    def __init__(self, rt: Any, name: str, served: Callable[[], tuple[dict[str, str], str, str]]) -> None:
+    def __init__(self, rt: Runtime, name: str, served: Callable[[], tuple[dict[str, str], str, str]]) -> None:
         self.rt = rt
         self.name = name
         self._served = served
-        self._service: Any = None
-        self._node: Any = None
+        self._service: Service | None = None
+        self._node: Node | None = None
 
-    def create(self, node: Any) -> None:
+    def create(self, node: Node) -> None:
         from actorbt_interfaces.srv import Describe
 
         self._node = node
         self._service = node.create_service(Describe, self.name, self._on_request)
 
     def destroy(self) -> None:
-        if self._service is not None:
+        if self._service is not None and self._node is not None:  # create() sets both
             self._node.destroy_service(self._service)
             self._service = None
 
-    def _on_request(self, request: Any, response: Any) -> Any:
+    def _on_request(self, request: RosMessage, response: RosMessage) -> RosMessage:
         try:
             trees, call_action, namespace = self._served()
             # the actors, and the trees that have an action

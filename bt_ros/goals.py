@@ -16,13 +16,18 @@ and runs exactly what was decoded.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING
 
 import yaml
 
 from bt_engine.errors import ActorbtError
 from bt_engine.yaml_hints import syntax_mark, syntax_message
 from .error_codes import Ending
+from .rostypes import Value
+
+if TYPE_CHECKING:
+    from bt_engine import ActorRef, Runtime
+    from bt_engine.trees import Mission
 
 __all__ = ["GoalError", "Invocation", "decode_call_goal", "decode_tree_goal", "parse_call_args", "parse_inputs"]
 
@@ -42,11 +47,11 @@ class Invocation:
     """What an accepted goal runs: ``rt.start(path, *args, **kwargs)``."""
 
     path: str
-    args: tuple
-    kwargs: dict
+    args: tuple[Value, ...]
+    kwargs: dict[str, Value]
 
 
-def decode_tree_goal(rt: Any, ref: Any, inputs_yaml: str) -> Invocation:
+def decode_tree_goal(rt: Runtime, ref: ActorRef, inputs_yaml: str) -> Invocation:
     """The run of tree actor ``ref`` that a RunTree goal asks for.
 
     Raises:
@@ -64,7 +69,7 @@ def decode_tree_goal(rt: Any, ref: Any, inputs_yaml: str) -> Invocation:
     return Invocation(ref.path, (), inputs)
 
 
-def decode_call_goal(rt: Any, actor: str, args_yaml: str) -> Invocation:
+def decode_call_goal(rt: Runtime, actor: str, args_yaml: str) -> Invocation:
     """The call a CallActor goal asks for. Not on the hub (it waits for the hub).
 
     Raises:
@@ -82,7 +87,7 @@ def decode_call_goal(rt: Any, actor: str, args_yaml: str) -> Invocation:
     return Invocation(ref.path, tuple(args), kwargs)
 
 
-def _mission(rt: Any, ref: Any) -> Any:
+def _mission(rt: Runtime, ref: ActorRef) -> Mission | None:
     """The trees layer's Mission behind a tree actor, when it has one (it checks types)."""
     try:
         from bt_engine.trees import tree_host
@@ -97,7 +102,7 @@ def _mission(rt: Any, ref: Any) -> Any:
 
 
 # -- YAML text -> data -------------------------------------------------------------------
-def _load(text: str, what: str) -> Any:
+def _load(text: str, what: str) -> Value:
     if not text or not text.strip():
         return None
     try:
@@ -116,7 +121,7 @@ def _check_keys(mapping: dict, what: str) -> None:
         raise GoalError(f"{what}: keys must be argument names, not {', '.join(map(repr, bad))}")
 
 
-def parse_inputs(text: str) -> dict[str, Any]:
+def parse_inputs(text: str) -> dict[str, Value]:
     """RunTree ``inputs_yaml``: a mapping of input names to values (empty: none)."""
     data = _load(text, "inputs_yaml")
     if data is None:
@@ -127,7 +132,7 @@ def parse_inputs(text: str) -> dict[str, Any]:
     return data
 
 
-def parse_call_args(text: str) -> tuple[list[Any], dict[str, Any]]:
+def parse_call_args(text: str) -> tuple[list[Value], dict[str, Value]]:
     """CallActor ``args_yaml`` -> (positional, keyword) arguments.
 
     - empty: no arguments;
