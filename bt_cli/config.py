@@ -25,7 +25,7 @@ from __future__ import annotations
 import importlib
 import pathlib
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import yaml
 
@@ -33,9 +33,16 @@ from bt_engine.errors import ActorbtError
 from bt_engine.modules import import_file, is_file_reference
 from bt_engine.yaml_hints import syntax_mark, syntax_message
 
+if TYPE_CHECKING:
+    from bt_ros.live_options import RobotSection
+
 
 class ConfigError(ActorbtError):
     """actorbt.yaml is missing a piece or names something that does not exist."""
+
+
+def _no_robot() -> RobotSection:
+    return {"body": None, "topics": ()}
 
 
 @dataclass
@@ -53,7 +60,7 @@ class Config:
     mcp: dict[str, Any] = field(default_factory=dict)
     #: the ``robot:`` section, checked: ``body`` (sx, sy, sz, x) [m] or None, and ``topics``,
     #: (name, type, qos, compress) each (read by :mod:`bt_ros.live_options`)
-    robot: dict[str, Any] = field(default_factory=lambda: {"body": None, "topics": ()})
+    robot: RobotSection = field(default_factory=_no_robot)
 
     @property
     def base(self) -> pathlib.Path:
@@ -120,7 +127,7 @@ def load_config(path: "str | pathlib.Path | None" = None) -> Config:
     )
 
 
-def _robot_section(p: pathlib.Path, section: Any) -> dict[str, Any]:
+def _robot_section(p: pathlib.Path, section: Any) -> RobotSection:
     """The checked ``robot:`` section: {"body": (sx, sy, sz, x) or None, "topics": ((name,
     type, qos, compress), ...)}; anything else is a ConfigError that shows the form."""
 

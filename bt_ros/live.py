@@ -6,11 +6,16 @@ one run), and a Foxglove view, opened together on one runtime and closed in reve
 from __future__ import annotations
 
 import sys
-from typing import Any, Callable, TextIO
+from typing import TYPE_CHECKING, Callable, TextIO
 
 from .bag import DEFAULT_TOPICS, BagRecorder, BagTopic
 from .live_options import LiveOptions
 from .tree_status import TreeStatusPublisher
+
+if TYPE_CHECKING:
+    from bt_engine import Runtime
+    from bt_engine.trees import Mission, TraceRecorder, TreeHost
+    from .foxglove_view import FoxgloveView
 
 __all__ = ["LiveSession", "around_run"]
 
@@ -28,8 +33,8 @@ class LiveSession:
 
     def __init__(
         self,
-        rt: Any,
-        host: Any,
+        rt: Runtime,
+        host: TreeHost,
         options: LiveOptions,
         *,
         tree: str | None = None,
@@ -39,9 +44,9 @@ class LiveSession:
     ) -> None:
         self.options = options
         self.status: TreeStatusPublisher | None = None
-        self.view: Any = None
+        self.view: FoxgloveView | None = None
         self.bag: BagRecorder | None = None
-        self.trace: Any = None
+        self.trace: TraceRecorder | None = None
         #: messages the bag holds, once closed
         self.recorded = 0
         try:
@@ -88,10 +93,12 @@ class LiveSession:
         return f"bag:       {self.options.bag} ({self.recorded} messages)"
 
 
-def around_run(options: LiveOptions, seed: int | None = None) -> Callable[..., LiveSession]:
+def around_run(
+    options: LiveOptions, seed: int | None = None
+) -> Callable[[Runtime, TreeHost, Mission, dict], LiveSession]:
     """For ``run``: ``around(rt, host, mission, inputs)`` opens the session of one run."""
 
-    def around(rt: Any, host: Any, mission: Any, inputs: dict) -> LiveSession:
+    def around(rt: Runtime, host: TreeHost, mission: Mission, inputs: dict) -> LiveSession:
         return LiveSession(rt, host, options, tree=mission.name, inputs=inputs, seed=seed)
 
     return around

@@ -9,9 +9,10 @@ import argparse
 import errno
 import socket
 from dataclasses import dataclass
-from typing import Any
+from typing import TypedDict
 
 from bt_engine.errors import ActorbtError
+from .rostypes import QosSetting
 
 __all__ = ["FOXGLOVE_PORT", "FoxgloveError", "LiveOptions", "add_live_options"]
 
@@ -66,6 +67,18 @@ def add_live_options(p: argparse.ArgumentParser, *, trace: bool = True) -> None:
     )
 
 
+#: a robot topic to record and show: (name, type, qos, compress)
+RobotTopic = tuple[str, str, QosSetting, bool]
+
+
+class RobotSection(TypedDict, total=False):
+    """actorbt.yaml's ``robot:`` section, as :mod:`bt_cli.config` checked it."""
+
+    #: the robot's box, (sx, sy, sz, x) [m], or None
+    body: tuple[float, float, float, float] | None
+    topics: tuple[RobotTopic, ...]
+
+
 @dataclass(frozen=True)
 class LiveOptions:
     """What the options asked for."""
@@ -79,10 +92,10 @@ class LiveOptions:
     body: tuple[float, float, float, float] | None = None
     #: the robot's topics besides the standard ones, (name, type, qos, compress) each
     #: (actorbt.yaml ``robot: topics:``)
-    topics: tuple[tuple[str, str, Any, bool], ...] = ()
+    topics: tuple[RobotTopic, ...] = ()
 
     @classmethod
-    def of(cls, args: argparse.Namespace, robot: dict[str, Any] | None = None) -> LiveOptions:
+    def of(cls, args: argparse.Namespace, robot: RobotSection | None = None) -> LiveOptions:
         """The options of a command's ``args``, with the configuration's ``robot:`` section
         (:attr:`bt_cli.config.Config.robot`)."""
         robot = robot or {}

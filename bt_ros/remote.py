@@ -28,11 +28,11 @@ import os
 import threading
 import time
 import uuid
-from typing import Any, Callable
+from typing import TYPE_CHECKING, Any, Callable
 
 import yaml
 
-from bt_engine.bus.messages import RosAction
+from bt_engine.bus.messages import RosAction, RosMessage
 from bt_engine.errors import ActorbtError, ActorTimeout
 from .client import (
     STATUS_NAMES,
@@ -46,7 +46,12 @@ from .client import (
 from .error_codes import REFUSED, ending_of
 from .host import RosClosedError, RosHost
 from .names import CALL_ACTION, NODE_NAME, in_namespace, tree_action_name, tree_of_action
+from .rostypes import Value
 from .yamlio import dump
+
+if TYPE_CHECKING:
+    from rclpy.action import ActionClient
+    from rclpy.action.client import ClientGoalHandle
 
 __all__ = ["GoalRefusedError", "NoServeError", "Remote", "RemoteCallError", "RemoteGoal", "UnknownTreeError"]
 
@@ -113,27 +118,27 @@ class RemoteGoal:
     (a GoalStatus name: succeeded, canceled, aborted), ``result`` (the Result message)
     and ``error`` (an exception when it did not succeed)."""
 
-    def __init__(self, remote: "Remote", action: str, goal: Any) -> None:
+    def __init__(self, remote: "Remote", action: str, goal: RosMessage) -> None:
         self.remote = remote
         self.action = action
         self.goal = goal
         self.accepted = threading.Event()
         self.done = threading.Event()
         self.status = "pending"
-        self.result: Any = None
+        self.result: RosMessage | None = None
         self.error: BaseException | None = None
         self.ended_at: float | None = None
         self.call: GoalCall | None = None
 
-    def _on_accepted(self, handle: Any) -> None:
+    def _on_accepted(self, handle: ClientGoalHandle) -> None:
         self.status = "accepted"
         self.accepted.set()
 
-    def _on_status(self, status: int, result: Any) -> None:
+    def _on_status(self, status: int, result: RosMessage) -> None:
         self.status = STATUS_NAMES.get(status, str(status))
         self.result = result
 
-    def _on_result(self, result: Any) -> None:
+    def _on_result(self, result: RosMessage) -> None:
         self.status = "succeeded"
         self.result = result
         self.ended_at = time.monotonic()
@@ -204,9 +209,9 @@ class Remote:
         try:
             self.node = self.host.create_node(node_name or f"actorbt_client_{os.getpid()}_{self.host.id}", lean=True)
             self._waiter = ServerWait(self.node)
-            self._clients: dict[str, Any] = {}
+            self._clients: dict[str, ActionClient] = {}
             self._created: dict[str, float] = {}
-            self._feedback: dict[bytes, tuple[RemoteGoal, Callable[[Any], None]]] = {}
+            self._feedback: dict[bytes, tuple[RemoteGoal, Callable[[RosMessage], None]]] = {}
         except BaseException:
             self.host.close()
             raise
@@ -280,7 +285,7 @@ class Remote:
     #: feedback callback waits this [s] (goals without one do not)
     SETTLE = 0.25
 
-    def _client(self, action_type: type[RosAction], action: str) -> Any:
+    def _client(self, action_type: type[RosAction], action: str) -> ActionClient:
         from rclpy.action import ActionClient
         from rclpy.qos import QoSProfile
 
@@ -299,7 +304,7 @@ class Remote:
     #: how long a finished goal still receives feedback that arrives late [s]
     FEEDBACK_GRACE = 2.0
 
-    def _on_feedback(self, msg: Any) -> None:
+    def _on_feedback(self, msg: RosMessage) -> None:
         entry = self._feedback.get(bytes(msg.goal_id.uuid))
         if entry is not None:
             entry[1](msg.feedback)
@@ -324,9 +329,9 @@ class Remote:
         self,
         action_type: type[RosAction],
         action: str,
-        goal: Any,
+        goal: RosMessage,
         *,
-        on_feedback: Callable[[Any], None] | None = None,
+        on_feedback: Callable[[RosMessage], None] | None = None,
         wait: float | None = None,
     ) -> RemoteGoal:
         """Send ``goal`` (waiting up to ``wait`` s for the server) and return at once."""
@@ -369,7 +374,7 @@ class Remote:
         tree: str,
         inputs: "dict | str | None" = None,
         *,
-        on_feedback: Callable[[Any], None] | None = None,
+        on_feedback: Callable[[RosMessage], None] | None = None,
         wait: float | None = None,
     ) -> RemoteGoal:
         """Start a goal on ``/actorbt/tree/<tree>``; ``inputs`` a mapping or YAML text."""
@@ -390,26 +395,28 @@ class Remote:
         inputs: "dict | str | None" = None,
         *,
         timeout: float | None = None,
-        on_feedback: Callable[[Any], None] | None = None,
-    ) -> Any:
+        on_feedback: Callable[[RosMessage], None] | None = None,
+    ) -> Value:
         """Run a tree to the end and return its outputs; raise RemoteCallError (failed,
         canceled), GoalRejectedError or ActorTimeout (then the goal is cancelled)."""
         g = self.tree_goal(tree, inputs, on_feedback=on_feedback)
         self._finish(g, timeout, f"tree {tree}")
-        return yaml.safe_load(g.result.outputs_yaml) if g.result.outputs_yaml else {}
+        result = g.result
+        assert result is not None  # _finish raised for a goal that did not succeed
+        return yaml.safe_load(result.outputs_yaml) if result.outputs_yaml else {}
 
-    def call_goal(self, actor: str, *args: Any, **kwargs: Any) -> RemoteGoal:
+    def call_goal(self, actor: str, *args: Value, **kwargs: Value) -> RemoteGoal:
         """Start a call of ``actor`` through ``/actorbt/call``."""
         from actorbt_interfaces.action import CallActor
 
         text = dump({"args": list(args), "kwargs": kwargs}) if (args or kwargs) else ""
         return self.send(CallActor, self.call_action, CallActor.Goal(actor=actor, args_yaml=text))
 
-    def call(self, actor: str, *args: Any, timeout: float | None = None, **kwargs: Any) -> Any:
+    def call(self, actor: str, *args: Value, timeout: float | None = None, **kwargs: Value) -> Value:
         """Call ``actor`` in the served runtime and return its result (as YAML data)."""
         return self.finish(self.call_goal(actor, *args, **kwargs), timeout, f"actor {actor}")
 
-    def finish(self, g: RemoteGoal, timeout: float | None = None, what: str | None = None) -> Any:
+    def finish(self, g: RemoteGoal, timeout: float | None = None, what: str | None = None) -> Value:
         """Wait for goal ``g`` and return its value as YAML data: a call's result, a tree's
         outputs. Cancels it after ``timeout`` [s] or on Ctrl-C; raises as :meth:`call`."""
         self._finish(g, timeout, what or g.action)
@@ -447,14 +454,14 @@ class Remote:
     def __enter__(self) -> "Remote":
         return self
 
-    def __exit__(self, *exc: Any) -> None:
+    def __exit__(self, *exc: object) -> None:
         self.close()
 
 
 class _Settling:
     """An ActionClient whose server counts as ready only after ``settled`` (monotonic)."""
 
-    def __init__(self, client: Any, settled: float) -> None:
+    def __init__(self, client: ActionClient, settled: float) -> None:
         self._client = client
         self._settled = settled
 

@@ -58,7 +58,7 @@ from __future__ import annotations
 import logging
 import pathlib
 import time
-from typing import Any, Callable
+from typing import TYPE_CHECKING, Callable
 
 from bt_engine.errors import Cancelled, Failure
 from .call_now_service import CallNowService
@@ -72,6 +72,10 @@ from .names import CALL_ACTION, CALL_NOW_SERVICE, DESCRIBE_SERVICE, NODE_NAME, r
 from .transport import RosTransport
 from .tree_server import TreeProgress, TreeServer
 from .tree_watch import TreeFolderWatch
+
+if TYPE_CHECKING:
+    from bt_engine import ActorRef, Runtime
+    from .goal_server import ServedGoal
 
 log = logging.getLogger("actorbt.ros.server")
 
@@ -108,7 +112,7 @@ class Server:
 
     def __init__(
         self,
-        rt: Any,
+        rt: Runtime,
         *,
         preempt: bool = False,
         node_name: str = NODE_NAME,
@@ -132,7 +136,7 @@ class Server:
         self._watch: TreeFolderWatch | None = None
         bus = rt.bus
         self._own_host = not isinstance(bus, RosTransport)
-        self.host: RosHost = RosHost("serve") if self._own_host else bus.host
+        self.host: RosHost = bus.host if isinstance(bus, RosTransport) else RosHost("serve")
         try:
             self.node = self.host.create_node(node_name, namespace or None, ros_args=ros_args)
             #: the node's namespace, as clients name it (``/robot1``; ``/`` for the root)
@@ -214,7 +218,7 @@ class Server:
 
         self.host.call(destroy_gone)
 
-    def _apply_trees(self, refs: list[Any], announce: bool) -> list[TreeServer]:
+    def _apply_trees(self, refs: list[ActorRef], announce: bool) -> list[TreeServer]:
         """(executor thread) Create and withdraw tree action servers; the withdrawn."""
         from actorbt_interfaces.action import RunTree
 
@@ -302,11 +306,11 @@ class Server:
     def __enter__(self) -> "Server":
         return self
 
-    def __exit__(self, *exc: Any) -> None:
+    def __exit__(self, *exc: object) -> None:
         self.close()
 
 
-def _wait_finished(goals: list[Any], grace: float) -> None:
+def _wait_finished(goals: list[ServedGoal], grace: float) -> None:
     """Wait up to ``grace`` [s] for ``goals`` to finish (not on the executor thread)."""
     deadline = time.monotonic() + grace
     while goals and not all(g.finished.done() for g in goals) and time.monotonic() < deadline:
@@ -314,7 +318,7 @@ def _wait_finished(goals: list[Any], grace: float) -> None:
 
 
 def serve(
-    rt: Any,
+    rt: Runtime,
     *,
     preempt: bool = False,
     node_name: str = NODE_NAME,

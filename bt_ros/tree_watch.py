@@ -13,7 +13,10 @@ from __future__ import annotations
 import logging
 import pathlib
 import threading
-from typing import Any, Callable
+from typing import TYPE_CHECKING, Callable
+
+if TYPE_CHECKING:
+    from bt_engine import Runtime
 
 log = logging.getLogger("actorbt.ros.server")
 
@@ -52,7 +55,11 @@ class TreeFolderWatch:
     """
 
     def __init__(
-        self, rt: Any, folder: "str | pathlib.Path", on_reloaded: Callable[[list[str]], None], period: float = PERIOD
+        self,
+        rt: Runtime,
+        folder: "str | pathlib.Path",
+        on_reloaded: Callable[[list[str]], None],
+        period: float = PERIOD,
     ) -> None:
         self.rt = rt
         self.folder = pathlib.Path(folder)
