@@ -31,14 +31,21 @@ import collections
 import logging
 import threading
 from pathlib import Path
-from typing import Any, Callable, NamedTuple
+from typing import TYPE_CHECKING, Callable, NamedTuple
 
-from bt_engine.bus.messages import message_class
+from bt_engine.bus.messages import RosMessage, message_class
 from bt_engine.bus.qos import is_latched
 from bt_engine.errors import ActorbtError, RuntimeClosedError
 from .cdr import message_definition, serialize, type_hash
 from .compressed import JPEG_QUALITY, CompressionError, compress_image, compressed_topic
+from .rostypes import QosSetting
 from .tree_status import STATUS_TOPIC
+
+if TYPE_CHECKING:
+    from rosbags.interfaces import Connection, Qos
+
+    from bt_engine import Runtime
+    from bt_engine.bus.transport import Subscription
 
 __all__ = ["BagError", "BagRecorder", "BagTopic", "DEFAULT_TOPICS", "TRACE_TOPIC", "check_bag_path"]
 
@@ -61,7 +68,7 @@ class BagTopic(NamedTuple):
     type: str
     #: the subscription's QoS setting (:mod:`bt_engine.bus.qos`); also what the bag says
     #: the topic offered, so ``ros2 bag play`` latches /map and /tf_static again
-    qos: Any = 10
+    qos: QosSetting = 10
     #: a sensor_msgs/Image recorded as CompressedImage on ``<name>/compressed``
     compress: bool = False
 
@@ -103,7 +110,7 @@ def check_bag_path(path: str | Path) -> Path:
     return path
 
 
-def _offered_qos(qos: Any) -> Any:
+def _offered_qos(qos: QosSetting) -> Qos:
     """The rosbags Qos a publisher with our setting offers (metadata.yaml)."""
     from rosbags.interfaces import Qos, QosDurability, QosHistory, QosLiveliness, QosReliability, QosTime
     from bt_engine.bus.qos import qos_depth
@@ -158,7 +165,7 @@ class BagRecorder:
 
     def __init__(
         self,
-        rt: Any,
+        rt: Runtime,
         path: str | Path,
         topics: tuple[BagTopic, ...] = DEFAULT_TOPICS,
         *,
@@ -178,8 +185,8 @@ class BagRecorder:
         clock = "virtual" if getattr(rt.clock, "virtual", False) else "wall"
         self._writer.set_custom_data("actorbt.clock", clock)
         self._writer.open()
-        self._connections: dict[str, Any] = {}
-        self._subs: list[Any] = []
+        self._connections: dict[str, Connection] = {}
+        self._subs: list[Subscription] = []
         self._warned: set[str] = set()
         self._closed = False
         try:
@@ -191,7 +198,7 @@ class BagRecorder:
             self._writer.close()
             raise
 
-    def _add_connection(self, name: str, type_name: str, qos: Any) -> None:
+    def _add_connection(self, name: str, type_name: str, qos: QosSetting) -> None:
         self._connections[name] = self._writer.add_connection(
             name,
             type_name,
@@ -207,12 +214,12 @@ class BagRecorder:
                 self.rt.bus.subscribe(topic.name, message_class(topic.type), self._receiver(topic), topic.qos)
             )
 
-    def _receiver(self, topic: BagTopic) -> Callable[[Any], None]:
+    def _receiver(self, topic: BagTopic) -> Callable[[RosMessage], None]:
         name = topic.bag_name
         if not topic.compress:
             return lambda msg: self.write(name, msg)
 
-        def compress(msg: Any) -> None:
+        def compress(msg: RosMessage) -> None:
             try:
                 self.write(name, compress_image(msg, self.jpeg_quality))
             except CompressionError as exc:
@@ -229,7 +236,7 @@ class BagRecorder:
                 self._add_connection(TRACE_TOPIC, STRING, "reliable")
         return _TraceSink(self)
 
-    def write(self, topic: str, msg: Any) -> None:
+    def write(self, topic: str, msg: RosMessage) -> None:
         """Write ``msg`` on bag topic ``topic`` at the runtime clock's now."""
         data = serialize(msg)
         with self._lock:  # stamped under the lock: the file's order is the order in time
@@ -259,5 +266,5 @@ class BagRecorder:
     def __enter__(self) -> BagRecorder:
         return self
 
-    def __exit__(self, *exc: Any) -> None:
+    def __exit__(self, *exc: object) -> None:
         self.close()

@@ -16,10 +16,13 @@ from __future__ import annotations
 
 import json
 import sys
-from typing import Any
+from typing import TYPE_CHECKING
 
 from .foxglove_view import PATH_TOPIC, SCENE_TOPIC
 from .tree_status import STATUS_TOPIC
+
+if TYPE_CHECKING:
+    from foxglove.layouts import Layout
 
 __all__ = ["layout", "layout_json"]
 
@@ -27,7 +30,7 @@ CAMERA = "/camera/color/image_raw/compressed"
 CAMERA_INFO = "/camera/camera_info"
 
 
-def layout() -> Any:
+def layout() -> Layout:
     """The layout, as a ``foxglove.layouts.Layout``."""
     import foxglove.layouts as fl
 

@@ -19,7 +19,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any, Iterator, TypeGuard
+from types import ModuleType
+from typing import TYPE_CHECKING, Iterable, Iterator, TypeGuard
+
+from .rostypes import Value
+
+if TYPE_CHECKING:
+    # the SDK is imported when a view starts; ``fm`` below is this module
+    from foxglove.messages import Pose, PosesInFrame, SceneEntity, SceneUpdate, Timestamp
 
 __all__ = ["Body", "Detection", "Goal", "Scene", "detections_in", "goal_of"]
 
@@ -66,11 +73,11 @@ class Goal:
     frame: str = "map"
 
 
-def _number(value: Any) -> TypeGuard[float]:
+def _number(value: object) -> TypeGuard[float]:
     return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
 
 
-def detections_in(value: Any, depth: int = 3) -> Iterator[Detection]:
+def detections_in(value: Value, depth: int = 3) -> Iterator[Detection]:
     """The detections in an actor's result (see the module docstring)."""
     if isinstance(value, dict):
         if isinstance(value.get("category"), str) and _number(value.get("x")) and _number(value.get("y")):
@@ -83,7 +90,7 @@ def detections_in(value: Any, depth: int = 3) -> Iterator[Detection]:
                 str(value.get("frame", "map")),
             )
             return
-        children: Any = value.values()
+        children: Iterable[Value] = value.values()
     elif isinstance(value, (list, tuple)):
         children = value
     else:
@@ -156,7 +163,7 @@ class Scene:
         return True
 
     # -- Foxglove messages -----------------------------------------------------------------
-    def update(self, t: float) -> Any:
+    def update(self, t: float) -> SceneUpdate:
         """Every entity, as one foxglove SceneUpdate (entities with an id replace the
         ones the client has)."""
         import foxglove.messages as fm
@@ -167,7 +174,7 @@ class Scene:
         entities += [self._goal(fm, stamp, i, g, latest=i == len(self.goals) - 1) for i, g in enumerate(self.goals)]
         return fm.SceneUpdate(entities=entities)
 
-    def path_message(self, t: float) -> Any:
+    def path_message(self, t: float) -> PosesInFrame:
         import foxglove.messages as fm
 
         return fm.PosesInFrame(
@@ -177,7 +184,7 @@ class Scene:
         )
 
     @staticmethod
-    def _robot(fm: Any, stamp: Any, body: Body) -> Any:
+    def _robot(fm: ModuleType, stamp: Timestamp, body: Body) -> SceneEntity:
         return fm.SceneEntity(
             timestamp=stamp,
             frame_id="base_footprint",
@@ -193,7 +200,7 @@ class Scene:
         )
 
     @staticmethod
-    def _detection(fm: Any, stamp: Any, i: int, d: Detection) -> Any:
+    def _detection(fm: ModuleType, stamp: Timestamp, i: int, d: Detection) -> SceneEntity:
         r, g, b = _hue(d.category)
         return fm.SceneEntity(
             timestamp=stamp,
@@ -221,7 +228,7 @@ class Scene:
         )
 
     @staticmethod
-    def _goal(fm: Any, stamp: Any, i: int, g: Goal, latest: bool) -> Any:
+    def _goal(fm: ModuleType, stamp: Timestamp, i: int, g: Goal, latest: bool) -> SceneEntity:
         a = 1.0 if latest else 0.35
         return fm.SceneEntity(
             timestamp=stamp,
@@ -240,14 +247,14 @@ class Scene:
         )
 
 
-def _timestamp(t: float) -> Any:
+def _timestamp(t: float) -> Timestamp:
     import foxglove.messages as fm
 
     sec, nsec = divmod(int(round(t * 1e9)), 1_000_000_000)
     return fm.Timestamp(sec, nsec)
 
 
-def _pose(fm: Any, x: float, y: float, z: float, yaw: float) -> Any:
+def _pose(fm: ModuleType, x: float, y: float, z: float, yaw: float) -> Pose:
     return fm.Pose(
         position=fm.Vector3(x=x, y=y, z=z),
         orientation=fm.Quaternion(x=0.0, y=0.0, z=math.sin(yaw / 2), w=math.cos(yaw / 2)),

@@ -25,9 +25,9 @@ from __future__ import annotations
 
 import logging
 import math
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Callable, Protocol
 
-from bt_engine.bus.messages import message_class
+from bt_engine.bus.messages import RosMessage, message_class
 from bt_engine.errors import RuntimeClosedError
 from .bag import DEFAULT_TOPICS, BagTopic
 from .cdr import message_definition, serialize
@@ -35,8 +35,13 @@ from .compressed import CompressionError, compress_image
 from .foxglove_scene import Body, Scene, detections_in, goal_of
 
 if TYPE_CHECKING:
-    from foxglove.websocket import ServerListener
+    from foxglove.websocket import ChannelView, Client, ServerListener
+
+    from bt_engine import Runtime, Transaction
+    from bt_engine.bus.transport import Subscription
+    from bt_engine.hub import TimerHandle
 from .live_options import FOXGLOVE_PORT, FoxgloveError
+from .rostypes import Json
 
 __all__ = ["DEFAULT_PORT", "FoxgloveError", "FoxgloveView", "PATH_TOPIC", "SCENE_TOPIC"]
 
@@ -57,35 +62,43 @@ def _listener(view: FoxgloveView) -> ServerListener:
     from foxglove.websocket import ServerListener
 
     class _Listener(ServerListener):
-        def on_subscribe(self, client: Any, channel: Any) -> None:
+        def on_subscribe(self, client: Client, channel: ChannelView) -> None:
             view._demand(channel.topic, +1)
 
-        def on_unsubscribe(self, client: Any, channel: Any) -> None:
+        def on_unsubscribe(self, client: Client, channel: ChannelView) -> None:
             view._demand(channel.topic, -1)
 
     return _Listener()
 
 
+class CallHooks(Protocol):
+    """What ``rt.recorder`` hears of every actor call (:mod:`bt_engine.transaction`)."""
+
+    def call_started(self, txn: Transaction) -> None: ...
+
+    def call_finished(self, txn: Transaction) -> None: ...
+
+
 class _Hooks:
     """``rt.recorder`` while the view is open: every actor call, then the previous hooks."""
 
-    def __init__(self, view: FoxgloveView, previous: Any) -> None:
+    def __init__(self, view: FoxgloveView, previous: CallHooks | None) -> None:
         self.view = view
         self.previous = previous
 
-    def call_started(self, txn: Any) -> None:
+    def call_started(self, txn: Transaction) -> None:
         if not self.view.closed:
             self.view._call_started(txn)
         if self.previous is not None:
             self.previous.call_started(txn)
 
-    def call_finished(self, txn: Any) -> None:
+    def call_finished(self, txn: Transaction) -> None:
         if not self.view.closed:
             self.view._call_finished(txn)
         if self.previous is not None:
             self.previous.call_finished(txn)
 
-    def emit(self, event: dict[str, Any]) -> None:
+    def emit(self, event: dict[str, Json]) -> None:
         if self.previous is not None and hasattr(self.previous, "emit"):
             self.previous.emit(event)
 
@@ -106,7 +119,7 @@ class FoxgloveView:
 
     def __init__(
         self,
-        rt: Any,
+        rt: Runtime,
         *,
         port: int = DEFAULT_PORT,
         host: str = "127.0.0.1",
@@ -135,9 +148,9 @@ class FoxgloveView:
         self._scene_channel = SceneUpdateChannel(SCENE_TOPIC, context=self.ctx)
         self._path_channel = PosesInFrameChannel(PATH_TOPIC, context=self.ctx)
         self._demanded: dict[str, int] = {}
-        self._subs: dict[str, Any] = {}
-        self._odom: Any = None
-        self._timer: Any = None
+        self._subs: dict[str, Subscription] = {}
+        self._odom: Subscription | None = None
+        self._timer: TimerHandle | None = None
         self._hooks: _Hooks | None = None
         self._sent = {"path": -1.0, "time": -1.0}
         try:
@@ -206,10 +219,10 @@ class FoxgloveView:
         elif not n and topic in self._subs:
             self._subs.pop(topic).close()
 
-    def _forwarder(self, topic: BagTopic) -> Any:
+    def _forwarder(self, topic: BagTopic) -> Callable[[RosMessage], None]:
         channel = self._channels[topic.bag_name]
 
-        def forward(msg: Any) -> None:
+        def forward(msg: RosMessage) -> None:
             if topic.compress:
                 try:
                     msg = compress_image(msg)
@@ -228,7 +241,7 @@ class FoxgloveView:
             self._sent["time"] = now
             self.server.broadcast_time(self._now_ns())
 
-    def _on_odom(self, msg: Any) -> None:
+    def _on_odom(self, msg: RosMessage) -> None:
         p, q = msg.pose.pose.position, msg.pose.pose.orientation
         yaw = math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
         self.scene.add_odometry(p.x, p.y, yaw, msg.header.frame_id or "odom")
@@ -241,13 +254,13 @@ class FoxgloveView:
     def _send_scene(self) -> None:
         self._scene_channel.log(self.scene.update(self.rt.now()), log_time=self._now_ns())
 
-    def _call_started(self, txn: Any) -> None:
+    def _call_started(self, txn: Transaction) -> None:
         goal = goal_of(txn.args)
         if goal is not None:
             self.scene.add_goal(goal)
             self._send_scene()
 
-    def _call_finished(self, txn: Any) -> None:
+    def _call_finished(self, txn: Transaction) -> None:
         if txn.result is None or txn.error is not None:
             return
         changed = False
@@ -271,5 +284,5 @@ class FoxgloveView:
     def __enter__(self) -> FoxgloveView:
         return self
 
-    def __exit__(self, *exc: Any) -> None:
+    def __exit__(self, *exc: object) -> None:
         self.close()
