@@ -20,6 +20,7 @@ from .config import Config, ConfigError, import_object, load_config, run_imports
 
 if TYPE_CHECKING:
     from bt_engine.bus import Transport
+    from bt_ros.command_app import CommandApp
     from bt_engine.trees import TreeLibrary
 
 log = logging.getLogger("actorbt.cli")
@@ -238,3 +239,11 @@ def _c_stdout_to_stderr() -> Iterator[None]:
     finally:
         os.dup2(saved, 1)
         os.close(saved)
+
+
+if TYPE_CHECKING:
+
+    def _as_command_app(app: App) -> CommandApp:
+        """The ROS commands take the App as a CommandApp: the type checker holds the two
+        to each other here (bt_ros may not import bt_cli)."""
+        return app

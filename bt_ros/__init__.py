@@ -18,6 +18,7 @@
     server       ``serve(rt)``: the node, its actions and services, the served trees, shutdown
     remote       Remote: a client of a running ``actorbt serve``; what it serves (ROS graph)
     shell        RemoteShell: ``actorbt rshell``, one warm client for many calls
+    command_app  what the commands below use of bt_cli's App (a protocol)
     cli          ``actorbt serve``, ``actorbt goal``, ``actorbt rcall``, ``actorbt rshell``
 
 Recording and viewing (``--bag``, ``--foxglove``; docs/recording.md):

@@ -14,13 +14,15 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, cast
+from typing import TYPE_CHECKING, cast
 
 from bt_tools.replay import ReplayError, replay
 from .bag import STRING, TRACE_TOPIC
 
 if TYPE_CHECKING:
     from rosbags.typesys.stores.ros2_jazzy import std_msgs__msg__String
+
+    from .command_app import CommandApp
 
 __all__ = ["bag_folder", "cmd_replay", "trace_lines"]
 
@@ -69,7 +71,7 @@ def trace_lines(path: str | Path) -> list[str]:
         raise ReplayError(f"{folder}: cannot read the bag: {exc}") from None
 
 
-def cmd_replay(args: argparse.Namespace, app: Any) -> int:
+def cmd_replay(args: argparse.Namespace, app: CommandApp) -> int:
     """``actorbt replay TRACE``: a ``.jsonl`` trace or a bag folder."""
     folder = bag_folder(args.trace)
     if folder is None:

@@ -29,13 +29,20 @@ import signal
 import sys
 import threading
 import time
-from typing import Any, Callable
+from typing import TYPE_CHECKING, Callable
 
 from bt_engine.clock import process_uptime
 from .live_options import LiveOptions, add_live_options
 
+if TYPE_CHECKING:
+    import types
 
-def register(sub: Any, common: Callable[[argparse.ArgumentParser], None]) -> None:
+    from bt_engine.bus.messages import RosMessage
+    from .command_app import CommandApp
+    from .remote import RemoteGoal
+
+
+def register(sub: argparse._SubParsersAction, common: Callable[[argparse.ArgumentParser], None]) -> None:
     p = sub.add_parser(
         "serve",
         help="Serve the trees and actors as ROS 2 actions until Ctrl-C.",
@@ -169,12 +176,12 @@ def _progress(text: str) -> None:
 
 
 # -- serve -------------------------------------------------------------------------------
-def cmd_serve(args: argparse.Namespace, app: Any) -> int:
+def cmd_serve(args: argparse.Namespace, app: CommandApp) -> int:
     from .server import serve
 
     previous = signal.getsignal(signal.SIGTERM)
 
-    def on_term(signum: int, frame: Any) -> None:
+    def on_term(signum: int, frame: types.FrameType | None) -> None:
         raise KeyboardInterrupt
 
     rt = server = session = None
@@ -189,13 +196,14 @@ def cmd_serve(args: argparse.Namespace, app: Any) -> int:
         trees = f" and the trees in {os.path.relpath(folder)}" if folder and folder.is_dir() else ""
         loading = f"loading subsystems {subsystems}{trees} ({bus} bus)..."
         spec = app.world_spec()
+        world_name = spec["name"] if spec else None  # world_up is called only when there is one
         if spec:
-            _progress(f"starting world {spec['name']} (seed {spec.get('seed', 0)})...")
+            _progress(f"starting world {world_name} (seed {spec.get('seed', 0)})...")
         else:
             _progress(loading)
 
-        def world_up(world: Any) -> None:
-            _progress(f"world {spec['name']} up at {process_uptime():.1f} s; {loading}")
+        def world_up(world: object) -> None:
+            _progress(f"world {world_name} up at {process_uptime():.1f} s; {loading}")
 
         rt = app.runtime(clock=getattr(args, "clock", None) or "wall", world_first=True, world_setup=world_up)
         _progress(f"actors and trees loaded at {process_uptime():.1f} s; starting the ROS node...")
@@ -260,12 +268,12 @@ def cmd_serve(args: argparse.Namespace, app: Any) -> int:
 
 
 # -- clients -----------------------------------------------------------------------------
-def _print_feedback(fb: Any) -> None:
+def _print_feedback(fb: RosMessage) -> None:
     active = f"  {fb.active_node}" if fb.active_node else ""
     print(f"[tick {fb.tick_count:4d} {fb.elapsed:7.2f} s] {fb.status}{active}", flush=True)
 
 
-def _follow(goal: Any, timeout: float | None) -> int | None:
+def _follow(goal: RemoteGoal, timeout: float | None) -> int | None:
     """Wait for ``goal``; on Ctrl-C or timeout cancel it. Returns 130 when interrupted."""
     try:
         if not goal.wait(timeout):
@@ -303,7 +311,7 @@ def _not_sent(err: BaseException | None, what: str = "goal") -> int | None:
     return 2
 
 
-def cmd_goal(args: argparse.Namespace, app: Any) -> int:
+def cmd_goal(args: argparse.Namespace, app: CommandApp) -> int:
     from .remote import NoServeError, Remote, UnknownTreeError
 
     with Remote(wait=args.wait, namespace=args.namespace) as remote:
@@ -330,7 +338,7 @@ def cmd_goal(args: argparse.Namespace, app: Any) -> int:
         return 0 if goal.status == "succeeded" and res is not None and res.success else 1
 
 
-def cmd_rcall(args: argparse.Namespace, app: Any) -> int:
+def cmd_rcall(args: argparse.Namespace, app: CommandApp) -> int:
     """``actorbt rcall ACTOR ARG...``: one call through ``/actorbt/call``; the result is
     printed (``--json``: as JSON)."""
     import yaml
@@ -358,7 +366,7 @@ def cmd_rcall(args: argparse.Namespace, app: Any) -> int:
         return 0
 
 
-def cmd_rshell(args: argparse.Namespace, app: Any) -> int:
+def cmd_rshell(args: argparse.Namespace, app: CommandApp) -> int:
     from .remote import NoServeError, Remote
     from .shell import RemoteShell
 

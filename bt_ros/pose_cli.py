@@ -27,9 +27,16 @@ import math
 import os
 import sys
 import time
-from typing import Any, Callable
+from typing import TYPE_CHECKING, Callable
 
 from bt_engine.errors import ActorbtError
+
+if TYPE_CHECKING:
+    from rclpy.node import Node
+
+    from bt_engine.bus.messages import RosMessage
+    from .command_app import CommandApp
+    from .host import RosHost
 
 TOPIC = "/initialpose"
 #: RViz's "2D Pose Estimate" defaults (rviz_default_plugins SetInitialPose: "X std
@@ -42,7 +49,7 @@ RVIZ_STD_YAW = math.pi / 12
 KEEP_ALIVE = 0.5
 
 
-def register(sub: Any, common: Callable[[argparse.ArgumentParser], None]) -> None:
+def register(sub: argparse._SubParsersAction, common: Callable[[argparse.ArgumentParser], None]) -> None:
     p = sub.add_parser(
         "pose",
         help="the robot's pose: init X Y YAW (like RViz's 2D Pose Estimate)",
@@ -116,7 +123,7 @@ def _non_negative(text: str) -> float:
 
 def initial_pose_msg(
     x: float, y: float, yaw: float, std_xy: float = RVIZ_STD_XY, std_yaw: float = RVIZ_STD_YAW, frame: str = "map"
-) -> Any:
+) -> RosMessage:
     """The PoseWithCovarianceStamped RViz's "2D Pose Estimate" sends (unstamped): pose
     (x, y, yaw) in ``frame``; covariance (row-major 6x6 over x, y, z, roll, pitch, yaw)
     ``std_xy``² for x and y, ``std_yaw``² for yaw, zero elsewhere."""
@@ -134,7 +141,7 @@ def initial_pose_msg(
     return msg
 
 
-def cmd_init(args: argparse.Namespace, app: Any) -> int:
+def cmd_init(args: argparse.Namespace, app: CommandApp) -> int:
     if (args.bus or app.cfg.transport) != "ros":
         raise ActorbtError(
             f"pose init publishes {TOPIC} over ROS 2, and the bus here is local: the pose "
@@ -186,7 +193,7 @@ def publish_over_ros(args: argparse.Namespace) -> int:
     return 0
 
 
-def _listeners(host: Any, node: Any, wait: float = 1.0) -> str:
+def _listeners(host: RosHost, node: Node, wait: float = 1.0) -> str:
     """The nodes subscribed to /initialpose, for the user to see who heard it. A node's
     name arrives after its endpoints (the graph says _NODE_NAME_UNKNOWN_ meanwhile), so
     wait up to ``wait`` seconds for the names; else count the subscribers."""

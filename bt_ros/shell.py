@@ -25,13 +25,16 @@ index comes in as a function.
 from __future__ import annotations
 
 import pprint
-from typing import Any, Callable
+from typing import IO, TYPE_CHECKING, Callable, Sequence
 
 from bt_engine.errors import ActorbtError
 from bt_engine.literals import parse_args, split_line
 from bt_engine.shell_base import ShellBase
 from .client import GoalRejectedError, ServerUnavailableError
 from .remote import GoalRefusedError, NoServeError, Remote, close_matches
+
+if TYPE_CHECKING:
+    from .command_app import IndexEntry
 
 __all__ = ["RemoteShell"]
 
@@ -58,11 +61,11 @@ class RemoteShell(ShellBase):
     def __init__(
         self,
         remote: Remote,
-        index: Callable[[], list[Any]] | None = None,
+        index: Callable[[], Sequence[IndexEntry]] | None = None,
         *,
         timeout: float | None = None,
-        stdin: Any = None,
-        stdout: Any = None,
+        stdin: IO[str] | None = None,
+        stdout: IO[str] | None = None,
     ) -> None:
         super().__init__(stdin=stdin, stdout=stdout)
         if stdin is not None:  # lines from a file or a pipe: no prompt, no banner
@@ -72,10 +75,10 @@ class RemoteShell(ShellBase):
         self.remote = remote
         self.timeout = timeout
         self._index_source = index
-        self._index: list[Any] | None = None
+        self._index: list[IndexEntry] | None = None
 
     # -- names ---------------------------------------------------------------------------
-    def entries(self) -> list[Any]:
+    def entries(self) -> list[IndexEntry]:
         """The local actor index (loaded once)."""
         if self._index is None:
             self._index = []
@@ -96,10 +99,10 @@ class RemoteShell(ShellBase):
         names = {e.path for e in self.entries()} | {e.name for e in self.entries()}
         return sorted(names | set(self._served_trees()))
 
-    def completenames(self, text: str, *ignored: Any) -> list[str]:
+    def completenames(self, text: str, *ignored: object) -> list[str]:
         return [n for n in self._names() + self.commands if n.startswith(text)]
 
-    def complete_help(self, text: str, *ignored: Any) -> list[str]:
+    def complete_help(self, text: str, *ignored: object) -> list[str]:
         return self.completenames(text)
 
     # -- commands --------------------------------------------------------------------------
@@ -173,7 +176,7 @@ class RemoteShell(ShellBase):
         if value is not None:
             self.stdout.write(pprint.pformat(value) + "\n")
 
-    def cmdloop(self, intro: Any = None) -> None:
+    def cmdloop(self, intro: object = None) -> None:
         while True:
             try:
                 super().cmdloop(intro)

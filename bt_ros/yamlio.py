@@ -12,12 +12,12 @@ from __future__ import annotations
 import array
 import dataclasses
 import enum
-from typing import Any
-
 import yaml
 
+from .rostypes import Value
 
-def to_plain(value: Any, _depth: int = 0) -> Any:
+
+def to_plain(value: Value, _depth: int = 0) -> Value:
     """``value`` as YAML-safe data (dict, list, str, int, float, bool, None)."""
     if _depth > 50:
         return repr(value)
@@ -46,12 +46,12 @@ def to_plain(value: Any, _depth: int = 0) -> Any:
     return repr(value)
 
 
-def dump(value: Any) -> str:
+def dump(value: Value) -> str:
     """YAML text of ``value`` (see the module docstring)."""
     return yaml.safe_dump(to_plain(value), default_flow_style=None, sort_keys=False, allow_unicode=True)
 
 
-def flow(value: Any) -> str:
+def flow(value: Value) -> str:
     """``value`` as one line of YAML flow style, e.g. ``{category: can, n: 2}``."""
     return (
         yaml.safe_dump(to_plain(value), default_flow_style=True, sort_keys=False, allow_unicode=True, width=1 << 30)
