@@ -45,7 +45,15 @@ builds without ROS still run the local bus. Discovery stays on this machine unle
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:  # what __getattr__ imports when a name is first used
+    from .host import RosHost
+    from .live import LiveSession
+    from .live_options import LiveOptions, add_live_options
+    from .remote import Remote
+    from .server import Server, serve
+    from .transport import RosTransport
 
 __all__ = ["LiveOptions", "LiveSession", "Remote", "RosHost", "RosTransport", "Server", "add_live_options", "serve"]
 
@@ -61,7 +69,7 @@ _HOMES = {
 }
 
 
-def __getattr__(name: str) -> Any:
+def __getattr__(name: str) -> object:
     home = _HOMES.get(name)
     if home is None:
         raise AttributeError(name)

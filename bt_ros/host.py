@@ -37,14 +37,24 @@ import pathlib
 import tempfile
 import threading
 import uuid
-from typing import TYPE_CHECKING, Any, Callable, TypeVar
+from typing import TYPE_CHECKING, Callable, TypedDict, TypeVar
 
 from bt_engine.errors import ActorbtError
 
 if TYPE_CHECKING:
     from rclpy.node import Node
+    from rclpy.parameter import Parameter
 
 T = TypeVar("T")
+
+
+class _NodeOptions(TypedDict, total=False):
+    """The keyword arguments of ``rclpy.create_node`` that create_node sets."""
+
+    enable_rosout: bool
+    parameter_overrides: list[Parameter]
+    cli_args: list[str]
+
 
 log = logging.getLogger("actorbt.ros")
 
@@ -131,7 +141,7 @@ class RosHost:
         self.executor = SingleThreadedExecutor(context=self.context)
         self._nodes: list[Node] = []
         self._lock = threading.Lock()
-        self._queue: collections.deque[tuple[Callable[..., object], tuple[Any, ...]]] = collections.deque()
+        self._queue: collections.deque[tuple[Callable[..., object], tuple[object, ...]]] = collections.deque()
         self._drain_scheduled = False
         self._stopping = False
         self._closed = False
@@ -155,7 +165,7 @@ class RosHost:
         import rclpy.exceptions
 
         self._check_open()
-        options: dict[str, Any] = {}
+        options: _NodeOptions = {}
         if lean:
             from rclpy.parameter import Parameter
 
@@ -199,7 +209,7 @@ class RosHost:
     def in_executor_thread(self) -> bool:
         return threading.current_thread() is self._thread
 
-    def post(self, fn: Callable[..., object], *args: Any) -> None:
+    def post(self, fn: Callable[..., object], *args: object) -> None:
         """Run ``fn(*args)`` on the executor thread soon, after earlier posts. Any thread.
 
         Raises:
@@ -214,7 +224,7 @@ class RosHost:
             self._drain_scheduled = True
             self.executor.create_task(self._drain)
 
-    def call(self, fn: Callable[..., T], *args: Any, timeout: float = 10.0) -> T:
+    def call(self, fn: Callable[..., T], *args: object, timeout: float = 10.0) -> T:
         """Run ``fn(*args)`` on the executor thread and return its result."""
         if self.in_executor_thread():
             return fn(*args)

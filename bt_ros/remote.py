@@ -468,5 +468,5 @@ class _Settling:
     def server_is_ready(self) -> bool:
         return self._client.server_is_ready() and time.monotonic() >= self._settled
 
-    def __getattr__(self, name: str) -> Any:
+    def __getattr__(self, name: str) -> Any:  # whatever the wrapped ActionClient has (rclpy: untyped)
         return getattr(self._client, name)

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import logging
 import os
-from typing import TYPE_CHECKING, Any, Callable, TypeVar
+from typing import TYPE_CHECKING, Callable, TypeVar
 
 from bt_engine.bus.messages import RosAction, RosMessage, RosService
 from bt_engine.bus.transport import EndpointInfo, TopicInfo, Transport
@@ -28,7 +28,7 @@ from bt_engine.bus.actions import ServerGoal, build_message, message_doc, messag
 from .client import GoalCall, ServerWait, ServiceCall
 from .host import RosClosedError, RosHost
 from .qos import qos_profile
-from .rostypes import QosSetting
+from .rostypes import QosSetting, Value
 
 if TYPE_CHECKING:
     from rclpy.action import ActionClient
@@ -275,7 +275,7 @@ class RosTransport(Transport):
         ``client`` as a ``call_type`` (GoalCall or ServiceCall) from the executor thread."""
         host, waiter = self.host, self._waiter
 
-        def send(done: Done, *args: object, **fields: Any) -> Callable[[], None]:
+        def send(done: Done, *args: object, **fields: Value) -> Callable[[], None]:
             # the signature is (<param>=None, **fields), checked by the runtime
             message = args[0] if args else fields.pop(param, None)
             call = call_type(
