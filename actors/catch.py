@@ -110,6 +110,8 @@ class Catcher(Approaching, Placing, SubSystem):
         self.set_value("failed_views", [])   # (x, y, heading) of grasps that failed
         self.set_value("moved_to", None)     # (was x, y; the detection seen after): where
         #                                      a failed grasp left the object
+        self.set_value("lost_at", None)      # (x, y): the sighting whose failed grasp left
+        #                                      the object nowhere the look round saw
         self.set_value("rejected", [])       # (x, y, category): a close look saw something else there
         self.set_value("put_down", [])       # (x, y): where place_on put objects down
         self.set_value("camera_view", None)  # see _camera_view
@@ -160,11 +162,20 @@ class Catcher(Approaching, Placing, SubSystem):
                 seen = min(near, key=lambda d: math.dist((d["x"], d["y"]), xy))
                 self.set_value("moved_to", (xy, seen))
                 break
+        else:
+            self.set_value("lost_at", self.get_value("sighted_at"))
         if turned:
             self.run_actor("mini_turn", -turned)
 
     def _where_now(self, target: dict) -> dict:
-        """``target``, or where a failed grasp of it left it (see ``_look_for_it``)."""
+        """``target``, or where a failed grasp of it left it (see ``_look_for_it``). An
+        object the failed grasp sent out of sight (a slipping can rolls off) is not
+        where it was: going back there, every attempt would close on the empty floor."""
+        lost = self.get_value("lost_at")
+        if lost is not None and tuple(lost) == target_xy(target):
+            # the same sighting retried; a new search's sighting there is looked at afresh
+            raise ApproachError(f"no {target.get('category') or 'object'} at ({lost[0]:.2f}, {lost[1]:.2f}) "
+                                f"any more: the failed grasp there left it where the look round did not see it")
         moved = self.get_value("moved_to")
         if moved is None:
             return target
@@ -285,6 +296,7 @@ class Catcher(Approaching, Placing, SubSystem):
         self.set_value("holding", held)
         self.set_value("held_plan", g)
         self.set_value("moved_to", None)
+        self.set_value("lost_at", None)
         return held
 
     def _put_back(self, g: GraspPlan, height: float) -> None:
