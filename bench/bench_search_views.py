@@ -64,6 +64,9 @@ def main() -> int:
     ap.add_argument("--world", default="house_hard")
     ap.add_argument("--seeds", type=int, default=10)
     ap.add_argument("--first-seed", type=int, default=2001)
+    ap.add_argument("--cover", nargs="*", default=[], metavar="COVERAGE:MIN_GAIN",
+                    help="also the map's places chosen with these viewpoints() settings, e.g. 0.95:0.01 "
+                         "(the 'map' row is search_views' own)")
     ap.add_argument("--world-locations", default="house",
                     help="take the hand-made search locations from this world when --world lists none")
     args = ap.parse_args()
@@ -85,6 +88,9 @@ def main() -> int:
             sets = {"hand-made": given,
                     "map": viewpoints(costmap, start),
                     "hand-made + map": given + viewpoints(costmap, start, seen_from=looked)}
+            for setting in args.cover:
+                cover, gain = (float(v) for v in setting.split(":"))
+                sets[f"map {setting}"] = viewpoints(costmap, start, coverage=cover, min_gain=gain)
             for label, places in sets.items():
                 seen = _seen(sim, places, objects, apps)
                 row = totals.setdefault(label, [0, 0, 0])

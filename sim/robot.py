@@ -176,11 +176,11 @@ class Robot:
                                     force=GRIPPER_FORCE, maxVelocity=GRIPPER_CATCH_UP,
                                     positionGain=GRIPPER_GAIN, physicsClientId=cid)
 
-    def gripper_busy(self, finger_positions) -> bool:
-        """Whether the servo's setpoint is still on its way to the goal, or a finger stands
-        more than a millimetre short of it (it squeezes what it holds)."""
+    def gripper_moving(self) -> bool:
+        """Whether the servo's setpoint is still on its way to the goal (the fingers open
+        or close; once there, a finger that stands short of it squeezes what it holds)."""
         goal = self.gripper_width / 2
-        return any(sp != goal for sp in self.grip_setpoint) or self.squeezing(finger_positions)
+        return any(sp != goal for sp in self.grip_setpoint)
 
     def holding(self, finger_positions) -> bool:
         """Whether the servo's setpoint has reached its goal and a finger stands short of

@@ -46,21 +46,24 @@ SOLVER_RESIDUAL = None
 #: the contact solver's iterations while the fingers hold something (the servo's setpoint
 #: has reached its goal and a finger stands short of it; a grasp still closing is solved
 #: with the usual ones). Friction alone keeps a held body, and a solver stopped short of
-#: converging lets it creep about the line between the pads. Over a 21 s carry
-#: (tests/test_sim_grip_hold.py), 9 grasps of bottles, cans and cartons turned in the hand,
-#: in degrees (median / worst), at 240 Hz with the fingers coupled as on the real gripper:
-#: 3.3 / 17.4 at 50 iterations, 2.1 / 4.4 at 100, 1.7 / 4.2 at 150, 2.4 / 2.9 at 200; with
-#: the fingers uncoupled, 1.1 / 5.0 at 300, for 1.6 times the cost of 100. Bullet's
-#: friction anchors on the pads held better (1.0 / 2.3 at 100) but kept stale contacts
-#: after the fingers opened: a tilted can stayed wedged between open-commanded pads.
-HOLDING_SOLVER_ITERATIONS = 100
-#: [Hz] physics substeps while the arm or the gripper moves or holds something: grasps,
-#: carries and placements are solved at this rate
+#: converging lets it creep about the line between the pads. A held body is solved at the
+#: full physics rate while the arm moves and at the still hand's rate while it is carried
+#: with the arm still. Over a 21 s carry (tests/test_sim_grip_hold.py), 9 grasps of
+#: bottles, cans and cartons turned in the hand, in degrees (median / worst), with the
+#: fingers coupled as on the real gripper: 1.2 / 7.2 at 100 iterations, 1.0 / 3.5 at 150,
+#: 0.8 / 3.0 at 200; 9 grasps 5 mm higher, 1.5 / 3.4, 0.9 / 3.0 and 0.9 / 7.2. Held at the
+#: full rate throughout, 100 iterations gave 2.1 / 4.4 and 1.7 / 5.8, at 1.4 times the
+#: cost of 150 at the still hand's rate. Bullet's friction anchors on the pads held
+#: better but kept stale contacts after the fingers opened: a tilted can stayed wedged
+#: between open-commanded pads.
+HOLDING_SOLVER_ITERATIONS = 150
+#: [Hz] physics substeps while the arm or the gripper moves: grasps, lifts and placements
+#: are solved at this rate
 PHYSICS_HZ = 240
-#: [Hz] physics substeps while the hand is still and empty (driving, looking, standing);
-#: None: always PHYSICS_HZ. Resting objects and the wheel odometry behave as at 240 Hz
-#: (bench/bench_physics.py) for 0.4 of the cost. A held body stays at the full rate (see
-#: HOLDING_SOLVER_ITERATIONS).
+#: [Hz] physics substeps while the arm and the fingers are still (driving, looking,
+#: standing, carrying); None: always PHYSICS_HZ. Resting objects and the wheel odometry
+#: behave as at 240 Hz (bench/bench_physics.py) for 0.4 of the cost; a held body is solved
+#: with HOLDING_SOLVER_ITERATIONS.
 #: ``ACTORBT_SIM_STILL_HAND_HZ=240`` (or none) sets one rate for every world of a run, also
 #: in an evaluation's worker processes.
 STILL_HAND_PHYSICS_HZ: int | None = 120
@@ -346,9 +349,12 @@ class SimWorld:
         self.t = t_next
         self.ticks += 1
         q, v, _ = self.robot.joint_states()
-        self._choose_iterations(self.robot.holding(q[6:8]))
-        if follows_hand and (max(map(abs, v[2:6])) > ARM_STILL or max(map(abs, v[6:8])) > FINGER_STILL
-                             or self.robot.gripper_busy(q[6:8])):
+        holding = self.robot.holding(q[6:8])
+        self._choose_iterations(holding)
+        # fingers pressed on a held body jitter with its contacts; the servo's setpoint says
+        # whether they open or close
+        fingers_moving = self.robot.gripper_moving() or (not holding and max(map(abs, v[6:8])) > FINGER_STILL)
+        if follows_hand and (max(map(abs, v[2:6])) > ARM_STILL or fingers_moving):
             self._hand_moved_at = self.t
         yaw = self.robot.base_pose()[0][2]
         # the encoders see the wheel joints; the gyro the body's true rotation

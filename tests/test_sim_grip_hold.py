@@ -4,8 +4,8 @@ pybullet's friction is solved iteratively; stopped short of converging, it lets 
 held by friction alone creep about the line between the pads. At the contact solver's
 usual 50 iterations a bottle or a can turned up to 17 degrees over this 21 s carry; in a
 map-world episode a bottle turned 23 degrees and, let go askew, toppled off the pallet
-(actor_demo_house seed 3). While the fingers hold something, the solver runs 100
-iterations.
+(actor_demo_house seed 3). While the fingers hold something, the solver runs
+HOLDING_SOLVER_ITERATIONS.
 """
 from __future__ import annotations
 
@@ -80,14 +80,14 @@ def _worst_turn(category: str, grip_z: float, **world) -> tuple[float, set]:
 def test_a_held_object_does_not_turn_in_the_hand_over_a_fold_and_a_carry(category, heights):
     """Which grasp creeps most is chaotic (a different physics rate before the grasp moves
     the worst case between heights), so the judge is several grasps: the worst of 9 went
-    from 17.4 degrees at 50 iterations to about 4.4 here, the median to about 2."""
+    from 17.4 degrees at 50 iterations to about 3.5 here, the median to about 1."""
     turns = []
     for grip_z in heights:
         worst, iterations = _worst_turn(category, grip_z)
         assert iterations == {HOLDING_SOLVER_ITERATIONS}
         turns.append(worst)
-    assert max(turns) < 6.0, turns
-    assert sorted(turns)[1] < 3.0, turns
+    assert max(turns) < 5.0, turns
+    assert statistics.median(turns) < 3.0, turns
 def test_at_the_usual_solver_iterations_held_objects_creep():
     """What the holding iterations are for: the same carries without them turn a bottle and
     a can several times as far (a median of about 10 degrees against about 2)."""
