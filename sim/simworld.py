@@ -52,8 +52,8 @@ SOLVER_RESIDUAL = None
 #: bottles, cans and cartons turned in the hand, in degrees (median / worst), with the
 #: fingers coupled as on the real gripper: 1.2 / 7.2 at 100 iterations, 1.0 / 3.5 at 150,
 #: 0.8 / 3.0 at 200; 9 grasps 5 mm higher, 1.5 / 3.4, 0.9 / 3.0 and 0.9 / 7.2. Held at the
-#: full rate throughout, 100 iterations gave 2.1 / 4.4 and 1.7 / 5.8, at 1.4 times the
-#: cost of 150 at the still hand's rate. Bullet's friction anchors on the pads held
+#: full rate throughout, 100 iterations gave 2.1 / 4.4 and 1.7 / 5.8, for about the cost
+#: of 150 at the still hand's rate. Bullet's friction anchors on the pads held
 #: better but kept stale contacts after the fingers opened: a tilted can stayed wedged
 #: between open-commanded pads.
 HOLDING_SOLVER_ITERATIONS = 150
