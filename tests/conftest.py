@@ -135,9 +135,10 @@ def w(tmp_path):
 
 
 # Under pytest-xdist with --dist loadgroup (make test), a test file runs in one worker (its
-# module fixtures are built once), except the documented examples: each document runs in a
-# worker of its own, so the long ones (README's missions, a category's evaluation) overlap.
-# They and the other long files start first, so that no worker is left with one at the end.
+# module fixtures are built once), except the documented examples: each document is a group
+# of its own, so the long ones (README's missions, a category's evaluation) may run in
+# different workers at once. They and the other long files start first, so that no worker is
+# left with one at the end.
 _STARTS_FIRST = ("tests/test_docs_run.py", "tests/test_rehearsal.py")
 
 
