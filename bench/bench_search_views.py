@@ -11,7 +11,9 @@ the map (``planning.viewpoints``, what a search given no locations visits), and 
 world's completed by map places that see the floor they leave unseen (``cover_map``).
 
     .venv/bin/python bench/bench_search_views.py [--world house_hard] [--seeds 10]
-        [--first-seed 2001] [--world-locations house]
+        [--first-seed 2001] [--world-locations house] [--cover COVERAGE:MIN_GAIN ...]
+
+``--cover`` adds rows for the map's places chosen with other ``viewpoints()`` settings.
 """
 from __future__ import annotations
 
