@@ -6,11 +6,9 @@ from __future__ import annotations
 import pytest
 
 from bt_engine import ActorError
-from demo.episode import episode_app
-from geometry_msgs.msg import PoseWithCovarianceStamped
-from sim.initial_pose import initial_pose_msg
 
 from tests.conftest import place_robot
+from tests.localised_rig import localised_rig
 
 START = (1.5, 2.0, 0.0)
 
@@ -23,12 +21,7 @@ def test_the_sighting_a_failed_grasp_lost_is_not_approached_again():
         place_robot(sim, START)
 
     state: dict = {}
-    app = episode_app("open_floor", 0)
-    rt = app.runtime(watchdog=None, world_first=True, world_setup=setup)
-    sim = app.world
-    try:
-        rt.bus.publisher("/initialpose", PoseWithCovarianceStamped).publish(initial_pose_msg(START))
-        rt.call("require_localised")
+    with localised_rig("open_floor", 0, START, setup) as (rt, sim):
         found = rt.call("get_found", category="can")
         assert found, "the can in front of the robot is not seen"
         close = rt.call("approach_object", target=found)
@@ -39,5 +32,3 @@ def test_the_sighting_a_failed_grasp_lost_is_not_approached_again():
             rt.call("pick", target=close)
         with pytest.raises(ActorError, match="any more"):
             rt.call("approach_object", target=found)
-    finally:
-        app.close(rt)

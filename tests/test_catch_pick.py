@@ -9,11 +9,9 @@ import pytest
 
 from actors.catch import STANDOFF_CLEARANCE, target_marks
 from categories import get as category
-from demo.episode import episode_app
-from sim.initial_pose import initial_pose_msg
-from geometry_msgs.msg import PoseWithCovarianceStamped
 
 from tests.conftest import place_robot
+from tests.localised_rig import localised_rig
 
 #: a bottle lying on the floor, as perception reports it: axis from base to top
 LYING = {"category": "bottle", "x": 8.84, "y": 7.28, "z": 0.0, "pose": "lying", "width": 0.07,
@@ -85,12 +83,7 @@ def test_the_way_to_a_lying_bottle_does_not_push_it_and_the_pick_holds_it():
         sim._on_hub_call(lambda: _lay(sim, name, 8.887, 7.253, -0.507, 0.035))
         place_robot(sim, start)
 
-    app = episode_app("house_hard", 2000)
-    rt = app.runtime(watchdog=None, world_first=True, world_setup=setup)
-    sim = app.world
-    try:
-        rt.bus.publisher("/initialpose", PoseWithCovarianceStamped).publish(initial_pose_msg(start))
-        rt.call("require_localised")
+    with localised_rig("house_hard", 2000, start, setup) as (rt, sim):
         was = sim.object_pose(state["name"])[:2]
         found = rt.call("get_found", category="bottle")
         assert found and found["pose"] == "lying"
@@ -100,5 +93,3 @@ def test_the_way_to_a_lying_bottle_does_not_push_it_and_the_pick_holds_it():
         held = rt.call("pick", target=close)
         assert held["category"] == "bottle" and 0.058 <= held["width"] <= 0.078
         assert sim.object_pose(state["name"])[2] > 0.1          # lifted
-    finally:
-        app.close(rt)

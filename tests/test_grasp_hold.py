@@ -2,36 +2,18 @@
 carry (actors/catch.py)."""
 from __future__ import annotations
 
-import contextlib
 import math
 
 import pytest
 
-from demo.episode import episode_app
-from sim.initial_pose import initial_pose_msg
-from geometry_msgs.msg import PoseWithCovarianceStamped
-
 from tests.conftest import place_robot
+from tests.localised_rig import localised_rig
 
 #: house_hard seed 2002: the search's sighting of bottle_1 on the TV bench (0.25 m high),
 #: from 2.7 m away: 35 mm from where it stands (5.279, 3.794)
 FAR_SIGHTING = {"category": "bottle", "x": 5.2513, "y": 3.7729, "z": 0.2546, "height": 0.299,
                 "width": 0.0712, "distance": 2.729, "confidence": 0.886, "colour": "green",
                 "truncated": [], "frame": "map", "pose": "upright"}
-
-
-@contextlib.contextmanager
-def _localised_rig(seed: int, start: tuple, setup):
-    """house_hard ``seed``'s episode runtime, its world set up by ``setup(sim)``, the robot
-    told it stands at ``start`` and localised there: yields (runtime, sim)."""
-    app = episode_app("house_hard", seed)
-    rt = app.runtime(watchdog=None, world_first=True, world_setup=setup)
-    try:
-        rt.bus.publisher("/initialpose", PoseWithCovarianceStamped).publish(initial_pose_msg(start))
-        rt.call("require_localised")
-        yield rt, app.world
-    finally:
-        app.close(rt)
 
 
 def test_a_bottle_on_a_low_bench_is_looked_at_from_where_the_camera_sees_it():
@@ -41,7 +23,7 @@ def test_a_bottle_on_a_low_bench_is_looked_at_from_where_the_camera_sees_it():
     the fingertips closed on it at 56 mm; the retries closed on nothing. The closer look
     is now from where the camera sees the bottle (about 1.8 m), and the pick holds it."""
     start = (4.60, 6.00, math.atan2(3.79 - 6.00, 5.28 - 4.60))
-    with _localised_rig(2002, start, lambda sim: place_robot(sim, start)) as (rt, sim):
+    with localised_rig("house_hard", 2002, start, lambda sim: place_robot(sim, start)) as (rt, sim):
         truth = sim.object_pose("bottle_1")
         close = rt.call("approach_object", target=dict(FAR_SIGHTING))
         # the estimate the hand goes to (relative to where the robot believes it is)
@@ -65,7 +47,7 @@ def test_a_bottle_on_the_bench_is_held_from_a_look_that_sees_it_and_a_straight_d
     estimate and the heading to it come from one belief and the errors cancel."""
     h = math.radians(80)      # from the south, as the robot came in the episode
     start = (5.177 - 2.2 * math.cos(h), 2.823 - 2.2 * math.sin(h), h)
-    with _localised_rig(2009, start, lambda sim: place_robot(sim, start)) as (rt, sim):
+    with localised_rig("house_hard", 2009, start, lambda sim: place_robot(sim, start)) as (rt, sim):
         truth = sim.object_pose("bottle_1")
         found = rt.call("get_found", category="bottle")
         assert found and found["z"] > 0.2
@@ -111,7 +93,7 @@ def test_where_its_fingertips_pinched_a_bottle_the_hand_grasps_it_again_and_hold
         state["name"] = _bottle_at(sim, bottle)
         place_robot(sim, start)
 
-    with _localised_rig(2009, start, setup) as (rt, sim):
+    with localised_rig("house_hard", 2009, start, setup) as (rt, sim):
         name = state["name"]
         held = rt.call("pick", target=target)
         assert 0.064 <= held["width"] <= 0.078, f"held at {held['width'] * 1000:.0f} mm: by the fingertips"
@@ -132,7 +114,7 @@ def test_a_bottle_against_furniture_is_grasped_from_where_the_fingers_have_room(
         state["name"] = _bottle_at(sim, FALLEN)
         place_robot(sim, start)
 
-    with _localised_rig(2009, start, setup) as (rt, sim):
+    with localised_rig("house_hard", 2009, start, setup) as (rt, sim):
         name = state["name"]
         found = rt.call("get_found", category="bottle")
         assert found and math.dist((found["x"], found["y"]), FALLEN) < 0.05
@@ -179,7 +161,7 @@ def test_a_pick_that_cannot_lift_puts_the_bottle_back_and_lets_go(monkeypatch):
         state["name"] = _bottle_at(sim, bottle)
         place_robot(sim, start)
 
-    with _localised_rig(2009, start, setup) as (rt, sim):
+    with localised_rig("house_hard", 2009, start, setup) as (rt, sim):
         name = state["name"]
         target = {"category": "bottle", "x": bottle[0], "y": bottle[1], "z": 0.0, "pose": "upright"}
         with pytest.raises(Exception, match="could not be lifted"):
@@ -212,7 +194,7 @@ def test_a_lying_carton_stays_where_the_fingers_hold_it_through_the_carry():
     sighting = {"category": "carton", "x": 9.031, "y": 5.4016, "z": 0.0, "height": 0.045,
                 "width": 0.07, "distance": 0.9, "confidence": 0.78, "colour": "yellow",
                 "truncated": [], "frame": "map", "yaw": -1.499, "pose": "lying"}
-    with _localised_rig(2004, start, lambda sim: place_robot(sim, start)) as (rt, sim):
+    with localised_rig("house_hard", 2004, start, lambda sim: place_robot(sim, start)) as (rt, sim):
         close = rt.call("approach_object", target=dict(sighting))
         held = rt.call("pick", target=close)
         assert held["pose"] == "lying"
