@@ -132,21 +132,3 @@ def w(tmp_path):
     rt = Runtime(clock=clock)
     yield World(rt, clock, tmp_path)
     rt.close()
-
-
-# Under pytest-xdist with --dist loadgroup (make test), a test file runs in one worker (its
-# module fixtures are built once), except the documented examples: each document is a group
-# of its own, so the long ones (README's missions, a category's evaluation) may run in
-# different workers at once. They and the other long files start first, so that no worker is
-# left with one at the end.
-_STARTS_FIRST = ("tests/test_docs_run.py", "tests/test_rehearsal.py")
-
-
-def pytest_collection_modifyitems(config, items) -> None:
-    for item in items:
-        path = item.nodeid.split("::")[0]
-        if not any(m.name == "xdist_group" for m in item.iter_markers()):
-            one_document = path == "tests/test_docs_run.py" and "[" in item.nodeid
-            group = item.nodeid if one_document else path
-            item.add_marker(pytest.mark.xdist_group(name=group))
-    items.sort(key=lambda item: item.nodeid.split("::")[0] not in _STARTS_FIRST)
