@@ -129,7 +129,7 @@ def replay(path: pathlib.Path, overrides: dict, edges: bool = False) -> dict:
         o = odom.at(t)
         if o is None:
             continue
-        slam.add(o, d["ranges"][k], angles, range_max, t, range_min=range_min)
+        slam.add(o, d["ranges"][k], angles, range_max, t, range_min=range_min, gyro=gyro.gyro_heading)
         est, true = slam.pose(), d["truth"][k]
         online.append(math.hypot(est[0] - true[0], est[1] - true[1]))
     wall = time.perf_counter() - t0

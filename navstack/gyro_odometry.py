@@ -23,6 +23,9 @@ from .amcl import compose, inverse
 
 #: [s] an IMU reading this much older than the odometry's stamp is too old to use
 IMU_STALE = 0.1
+#: [s] a stop at least this long measures the gyro's bias (what it turns while the wheels
+#: stand still); a shorter one says too little against the gyro's white noise
+BIAS_MIN_STILL = 1.0
 
 
 def _wrap(a: float) -> float:
@@ -36,7 +39,10 @@ class GyroOdometry:
     (the IMU's message for a stamp may come after the odometry's), plus a constant offset
     that keeps the heading continuous whenever the IMU (re)appears. While the wheels
     stand still the heading does not change: the gyro's bias would turn a robot that
-    waits for a look or a grasp."""
+    waits for a look or a grasp. What the gyro turns during such a stop is its bias
+    (``bias``, rad/s): a MEMS gyro's bias wanders after its start-up calibration, and each
+    stop of ``BIAS_MIN_STILL`` or more measures it afresh, to be taken off the headings
+    until the next."""
 
     def __init__(self, maxlen: int = 400) -> None:
         self._imu: deque = deque(maxlen=maxlen)     # (t, unwrapped yaw), by stamp
@@ -46,12 +52,17 @@ class GyroOdometry:
         self.fused = None                           # the newest fused pose
         self.wheel = None                           # the newest wheel pose
         self.imu_used = 0                           # odometry steps turned by the gyro
+        self.bias = 0.0                             # [rad/s] the gyro's, from the last long stop
+        self._still: tuple | None = None            # (first, last) stamp of the stop under way
+        self.gyro_heading = False                   # the newest fused heading came from the gyro
 
     def reset(self) -> None:
         """Forget everything (a new run: time went backwards)."""
         self._imu.clear()
         self._wheel_yaw.clear()
-        self._last = self._offset = self.fused = self.wheel = None
+        self._last = self._offset = self.fused = self.wheel = self._still = None
+        self.bias = 0.0
+        self.gyro_heading = False
 
     def on_imu(self, t: float, yaw: float) -> None:
         """The IMU's heading [rad] at stamp ``t`` [s] (its orientation's yaw)."""
@@ -62,12 +73,15 @@ class GyroOdometry:
         reading = _at_or_before(self._imu, t)
         if reading is None or t - reading[0] > IMU_STALE:
             self._offset = None                       # re-anchor when it comes back
+            self.gyro_heading = False
             return fallback
         t_k, imu_yaw = reading
+        imu_yaw -= self.bias * t_k
         since = wheel_yaw - _interpolate(self._wheel_yaw, t_k, wheel_yaw)   # turned since t_k
         if self._offset is None:
             self._offset = fallback - (imu_yaw + since)
         self.imu_used += 1
+        self.gyro_heading = True
         return self._offset + imu_yaw + since
 
     def fuse(self, t: float, wheel) -> tuple:
@@ -90,14 +104,27 @@ class GyroOdometry:
                 # the wheels stand still: so does the robot, whatever the gyro's bias says
                 # (a zero-velocity update); the heading re-anchors to the IMU when it moves
                 self._offset = None
+                self._still = (self._still[0] if self._still else self._last[0], t)
                 new_yaw = yaw
             else:
+                self._end_stop()
                 new_yaw = self._heading(t, wheel_yaw, yaw + dth_wheels)
             mid = (yaw + new_yaw) / 2
             self.fused = (x + ds * math.cos(mid), y + ds * math.sin(mid), new_yaw)
         self._last = (t, wheel)
         self.wheel = wheel
         return (self.fused[0], self.fused[1], _wrap(self.fused[2]))
+
+    def _end_stop(self) -> None:
+        """The robot moves again: a long enough stop gives the gyro's bias."""
+        if self._still is None:
+            return
+        first, last = self._still
+        self._still = None
+        if last - first < BIAS_MIN_STILL or not self._imu or self._imu[0][0] > first or self._imu[-1][0] < last:
+            return
+        turned = _interpolate(self._imu, last, 0.0) - _interpolate(self._imu, first, 0.0)
+        self.bias = turned / (last - first)
 
     def map_to_wheel_odom(self, map_to_fused) -> tuple:
         """map -> the wheels' odom frame, from map -> the fused frame, at the newest pose."""

@@ -121,7 +121,8 @@ class Mapper(SubSystem):
                 #                        alone leaves the floor unknown (a free cell needs a few)
             ranges = np.asarray(msg.ranges, dtype=float)
             angles = msg.angle_min + msg.angle_increment * np.arange(ranges.size)
-            self.slam.add(odom, ranges, angles, msg.range_max, t, range_min=msg.range_min)
+            self.slam.add(odom, ranges, angles, msg.range_max, t, range_min=msg.range_min,
+                          gyro=self.odometry.gyro_heading)
             self.scans += 1
             self._send_tf(t)
             if t - self._map_sent >= self._period:

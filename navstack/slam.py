@@ -95,6 +95,13 @@ class SlamParams:
     #   keyframe (each at its odometry offset), not only its first: 3-5 noisy scans of the same
     #   walls average out, and the links' shrink and heading noise drop (bench/mapping_replay.py)
     pair_scan_turn: float = math.radians(5)   # but only the scans turned at most this much from it
+    gyro_links: bool = True                   # link each keyframe's heading to the last's by the
+    #   odometry's turn where that is the gyro's (Slam.add's ``gyro``; GyroOdometry takes the
+    #   bias off at each stop)
+    gyro_sigma: tuple = (math.radians(0.03), 0.005, math.radians(0.005))  # its sigma: floor [rad],
+    #   per radian turned (what is left of the gyro's scale error once estimated), per second
+    #   (its bias left after a stop) [rad/s]
+    gyro_scale_prior: float = 0.02            # the gyro's scale error before any turn [sigma]
     optimize_every: int = 1                   # keyframes between two graph optimisations
     #   when pair_edges > 0 (every one: the published pose is the newest keyframe's, which
     #   stands at its local-map match until the graph takes its links in)
@@ -141,6 +148,7 @@ class Keyframe:
     points: np.ndarray           # (K, 2) returns in the base frame [m]
     weights: np.ndarray          # (K,) their weight in a local map: 1 / range noise^2, relative
     travel: float                # odometry path length from the start [m]
+    gyro: bool = False           # its odometry's heading is the gyro's
     scans: list = field(default_factory=list)   # (relative pose to this keyframe, scan) to rebuild the map
     density: LikelihoodMap | None = None         # of its returns, for pair edges (lazily, once complete)
 
@@ -187,16 +195,20 @@ class Slam:
         self._local_map: _LocalMap | None = None
         self._kf_map: _LocalMap | None = None
         self._graph_version = 0          # bumped whenever the graph moves its nodes
+        self._turns = [0.0, 0.0]         # the gyro's scale from the matches: sum g^2, sum (m - g) g
+        self._gyro = False               # the latest odometry's heading is the gyro's
 
     # -- input ---------------------------------------------------------------------------------
     def add(self, odom_pose, ranges, angles, range_max: float, t: float = 0.0,
-            range_min: float = 0.0) -> bool:
+            range_min: float = 0.0, gyro: bool = False) -> bool:
         """Take one scan and the odometry pose (x [m], y [m], yaw [rad], odom frame) at its
         time ``t`` [s]. ``ranges`` [m] and ``angles`` [rad, sensor frame] are the beams;
-        inf or >= ``range_max`` is no return. Returns True when it became a keyframe."""
+        inf or >= ``range_max`` is no return. ``gyro``: the odometry's heading is a gyro's
+        (see :attr:`SlamParams.gyro_links`). Returns True when it became a keyframe."""
         p = self.params
         odom = tuple(float(v) for v in odom_pose)
         self._t = float(t)
+        self._gyro = bool(gyro)
         # copies: a row of a caller's larger array would keep all of it alive
         scan = _Scan(np.array(ranges, dtype=np.float32), np.array(angles, dtype=np.float64),
                      float(range_max), float(range_min), float(t))
@@ -263,7 +275,7 @@ class Slam:
         (its pose guessed from the newest keyframe's)."""
         p = self.params
         pts = match_points(scan, p.match_max_range, p.sensor_offset)
-        kf = Keyframe(t, odom, pts, self._weights(pts), self._travel, [(IDENTITY, scan)])
+        kf = Keyframe(t, odom, pts, self._weights(pts), self._travel, gyro=self._gyro, scans=[(IDENTITY, scan)])
         if pose is not None:                         # the first keyframe
             self.graph.add_node(pose)
             self.keyframes.append(kf)
@@ -290,6 +302,9 @@ class Slam:
         if pairs:
             for i, z in self._near_matches(k, pts, matched):
                 self.graph.add_edge(i, k, z, link_info, "near")
+        if p.gyro_links and kf.gyro and self.keyframes[k - 1].gyro:
+            self._learn_gyro_scale(k, pairs)
+            self._add_gyro_link(k)
         if not pairs and matched is not None:
             self.graph.add_edge(k - 1, k, relative(self.graph.pose(k - 1), matched), _information(cov), "match")
         elif not pairs:
@@ -303,6 +318,39 @@ class Slam:
             self._since_closure = 0
         self._integrated_at[k] = self.graph.pose(k)
         self._integrate(self.graph.pose(k), scan)
+
+    def _add_gyro_link(self, k: int) -> None:
+        """Keyframe k's heading from k - 1's by the odometry's turn between them: the gyro
+        holds the heading over a second to a few hundredths of a degree, ten times better
+        than a scan match. Heading only: the wheels' distance is the matches' business."""
+        p = self.params
+        a, b = self.keyframes[k - 1], self.keyframes[k]
+        z = relative(a.odom, b.odom)
+        correction, scale_sigma = self.gyro_scale()
+        floor, per_rad, per_s = p.gyro_sigma
+        sigma = math.sqrt(floor ** 2 + ((per_rad + scale_sigma) * z[2]) ** 2 + (per_s * (b.t - a.t)) ** 2)
+        z = (z[0], z[1], z[2] * (1 + correction))
+        self.graph.add_edge(k - 1, k, z, np.diag([1e-6, 1e-6, 1 / sigma ** 2]), "gyro")
+
+    def gyro_scale(self) -> tuple[float, float]:
+        """The factor the odometry's turns are off by, as the scan matches see it (a
+        turn's true size is the odometry's times 1 + this), and its sigma."""
+        gg, mg = self._turns
+        match_sigma = self.params.pair_sigma[1] / 3             # a single match's, not the links' looser one
+        prior = (match_sigma / self.params.gyro_scale_prior) ** 2   # no turn yet: no correction
+        return mg / (gg + prior), match_sigma / math.sqrt(gg + prior)
+
+    def _learn_gyro_scale(self, k: int, pairs) -> None:
+        """Add keyframe k's turn from k - 1, by the odometry and by its pair link, to the
+        scale's estimate (a match far off both is left out: a wrong match)."""
+        g = relative(self.keyframes[k - 1].odom, self.keyframes[k].odom)[2]
+        m = next((z[2] for i, z in pairs if i == k - 1), None)
+        if m is None or abs(g) < math.radians(2):
+            return
+        if abs(m - g) > math.radians(1.0) + 0.05 * abs(g):
+            return
+        self._turns[0] += g * g
+        self._turns[1] += (m - g) * g
 
     def _match_local(self, pts: np.ndarray, predicted):
         """The keyframe's pose from the local map, and its covariance; (None, None) when

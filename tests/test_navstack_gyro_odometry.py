@@ -96,3 +96,44 @@ def test_standing_still_the_gyros_bias_turns_nothing():
         odo.on_imu(t, bias * t + 0.5 * k * DT)
         odo.fuse(t, (1.0, 2.0, 0.5 + 1.03 * 0.5 * k * DT))
     assert odo.fused[2] == pytest.approx(0.5 + 0.5 + bias, abs=1e-3)   # the first step: the wheels
+
+
+def drive(odo: GyroOdometry, t0: float, seconds: float, speed: float, rate: float, bias: float) -> float:
+    """The robot drives from ``t0`` at ``speed`` [m/s] turning at ``rate`` [rad/s] (0, 0:
+    it stands still); the gyro reads the turn plus ``bias`` [rad/s] all the time, the
+    wheels the truth. Returns the end time."""
+    t = t0
+    for _ in range(round(seconds / DT)):
+        t += DT
+        x0, y0, w0 = odo.wheel
+        truth_yaw = w0 + rate * DT
+        odo.on_imu(t, math.remainder(odo._imu[-1][1] + rate * DT + bias * DT, 2 * math.pi))
+        odo.fuse(t, (x0 + speed * DT * math.cos(truth_yaw), y0 + speed * DT * math.sin(truth_yaw), truth_yaw))
+    return t
+
+
+def test_a_stop_measures_the_gyros_bias_and_the_heading_after_it_is_free_of_it():
+    bias = math.radians(0.1)
+    odo = GyroOdometry()
+    odo.on_imu(0.0, 0.0)
+    odo.fuse(0.0, (0.0, 0.0, 0.0))
+    t = drive(odo, 0.0, 5.0, 0.2, 0.0, bias)
+    before = odo.fused[2] - odo.wheel[2]         # the bias turned the heading while it drove
+    assert before == pytest.approx(5.0 * bias, rel=0.1)
+    t = drive(odo, t, 3.0, 0.0, 0.0, bias)        # a stop: the wheels stand still
+    assert odo.fused[2] - odo.wheel[2] == pytest.approx(before)   # no turn while still
+    t = drive(odo, t, 20.0, 0.2, 0.0, bias)
+    assert odo.bias == pytest.approx(bias, rel=0.05)
+    # after the stop, 20 s of driving add under 2 % of what the bias alone would turn
+    assert abs(odo.fused[2] - odo.wheel[2] - before) < 0.02 * 20.0 * bias
+    assert odo.gyro_heading
+
+
+def test_a_short_stop_leaves_the_bias_as_it_was():
+    odo = GyroOdometry()
+    odo.on_imu(0.0, 0.0)
+    odo.fuse(0.0, (0.0, 0.0, 0.0))
+    t = drive(odo, 0.0, 2.0, 0.2, 0.0, math.radians(0.1))
+    t = drive(odo, t, 0.5, 0.0, 0.0, math.radians(0.1))
+    drive(odo, t, 1.0, 0.2, 0.0, math.radians(0.1))
+    assert odo.bias == 0.0

@@ -207,3 +207,36 @@ def test_the_published_pose_follows_the_laser_when_the_wheels_slip():
     tracked = np.array(_wedged_run(track_scans=True))
     assert np.sqrt(np.mean(tracked ** 2)) < 0.03 and tracked.max() < 0.1
     assert max(_wedged_run(track_scans=False)) > 0.2       # the odometry between keyframes
+
+
+def _gyro_run(gyro: bool, scale: float = 1.015, seconds: float = 150.0):
+    """The synthetic house with an odometry whose heading is a gyro's: the true turns
+    ``scale`` times too large (a gyro's scale error), the wheels' distance."""
+    occ = read_map_yaml(FIXTURES / "house.yaml")
+    world = SyntheticWorld(occ, world_boxes(FIXTURES / "house_world.yaml"), seed=0, start=0, reverse=False)
+    slam = Slam(SlamParams(initial_pose=world.truth))
+    heading, last, yaw_err = None, None, []
+    while world.target < len(world.tour) + 2 and world.t < seconds:
+        s = world.step()
+        if last is None:
+            heading = s.odom[2]
+        else:
+            heading += scale * math.remainder(s.truth[2] - last.truth[2], 2 * math.pi)
+        last = s
+        if s.scan is not None:
+            odom = (s.odom[0], s.odom[1], heading)
+            slam.add(odom, s.scan.ranges, s.scan.angles, s.scan.range_max, s.t, s.scan.range_min, gyro=gyro)
+            yaw_err.append(math.remainder(slam.pose()[2] - s.truth[2], 2 * math.pi))
+    return slam, float(np.sqrt(np.mean(np.square(yaw_err))))
+
+
+def test_a_gyros_heading_links_the_keyframes_and_its_scale_error_is_learned():
+    with_gyro, yaw_rms = _gyro_run(gyro=True)
+    without, yaw_rms_matches = _gyro_run(gyro=False)
+    kinds = {e.kind for e in with_gyro.graph.edges}
+    assert "gyro" in kinds and "gyro" not in {e.kind for e in without.graph.edges}
+    correction, sigma = with_gyro.gyro_scale()
+    assert correction == pytest.approx(1 / 1.015 - 1, abs=0.004) and sigma < 0.004
+    print(f"heading RMS {math.degrees(yaw_rms):.2f} deg with the gyro's links, "
+          f"{math.degrees(yaw_rms_matches):.2f} without")
+    assert yaw_rms < yaw_rms_matches
