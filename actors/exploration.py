@@ -94,8 +94,17 @@ class Exploration(SubSystem):
             self.run_actor("sleep", SETTLE)
 
     def _look_around(self) -> None:
-        """Turn a full circle in place, in thirds, letting the map take in the scans."""
+        """Turn a full circle in place, in thirds, letting the map take in the scans. A
+        turn that something blocks (the arm against a wall beside the robot) is not the end
+        of the exploration: the robot looks round the other way instead, and goes on with
+        what it saw either way."""
         log.info("no frontier within reach: looking all round")
-        for _ in range(LOOK_AROUND):
-            self.run_actor("mini_turn", 2 * math.pi / LOOK_AROUND)
+        for direction in (1.0, -1.0):
+            try:
+                for _ in range(LOOK_AROUND):
+                    self.run_actor("mini_turn", direction * 2 * math.pi / LOOK_AROUND)
+                break
+            except ActorError as e:
+                log.info("the look round is blocked turning %s: %s",
+                         "left" if direction > 0 else "right", e.root_cause)
         self.run_actor("sleep", SETTLE)

@@ -13,6 +13,7 @@ import numpy as np
 from nav_msgs.msg import OccupancyGrid as OccupancyGridMsg
 
 from actors.exploration import LOOK_AROUND, Exploration
+from actors.navigation import NavigationError
 from bt_engine import Runtime, SubSystem, actor
 
 RES = 0.05
@@ -48,9 +49,10 @@ class Base(SubSystem):
     """The navigation actors the exploration uses, on a map the test publishes: turning
     shows the doorway (when ``reveal``), driving anywhere closes it off again."""
 
-    def __init__(self, reveal: bool) -> None:
+    def __init__(self, reveal: bool, blocked_left: bool = False) -> None:
         super().__init__()
         self.reveal = reveal
+        self.blocked_left = blocked_left        # a wall stops every turn to the left
         self.turns: list[float] = []
         self.goals: list[tuple[float, float, float]] = []
         self.register_subscriber("map", OccupancyGridMsg, "/map", "latched")
@@ -65,6 +67,8 @@ class Base(SubSystem):
 
     @actor
     def mini_turn(self, angle: float) -> float:
+        if self.blocked_left and angle > 0:
+            raise NavigationError("turn timed out 114.4 deg short")
         self.turns.append(angle)
         if self.reveal and len(self.turns) == LOOK_AROUND:
             self.publish(doorway=True)
@@ -77,10 +81,10 @@ class Base(SubSystem):
         return True
 
 
-def explore(reveal: bool) -> tuple[dict, Base]:
+def explore(reveal: bool, blocked_left: bool = False) -> tuple[dict, Base]:
     rt = Runtime(clock="virtual")
     try:
-        base = rt.add_subsystem("base", Base, reveal)
+        base = rt.add_subsystem("base", Base, reveal, blocked_left)
         base.publisher = rt.bus.publisher("/map", OccupancyGridMsg, "latched")
         base.publish(doorway=False)
         rt.add_subsystem("exploration", Exploration)
@@ -103,3 +107,9 @@ def test_what_the_look_round_shows_is_explored():
     assert x > 1.0 and abs(y) < 0.5, "the goal is at the doorway in the east wall"
     # one look round at the start, one after the goal (the map closed again)
     assert len(base.turns) == 2 * LOOK_AROUND
+
+
+def test_a_look_round_blocked_one_way_looks_round_the_other():
+    result, base = explore(reveal=True, blocked_left=True)
+    assert result["finished"] and result["goals"] == 1
+    assert base.turns[:LOOK_AROUND] == [-2 * math.pi / LOOK_AROUND] * LOOK_AROUND
