@@ -238,9 +238,10 @@ class Amcl:
             xy = np.column_stack([lx + c * xy[:, 0] - s * xy[:, 1], ly + s * xy[:, 0] + c * xy[:, 1]])
         return xy.astype(np.float32)
 
-    def on_scan(self, scan: Scan, odom) -> bool:
-        """A scan taken at odometry pose ``odom`` (x, y, yaw). Returns True when the
-        filter updated. Does nothing before initialise/global_localisation."""
+    def on_scan(self, scan: Scan, odom, gyro: bool = False) -> bool:
+        """A scan taken at odometry pose ``odom`` (x, y, yaw); ``gyro``: its heading is a
+        gyro's (:meth:`ParticleFilter.predict`). Returns True when the filter updated. Does
+        nothing before initialise/global_localisation."""
         if self.status.state == UNINITIALISED and self._pending_global is None:
             return False
         odom = tuple(float(v) for v in odom)
@@ -260,7 +261,7 @@ class Amcl:
             or abs(wrap1(odom[2] - old[2])) > self.params.update_min_a
         if moved or self._force_update:
             t0 = time.perf_counter()
-            self.pf.predict(old, odom)
+            self.pf.predict(old, odom, gyro)
             self.pf.update(self.beams(scan, self.params.max_beams), scan.range_max)
             self.status.updates += 1
             self.estimate = est = self.pf.estimate()

@@ -311,7 +311,7 @@ class Localiser(SubSystem):
                     self.amcl.request_nomotion_update()
                 elif self._global_after is not None and t - self._first_scan >= self._global_after:
                     self.amcl.global_localisation()     # nobody said where the robot is
-            if self.amcl.on_scan(Scan.from_msg(msg), odom):
+            if self.amcl.on_scan(Scan.from_msg(msg), odom, self.odometry.gyro_heading):
                 self._estimate(odom)
                 if not self._tf_valid and self.amcl.status.state == LOCALISED:
                     self._tf_valid = True           # a global localisation converged
