@@ -62,11 +62,6 @@ def _lay(sim, name, x, y, axis_yaw, radius):
     p.resetBaseVelocity(body, [0, 0, 0], [0, 0, 0], physicsClientId=sim.cid)
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "the gripper now squeezes with its servo's full 10 N, so the bottle no longer slips "
-    "in the fingers; the lift from this standoff brings its end against the robot's own "
-    "camera_link (up to 7 N), which turns it in the grip until it falls out at 83 mm: "
-    "the arm's lift is planned without the held object in the collision model"))
 def test_the_way_to_a_lying_bottle_does_not_push_it_and_the_pick_holds_it():
     """house_hard seed 2000: a bottle lies near the north-east wall, its base end to the
     west; the robot first sees it from the south-west. Its look pose is east of the bottle
