@@ -58,9 +58,9 @@ class FilterParams:
     alpha4: float = 0.05             # translation noise from rotation
     # where the odometry's heading is a gyro's (GyroOdometry: its bias taken off at each
     # stop, its scale within a few per cent), its turns are good to a few per cent and
-    # driving straight hardly turns it: the rotation noises are these instead. With the
-    # wheels' 0.05, four metres of open floor (a warehouse, the lidar seeing nothing)
-    # spread the headings by 25 degrees and the filter declared itself lost
+    # driving straight hardly turns it: the rotation noises are these instead. The wheels'
+    # 0.05 spread the headings by 13 degrees per metre, which on open floor, where the
+    # lidar sees nothing to correct them, soon leaves the filter lost
     gyro_alpha1: float = 0.005       # rotation noise from rotation (7 %)
     gyro_alpha2: float = 0.001       # rotation noise from translation (1.8 deg per metre)
     alpha_slow: float = 0.0          # recovery_alpha_slow (0: no random particles)

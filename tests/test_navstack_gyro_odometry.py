@@ -100,14 +100,14 @@ def test_standing_still_the_gyros_bias_turns_nothing():
 
 def drive(odo: GyroOdometry, t0: float, seconds: float, speed: float, rate: float, bias: float) -> float:
     """The robot drives from ``t0`` at ``speed`` [m/s] turning at ``rate`` [rad/s] (0, 0:
-    it stands still); the gyro reads the turn plus ``bias`` [rad/s] all the time, the
-    wheels the truth. Returns the end time."""
+    it stands still); the gyro reads the turn plus ``bias`` [rad/s] all the time (its
+    heading integrates from 0 at t = 0), the wheels the truth. Returns the end time."""
     t = t0
     for _ in range(round(seconds / DT)):
         t += DT
         x0, y0, w0 = odo.wheel
         truth_yaw = w0 + rate * DT
-        odo.on_imu(t, math.remainder(odo._imu[-1][1] + rate * DT + bias * DT, 2 * math.pi))
+        odo.on_imu(t, math.remainder(truth_yaw + bias * t, 2 * math.pi))
         odo.fuse(t, (x0 + speed * DT * math.cos(truth_yaw), y0 + speed * DT * math.sin(truth_yaw), truth_yaw))
     return t
 
