@@ -24,7 +24,9 @@
   returns alone (all its scans, placed by the odometry unless the wheels slipped: short
   baselines, little shrink); else a match edge (the matcher's covariance) from the
   previous keyframe, or an odometry edge (uncertainty growing with the distance and the
-  turn) where the match failed;
+  turn) where the match failed; and where the odometry's heading is a gyro's, a
+  heading-only link to the previous keyframe by its turn (``gyro_links``), its scale
+  error learnt from the pair links;
 * **loop closures**: a keyframe is matched against the submap around an old keyframe
   (``loop_min_travel`` back along the path but within ``loop_radius``), over a wide window;
   a good score, a refinement that stays within ``loop_max_refine_shift`` and a
@@ -321,8 +323,8 @@ class Slam:
 
     def _add_gyro_link(self, k: int) -> None:
         """Keyframe k's heading from k - 1's by the odometry's turn between them: the gyro
-        holds the heading over a second to a few hundredths of a degree, ten times better
-        than a scan match. Heading only: the wheels' distance is the matches' business."""
+        holds the heading over a second to a few hundredths of a degree, several times
+        better than a scan match (about a quarter of a degree). Heading only: the wheels' distance is the matches' business."""
         p = self.params
         a, b = self.keyframes[k - 1], self.keyframes[k]
         z = relative(a.odom, b.odom)
