@@ -324,7 +324,8 @@ class Slam:
     def _add_gyro_link(self, k: int) -> None:
         """Keyframe k's heading from k - 1's by the odometry's turn between them: the gyro
         holds the heading over a second to a few hundredths of a degree, several times
-        better than a scan match (about a quarter of a degree). Heading only: the wheels' distance is the matches' business."""
+        better than a scan match (about a quarter of a degree). Heading only: the wheels'
+        distance is the matches' business."""
         p = self.params
         a, b = self.keyframes[k - 1], self.keyframes[k]
         z = relative(a.odom, b.odom)
