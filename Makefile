@@ -59,12 +59,13 @@ venv: $(STAMP)
 # the linter, the format check and the engine's type check first (seconds), then the suite
 # on one worker per core (pytest-xdist); a test file stays in one worker (--dist loadgroup
 # would not: with pytest 9 xdist 3.8's group marks no longer reach the scheduler, and every
-# test is sent alone); the slowest tests are listed at the end
+# test is sent alone), except the runs of minutes, which tests/conftest.py sends alone and
+# first (--no-loadscope-reorder keeps that order); the slowest tests are listed at the end
 test: $(STAMP)
 	$(PY) -m ruff check .
 	$(PY) -m ruff format --check .
 	$(PY) -m mypy
-	$(PY) -m pytest -q -n auto --dist loadfile --durations=25
+	$(PY) -m pytest -q -n auto --dist loadfile --no-loadscope-reorder --durations=25
 
 demo: $(STAMP)
 	$(VENV)/bin/actorbt demo

@@ -86,6 +86,34 @@ def pytest_sessionstart(session) -> None:
     remove_stale_dds_segments()
 
 
+# The end-to-end runs of minutes each: the documents' examples and the rehearsal against the
+# robot side. Under `--dist loadfile` a file stays in one worker, and the documents' runs
+# alone (one file) kept one worker busy for 13 minutes while the other sat idle. So each of
+# these is a unit of work of its own, and they start first (longest processing time first);
+# `make test` keeps xdist from reordering the units by their number of tests.
+LONG_RUNS = ("tests/test_docs_run.py::test_the_documented_examples_run[", "tests/test_rehearsal.py::")
+
+
+def _long_run(nodeid: str) -> bool:
+    return nodeid.startswith(LONG_RUNS)
+
+
+def pytest_collection_modifyitems(items) -> None:
+    items.sort(key=lambda item: not _long_run(item.nodeid))    # stable: the rest keep their order
+
+
+def pytest_xdist_make_scheduler(config, log):
+    if config.getvalue("dist") != "loadfile":
+        return None
+    from xdist.scheduler import LoadFileScheduling
+
+    class LongRunsApart(LoadFileScheduling):
+        def _split_scope(self, nodeid: str) -> str:
+            return nodeid if _long_run(nodeid) else super()._split_scope(nodeid)
+
+    return LongRunsApart(config, log)
+
+
 @pytest.fixture
 def rt():
     runtime = Runtime(clock="virtual")
