@@ -102,6 +102,13 @@ def pytest_collection_modifyitems(items) -> None:
     items.sort(key=lambda item: not _long_run(item.nodeid))    # stable: the rest keep their order
 
 
+def pytest_xdist_auto_num_workers(config) -> int:
+    # One worker more than the cores: the documents' runs drive the robot on the wall clock
+    # and mostly wait (README's: 100 s of CPU in 244 s); a third worker fills that time
+    # (the suite on 2 cores: 674 s with two workers, 509 s with three).
+    return len(os.sched_getaffinity(0)) + 1
+
+
 def pytest_xdist_make_scheduler(config, log):
     if config.getvalue("dist") != "loadfile":
         return None
@@ -119,6 +126,13 @@ def rt():
     runtime = Runtime(clock="virtual")
     yield runtime
     runtime.close()
+
+
+def started_since(before: set[threading.Thread]) -> list[str]:
+    """The names of the threads alive now that were not in ``before``: what a test left
+    running. (A thread of an earlier test that ends meanwhile is not this test's leak, and
+    a new thread may reuse a dead one's ident: compare the Thread objects.)"""
+    return [t.name for t in threading.enumerate() if t not in before]
 
 
 def run_in_actor(rt: Runtime, fn: Callable[[], Any]) -> Any:

@@ -6,7 +6,7 @@ import threading
 import pytest
 
 from bt_engine import (ActorCancelled, Cancelled, Runtime, Signal, SubSystem, TxnState, actor)
-from tests.conftest import run_in_actor
+from tests.conftest import run_in_actor, started_since
 
 
 class Blockers(SubSystem):
@@ -105,7 +105,7 @@ PRIMITIVES = {
 
 @pytest.mark.parametrize("name", sorted(PRIMITIVES))
 def test_cancel_reaches_the_blocking_point_and_leaks_nothing(name):
-    threads_before = {t.ident for t in threading.enumerate()}
+    threads_before = set(threading.enumerate())
     rt = Runtime()
     b = rt.add_subsystem("b", Blockers)
     got = []
@@ -129,7 +129,7 @@ def test_cancel_reaches_the_blocking_point_and_leaks_nothing(name):
         assert b.get_value("closed") == ["quiet_stream"]
     assert rt.stats() == {"transactions": 0, "tasks": 0}
     rt.close()
-    assert {t.ident for t in threading.enumerate()} == threads_before
+    assert started_since(threads_before) == []
 
 
 def test_except_exception_does_not_swallow_cancelled(rt):
@@ -225,9 +225,9 @@ def test_ten_thousand_concurrent_transactions(rt):
 
 
 def test_close_cancels_live_work_and_joins_threads():
-    before = {t.ident for t in threading.enumerate()}
+    before = set(threading.enumerate())
     rt = Runtime()
     rt.start("sleep", 1000)
     rt.close()
     assert rt.stats()["transactions"] == 0
-    assert {t.ident for t in threading.enumerate()} == before
+    assert started_since(before) == []

@@ -16,6 +16,7 @@ import py_trees
 
 from bt_engine import Runtime, SubSystem, actor
 from bt_engine.trees import register_tree_folder, tree_host
+from tests.conftest import started_since
 
 BUSY_TREES = {
     "busy": """
@@ -102,7 +103,7 @@ def actorbt_blackboard_keys() -> set[str]:
 
 def test_a_thousand_random_halts_leave_nothing_behind(tmp_path):
     folder = write_trees(tmp_path)
-    threads_before = {t.ident for t in threading.enumerate()}
+    threads_before = set(threading.enumerate())
     fds_before = open_fds()
     keys_before = actorbt_blackboard_keys()
     rng = random.Random(7)
@@ -133,7 +134,7 @@ def test_a_thousand_random_halts_leave_nothing_behind(tmp_path):
         assert host.live_runs() == []
         assert actorbt_blackboard_keys() - keys_before == set()
         assert rt.hub.foreign_pending == 0 and rt.hub.outside_pending == 0
-    assert {t.ident for t in threading.enumerate()} == threads_before
+    assert started_since(threads_before) == []
     assert open_fds() == fds_before
 
 
