@@ -57,10 +57,11 @@ $(STAMP): pyproject.toml | $(IFACE_STAMP)
 venv: $(STAMP)
 
 # the linter, the format check and the engine's type check first (seconds), then the suite
-# on one worker per core (pytest-xdist); a test file stays in one worker (--dist loadgroup
-# would not: with pytest 9 xdist 3.8's group marks no longer reach the scheduler, and every
-# test is sent alone), except the runs of minutes, which tests/conftest.py sends alone and
-# first (--no-loadscope-reorder keeps that order); the slowest tests are listed at the end
+# on one worker more than the cores (pytest-xdist; tests/conftest.py says why). A test file
+# stays in one worker (--dist loadgroup would not: with pytest 9 xdist 3.8's group marks no
+# longer reach the scheduler, and every test is sent alone), except the runs of minutes,
+# which go first, each alone (--no-loadscope-reorder keeps that order). The slowest tests
+# are listed at the end.
 test: $(STAMP)
 	$(PY) -m ruff check .
 	$(PY) -m ruff format --check .
