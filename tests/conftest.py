@@ -88,7 +88,7 @@ def pytest_sessionstart(session) -> None:
 
 # The end-to-end runs of minutes each: the documents' examples and the rehearsal against the
 # robot side. Under `--dist loadfile` a file stays in one worker, and the documents' runs
-# alone (one file) kept one worker busy for 13 minutes while the other sat idle. So each of
+# alone (one file) kept one worker busy for 12 minutes while the other sat idle. So each of
 # these is a unit of work of its own, and they start first (longest processing time first);
 # `make test` keeps xdist from reordering the units by their number of tests.
 LONG_RUNS = ("tests/test_docs_run.py::test_the_documented_examples_run[", "tests/test_rehearsal.py::")
