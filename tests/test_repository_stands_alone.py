@@ -10,7 +10,10 @@ import pytest
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 TEXT_SUFFIXES = {".py", ".md", ".yaml", ".yml", ".toml", ".txt", ".cfg"}
-SKIP_DIRS = {".venv", ".git", "out", "build", ".actorbt", "__pycache__", "fixtures", "replays"}
+#: not the project's text: environments, outputs, and the tools' caches (a second `make test`
+#: would otherwise also check .pytest_cache/README.md)
+SKIP_DIRS = {".venv", ".git", "out", "build", ".actorbt", "__pycache__", "fixtures", "replays",
+             ".pytest_cache", ".mypy_cache", ".ruff_cache"}
 #: what points outside the repository: the planning documents and the work tracker
 OUTSIDE = re.compile(r"\.\./shared|DESIGN\.md|ROS_WHEELS\.md|STYLE\.md|the proposal|\bissue \d+\b|seed/",
                      re.IGNORECASE)
