@@ -52,6 +52,7 @@ import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from .log_odds import LogOddsGrid, LogOddsParams
 from .map_io import OccupancyMap
@@ -96,6 +97,10 @@ class SlamParams:
     pair_all_scans: bool = True               # a link's reference: every scan of the older
     #   keyframe (each at its odometry offset), not only its first: 3-5 noisy scans of the same
     #   walls average out, and the links' shrink and heading noise drop (bench/mapping_replay.py)
+    pair_match: str = "gauss_newton"          # the pair links' match: "gauss_newton" (on the
+    #   keyframe's density map) or "icp_visible" (point-to-line ICP on the returns the
+    #   keyframe's beams reach, by 3 sigma of the noise: the links shrink less, the replays'
+    #   online error halves, but in one live map build of four the loops stopped closing)
     pair_scan_turn: float = math.radians(5)   # but only the scans turned at most this much from it
     gyro_links: bool = True                   # link each keyframe's heading to the last's by the
     #   odometry's turn where that is the gyro's (Slam.add's ``gyro``; GyroOdometry takes the
@@ -153,6 +158,8 @@ class Keyframe:
     gyro: bool = False           # its odometry's heading is the gyro's
     scans: list = field(default_factory=list)   # (relative pose to this keyframe, scan) to rebuild the map
     density: LikelihoodMap | None = None         # of its returns, for pair edges (lazily, once complete)
+    pair_ref: np.ndarray | None = None
+    pair_tree: cKDTree | None = None
 
 
 @dataclass
@@ -172,11 +179,16 @@ class _Scan:
     t: float = 0.0
 
 
+PAIR_MATCHES = ("gauss_newton", "icp_visible")
+
+
 class Slam:
     """Keyframe graph SLAM. Feed :meth:`add`; read :meth:`pose`, :meth:`map`, :meth:`trajectory`."""
 
     def __init__(self, params: SlamParams | None = None):
         self.params = p = params or SlamParams()
+        if p.pair_match not in PAIR_MATCHES:
+            raise ValueError(f"SlamParams.pair_match must be one of {PAIR_MATCHES}, not {p.pair_match!r}")
         if p.grid.resolution != p.resolution:
             p.grid = LogOddsParams(**{**p.grid.__dict__, "resolution": p.resolution})
         self.graph = PoseGraph()
@@ -464,14 +476,35 @@ class Slam:
             if len(kf.points) < 20:
                 continue
             z0 = relative(self.graph.pose(i), matched)
-            if kf.density is None:
-                ref, w = self._pair_reference(i)
-                kf.density = LikelihoodMap.from_density(ref, p.refine_resolution, p.refine_sigma,
-                                                        levels=0, weights=w)
-            z = refine(kf.density, pts, z0)[0]
+            if p.pair_match == "icp_visible":
+                z = self._icp_visible(i, pts, z0)
+            else:
+                if kf.density is None:
+                    ref, w = self._pair_reference(i)
+                    kf.density = LikelihoodMap.from_density(ref, p.refine_resolution, p.refine_sigma,
+                                                            levels=0, weights=w)
+                z = refine(kf.density, pts, z0)[0]
             if math.hypot(z[0] - z0[0], z[1] - z0[1]) < 2 * p.resolution:
                 out.append((i, z))
         return out
+
+    def _icp_visible(self, i: int, pts: np.ndarray, z0) -> tuple:
+        """Keyframe i -> the new keyframe by ICP, on the new returns keyframe i could have
+        seen (at the prior, then again at the first match): a return on a surface the
+        reference never saw (round a corner, past furniture) would be pulled onto what it
+        did see, which lies back towards it."""
+        kf = self.keyframes[i]
+        if kf.pair_tree is None:
+            kf.pair_ref = self._pair_reference(i)[0]
+            kf.pair_tree = cKDTree(kf.pair_ref)
+        scan = kf.scans[0][1]
+        z = z0
+        for _ in range(2):
+            keep = _seen_from(scan, transform(z, pts), self.params.sensor_offset, self.params.range_noise)
+            if keep.sum() < 20:
+                return z0
+            z = icp(kf.pair_ref, pts[keep], z, iterations=30, neighbours=10, tree=kf.pair_tree)[0]
+        return z
 
     def _pair_reference(self, i: int) -> tuple[np.ndarray, np.ndarray]:
         """Keyframe i's returns as a pair link's reference, in its base frame, and their
@@ -646,6 +679,20 @@ def match_points(scan: _Scan, max_range: float, sensor_offset) -> np.ndarray:
         typical = np.nanmedian(sides, axis=0)
     keep = valid & (typical < max_range)
     return scan_points(np.where(keep, r, np.inf), scan.angles, scan.range_max, scan.range_min, sensor_offset)
+
+
+def _seen_from(scan: _Scan, q: np.ndarray, sensor_offset, range_noise, k_sigma: float = 3.0) -> np.ndarray:
+    """Which points q (the scan's base frame) the scan's laser could have seen: its beam at
+    their bearing, or a neighbour, reaches at least to their range less k sigma of both
+    ranges' noise."""
+    d = q - np.asarray(sensor_offset[:2])
+    rho, bear = np.hypot(d[:, 0], d[:, 1]), np.arctan2(d[:, 1], d[:, 0]) - sensor_offset[2]
+    inc = scan.angles[1] - scan.angles[0]
+    idx = np.round((bear - scan.angles[0]) / inc).astype(int) % len(scan.angles)
+    r = np.where(np.isfinite(scan.ranges), scan.ranges, np.inf).astype(float)
+    reach = np.maximum(np.maximum(r, np.roll(r, 1)), np.roll(r, -1))[idx]
+    sigma = math.sqrt(2) * np.maximum(range_noise[0], range_noise[1] * rho)
+    return rho <= reach + k_sigma * sigma
 
 
 def _information(cov: np.ndarray) -> np.ndarray:
