@@ -99,8 +99,9 @@ class SlamParams:
     #   walls average out, and the links' shrink and heading noise drop (bench/mapping_replay.py)
     pair_match: str = "gauss_newton"          # the pair links' match: "gauss_newton" (on the
     #   keyframe's density map) or "icp_visible" (point-to-line ICP on the returns the
-    #   keyframe's beams reach, by 3 sigma of the noise: the links shrink less, the replays'
-    #   online error halves, but in one live map build of four the loops stopped closing)
+    #   keyframe's beams reach, by 3 sigma of the noise: the links shrink less, and six house
+    #   replays' online error fell by a quarter, but in one live map build of four the loops
+    #   stopped closing)
     pair_scan_turn: float = math.radians(5)   # but only the scans turned at most this much from it
     gyro_links: bool = True                   # link each keyframe's heading to the last's by the
     #   odometry's turn where that is the gyro's (Slam.add's ``gyro``; GyroOdometry takes the
@@ -158,8 +159,8 @@ class Keyframe:
     gyro: bool = False           # its odometry's heading is the gyro's
     scans: list = field(default_factory=list)   # (relative pose to this keyframe, scan) to rebuild the map
     density: LikelihoodMap | None = None         # of its returns, for pair edges (lazily, once complete)
-    pair_ref: np.ndarray | None = None
-    pair_tree: cKDTree | None = None
+    pair_ref: np.ndarray | None = None          # its returns for pair_match "icp_visible"
+    pair_tree: cKDTree | None = None            # and their KD-tree (both lazily, once complete)
 
 
 @dataclass
