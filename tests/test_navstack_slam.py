@@ -19,11 +19,11 @@ from navstack.synthetic import SyntheticWorld, world_boxes
 FIXTURES = Path(__file__).parent / "fixtures"
 
 
-@pytest.fixture(scope="module")
-def house_run():
+def drive_the_house(**params):
+    """One loop of the synthetic house with a Slam of ``params``: (world, slam, samples)."""
     occ = read_map_yaml(FIXTURES / "house.yaml")
     world = SyntheticWorld(occ, world_boxes(FIXTURES / "house_world.yaml"), seed=0, start=0, reverse=False)
-    slam = Slam(SlamParams(initial_pose=world.truth))
+    slam = Slam(SlamParams(initial_pose=world.truth, **params))
     samples = []
     while world.target < len(world.tour) + 2 and world.t < 400:
         s = world.step()
@@ -31,6 +31,11 @@ def house_run():
             slam.add(s.odom, s.scan.ranges, s.scan.angles, s.scan.range_max, s.t, s.scan.range_min)
             samples.append(s)
     return world, slam, samples
+
+
+@pytest.fixture(scope="module")
+def house_run():
+    return drive_the_house()
 
 
 def test_the_trajectory_beats_the_odometry_by_far(house_run):
@@ -247,15 +252,8 @@ def test_icp_on_what_the_reference_saw_shrinks_the_pair_links_less():
     # onto what it did see, which lies back towards it, and Gauss-Newton on a blurred map
     # pulls the returns at a wall's end inwards: in this run the default links are 11.0 mm/m
     # short, those of pair_match="icp_visible" 7.9 mm/m.
-    occ = read_map_yaml(FIXTURES / "house.yaml")
-    world = SyntheticWorld(occ, world_boxes(FIXTURES / "house_world.yaml"), seed=0, start=0, reverse=False)
-    slam = Slam(SlamParams(initial_pose=world.truth, pair_match="icp_visible"))
-    truth = {}
-    while world.target < len(world.tour) + 2 and world.t < 400:
-        s = world.step()
-        if s.scan is not None:
-            slam.add(s.odom, s.scan.ranges, s.scan.angles, s.scan.range_max, s.t, s.scan.range_min)
-            truth[s.t] = s.truth
+    world, slam, samples = drive_the_house(pair_match="icp_visible")
+    truth = {s.t: s.truth for s in samples}
     kf_true = [truth[kf.t] for kf in slam.keyframes]
     along, length = 0.0, 0.0
     for e in slam.graph.edges:
