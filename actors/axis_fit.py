@@ -66,7 +66,7 @@ def axis_candidates(points: np.ndarray, normals: np.ndarray) -> list[np.ndarray]
     if len(points) > 3:
         q = points - points.mean(axis=0)
         cands.append(np.linalg.eigh(q.T @ q)[1][:, -1])
-    out = []
+    out: list[tuple[np.ndarray, int]] = []      # (direction, how many normals support it)
     for a in cands:
         for _ in range(3):
             side = np.abs(normals @ a) < CAP_COS

@@ -77,7 +77,7 @@ def image_to_array(msg: Image) -> np.ndarray:
     if enc == "mono8":
         return buf.reshape(h, msg.step)[:, :w].copy()
     if enc == "32FC1":
-        dt = np.dtype(">f4" if msg.is_bigendian else "<f4")
+        dt: np.dtype = np.dtype(">f4" if msg.is_bigendian else "<f4")
         return buf.reshape(h, msg.step)[:, :w * 4].copy().view(dt).reshape(h, w).astype(np.float32)
     if enc == "16UC1":
         dt = np.dtype(">u2" if msg.is_bigendian else "<u2")

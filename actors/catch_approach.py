@@ -5,17 +5,24 @@ clear way in, and the drive there.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import replace
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from bt_engine import ActorbtError, actor
+from bt_engine import ActorbtError, SubSystem, actor
 
 from .catch_errors import ApproachError
 from .catch_geometry import (BASE_MARGIN, FINGERTIPS, OUTLINE_REACH, SAME_OBJECT, STANDOFF_CLEARANCE, ends_swapped,
                              grasp_xy, object_yaw, outline_discs, seen_again, segment_distance, target_marks,
                              target_xy)
 from .strategies import GraspPlan, Strategy
+
+if TYPE_CHECKING:
+    _CatcherBase = SubSystem    # the mixin runs only as a part of Catcher, which adds SubSystem
+else:
+    _CatcherBase = object
 
 HAND_HALF_WIDTH = 0.07      # half the open hand's width, with margin [m]
 CONFIRM_RANGE = (0.45, 1.2)  # [m] from this near, a close look that sees something else at
@@ -45,11 +52,21 @@ RAISED_SQUARE = math.radians(5)  # a box on a table is grasped straight in from 
 #                             finger runs into its corner and pushes it off the grasp)
 
 
-class Approaching:
+class Approaching(_CatcherBase):
     """Catcher's approach (a mixin of it: it uses Catcher's shared helpers)."""
 
+    if TYPE_CHECKING:   # Catcher's shared helpers (actors/catch.py) the approach uses
+        def _strategy(self, target: Any, category: str | None) -> Strategy: ...
+        def _where_now(self, target: dict) -> dict: ...
+        @staticmethod
+        def _plan(strategy: Strategy, target: dict) -> GraspPlan: ...
+        def _face(self, xy: tuple[float, float], strategy: Strategy) -> float: ...
+        def _pass_over(self, xy: tuple[float, float], category: str) -> None: ...
+        def _fresh_views_first(self, poses: list[tuple[float, float, float]],
+                               xy: tuple[float, float]) -> list[tuple[float, float, float]]: ...
+
     def _free_standoff(self, robot_xy: tuple[float, float], xy: tuple[float, float],
-                       strategy: Strategy, extra: float = 0.0, others: list[dict] = (),
+                       strategy: Strategy, extra: float = 0.0, others: Sequence[dict] = (),
                        corridor: bool = True, object_yaw: float | None = None,
                        plan: GraspPlan | None = None) -> list[tuple[float, float, float]]:
         """Standoff poses with room for the base around them and (with ``corridor``) a
@@ -68,7 +85,7 @@ class Approaching:
         return free
 
     def _corridor_clear(self, pose: tuple[float, float, float], xy: tuple[float, float],
-                        reach: float, others: list[dict]) -> bool:
+                        reach: float, others: Sequence[dict]) -> bool:
         """Can the base drive straight in from ``pose`` until the hand, ``reach`` ahead of
         the base, is at the object?"""
         sx, sy, yaw = pose
@@ -356,7 +373,7 @@ class Approaching:
         return plan.off_sides(math.atan2(gy - y, gx - x), object_yaw(target, plan))
 
     def _goto_first(self, poses: list[tuple[float, float, float]], xy: tuple[float, float],
-                    target: dict | None = None, length: float = 0.0, others: list[dict] = ()) -> None:
+                    target: dict | None = None, length: float = 0.0, others: Sequence[dict] = ()) -> None:
         """Go to the first of ``poses`` that the base can reach (up to three tries). With
         ``target``, the way there keeps off it (``target_marks``; ``others`` are the
         marks already made, kept); if no way does, the base goes there as before."""

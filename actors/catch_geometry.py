@@ -148,8 +148,8 @@ def surface_spots(surface: tuple[float, float, float, float], inset: float, stan
     x, y, size_x, size_y = surface
     c, s = math.cos(yaw), math.sin(yaw)
     spots = []
-    for nx, ny, half, along in ((1, 0, size_x / 2, size_y / 2), (-1, 0, size_x / 2, size_y / 2),
-                                (0, 1, size_y / 2, size_x / 2), (0, -1, size_y / 2, size_x / 2)):
+    for nx, ny, half, along in ((1.0, 0.0, size_x / 2, size_y / 2), (-1.0, 0.0, size_x / 2, size_y / 2),
+                                (0.0, 1.0, size_y / 2, size_x / 2), (0.0, -1.0, size_y / 2, size_x / 2)):
         nx, ny = c * nx - s * ny, s * nx + c * ny       # the edge's outward normal, map frame
         heading = math.atan2(-ny, -nx)
         for k in (0, 1, -1, 2, -2):

@@ -81,16 +81,18 @@ class Exploration(SubSystem):
             if frontier is None:
                 return {"finished": True, "goals": len(visited), "failed": len(failed),
                         "seconds": round(self.runtime.now() - start, 1)}
-            gx, gy, gyaw = frontier.goal
+            goal = frontier.goal
+            assert goal is not None     # next_frontier passes over frontiers without a goal
+            gx, gy, gyaw = goal
             log.info("frontier of %d cells at (%.2f, %.2f): going to (%.2f, %.2f)",
                      frontier.size, *frontier.middle, gx, gy)
             try:
                 self.run_actor("goto", gx, gy, gyaw)
-                visited.append(frontier.goal)
+                visited.append(goal)
                 looked_around = False
             except ActorError as e:
                 log.info("frontier goal (%.2f, %.2f) not reached: %s", gx, gy, e.root_cause)
-                failed.append(frontier.goal)
+                failed.append(goal)
             self.run_actor("sleep", SETTLE)
 
     def _look_around(self) -> None:

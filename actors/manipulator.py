@@ -68,7 +68,7 @@ def gripper_width(position: float) -> float:
     return w0 + f * (w1 - w0)
 
 
-def goal_result(error: BaseException) -> Any:
+def goal_result(error: BaseException | None) -> Any:
     """The result an action goal ended with, from a failed call's exception chain (an
     aborted or canceled goal fails the call with it), or None."""
     seen = set()

@@ -301,7 +301,7 @@ class Navigation(SubSystem):
         path = self._plan_from_here(x, y)
         if not path.ok:
             raise NavigationError(f"no path to ({x:.2f}, {y:.2f}): {path.message}")
-        return [tuple(p) for p in path.waypoints]
+        return list(path.waypoints)
 
     # -- motions -----------------------------------------------------------------------
     @actor(moves=True, limits={"timeout": (0.0, None)})

@@ -60,7 +60,7 @@ def _rectangle_fit(xy: np.ndarray, direction: float | None = None) -> _Rectangle
         xy = xy[np.linspace(0, len(xy) - 1, FIT_POINTS).astype(int)]
     if direction is not None:
         # refined within +-6 degrees: the sides that the points lie on most closely
-        best = None
+        best: tuple[float, np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None = None
         for th in direction + np.radians(np.arange(-6.0, 6.01, 0.5)):
             e1 = np.array([math.cos(th), math.sin(th)])
             e2 = np.array([-e1[1], e1[0]])
@@ -70,6 +70,7 @@ def _rectangle_fit(xy: np.ndarray, direction: float | None = None) -> _Rectangle
             rms = float(np.sqrt(np.mean(d * d)))
             if best is None or rms < best[0]:
                 best = (rms, e1, e2, c1, c2)
+        assert best is not None     # the first of the 25 angles sets it
         rms, e1, e2, c1, c2 = best
         m1, m2 = 0.5 * (c1.max() + c1.min()), 0.5 * (c2.max() + c2.min())
         return _Rectangle(xy.mean(axis=0) + m1 * e1 + m2 * e2, e1, e2, float(np.ptp(c1)), float(np.ptp(c2)), rms)
@@ -122,13 +123,15 @@ def _score_box(seg: _Segment, app: Appearance) -> tuple[float, dict]:
     and the evidence of the face that fits best, with its ``pose``."""
     if seg.colour != app.colour:
         return 0.0, {"reason": "colour"}
-    best = (0.0, {"reason": "body not visible"})
-    for pose, sides, height in categories.Box(*app.box).rests():
+    box = app.box
+    assert box is not None      # called for a box's appearance only (_score: app.is_box)
+    best: tuple[float, dict] = (0.0, {"reason": "body not visible"})
+    for pose, sides, height in categories.Box(*box).rests():
         conf, ev = _score_box_resting(seg, sides, height)
         if conf > best[0] or "reason" in best[1]:
             best = (conf, {**ev, "pose": pose, "width": min(sides)} if "reason" not in ev else ev)
     if best[0] < 0.9:                              # no resting face fits well: leaning?
-        conf, ev = _score_box_tilted(seg, app.box)
+        conf, ev = _score_box_tilted(seg, box)
         if conf > best[0]:
             best = (conf, ev)
     return best
@@ -258,13 +261,14 @@ def _score_box_tilted(seg: _Segment, box: tuple[float, float, float]) -> tuple[f
     if all(any(e) for e in open_ends) or any(all(e) for e in open_ends):
         return 0.0, {"reason": "too little of it in view", "extents": ext}
     dims = [float(d) for d in box]
-    best = None
+    best: tuple[float, tuple[int, int, int], list[float]] | None = None
     for i0, i1, i2 in ((0, 1, 2), (1, 0, 2), (0, 2, 1), (2, 0, 1), (1, 2, 0), (2, 1, 0)):
         true = [dims[i0], dims[i1]]
         errs = [ext[k] - true[k] if not any(open_ends[k]) else max(0.0, ext[k] - true[k]) for k in (0, 1)]
         e = math.sqrt(float(np.mean(np.square(errs))))
         if best is None or e < best[0]:
             best = (e, (i0, i1, i2), true)
+    assert best is not None     # the first of the six assignments sets it
     e_face, assign, true = best
     # the box's centre: along each face axis the middle of its extent, or half its size
     # from the end in view; behind the face half the third size
@@ -279,8 +283,8 @@ def _score_box_tilted(seg: _Segment, box: tuple[float, float, float]) -> tuple[f
                 centre = centre + (float(s.min()) + 0.5 * true[k]) * a
             else:
                 centre = centre + (float(s.max()) - 0.5 * true[k]) * a
-    box_axes = [None, None, None]
-    box_axes[assign[0]], box_axes[assign[1]], box_axes[assign[2]] = axes[0], axes[1], n
+    by_size = {assign[0]: axes[0], assign[1]: axes[1], assign[2]: n}   # assign: a permutation of 0, 1, 2
+    box_axes = [by_size[k] for k in range(3)]
     up = box_axes[2] if box_axes[2][2] >= 0 else -box_axes[2]
     tilt = math.acos(min(1.0, abs(float(up[2]))))
     if not UPRIGHT_TILT < tilt < LYING_TILT:

@@ -89,7 +89,7 @@ class Appearance:
 def _hsv_of(rgba) -> tuple[int, int, int]:
     """OpenCV's hue (0..180), saturation and value (0..255) of a colour given as rgb(a)
     in 0..1; PerceptionError for a colour with no clear hue (white, grey, black)."""
-    px = np.uint8([[[round(255 * float(c)) for c in reversed(tuple(rgba)[:3])]]])   # BGR
+    px = np.array([[[round(255 * float(c)) for c in reversed(tuple(rgba)[:3])]]], dtype=np.uint8)   # BGR
     h, sat, val = (int(v) for v in cv2.cvtColor(px, cv2.COLOR_BGR2HSV)[0, 0])
     if sat < MIN_SATURATION or val < MIN_VALUE:
         raise PerceptionError(f"colour {tuple(rgba)} has no clear hue (saturation {sat}, value {val}): "
@@ -117,14 +117,19 @@ def appearance_of(category: categories.Category) -> Appearance:
     """A category's appearance: the palette colour of its rgba and its shape."""
     shape = category.shape
     hue, sat, _ = _hsv_of(category.rgba)
-    common = dict(name=category.name, colour=palette_colour(category.rgba), hue=hue, saturation=sat,
-                  min_confidence=category.min_confidence, description=category.description)
+    colour = palette_colour(category.rgba)
     label = category.label
-    if label is not None and not _same_colour(label.rgba, common["colour"]):
-        common["label"] = (label.bottom, label.top)
+    band = None
+    if label is not None and not _same_colour(label.rgba, colour):
+        band = (label.bottom, label.top)
+    box: tuple[float, float, float] | None = None
+    sections: tuple[tuple[float, float], ...] = ()
     if isinstance(shape, categories.Box):
-        return Appearance(box=(shape.x, shape.y, shape.z), **common)
-    return Appearance(sections=tuple(shape.sections), **common)
+        box = (shape.x, shape.y, shape.z)
+    else:
+        sections = tuple(shape.sections)
+    return Appearance(name=category.name, colour=colour, sections=sections, box=box, hue=hue, saturation=sat,
+                      min_confidence=category.min_confidence, description=category.description, label=band)
 
 
 def _same_colour(rgba, colour: str) -> bool:

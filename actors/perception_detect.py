@@ -88,15 +88,16 @@ def detect(frame: RGBDFrame, appearances: dict[str, Appearance] | None = None) -
     apps = registered_appearances() if appearances is None else appearances
     P = backproject(frame)
     T_base_map = np.linalg.inv(frame.T_map_base)
-    out = []
+    out: list[dict] = []
     for seg in _segments(frame, P, list(apps.values())):
         if seg.continued > PATCH_SHARE:
             continue                                   # a patch of furniture, of any shape
         best, best_conf, evidence = None, 0.0, {}
-        for app in apps.values():
-            conf, ev = _score(seg, app)
+        for candidate in apps.values():
+            conf, ev = _score(seg, candidate)
             if conf > best_conf:
-                best, best_conf, evidence = app, conf, ev
+                best, best_conf, evidence = candidate, conf, ev
+        app: Appearance | None      # the category's, None for an object of no known category
         if best is not None and best_conf >= best.min_confidence:
             category, conf, app = best.name, best_conf, best
         else:

@@ -80,8 +80,8 @@ class _Segment:
     lateral: np.ndarray       # (N,) coordinate across the viewing direction [m]
     m_per_px: float           # metres per pixel at the segment
     range: float              # median horizontal distance camera -> surface [m]
-    frame: RGBDFrame | None = None
-    grid: np.ndarray | None = None   # (h, w, 3) map-frame points over the bounding box,
+    frame: RGBDFrame                 # the frame it was measured in
+    grid: np.ndarray                 # (h, w, 3) map-frame points over the bounding box,
                                      # NaN outside the segment (image neighbours stay neighbours)
     in_structure: float = 0.0        # share of its pixels in a coloured region of furniture size
     #                                  (its surface going on without a depth step)
@@ -144,7 +144,7 @@ class _Segment:
 
     def band_widths(self, band: float) -> list[tuple[float, float]]:
         """(mid height, width) of the silhouette in height bands of ``band`` [m]."""
-        out = []
+        out: list[tuple[float, float]] = []
         if self.height <= 0:
             return out
         n = max(1, int(math.ceil(self.height / band)))
@@ -210,14 +210,14 @@ def _support(low: np.ndarray, cols: np.ndarray, P: np.ndarray, lab: np.ndarray, 
     at the first visible pixels, 15 cm too high, and the grasp would close on its neck).
     Else ``zmin``, the lowest part in view."""
     h = lab.shape[0]
-    sup = []
+    below = []
     for dy in (2, 3, 4):
         yy = low[cols] + dy
         inside = yy < h
         cx, cy = cols[inside], yy[inside]
         zz = P[cy, cx, 2]
-        sup.append(zz[(lab[cy, cx] == 0) & np.isfinite(zz)])
-    sup = np.concatenate(sup)
+        below.append(zz[(lab[cy, cx] == 0) & np.isfinite(zz)])
+    sup = np.concatenate(below)
     if len(sup) >= 3:
         s = float(np.median(sup))
         if zmin - 0.03 <= s <= zmin + 0.005:
@@ -345,7 +345,7 @@ def _bridge_labels(mask: np.ndarray, lab: np.ndarray, depth: np.ndarray, P: np.n
         full.append(m)
         samples.append(pts[np.linspace(0, len(pts) - 1, min(len(pts), 150)).astype(int)] if len(pts) else pts)
     out = mask.copy()
-    joined = set()
+    joined: set[int] = set()
     for i in range(len(comps)):
         for j in range(i + 1, len(comps)):
             if i in joined or j in joined or not len(samples[i]) or not len(samples[j]):

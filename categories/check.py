@@ -57,6 +57,8 @@ def _upright(category: Category, reachable: Reachable) -> list[str]:
 
 def _window(category: Category) -> list[str]:
     g = category.grasp
+    # the window is filled in by Category.__post_init__ when the description leaves it out
+    assert g.closed_min is not None and g.closed_max is not None
     problems = []
     if g.open_width > GRIPPER_MAX_OPENING:
         problems.append(f"grasp.open_width {g.open_width * 1000:.0f} mm is wider than the gripper opens "

@@ -187,6 +187,8 @@ class Strategy:
     @property
     def upright(self) -> GraspPlan:
         g = self.grasp
+        # the window is filled in by Category.__post_init__, which every Strategy comes from
+        assert g.closed_min is not None and g.closed_max is not None
         return GraspPlan(self.approach.reach, g.height, g.pitch, g.open_width, g.closed_min,
                          g.closed_max, g.lift, self.sides, widths=self.side_widths)
 
@@ -250,7 +252,9 @@ class Strategy:
 
     def holding(self, closed_width: float) -> bool:
         """True when the fingers stopped at a width that means the object is held."""
-        return self.grasp.closed_min <= closed_width <= self.grasp.closed_max
+        g = self.grasp
+        assert g.closed_min is not None and g.closed_max is not None    # see upright
+        return g.closed_min <= closed_width <= g.closed_max
 
 
 def _wrap(a: float) -> float:

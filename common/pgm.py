@@ -16,7 +16,8 @@ def read_pgm(raw: bytes, where: str, error: type[Exception] = ValueError) -> np.
     magic = raw[:2]
     if not is_pgm(raw):
         raise error(f"{where}: not a PGM image (magic {magic!r}; expected P5 or P2)")
-    fields, pos = [], 2
+    fields: list[bytes] = []
+    pos = 2
     while len(fields) < 3:          # width, height, maxval; '#' comments between them
         while pos < len(raw) and raw[pos:pos + 1].isspace():
             pos += 1

@@ -210,6 +210,7 @@ class Progress:
         self._watcher.start()
 
     def _heartbeat(self, folders: dict[pathlib.Path, str], done: set, episodes: list[Episode]) -> None:
+        assert self.out is not None      # watch() starts the heartbeat only with an out
         running = []
         for folder, label in folders.items():
             seed, category = label.split()[1:3]
@@ -275,6 +276,7 @@ class Progress:
         return f"{ok} succeeded{rate}, {_duration(time.perf_counter() - self.t0)}, {eta}"
 
     def _line(self, episodes: list[Episode]) -> None:
+        assert self.out is not None      # a tty is an out
         n = len(episodes)
         bar = "#" * int(30 * n / self.total) if self.total else ""
         text = f"\r[{bar:<30}] {n}/{self.total} episodes, {self.summary(episodes)}"
@@ -397,9 +399,10 @@ def print_table(episodes: list[Episode], out: TextIO = sys.stdout) -> None:
                   f"{statistics.median(tilts) if tilts else float('nan'):9.1f}\n")
     if any(e.pose for e in episodes):
         print_pose_table(episodes, out)
-    tidy = [e for e in episodes if e.objects is not None]
+    # (objects, placed) of the tidy-ups; an episode sets both (a hand-edited CSV may not)
+    tidy = [(e.objects, e.placed) for e in episodes if e.objects is not None and e.placed is not None]
     if tidy:
-        total, placed = sum(e.objects for e in tidy), sum(e.placed for e in tidy)
+        total, placed = sum(o for o, _ in tidy), sum(p for _, p in tidy)
         out.write(f"\nobjects where they belong: {placed} of {total} "
                   f"({100 * placed / total if total else float('nan'):.1f}%)\n")
     pushed = [e for e in episodes if e.pushed]

@@ -40,6 +40,7 @@ import numpy as np
 
 from .likelihood_field import LaserModelParams, beam_endpoints_laser_frame
 from .map_io import OccupancyMap
+from .odometry import Pose, as_pose
 from .particle_filter import Estimate, FilterParams, ParticleFilter, wrap1
 
 # states
@@ -129,13 +130,13 @@ class Status:
         return dict(self.__dict__)
 
 
-def compose(a, b):
+def compose(a, b) -> Pose:
     """Pose a (x, y, yaw) composed with pose b expressed in a's frame."""
     c, s = math.cos(a[2]), math.sin(a[2])
     return (a[0] + c * b[0] - s * b[1], a[1] + s * b[0] + c * b[1], wrap1(a[2] + b[2]))
 
 
-def inverse(a):
+def inverse(a) -> Pose:
     c, s = math.cos(a[2]), math.sin(a[2])
     return (-c * a[0] - s * a[1], s * a[0] - c * a[1], wrap1(-a[2]))
 
@@ -156,14 +157,15 @@ class Amcl:
         self.holding = False                         # relocalising after lost, map_to_odom held
         self._trusted = False                        # map_to_odom is a pose given or converged to
         self.estimate: Estimate | None = None
-        self._odom_at_update = None      # odometry pose at the last filter update
-        self._last_odom = None           # the newest odometry pose
+        self._odom_at_update: Pose | None = None   # odometry pose at the last filter update
+        self._last_odom: Pose | None = None        # the newest odometry pose
         self._force_update = False
         # share of particles to keep, while an informed global localisation waits for a scan
-        self._pending_global = None
+        self._pending_global: float | None = None
         self._low_scans = 0
         self._grace_until = -math.inf
-        self._rivals = None              # the scan's best places (map -> odom), their fits, the odometry pose
+        # the scan's best places (map -> odom), their fits, the odometry pose
+        self._rivals: tuple[list[Pose], list[float], Pose] | None = None
         self.update_times: list[float] = []   # [s] per filter update
         self.search_times: list[float] = []   # [s] per scan-informed global localisation
 
@@ -173,7 +175,7 @@ class Amcl:
 
     def on_odometry(self, odom) -> None:
         """The newest odometry pose (x, y, yaw), for :meth:`pose` between scans."""
-        self._last_odom = tuple(float(v) for v in odom)
+        self._last_odom = as_pose(odom)
 
     def initialise(self, pose, cov, odom=None) -> None:
         """The /initialpose case: particles round ``pose`` (map frame) with 3x3 ``cov``,

@@ -20,6 +20,7 @@ import math
 from collections import deque
 
 from .amcl import compose, inverse
+from .odometry import Pose
 
 #: [s] an IMU reading this much older than the odometry's stamp is too old to use
 IMU_STALE = 0.1
@@ -47,13 +48,13 @@ class GyroOdometry:
     def __init__(self, maxlen: int = 400) -> None:
         self._imu: deque = deque(maxlen=maxlen)     # (t, unwrapped yaw), by stamp
         self._wheel_yaw: deque = deque(maxlen=maxlen)   # (t, unwrapped wheel yaw)
-        self._last = None                           # (t, wheel pose) of the last fuse
-        self._offset = None                         # fused yaw - the IMU's (None: not anchored)
-        self.fused = None                           # the newest fused pose
-        self.wheel = None                           # the newest wheel pose
+        self._last: tuple[float, Pose] | None = None   # (t, wheel pose) of the last fuse
+        self._offset: float | None = None           # fused yaw - the IMU's (None: not anchored)
+        self.fused: Pose | None = None              # the newest fused pose
+        self.wheel: Pose | None = None              # the newest wheel pose
         self.imu_used = 0                           # odometry steps turned by the gyro
         self.bias = 0.0                             # [rad/s] the gyro's, from the last long stop
-        self._still: tuple | None = None            # (first, last) stamp of the stop under way
+        self._still: tuple[float, float] | None = None   # (first, last) stamp of the stop under way
         self.gyro_heading = False                   # the newest fused heading came from the gyro
 
     def reset(self) -> None:
@@ -84,7 +85,7 @@ class GyroOdometry:
         self.gyro_heading = True
         return self._offset + imu_yaw + since
 
-    def fuse(self, t: float, wheel) -> tuple:
+    def fuse(self, t: float, wheel) -> Pose:
         """The fused pose at stamp ``t`` from the wheel pose there (x, y, yaw)."""
         wheel = tuple(float(v) for v in wheel)
         if self._last is not None and t < self._last[0]:
@@ -99,6 +100,7 @@ class GyroOdometry:
             dth_wheels = _wrap(wheel[2] - w0[2])
             mid = w0[2] + dth_wheels / 2
             ds = (wheel[0] - w0[0]) * math.cos(mid) + (wheel[1] - w0[1]) * math.sin(mid)
+            assert self.fused is not None               # set by every fuse, as _last is
             x, y, yaw = self.fused
             if ds == 0.0 and dth_wheels == 0.0:
                 # the wheels stand still: so does the robot, whatever the gyro's bias says

@@ -147,7 +147,7 @@ class LikelihoodField:
         p = self.params
         return p.z_hit * np.exp(-(d * d) / self._two_sigma2) + p.z_rand / range_max
 
-    def log_weights(self, poses: np.ndarray, beam_xy: np.ndarray, range_max: float) -> np.ndarray:
+    def log_weights(self, poses: np.ndarray, beam_xy: np.ndarray, range_max: float) -> tuple[np.ndarray, np.ndarray]:
         """Log-weights (N,) of laser poses (N, 3) for the beams ending at ``beam_xy``
         (K, 2, laser frame; only valid returns) under the chosen combination, and the
         mean per-beam likelihood (N,) (a scale-free match measure)."""

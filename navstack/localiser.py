@@ -76,7 +76,7 @@ from .map_io import OccupancyMap
 from .particle_filter import FilterParams
 from .smoothing import LocalHold, PoseSmoother, SmootherParams
 from .gyro_odometry import GyroOdometry
-from .odometry import OdomHistory
+from .odometry import OdomHistory, Pose
 from .odometry import seconds as _seconds
 from .odometry import yaw_of as _yaw
 from .tf import TF, TfListener, TransformError, planar_transform, to_stamp
@@ -98,9 +98,9 @@ GLOBAL_FRAME, ODOM_FRAME, BASE_FRAME = "map", "odom", "base_footprint"
 IMU_TOPIC = "/imu_broadcaster/imu"
 
 
-def split_params(params: dict | None):
+def split_params(params: dict | None) -> tuple[AmclParams, FilterParams, LaserModelParams]:
     """AmclParams, FilterParams and LaserModelParams from one flat dict of overrides."""
-    parts = [AmclParams(laser_pose=LASER_POSE), FilterParams(), LaserModelParams()]
+    parts = (AmclParams(laser_pose=LASER_POSE), FilterParams(), LaserModelParams())
     for key, value in (params or {}).items():
         for p in parts:
             if key in {f.name for f in fields(p)}:
@@ -139,7 +139,7 @@ class Localiser(SubSystem):
                  hold_radius: float = 0.75, imu_topic: str | None = IMU_TOPIC) -> None:
         super().__init__()
         self.hold = LocalHold(hold_radius) if hold_radius > 0 else None
-        self._target = None                     # the newest map -> odom, held or not
+        self._target: Pose | None = None        # the newest map -> odom, held or not
         self.smoother = None if smoothing is False else PoseSmoother(
             SmootherParams(**smoothing) if isinstance(smoothing, dict) else None)
         self._params = split_params(params)
@@ -151,18 +151,18 @@ class Localiser(SubSystem):
         self._global_after = global_after
         self._lock = threading.RLock()
         self.amcl: Amcl | None = None
-        self._map_key = None
+        self._map_key: tuple[int, int, float, float, float, int] | None = None   # size, resolution, origin, data
         self._now = 0.0
         self._odom = OdomHistory()              # (t, fused (x, y, yaw)), by stamp
         self.odometry = GyroOdometry()          # the wheels' poses turned by the gyro
         self._last_pub = -math.inf
-        self._pending_initial = None            # an /initialpose before the map
-        self._first_scan = None                 # odometry time of the first scan with a map
+        self._pending_initial: tuple[Pose, np.ndarray] | None = None   # an /initialpose before the map
+        self._first_scan: float | None = None   # odometry time of the first scan with a map
         self._tf_valid = False                  # map -> odom may go out
         self._tf_sent = -math.inf               # odometry time of the last map -> odom
         self._tf_stamp = -math.inf              # the stamp it carried
         self._laser_from_tf = False
-        self.map_to_odom = (0.0, 0.0, 0.0)
+        self.map_to_odom: Pose = (0.0, 0.0, 0.0)
         self._paused = False                    # another node (the mapper) owns map -> odom
         bus = self.runtime.bus
         self._pub = bus.publisher("/amcl_pose", PoseWithCovarianceStamped, "latched")
@@ -209,6 +209,7 @@ class Localiser(SubSystem):
 
     def _initialise(self, pose, cov) -> None:
         """Start from a pose the user gave: map -> odom is known at once."""
+        assert self.amcl is not None            # called once the map has made the filter
         self.amcl.initialise(pose, cov)
         self.map_to_odom = self._target = self.amcl.map_to_odom
         if self.hold is not None:
@@ -225,6 +226,7 @@ class Localiser(SubSystem):
         drift cannot explain. Until map -> odom is known (a global localisation before it
         first converges), the estimate is taken as it is: the transform there is nothing
         the robot has used, so there is nothing to hold or to smooth towards."""
+        assert self.amcl is not None            # called on a scan the filter took
         localised = self.amcl.status.state == LOCALISED
         big = not localised or not self._tf_valid
         if self.smoother is None:
@@ -350,7 +352,10 @@ class Localiser(SubSystem):
         msg.pose.pose.orientation.z = math.sin(pose[2] / 2)
         msg.pose.pose.orientation.w = math.cos(pose[2] / 2)
         cov = np.zeros((6, 6))
-        cov[np.ix_([0, 1, 5], [0, 1, 5])] = self.amcl.covariance() if cov3 is None else cov3
+        if cov3 is None:
+            assert self.amcl is not None        # a pose is published only once the filter runs
+            cov3 = self.amcl.covariance()
+        cov[np.ix_([0, 1, 5], [0, 1, 5])] = cov3
         msg.pose.covariance = cov.ravel().tolist()
         self._pub.publish(msg)
         self._last_pub = _seconds(stamp)

@@ -129,6 +129,7 @@ class Mapper(SubSystem):
                 self.publish_map(t)
 
     def _send_tf(self, t: float) -> None:
+        assert self.slam is not None            # sent after a scan went into it
         self._tf_pub.publish(TFMessage(transforms=[
             planar_transform("map", "odom", self.odometry.map_to_wheel_odom(self.slam.map_to_odom()),
                              t + TRANSFORM_TOLERANCE)]))

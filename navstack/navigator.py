@@ -42,6 +42,7 @@ from __future__ import annotations
 import logging
 import math
 from dataclasses import dataclass, field, fields, replace
+from typing import TypedDict
 
 import numpy as np
 from builtin_interfaces.msg import Duration
@@ -58,6 +59,7 @@ from planning.grid import OccupancyGrid, inflate
 from planning.tf_buffer import planar
 
 from .depth_obstacles import DepthObstacleParams, depth_obstacle_points
+from .odometry import Pose
 from .tf import TfListener, TransformError, to_stamp
 
 log = logging.getLogger("navstack.navigator")
@@ -236,15 +238,26 @@ class _Goal:
         self.recoveries = 0
         self.backups = 0
         self.marks = np.zeros((0, 2))       # unmapped scan points planned around
-        self.pose = None                    # the newest map -> base_footprint
-        self.progress = None                # (pose, time) the progress is measured from
-        self.blocked_since = None
-        self.blocked_at = None
-        self.checked = None                 # (scan, path) the obstacle check last ran on
+        self.pose: Pose | None = None       # the newest map -> base_footprint
+        self.progress: tuple[Pose, float] | None = None   # (pose, time) the progress is measured from
+        self.blocked_since: float | None = None
+        self.blocked_at: tuple[float, float] | None = None
+        self.checked: tuple[int, int] | None = None   # (scan, path) the obstacle check last ran on
         self.obstacle = np.zeros((0, 2))    # ... and what it found
-        self.backup_from = None
+        self.backup_from: Pose | None = None
         self.feedback_at = -math.inf
         self.ticked = -math.inf             # when the last control step ran
+
+
+class _Stats(TypedDict):
+    """The goals' counts and the last abort's reason (navigator_status)."""
+    goals: int
+    succeeded: int
+    aborted: int
+    canceled: int
+    recoveries: int
+    obstacle_stops: int
+    last_error: str
 
 
 class Navigator(SubSystem):
@@ -264,7 +277,7 @@ class Navigator(SubSystem):
         self.tf = TfListener(bus, on_tf=self._on_tf)
         self._cmd = bus.publisher(BASE_COMMAND, TwistStamped)
         self._grid: OccupancyGrid | None = None
-        self._map_key = None
+        self._map_key: tuple[int, int, float, float, float, int] | None = None   # size, resolution, origin, data
         self._perceived = np.zeros((0, 2))
         self._planners: dict = {}           # marks key -> GridPlanner
         self._goal: _Goal | None = None
@@ -274,8 +287,8 @@ class Navigator(SubSystem):
         self._depth_subs: list = []                 # the depth camera's, while a goal runs
         self._camera_info: CameraInfo | None = None
         self.last_path: BasePath | None = None
-        self.stats = {"goals": 0, "succeeded": 0, "aborted": 0, "canceled": 0, "recoveries": 0,
-                      "obstacle_stops": 0, "last_error": ""}
+        self.stats: _Stats = {"goals": 0, "succeeded": 0, "aborted": 0, "canceled": 0, "recoveries": 0,
+                              "obstacle_stops": 0, "last_error": ""}
         self._subs = [
             bus.subscribe("/map", OccupancyGridMsg, self._on_map, "latched"),
             bus.subscribe("/scan", LaserScan, self._on_scan, "sensor"),
@@ -388,8 +401,8 @@ class Navigator(SubSystem):
         if info is None or msg.encoding != "32FC1" or self._goal is None:
             return
         dt = np.dtype(">f4" if msg.is_bigendian else "<f4")
-        depth = np.frombuffer(bytes(msg.data), np.uint8).reshape(msg.height, msg.step)[:, :msg.width * 4]
-        depth = depth.copy().view(dt).reshape(msg.height, msg.width)
+        raw = np.frombuffer(bytes(msg.data), np.uint8).reshape(msg.height, msg.step)[:, :msg.width * 4]
+        depth = raw.copy().view(dt).reshape(msg.height, msg.width)
         poses = self._sensor_poses(msg.header, msg.header.frame_id or info.header.frame_id)
         if poses is None:
             return
@@ -418,6 +431,7 @@ class Navigator(SubSystem):
         planner = self._planners.get(key)
         if planner is None:
             grid = self._grid
+            assert grid is not None             # callers plan only once a map has come
             pts = self._perceived if extra is None else np.vstack([self._perceived, extra])
             if len(pts):
                 data = grid.data.copy()
@@ -443,6 +457,7 @@ class Navigator(SubSystem):
 
     def _plan(self, g: _Goal) -> None:
         p = self.params
+        assert g.pose is not None               # _tick has set it
         planner = self._planner(g.marks)
         path = planner.plan(g.pose[:2], g.goal[:2])
         if path.failure is FailureReason.START_INVALID and "outside" not in path.message:
@@ -477,6 +492,7 @@ class Navigator(SubSystem):
         elif path.failure is FailureReason.GOAL_INVALID:
             self._abort(g, GOAL_OUTSIDE_MAP if "outside" in why else GOAL_OCCUPIED, f"no path: {why}")
         elif len(g.marks):
+            assert g.blocked_at is not None     # marks are made where the robot was blocked
             self._abort(g, NO_VALID_PATH, f"no path around an obstacle that is not on the map, "
                                           f"near ({g.blocked_at[0]:.2f}, {g.blocked_at[1]:.2f}): {why}")
         elif path.failure is FailureReason.NO_PATH:
@@ -571,6 +587,7 @@ class Navigator(SubSystem):
     # -- control -----------------------------------------------------------------------
     def _tick(self) -> None:
         g = self._goal
+        assert g is not None                    # _on_tf ticks only while a goal runs
         p = self.params
         now = self.runtime.now()
         try:
@@ -598,6 +615,7 @@ class Navigator(SubSystem):
             self._feedback(g, now)
 
     def _backup(self, g: _Goal, now: float) -> None:
+        assert g.pose is not None               # _tick has set it
         try:
             odom = self.tf.pose(ODOM_FRAME, BASE_FRAME)
         except TransformError:
@@ -614,6 +632,7 @@ class Navigator(SubSystem):
 
     def _follow(self, g: _Goal, now: float) -> None:
         p = self.params
+        assert g.pose is not None and g.progress is not None   # _tick's, and _plan's with the path
         x, y, yaw = g.pose
         gx, gy = g.goal[:2]
         dist_goal = math.hypot(gx - x, gy - y)
@@ -658,13 +677,15 @@ class Navigator(SubSystem):
         self._cmd.publish(_twist())
         if g.blocked_since is None:
             g.blocked_since = now
-            g.blocked_at = tuple(pts.mean(axis=0))
+            cx, cy = pts.mean(axis=0)
+            g.blocked_at = (float(cx), float(cy))
             self.stats["obstacle_stops"] += 1
             log.info("stopped: an obstacle the map does not show at (%.2f, %.2f)", *g.blocked_at)
             return True
         if now - g.blocked_since < p.obstacle_wait:
             return True
-        g.blocked_at = tuple(pts.mean(axis=0))
+        cx, cy = pts.mean(axis=0)
+        g.blocked_at = (float(cx), float(cy))
         if g.recoveries >= p.max_recoveries:
             self._abort(g, PATIENCE_EXCEEDED,
                         f"blocked by an obstacle that is not on the map, near "
@@ -687,6 +708,7 @@ class Navigator(SubSystem):
             pts = np.vstack([pts, self._depth_pts])
         if not len(pts):
             return np.zeros((0, 2))
+        assert g.pose is not None               # _tick has set it
         x, y, _ = g.pose
         return pts[np.hypot(pts[:, 0] - x, pts[:, 1] - y) < radius]
 
@@ -711,6 +733,7 @@ class Navigator(SubSystem):
         near = self._near(g, p.collision_lookahead + p.collision_radius)
         if len(near) < p.collision_min_points:
             return near[:0]
+        assert g.pose is not None               # _tick has set it
         line = path_ahead(g.path, g.seg, g.pose[:2], p.collision_lookahead)
         hits = near[distance_to_polyline(near, line) < p.collision_radius]
         if len(hits) < p.collision_min_points:
@@ -719,6 +742,7 @@ class Navigator(SubSystem):
 
     def _turn(self, g: _Goal, now: float) -> None:
         p = self.params
+        assert g.pose is not None               # _tick has set it
         err = _wrap(g.goal[2] - g.pose[2])
         if abs(err) < p.yaw_goal_tolerance:
             self._succeed(g)
@@ -731,6 +755,7 @@ class Navigator(SubSystem):
 
     def _feedback(self, g: _Goal, now: float) -> None:
         fb = NavigateToPose.Feedback()
+        assert g.pose is not None               # _tick has set it
         x, y, yaw = g.pose
         fb.current_pose.header.frame_id = GLOBAL_FRAME
         to_stamp(now, fb.current_pose.header.stamp)
@@ -780,7 +805,7 @@ def plan_out_of(planner: GridPlanner, start, goal, escape_distance: float) -> Ba
         if rest.ok:
             log.info("start (%.2f, %.2f) is inside the inflation: leaving through (%.2f, %.2f)",
                      start[0], start[1], *via)
-            return replace(rest, waypoints=(tuple(map(float, start)),) + rest.waypoints,
+            return replace(rest, waypoints=((float(start[0]), float(start[1])),) + rest.waypoints,
                            length=rest.length + float(d[i]))
     return None
 

@@ -6,7 +6,15 @@ import bisect
 import math
 from collections import deque
 
-__all__ = ["OdomHistory", "yaw_of", "seconds", "interpolate_pose"]
+__all__ = ["OdomHistory", "Pose", "as_pose", "yaw_of", "seconds", "interpolate_pose"]
+
+#: a planar pose (x [m], y [m], yaw [rad])
+Pose = tuple[float, float, float]
+
+
+def as_pose(p) -> Pose:
+    """``p`` (x, y, yaw: a tuple, a list, an array row) as a pose of plain floats."""
+    return float(p[0]), float(p[1]), float(p[2])
 
 
 def yaw_of(q) -> float:

@@ -95,6 +95,8 @@ class Estimate:
 class ParticleFilter:
     """Particles (N, 3) and their normalised weights over an :class:`OccupancyMap`."""
 
+    field: LikelihoodField           # made by set_map (from the laser model of the one before)
+
     def __init__(self, occ_map: OccupancyMap, params: FilterParams | None = None,
                  laser: LaserModelParams | None = None, seed: int | None = None):
         self.params = params or FilterParams()
@@ -146,7 +148,7 @@ class ParticleFilter:
         """AMCL's: max_particles particles uniform over the free cells."""
         self._set(self.uniform_poses(self.params.max_particles))
 
-    def global_search(self, beam_xy: np.ndarray, range_max: float) -> np.ndarray:
+    def global_search(self, beam_xy: np.ndarray, range_max: float) -> tuple[np.ndarray, np.ndarray]:
         """Coarse scan matching over the whole map: candidate poses (M, 3) on a grid of
         ``search_spacing`` x ``search_headings`` over the free space, and their log-scores."""
         p = self.params
@@ -203,7 +205,7 @@ class ParticleFilter:
             self.rng.normal(0, math.pi / p.search_headings, size=len(pick))])
         seeded = poses[pick] + jitter
         seeded[:, 2] = wrap(seeded[:, 2])
-        parts = [seeded, self.uniform_poses(n_uni)] + ([old] if n_old else [])
+        parts = [seeded, self.uniform_poses(n_uni)] + ([old] if old is not None else [])
         self._set(np.vstack(parts))
 
     def refine(self, pose, beam_xy: np.ndarray, range_max: float) -> np.ndarray:
@@ -229,7 +231,7 @@ class ParticleFilter:
         refined (:meth:`refine`)."""
         poses, scores = self.global_search(beam_xy, range_max)
         scores = scores.astype(np.float64)
-        picked = []
+        picked: list[np.ndarray] = []
         while len(picked) < k and np.isfinite(scores).any():
             q = poses[int(np.argmax(scores))]
             picked.append(q)

@@ -52,7 +52,7 @@ class OptimizeResult:
 class PoseGraph:
     """Nodes (keyframe poses) and edges (relative constraints); node 0 fixed by default."""
 
-    def __init__(self):
+    def __init__(self) -> None:
         self._poses: list[tuple] = []
         self.edges: list[Edge] = []
         self.fixed: set[int] = {0}

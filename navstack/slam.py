@@ -56,6 +56,7 @@ from scipy.spatial import cKDTree
 
 from .log_odds import LogOddsGrid, LogOddsParams
 from .map_io import OccupancyMap
+from .odometry import as_pose
 from .pose_graph import PoseGraph, compose, relative
 from .scan_matcher import (CorrelativeMatcher, LikelihoodMap, MatcherParams, icp, refine, scan_points,
                            transform)
@@ -221,7 +222,7 @@ class Slam:
         inf or >= ``range_max`` is no return. ``gyro``: the odometry's heading is a gyro's
         (see :attr:`SlamParams.gyro_links`). Returns True when it became a keyframe."""
         p = self.params
-        odom = tuple(float(v) for v in odom_pose)
+        odom = as_pose(odom_pose)
         self._t = float(t)
         self._gyro = bool(gyro)
         # copies: a row of a caller's larger array would keep all of it alive
@@ -423,6 +424,7 @@ class Slam:
         a refinement that leaves the lattice cell it started from is not trusted."""
         p = self.params
         if p.refine == "gauss_newton":
+            assert local.fine is not None   # the local maps have it whenever refine is "gauss_newton"
             refined = refine(local.fine, pts, pose)[0]
         elif p.refine == "icp":
             refined = self._refine(local.points, pts, pose)
@@ -495,7 +497,7 @@ class Slam:
         reference never saw (round a corner, past furniture) would be pulled onto what it
         did see, which lies back towards it."""
         kf = self.keyframes[i]
-        if kf.pair_tree is None:
+        if kf.pair_ref is None or kf.pair_tree is None:     # (both or neither)
             kf.pair_ref = self._pair_reference(i)[0]
             kf.pair_tree = cKDTree(kf.pair_ref)
         scan = kf.scans[0][1]

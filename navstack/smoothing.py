@@ -21,6 +21,7 @@ import math
 from dataclasses import dataclass
 
 from .amcl import compose, inverse
+from .odometry import Pose
 
 
 @dataclass
@@ -40,8 +41,8 @@ class PoseSmoother:
 
     def __init__(self, params: SmootherParams | None = None) -> None:
         self.p = params or SmootherParams()
-        self.pose = None                 # (x, y, yaw), map frame, at odometry pose self.odom
-        self.odom = None
+        self.pose: Pose | None = None    # (x, y, yaw), map frame, at odometry pose self.odom
+        self.odom: Pose | None = None
         self.var_xy = self.var_yaw = 0.0
         self.resets = 0
 
@@ -50,14 +51,14 @@ class PoseSmoother:
         self.pose, self.odom = tuple(pose), tuple(odom)
         self.var_xy, self.var_yaw = self.p.meas_xy ** 2, self.p.meas_yaw ** 2
 
-    def update(self, estimate, odom) -> tuple:
+    def update(self, estimate, odom) -> Pose:
         """Blend in ``estimate`` (map frame) taken at odometry pose ``odom``; returns the
         smoothed pose there."""
         p = self.p
         estimate, odom = tuple(float(v) for v in estimate), tuple(float(v) for v in odom)
         if self.pose is None:
             self.reset(estimate, odom)
-            return self.pose
+            return estimate              # reset took it as it is (the same tuple)
         # predict: move the smoothed pose by the odometry's step (in the robot's frame)
         step = compose(inverse(self.odom), odom)
         pred = compose(self.pose, step)
@@ -79,7 +80,7 @@ class PoseSmoother:
         self.var_xy, self.var_yaw = (1 - k_xy) * var_xy, (1 - k_yaw) * var_yaw
         return self.pose
 
-    def map_to_odom(self) -> tuple:
+    def map_to_odom(self) -> Pose:
         """map -> odom (x, y, yaw) that puts the robot at the smoothed pose."""
         return compose(self.pose, inverse(self.odom))
 
@@ -105,9 +106,9 @@ class LocalHold:
                  still_turn: float = 0.03) -> None:
         self.radius, self.max_turn = radius, max_turn
         self.still_speed, self.still_turn = still_speed, still_turn
-        self.anchor = None               # odometry (x, y) where the robot last stood still
+        self.anchor: tuple[float, float] | None = None   # odometry (x, y) where the robot last stood still
         self.turned = 0.0                # [rad] turned since then, either way
-        self._last = None                # (t, odometry pose) of the previous message
+        self._last: tuple[float, Pose] | None = None      # (t, odometry pose) of the previous message
 
     @property
     def holding(self) -> bool:

@@ -20,13 +20,27 @@ robot on the whole map from its scans (so ``actorbt call goto ...`` works on its
 """
 from __future__ import annotations
 
+from typing import TYPE_CHECKING, Any, TypeVar
+
 from bt_engine import ActorbtError, SubSystem, actor
 
 from .localiser import Localiser
 from .navigator import Navigator
 
+if TYPE_CHECKING:
+    from .mapper import Mapper
+
 #: [s] with no /initialpose this long after the first scan, localise globally
 GLOBAL_AFTER = 2.0
+
+_S = TypeVar("_S", bound=SubSystem)
+
+
+def _add(parent: SubSystem, name: str, cls: type[_S], **kwargs: Any) -> _S:
+    """``parent.add_subsystem``, typed as what it makes: an instance of ``cls``."""
+    child = parent.add_subsystem(name, cls, **kwargs)
+    assert isinstance(child, cls)
+    return child
 
 
 class NavStack(SubSystem):
@@ -48,10 +62,10 @@ class NavStack(SubSystem):
                  initial_pose: tuple | None = None, global_after: float | None = GLOBAL_AFTER,
                  mapper: dict | None = None) -> None:
         super().__init__()
-        self.localiser = self.add_subsystem("localiser", Localiser, params=localiser, seed=seed,
-                                            initial_pose=initial_pose, global_after=global_after)
-        self.navigator = self.add_subsystem("navigator", Navigator, params=navigator)
-        self.mapper = None                  # made by start_mapping
+        self.localiser = _add(self, "localiser", Localiser, params=localiser, seed=seed,
+                              initial_pose=initial_pose, global_after=global_after)
+        self.navigator = _add(self, "navigator", Navigator, params=navigator)
+        self.mapper: Mapper | None = None   # made by start_mapping
         self._mapper_args = dict(mapper or {})
 
     @actor
@@ -67,7 +81,7 @@ class NavStack(SubSystem):
         args = dict(self._mapper_args)
         if start is not None:
             args.setdefault("start_pose", start)
-        self.mapper = self.add_subsystem("mapper", Mapper, **args)
+        self.mapper = _add(self, "mapper", Mapper, **args)
         return [float(v) for v in start] if start is not None else None
 
     @actor
@@ -75,11 +89,14 @@ class NavStack(SubSystem):
         """Stop mapping (the map stays on /map, latched, as map_server would serve it) and
         localise on it from where the mapper has the robot now (slam_toolbox's hand-over to
         AMCL). Returns that pose [x m, y m, yaw rad]."""
-        pose = self._mapping().stop()
-        self.localiser.resume(tuple(pose), self.mapper.map_msg())
+        mapper = self._mapping()
+        pose = mapper.stop()
+        map_msg = mapper.map_msg()
+        assert map_msg is not None              # stop() raised unless a scan has started the map
+        self.localiser.resume(tuple(pose), map_msg)
         return pose
 
-    def _mapping(self):
+    def _mapping(self) -> Mapper:
         if self.mapper is None:
             raise ActorbtError("not mapping: call start_mapping first (in a world with no map server)")
         return self.mapper

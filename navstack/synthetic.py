@@ -22,6 +22,7 @@ import yaml
 
 from .amcl import Scan
 from .map_io import OccupancyMap
+from .odometry import Pose, as_pose
 
 
 @dataclass
@@ -154,7 +155,7 @@ class SyntheticWorld:
         self.target = 1
         x0, y0 = self.tour[0]
         x1, y1 = self.tour[1]
-        self.truth = (x0, y0, math.atan2(y1 - y0, x1 - x0))
+        self.truth: Pose = (x0, y0, math.atan2(y1 - y0, x1 - x0))
         self.odom = (0.0, 0.0, 0.0)
         self.t = 0.0
         self._next_scan = 0.0
@@ -171,7 +172,7 @@ class SyntheticWorld:
         """n small boxes on free floor, 0.35 m clear of the tour and 0.1 m of the furniture."""
         free_x, free_y = self.map.cell_centres(self.map.free())
         tour = np.asarray(self.tour + [self.tour[0]])
-        out = []
+        out: list[tuple[float, float, float, float, float]] = []   # cx, cy, sx, sy, yaw
         for _ in range(200 * max(n, 1)):
             if len(out) >= n:
                 break
@@ -190,7 +191,7 @@ class SyntheticWorld:
     def teleport(self, pose, target: int | None = None) -> None:
         """Move the robot without telling the odometry (the kidnapped robot), and drive on
         towards tour point ``target`` (the nearest one when None)."""
-        self.truth = tuple(float(v) for v in pose)
+        self.truth = as_pose(pose)
         if target is None:
             pts = np.asarray(self.tour)
             target = int(np.argmin(np.hypot(pts[:, 0] - pose[0], pts[:, 1] - pose[1])))

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any, Sequence
+from typing import Any, Sequence, overload
 
 import numpy as np
 
@@ -66,7 +66,7 @@ class OccupancyGrid:
     @property
     def shape(self) -> tuple[int, int]:
         """(height, width) in cells."""
-        return self.data.shape  # type: ignore[return-value]
+        return self.data.shape
 
     def cell_of(self, x: float, y: float) -> tuple[int, int]:
         """(row, col) of the cell containing map point (x, y) [m]; may be outside."""
@@ -75,8 +75,15 @@ class OccupancyGrid:
             int(math.floor((x - self.origin[0]) / self.resolution)),
         )
 
-    def center_of(self, row: int, col: int) -> tuple[float, float]:
-        """Map position (x, y) [m] of a cell centre."""
+    @overload
+    def center_of(self, row: int, col: int) -> tuple[float, float]: ...
+    @overload
+    def center_of(self, row: np.ndarray, col: np.ndarray) -> tuple[np.ndarray, np.ndarray]: ...
+
+    def center_of(
+        self, row: int | np.ndarray, col: int | np.ndarray
+    ) -> tuple[float | np.ndarray, float | np.ndarray]:
+        """Map position (x, y) [m] of a cell centre (of each cell, elementwise, for arrays)."""
         return (
             self.origin[0] + (col + 0.5) * self.resolution,
             self.origin[1] + (row + 0.5) * self.resolution,

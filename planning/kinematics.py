@@ -29,7 +29,7 @@ import math
 import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Literal
+from typing import Literal, TypeAlias
 
 import numpy as np
 
@@ -40,6 +40,8 @@ from .urdf import UrdfRobot, origin_transform, read_urdf
 __all__ = ["ArmPose", "IKSolution", "IKResult", "ArmKinematics"]
 
 ARM_JOINTS = ("joint1", "joint2", "joint3", "joint4")
+#: joint positions [rad] as callers hold them: a sequence of numbers or an array
+JointValues: TypeAlias = Sequence[float] | np.ndarray
 _TOL = 1e-6  # geometric tolerance when checking the chain's shape [m] / [rad]
 _LIMIT_TOL = 1e-9  # slack on joint limits when checking a given q [rad]
 _FIT_TOL = 1e-5  # IK solutions this close outside a limit are clipped onto it [rad]
@@ -251,7 +253,7 @@ class ArmKinematics:
         )
 
     @staticmethod
-    def _frames(segments: tuple[_Segment, ...], q: Sequence[float]) -> list[np.ndarray]:
+    def _frames(segments: tuple[_Segment, ...], q: JointValues) -> list[np.ndarray]:
         """Root transforms of the four joint frames (after their rotation) and the tip."""
         t = np.eye(4)
         out = []
@@ -319,25 +321,25 @@ class ArmKinematics:
         return c, planar
 
     # -------------------------------------------------------------- forward
-    def check_joints(self, q: Sequence[float]) -> np.ndarray:
+    def check_joints(self, q: JointValues) -> np.ndarray:
         """``q`` as an array (4,) [rad]; :class:`InvalidInputError` unless 4 finite values."""
         arr = np.asarray(q, dtype=float)
         if arr.shape != (4,) or not np.all(np.isfinite(arr)):
             raise InvalidInputError(f"q must be 4 finite joint positions {self.joint_names}, got {q!r}")
         return arr
 
-    def fk(self, q: Sequence[float]) -> np.ndarray:
+    def fk(self, q: JointValues) -> np.ndarray:
         """Transform (4, 4) of the tip frame in the root frame for joints ``q`` [rad]."""
         return self._frames(self._segments, self.check_joints(q))[-1]
 
-    def fk_pose(self, q: Sequence[float]) -> ArmPose:
+    def fk_pose(self, q: JointValues) -> ArmPose:
         """Tool pose (x, y, z [m], pitch [rad]) for joints ``q`` [rad]."""
         t = self.fk(q)
         x_axis = t[:3, 0]
         pitch = -math.atan2(x_axis[2], math.hypot(x_axis[0], x_axis[1]))
         return ArmPose(float(t[0, 3]), float(t[1, 3]), float(t[2, 3]), pitch)
 
-    def within_limits(self, q: Sequence[float], tol: float = _LIMIT_TOL) -> bool:
+    def within_limits(self, q: JointValues, tol: float = _LIMIT_TOL) -> bool:
         """True when every joint of ``q`` [rad] is inside its limits (+- ``tol``)."""
         arr = self.check_joints(q)
         return bool(np.all(arr >= self.lower - tol) and np.all(arr <= self.upper + tol))
@@ -362,7 +364,7 @@ class ArmKinematics:
         z: float,
         pitch: float,
         *,
-        seed: Sequence[float] | None = None,
+        seed: JointValues | None = None,
         heading: Literal["outward", "inward", "any"] = "outward",
     ) -> IKResult:
         """Every joint solution that puts the tool at ``(x, y, z)`` [m] with ``pitch`` [rad].
@@ -482,7 +484,7 @@ class ArmKinematics:
         z: float,
         pitch: float,
         *,
-        seed: Sequence[float] | None = None,
+        seed: JointValues | None = None,
         heading: Literal["outward", "inward", "any"] = "outward",
     ) -> tuple[float, ...]:
         """The solution nearest ``seed`` [rad]; raises :class:`UnreachableError` when none."""

@@ -32,7 +32,7 @@ from ompl import util as ou
 
 from .errors import InvalidInputError
 from .failure import FailureReason
-from .kinematics import ArmPose
+from .kinematics import ArmPose, JointValues
 from .scene import PlanningScene
 
 __all__ = ["MotionPlan", "PLANNERS", "plan_joint_motion", "plan_pose_motion", "path_length", "seed_planners"]
@@ -107,7 +107,7 @@ def seed_planners(seed: int) -> None:
     ou.RNG.setSeed(int(seed))
 
 
-def path_length(path: Sequence[Sequence[float]]) -> float:
+def path_length(path: Sequence[JointValues]) -> float:
     """Joint-space length of a polyline [rad]: sum of the segments' Euclidean norms."""
     pts = np.asarray(path, dtype=float)
     if len(pts) < 2:

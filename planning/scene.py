@@ -37,7 +37,7 @@ import numpy as np
 from common.quiet_pybullet import pybullet
 
 from .errors import InvalidInputError, SceneError
-from .kinematics import ArmKinematics
+from .kinematics import ArmKinematics, JointValues
 
 __all__ = ["Obstacle", "Contact", "CollisionReport", "PlanningScene"]
 
@@ -308,7 +308,7 @@ class PlanningScene:
             if c[8] < 0.0 and self._checked_self_pair(c[3], c[4])
         ]
 
-    def _set_arm(self, q: np.ndarray) -> None:
+    def _set_arm(self, q: JointValues) -> None:
         c, rid = self._client, self._robot
         pybullet.resetJointStatesMultiDof(rid, self._arm_index, [[float(v)] for v in q], physicsClientId=c)
         for name, (link, rel) in self._attached.items():
@@ -348,7 +348,7 @@ class PlanningScene:
     ) -> Obstacle:
         """Add (or replace) a box of full extents ``size`` [m] centred at ``position`` [m]."""
         return self._add(
-            Obstacle(name, "box", _vec(size, 3, "size"), _vec(position, 3, "position"), _quat(orientation))
+            Obstacle(name, "box", _vec(size, 3, "size"), _vec3(position, "position"), _quat(orientation))
         )
 
     def add_cylinder(
@@ -362,13 +362,13 @@ class PlanningScene:
         """Add (or replace) an upright cylinder (``radius``, ``height`` [m]) centred at ``position`` [m]."""
         return self._add(
             Obstacle(
-                name, "cylinder", _vec((radius, height), 2, "size"), _vec(position, 3, "position"), _quat(orientation)
+                name, "cylinder", _vec((radius, height), 2, "size"), _vec3(position, "position"), _quat(orientation)
             )
         )
 
     def add_sphere(self, name: str, radius: float, position: Sequence[float]) -> Obstacle:
         """Add (or replace) a sphere of ``radius`` [m] centred at ``position`` [m]."""
-        return self._add(Obstacle(name, "sphere", _vec((radius,), 1, "size"), _vec(position, 3, "position")))
+        return self._add(Obstacle(name, "sphere", _vec((radius,), 1, "size"), _vec3(position, "position")))
 
     def add(self, obstacle: Obstacle) -> Obstacle:
         """Add (or replace) an :class:`Obstacle` value (world obstacles only)."""
@@ -450,7 +450,7 @@ class PlanningScene:
             if not (keep_floor and name == _FLOOR):
                 self.remove(name)
 
-    def attach(self, name: str, q: Sequence[float], link: str = "end_effector_link") -> Obstacle:
+    def attach(self, name: str, q: JointValues, link: str = "end_effector_link") -> Obstacle:
         """Make obstacle ``name`` move with ``link``, keeping its pose relative to
         the link as it is with the arm at ``q`` [rad] (the grasp configuration).
 
@@ -480,7 +480,7 @@ class PlanningScene:
         del self._attached[name]
         pos, quat = pybullet.getBasePositionAndOrientation(self._bodies[name], physicsClientId=self._client)
         ob = self._obstacles[name]
-        new = Obstacle(ob.name, ob.shape, ob.size, tuple(pos), tuple(quat), None)  # type: ignore[arg-type]
+        new = Obstacle(ob.name, ob.shape, ob.size, tuple(pos), tuple(quat), None)
         self._obstacles[name] = new
         self._replace_body(new, None)
         self._update_reach()
@@ -514,7 +514,7 @@ class PlanningScene:
                     found.append((name, self._link_name(pt[2], pt[4]), pt[8]))
         return found
 
-    def is_valid(self, q: Sequence[float]) -> bool:
+    def is_valid(self, q: JointValues) -> bool:
         """True when ``q`` [rad] is inside the joint limits and collision-free."""
         if len(q) != 4:
             return False
@@ -525,7 +525,7 @@ class PlanningScene:
             self._set_arm(q)
             return not self._contacts()
 
-    def check(self, q: Sequence[float]) -> CollisionReport:
+    def check(self, q: JointValues) -> CollisionReport:
         """Like :meth:`is_valid`, with the colliding pairs for messages."""
         k = self.kinematics
         arr = k.check_joints(q)
@@ -540,7 +540,7 @@ class PlanningScene:
         contacts = tuple(Contact(a, b, d) for (a, b), d in sorted(deepest.items(), key=lambda kv: kv[1]))
         return CollisionReport(limits and not contacts, limits, contacts)
 
-    def displacement_bound(self, a: Sequence[float], b: Sequence[float]) -> float:
+    def displacement_bound(self, a: JointValues, b: JointValues) -> float:
         """Upper bound on how far any point of the moving links (and attached
         objects) travels along the straight joint segment a -> b [m]."""
         dq = np.abs(np.asarray(b, dtype=float) - np.asarray(a, dtype=float))
@@ -548,8 +548,8 @@ class PlanningScene:
 
     def segment_valid(
         self,
-        a: Sequence[float],
-        b: Sequence[float],
+        a: JointValues,
+        b: JointValues,
         resolution: float = 0.01,
         max_step: float | None = None,
     ) -> bool:
@@ -574,7 +574,7 @@ class PlanningScene:
 
     def path_valid(
         self,
-        path: Iterable[Sequence[float]],
+        path: Iterable[JointValues],
         resolution: float = 0.01,
         max_step: float | None = None,
     ) -> bool:
@@ -613,7 +613,7 @@ class PlanningScene:
 def _van_der_corput_order(n: int) -> Iterable[int]:
     """Indices 1..n-1, coarse to fine (midpoints first)."""
     seen = {0, n}
-    step = n
+    step: float = n
     while step > 1:
         half = step / 2
         i = half
@@ -639,12 +639,18 @@ def _vec(values: Sequence[float], n: int, what: str) -> tuple[float, ...]:
     return out
 
 
+def _vec3(values: Sequence[float], what: str) -> tuple[float, float, float]:
+    x, y, z = _vec(values, 3, what)
+    return x, y, z
+
+
 def _quat(q: Sequence[float]) -> tuple[float, float, float, float]:
     v = np.array(_vec(q, 4, "orientation (x, y, z, w)"))
     norm = float(np.linalg.norm(v))
     if norm < 1e-9:
         raise InvalidInputError(f"orientation must be a unit quaternion, got {q!r}")
-    return tuple(float(x) for x in v / norm)  # type: ignore[return-value]
+    x, y, z, w = (float(c) for c in v / norm)
+    return x, y, z, w
 
 
 def _pose_matrix(pos: Sequence[float], quat: Sequence[float]) -> np.ndarray:

@@ -13,6 +13,7 @@ Frames follow REP 105: ``map`` → ``odom`` (the localiser) → ``base_footprint
 from __future__ import annotations
 
 import bisect
+import builtins
 import math
 from dataclasses import dataclass, field
 from typing import Any, Iterable
@@ -156,7 +157,7 @@ class TransformBuffer:
                      stamp.sec + stamp.nanosec * 1e-9, static)
 
     # -- asking ----------------------------------------------------------------------
-    def frames(self) -> set[str]:
+    def frames(self) -> builtins.set[str]:    # builtins: the class's own set() shadows the type here
         return set(self._edges) | {e.parent for e in self._edges.values()}
 
     def can_transform(self, target: str, source: str, t: float | None = None) -> bool:

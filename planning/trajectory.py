@@ -329,5 +329,5 @@ def _stop_on_line(q0: np.ndarray, u: np.ndarray, speed: float, acc: float, limit
         durations=(traj.duration,),
         duration=traj.duration,
         limits=limits,
-        _segments=(seg,),  # type: ignore[arg-type]
+        _segments=(seg,),
     )

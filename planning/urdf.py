@@ -120,7 +120,7 @@ class UrdfRobot:
         return chain
 
 
-def _floats(text: str | None, default: tuple[float, ...], what: str) -> tuple[float, ...]:
+def _floats(text: str | None, default: tuple[float, float, float], what: str) -> tuple[float, float, float]:
     if text is None:
         return default
     try:
@@ -129,7 +129,8 @@ def _floats(text: str | None, default: tuple[float, ...], what: str) -> tuple[fl
         raise ModelError(f"bad numbers {text!r} in {what}") from None
     if len(values) != len(default):
         raise ModelError(f"{what}: expected {len(default)} numbers, got {text!r}")
-    return values
+    x, y, z = values
+    return x, y, z
 
 
 def read_urdf(path: str | os.PathLike[str] | None = None) -> UrdfRobot:
@@ -174,7 +175,7 @@ def read_urdf(path: str | os.PathLike[str] | None = None) -> UrdfRobot:
             child=child.get("link", ""),
             xyz=_floats(origin.get("xyz") if origin is not None else None, (0.0, 0.0, 0.0), what),
             rpy=_floats(origin.get("rpy") if origin is not None else None, (0.0, 0.0, 0.0), what),
-            axis=tuple(a / norm for a in axis),  # type: ignore[arg-type]
+            axis=(axis[0] / norm, axis[1] / norm, axis[2] / norm),
             lower=lower,
             upper=upper,
             velocity=velocity,

@@ -81,8 +81,8 @@ class Lighting:
         bright = rng.uniform(*r.brightness)
         tint = rng.uniform(-r.tint, r.tint, 3)
         tint -= tint.mean()                 # white balance: shifts between channels
-        gain = tuple(float(bright * (1 + t)) for t in tint)
-        return cls(tuple(float(d) for d in direction), gain, float(rng.uniform(*r.ambient)))
+        gr, gg, gb = (float(bright * (1 + t)) for t in tint)
+        return cls(direction, (gr, gg, gb), float(rng.uniform(*r.ambient)))
 
     def apply(self, rgb: np.ndarray) -> np.ndarray:
         out = rgb.astype(np.float32) * np.asarray(self.gain, np.float32) + 255.0 * self.ambient

@@ -53,6 +53,7 @@ from builtin_interfaces.msg import Time
 from control_msgs.action import FollowJointTrajectory, GripperCommand
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
+from bt_engine.bus.actions import ServerGoal
 from bt_engine.errors import ActorbtError
 
 from .actuators import (ArmTrajectory, TrajectoryError, duration_to_sec,
@@ -132,11 +133,11 @@ def _point(positions, velocities=None) -> JointTrajectoryPoint:
 
 @dataclass
 class _ArmGoal:
-    handle: object
+    handle: ServerGoal
     traj: ArmTrajectory
-    goal_position: list
-    goal_velocity: list
-    path_position: list
+    goal_position: list[float]
+    goal_velocity: list[float]
+    path_position: list[float]
     goal_time: float
     ticks: int = 0
     number: int = 0       # 1 for the first goal this controller took
@@ -207,7 +208,7 @@ class ArmController:
         self.sim.set_arm_trajectory(traj)
         goal.on_cancel(lambda: self._cancel(active))
 
-    def _tolerances(self, req):
+    def _tolerances(self, req) -> tuple[list[float], list[float], list[float], float]:
         c = self.config
         n = len(ARM)
         goal_pos, goal_vel = [c.goal_position_tolerance] * n, [c.stopped_velocity_tolerance] * n
@@ -320,7 +321,7 @@ def _resolve(default: float, value: float) -> float:
 
 @dataclass
 class _GripperGoal:
-    handle: object
+    handle: ServerGoal
     position: float
     last_movement: float
     anchor: float            # the position when the fingers last counted as moving

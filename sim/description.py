@@ -164,50 +164,52 @@ def _poses(ctx, node) -> PoseMix:
             weights[kind] = ctx.num(m[kind][1], f"poses.{kind}", nonneg=True)
     if sum(weights.values()) <= 0:
         raise ctx.err(node, f"poses: the weights of {', '.join(POSE_KINDS)} must not all be 0")
-    kw = {"weights": tuple((k, weights.get(k, 0.0)) for k in POSE_KINDS)}
+    tilt_deg, on_tables, settle_steps = defaults.tilt_deg, defaults.on_tables, defaults.settle_steps
     if "tilt_deg" in m:
-        kw["tilt_deg"] = _range(ctx, m["tilt_deg"][1], "poses.tilt_deg", 1.0, 55.0)
+        tilt_deg = _range(ctx, m["tilt_deg"][1], "poses.tilt_deg", 1.0, 55.0)
     if "on_tables" in m:
         v = ctx.num(m["on_tables"][1], "poses.on_tables", nonneg=True)
         if v > 1:
             raise ctx.err(m["on_tables"][1], f"poses.on_tables must be a fraction in 0..1, got {v:g}")
-        kw["on_tables"] = v
+        on_tables = v
     if "settle_steps" in m:
-        kw["settle_steps"] = ctx.int_(m["settle_steps"][1], "poses.settle_steps", minimum=0)
-    return PoseMix(**kw)
+        settle_steps = ctx.int_(m["settle_steps"][1], "poses.settle_steps", minimum=0)
+    return PoseMix(weights=tuple((k, weights.get(k, 0.0)) for k in POSE_KINDS), tilt_deg=tilt_deg,
+                   on_tables=on_tables, settle_steps=settle_steps)
 
 
 def _distractors(ctx, node) -> Distractors:
     m = ctx.mapping(node, "distractors")
     ctx.keys(m, {"count", "kinds", "on_tables"}, "distractors")
-    kw = {}
+    defaults = Distractors()
+    count, kinds, on_tables = defaults.count, defaults.kinds, defaults.on_tables
     if "count" in m:
         cnode = m["count"][1]
         if isinstance(cnode, yaml.SequenceNode):
             lo, hi = _range(ctx, cnode, "distractors.count", 0)
             if lo != int(lo) or hi != int(hi):
                 raise ctx.err(cnode, f"distractors.count must be whole numbers, got [{lo:g}, {hi:g}]")
-            kw["count"] = (int(lo), int(hi))
+            count = (int(lo), int(hi))
         else:
             n = ctx.int_(cnode, "distractors.count", minimum=0)
-            kw["count"] = (n, n)
+            count = (n, n)
     if "kinds" in m:
-        kinds = []
+        named: list[str] = []
         for kn in ctx.seq(m["kinds"][1], "distractors.kinds"):
             k = ctx.str_(kn, "distractors.kinds")
             if k not in DECOYS:
                 raise ctx.err(kn, f"distractors.kinds: unknown distractor '{k}' (one of: {', '.join(DECOYS)})")
-            kinds.append(k)
-        if not kinds:
+            named.append(k)
+        if not named:
             raise ctx.err(m["kinds"][1], "distractors.kinds must name at least one distractor "
                                          f"(one of: {', '.join(DECOYS)})")
-        kw["kinds"] = tuple(kinds)
+        kinds = tuple(named)
     if "on_tables" in m:
         v = ctx.num(m["on_tables"][1], "distractors.on_tables", nonneg=True)
         if v > 1:
             raise ctx.err(m["on_tables"][1], f"distractors.on_tables must be a fraction in 0..1, got {v:g}")
-        kw["on_tables"] = v
-    return Distractors(**kw)
+        on_tables = v
+    return Distractors(count=count, kinds=kinds, on_tables=on_tables)
 
 
 WALL_RGBA = (0.82, 0.80, 0.74, 1.0)

@@ -92,8 +92,13 @@ def urdf_joints(path: str | Path = URDF) -> tuple[Joint, ...]:
     for j in ET.parse(path).getroot().iter("joint"):
         o = j.find("origin")
         a = j.find("axis")
-        out.append(Joint(j.get("name"), j.get("type"), j.find("parent").get("link"),
-                         j.find("child").get("link"),
+        parent, child = j.find("parent"), j.find("child")
+        name, jtype = j.get("name"), j.get("type")
+        parent_link = parent.get("link") if parent is not None else None
+        child_link = child.get("link") if child is not None else None
+        if name is None or jtype is None or parent_link is None or child_link is None:
+            raise ValueError(f"{path}: joint {name!r} needs a name, a type, a parent link and a child link")
+        out.append(Joint(name, jtype, parent_link, child_link,
                          _floats(o.get("xyz") if o is not None else None, 3, 0.0),
                          _floats(o.get("rpy") if o is not None else None, 3, 0.0),
                          _floats(a.get("xyz"), 3, 0.0) if a is not None else (1.0, 0.0, 0.0)))

@@ -47,10 +47,10 @@ def box(half) -> tuple:
     hx, hy, hz = (float(h) for h in half)
     faces = []
     # (normal, the face's u axis, its v axis): corners centre +- u +- v
-    for n, u, v in (((1, 0, 0), (0, 1, 0), (0, 0, 1)), ((-1, 0, 0), (0, -1, 0), (0, 0, 1)),
-                    ((0, 1, 0), (-1, 0, 0), (0, 0, 1)), ((0, -1, 0), (1, 0, 0), (0, 0, 1)),
-                    ((0, 0, 1), (1, 0, 0), (0, 1, 0)), ((0, 0, -1), (-1, 0, 0), (0, 1, 0))):
-        faces.append((np.array(n, float), np.array(u, float), np.array(v, float)))
+    for normal, u_axis, v_axis in (((1, 0, 0), (0, 1, 0), (0, 0, 1)), ((-1, 0, 0), (0, -1, 0), (0, 0, 1)),
+                                   ((0, 1, 0), (-1, 0, 0), (0, 0, 1)), ((0, -1, 0), (1, 0, 0), (0, 0, 1)),
+                                   ((0, 0, 1), (1, 0, 0), (0, 1, 0)), ((0, 0, -1), (-1, 0, 0), (0, 1, 0))):
+        faces.append((np.array(normal, float), np.array(u_axis, float), np.array(v_axis, float)))
     h = np.array([hx, hy, hz])
     corners, normals, uvs = [], [], []
     for n, u, v in faces:
@@ -143,9 +143,10 @@ def _flat_normals(pos):
     return np.repeat(n, 3, axis=0)
 
 
-def _parse_mtl(path: Path) -> dict:
+def _parse_mtl(path: Path) -> dict[str, Path]:
     """material name -> its map_Kd path (only materials with one)."""
-    out, name = {}, None
+    out: dict[str, Path] = {}
+    name: str | None = None
     try:
         text = path.read_text(errors="replace")
     except OSError:
@@ -193,10 +194,10 @@ def _load_obj(path: Path):
                                 (ti - 1 if ti > 0 else len(vts) + ti) if ti else -1,
                                 (ni - 1 if ni > 0 else len(vns) + ni) if ni else -1))
             for k in range(1, len(corners) - 1):
-                for c in (corners[0], corners[k], corners[k + 1]):
-                    tri_v.append(c[0])
-                    tri_t.append(c[1])
-                    tri_n.append(c[2])
+                for corner in (corners[0], corners[k], corners[k + 1]):
+                    tri_v.append(corner[0])
+                    tri_t.append(corner[1])
+                    tri_n.append(corner[2])
         elif tag == "mtllib" and len(parts) > 1:
             mtl.update(_parse_mtl(path.parent / line.split(None, 1)[1].strip()))
         elif tag == "usemtl" and len(parts) > 1 and texture is None:
@@ -206,17 +207,17 @@ def _load_obj(path: Path):
         return z, z, np.zeros((0, 2), np.float32), None
     V = np.asarray(vs, np.float64)
     pos = V[np.asarray(tri_v)]
-    ti, ni = np.asarray(tri_t), np.asarray(tri_n)
+    t_idx, n_idx = np.asarray(tri_t), np.asarray(tri_n)
     if vts:
         T = np.vstack([np.asarray(vts, np.float64), [[0.0, 0.0]]])    # -1: the zero row
-        uv = T[ti]
+        uv = T[t_idx]
     else:
         uv = np.zeros((len(pos), 2))
     normals = _flat_normals(pos)
     if vns:
         N = np.asarray(vns, np.float64)
-        has = ni >= 0
-        normals[has] = N[ni[has]]
+        has = n_idx >= 0
+        normals[has] = N[n_idx[has]]
     if texture is None and mtl:
         texture = next(iter(mtl.values()))
     return pos, normals, uv, texture

@@ -261,11 +261,14 @@ def lidar_height() -> float:
     ``base_footprint``, summed along the URDF's fixed joints (0.132 m for the Waffle Pi)."""
     import xml.etree.ElementTree as ET
     urdf = Path(__file__).resolve().parent / "models" / "mobile_manipulator.urdf"
-    parent_of = {}
+    parent_of: dict[str, tuple[str, float]] = {}    # link -> (its parent link, its z there)
     for j in ET.parse(urdf).getroot().iter("joint"):
         o = j.find("origin")
         z = float(o.get("xyz", "0 0 0").split()[2]) if o is not None else 0.0
-        parent_of[j.find("child").get("link")] = (j.find("parent").get("link"), z)
+        parent, child = j.find("parent"), j.find("child")
+        if parent is None or child is None:
+            raise ValueError(f"{urdf}: joint {j.get('name')!r} needs a <parent> and a <child>")
+        parent_of[child.get("link", "")] = (parent.get("link", ""), z)
     link, z = "base_scan", 0.0
     while link in parent_of and link != "base_footprint":
         link, dz = parent_of[link]

@@ -43,7 +43,7 @@ class Gyro:
         self.yaw = 0.0                        # the board's heading (its own start is 0)
         self.rate = 0.0
         self.accel = 0.0
-        self._true_yaw = None
+        self._true_yaw: float | None = None   # None: the next update() takes it as the reference
         self._speed = 0.0
 
     def reset(self) -> None:

@@ -120,7 +120,7 @@ def _coarse(mask: np.ndarray, f: int) -> np.ndarray:
     H, W = -(-h // f), -(-w // f)
     m = np.zeros((H * f, W * f), bool)
     m[:h, :w] = mask
-    return m.reshape(H, f, W, f).any(axis=(1, 3))
+    return np.asarray(m.reshape(H, f, W, f).any(axis=(1, 3)))   # an array (numpy's stubs allow a scalar)
 
 
 def _similarity(mask: np.ndarray, res: float, sigma: float) -> np.ndarray:
@@ -196,7 +196,7 @@ def align(built: np.ndarray, truth_occ: np.ndarray, res: float, origin) -> Align
         corr, t0, hb, wb = _correlate(csim, origin, cres, built, yaw)
         cands += _peaks(corr, t0, cres, hb, wb, float(yaw), 2)
     cands.sort(reverse=True)
-    chosen = []
+    chosen: list[tuple[float, float, float, float]] = []    # (score, x, y, yaw)
     for cand in cands:      # the best few, distinct in yaw or place
         if all(abs(_wrap(cand[3] - o[3])) > math.radians(5) or math.hypot(cand[1] - o[1], cand[2] - o[2]) > 0.5
                for o in chosen):

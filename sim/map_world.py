@@ -146,8 +146,8 @@ def clean(occ: np.ndarray, free: np.ndarray, res: float):
     unknown pockets with no floor next to them (the inside of furniture) become solid."""
     occ, free = occ.copy(), free.copy()
     n, labels, stats = _components(occ, 8)
-    for i in np.flatnonzero(stats[1:, 4] <= SPECKLE_CELLS) + 1:
-        blob = labels == i
+    for label in np.flatnonzero(stats[1:, 4] <= SPECKLE_CELLS) + 1:
+        blob = labels == label
         ring = _dilate(blob) & ~blob
         if free[ring].all():
             occ[blob], free[blob] = False, True

@@ -90,8 +90,8 @@ class WheelOdometry:
         self.x = self.y = self.yaw = 0.0
         self.v = self.w = 0.0
         self.distance = self.turned = self.t = 0.0
-        self._last = None
-        self._last_yaw = None
+        self._last: tuple[float, float] | None = None      # the wheel readings of the last step
+        self._last_yaw: float | None = None
         self._noisy = n.wheel_noise > 0 or n.gyro_noise > 0 or n.gyro_bias_walk > 0
 
     def _ticks(self, angle: float) -> float:

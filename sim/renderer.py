@@ -14,10 +14,14 @@ import os
 import queue
 import sys
 import threading
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from common.quiet_pybullet import pybullet as p
+
+if TYPE_CHECKING:
+    from .gl_renderer import GLRenderer
 
 log = logging.getLogger("sim.renderer")
 
@@ -76,9 +80,9 @@ class Renderer:
         self.cid = cid
         self.name = "tiny"
         self.plugin = -1
-        self.gl = None
+        self.gl: GLRenderer | None = None
         self.why_not_egl = "not requested"
-        self._sizes_seen = set()
+        self._sizes_seen: set[tuple[int, int]] = set()     # (width, height) rendered so far
         wanted = prefer or requested_renderer()
         if wanted is not None and wanted not in RENDERERS:
             raise ValueError(f"renderer {wanted!r}: one of {', '.join(RENDERERS)}")

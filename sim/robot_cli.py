@@ -28,10 +28,16 @@ import os
 import signal
 import sys
 import time
+from typing import TYPE_CHECKING
 
 from bt_engine.clock import process_uptime
 
 from .cli import _world_args
+
+if TYPE_CHECKING:
+    from bt_engine import Runtime, SubSystem
+
+    from .simworld import SimWorld
 
 #: what the navstack is, as actorbt.yaml names it
 NAVSTACK = "navstack:NavStack"
@@ -122,8 +128,9 @@ class RobotSide:
         self.node_name = "(local bus)"
         cfg = dataclasses.replace(app.cfg, subsystems={}, trees=None)
         self.app = type(app)(argparse.Namespace(**{**vars(args), "clock": "wall"}), cfg)
-        self.rt = None
-        self.sim = None
+        self.rt: Runtime | None = None
+        self.sim: SimWorld | None = None
+        self._navstack_cls: type[SubSystem] | None = None
         self.events: list[str] = []
 
     def start(self) -> None:
@@ -146,14 +153,18 @@ class RobotSide:
 
     # -- the restart fault ------------------------------------------------------------
     def _go_down(self) -> None:
+        assert self.rt is not None and self.sim is not None    # scheduled by start(), which set both
         self.sim.drivers_down()
         if self._navstack_cls is not None:
             navstack = self.rt.root.remove_subsystem("navstack")
-            navstack.close()
+            close = getattr(navstack, "close", None)   # a SubSystem need not have one (--navstack)
+            if close is not None:
+                close()
         self._event(f"fault: the robot side went down at {self.rt.now():.1f} s")
         self.rt.call_later(self.faults.restart_for, self._come_up)
 
     def _come_up(self) -> None:
+        assert self.rt is not None and self.sim is not None    # scheduled by _go_down()
         self.sim.drivers_up()
         if self._navstack_cls is not None:
             self.rt.add_subsystem("navstack", self._navstack_cls)
@@ -174,7 +185,8 @@ class RobotSide:
     # -- the referee's view -------------------------------------------------------------
     def write_truth(self, path: str) -> None:
         """The ground truth, as JSON, written whole (a reader never sees half a file)."""
-        sim = self.sim
+        sim, rt = self.sim, self.rt
+        assert sim is not None and rt is not None    # written once start() has set both
         try:
             robot = [round(float(v), 4) for v in sim.robot_pose()]
             objects = {name: {"category": sim.object_category(name),
@@ -184,7 +196,7 @@ class RobotSide:
             print(f"actorbt robot: truth not written: {e}", file=sys.stderr)
             return
         place = sim.place_location
-        truth = {"time": round(self.rt.now(), 3), "world": sim.spec.name, "seed": sim.seed,
+        truth = {"time": round(rt.now(), 3), "world": sim.spec.name, "seed": sim.seed,
                  "robot": robot, "start": [float(v) for v in sim.spec.robot_start],
                  "objects": objects,
                  "place": None if place is None else {

@@ -7,6 +7,7 @@ import logging
 import math
 import os
 import time
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 
@@ -28,6 +29,9 @@ from .robot import ARM, ROBOT_COLLISION_GROUP, Robot
 from .scene import Scene
 from .sensors import CameraModel
 from .world_spec import PlacedObject, WorldSpec
+
+if TYPE_CHECKING:
+    from .topics import SimTopics
 
 log = logging.getLogger("sim")
 
@@ -126,9 +130,11 @@ class SimWorld:
 
     #: publish the world's own map on /map (map_server's job); False while the robot maps
     serve_map = True
+    #: the bus endpoints while started (set on the hub by start()), else None
+    topics: SimTopics | None
 
     def __init__(self, runtime=None, world: str | WorldSpec = "house", seed: int = 0, gui: bool = False,
-                 *, physics_hz: int = PHYSICS_HZ, still_hand_physics_hz: int | None | str = "env",
+                 *, physics_hz: int = PHYSICS_HZ, still_hand_physics_hz: int | None | Literal["env"] = "env",
                  control_hz: int = 60, publish_hz: float = 30.0,
                  camera_hz: float = 5.0, camera_size=(320, 240), odom_noise: OdomNoise | None = None,
                  prefer_egl: bool = True, camera: bool = True, cmd_vel_timeout: float = CMD_VEL_TIMEOUT,
@@ -162,7 +168,7 @@ class SimWorld:
         self.faults = faults             # a sim.faults.Faults: what the robot side breaks
         self.prefer_egl = prefer_egl
         self.gui = False
-        self.cid = None
+        self.cid: int | None = None      # the pybullet client; None once closed
         self._gui_requested = gui
         self._camera_enabled = camera
         self._camera_size = camera_size
@@ -541,6 +547,8 @@ class SimWorld:
     @property
     def renderer(self) -> Renderer:
         if self._renderer is None:
+            if self.cid is None:
+                raise RuntimeError("SimWorld is closed: no renderer")
             # built without camera=True: the EGL plugin would miss the existing shapes
             self._renderer = Renderer(self.cid, prefer_egl=False)
         return self._renderer

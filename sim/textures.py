@@ -115,7 +115,12 @@ def texture_file(img: np.ndarray) -> Path:
 
 
 # ----------------------------------------------------------------------------- meshes
-def _obj_text(vs, vts, vns, faces, tag="") -> bytes:
+Vec3 = tuple[float, float, float]     # a vertex or a normal
+UV = tuple[float, float]
+Corner = tuple[int, int, int]         # a face corner: (vertex, uv, normal) indices from 0
+
+
+def _obj_text(vs: list[Vec3], vts: list[UV], vns: list[Vec3], faces: list[list[Corner]], tag: str = "") -> bytes:
     out = ["# actorbt sim: a labelled body (sim/textures.py)" + (f" for {tag}" if tag else "")]
     out += [f"v {x:.6f} {y:.6f} {z:.6f}" for x, y, z in vs]
     out += [f"vt {u:.6f} {v:.6f}" for u, v in vts]
@@ -131,7 +136,10 @@ def revolution_obj(sections, segments: int = SEGMENTS, tag: str = "") -> Path:
     the texture, between the bodies that load it)."""
     height = sections[-1][0]
     z0 = -height / 2
-    vs, vts, vns, faces = [], [], [], []
+    vs: list[Vec3] = []
+    vts: list[UV] = []
+    vns: list[Vec3] = []
+    faces: list[list[Corner]] = []
     cap_vt = len(vts)
     vts.append((0.5, CAP_V))
     up, down = len(vns), len(vns) + 1
@@ -194,7 +202,10 @@ def box_obj(sx: float, sy: float, sz: float, tag: str = "") -> Path:
     hx, hy, hz = sx / 2, sy / 2, sz / 2
     corners = [(hx, -hy), (hx, hy), (-hx, hy), (-hx, -hy)]   # counter-clockwise from +x
     perim = 2 * (sx + sy)
-    vs, vts, vns, faces = [], [], [], []
+    vs: list[Vec3] = []
+    vts: list[UV] = []
+    vns: list[Vec3] = []
+    faces: list[list[Corner]] = []
     u = 0.0
     for i in range(4):
         (x0, y0), (x1, y1) = corners[i], corners[(i + 1) % 4]

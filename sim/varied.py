@@ -57,7 +57,7 @@ def quat_of(R) -> tuple[float, float, float, float]:
     t = m[0, 0] + m[1, 1] + m[2, 2]
     if t > 0:
         s = 2 * math.sqrt(t + 1)
-        q = ((m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s, s / 4)
+        q = [(m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s, s / 4]
     else:
         i = int(np.argmax([m[0, 0], m[1, 1], m[2, 2]]))
         j, k = (i + 1) % 3, (i + 2) % 3
@@ -66,11 +66,12 @@ def quat_of(R) -> tuple[float, float, float, float]:
         q[i] = s / 4
         q[j] = (m[j, i] + m[i, j]) / s
         q[k] = (m[k, i] + m[i, k]) / s
-    q = np.array(q)
-    q /= np.linalg.norm(q)
-    if q[3] < 0:
-        q = -q
-    return tuple(float(v) for v in q)
+    v = np.array(q)
+    v /= np.linalg.norm(v)
+    if v[3] < 0:
+        v = -v
+    x, y, z, w = (float(c) for c in v)
+    return x, y, z, w
 
 
 def part_points(model, n: int = 48) -> np.ndarray:
@@ -428,7 +429,8 @@ class Placer:
         crng = np.random.default_rng([seed, 29, 1])
         kinds = [k for k in spec_d.kinds if k not in registry.names()]
         palette = [tuple(c.rgba) + (1.0,) * (4 - len(c.rgba)) for c in registry.all_categories()]
-        out, counters = [], {}
+        out: list[PlacedObject] = []
+        counters: dict[str, int] = {}
         n = int(rng.integers(spec_d.count[0], spec_d.count[1] + 1)) if kinds else 0
         rooms = sorted(self.spec.rooms)
         for _ in range(n):
