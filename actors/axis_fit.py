@@ -9,6 +9,7 @@ centre is a point of the axis. A joint least-squares refinement then moves direc
 point together. Used by perception (``actors/perception_round.py`` and
 ``actors/perception_segments.py``); plain numpy/scipy, no robot.
 """
+
 from __future__ import annotations
 
 import math
@@ -17,9 +18,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import least_squares
 
-NORMAL_STRIDE = 3       # [px] baseline of the tangents a normal is made from
-CAP_COS = 0.6           # a normal this parallel to the axis (|cos|) is an end cap's
-MAX_POINTS = 600        # the refinement uses an even subsample
+NORMAL_STRIDE = 3  # [px] baseline of the tangents a normal is made from
+CAP_COS = 0.6  # a normal this parallel to the axis (|cos|) is an end cap's
+MAX_POINTS = 600  # the refinement uses an even subsample
 
 
 @dataclass
@@ -27,10 +28,11 @@ class AxisFit:
     """An axis: ``point`` on it (map frame), unit ``direction`` (pointing up, z >= 0),
     the RMS distance of the side's points to the cylinder [m], and which points are on the
     side (not an end cap)."""
+
     point: np.ndarray
     direction: np.ndarray
     rms: float
-    side: np.ndarray          # (N, 3) the points on the cylinder's side
+    side: np.ndarray  # (N, 3) the points on the cylinder's side
 
 
 def surface_normals(grid: np.ndarray, stride: int = NORMAL_STRIDE) -> tuple[np.ndarray, np.ndarray]:
@@ -66,7 +68,7 @@ def axis_candidates(points: np.ndarray, normals: np.ndarray) -> list[np.ndarray]
     if len(points) > 3:
         q = points - points.mean(axis=0)
         cands.append(np.linalg.eigh(q.T @ q)[1][:, -1])
-    out: list[tuple[np.ndarray, int]] = []      # (direction, how many normals support it)
+    out: list[tuple[np.ndarray, int]] = []  # (direction, how many normals support it)
     for a in cands:
         for _ in range(3):
             side = np.abs(normals @ a) < CAP_COS
@@ -93,8 +95,9 @@ def _basis(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return u, np.cross(a, u)
 
 
-def fit_axis(pts: np.ndarray, normals: np.ndarray, radius: float, view_from: np.ndarray,
-             direction: np.ndarray | None = None) -> AxisFit | None:
+def fit_axis(
+    pts: np.ndarray, normals: np.ndarray, radius: float, view_from: np.ndarray, direction: np.ndarray | None = None
+) -> AxisFit | None:
     """The axis of a cylinder of ``radius`` through surface points and their normals (as
     :func:`surface_normals` gives them), seen from ``view_from`` (the camera's position:
     the axis is behind the surface), starting from ``direction`` (default: the best
@@ -111,7 +114,7 @@ def fit_axis(pts: np.ndarray, normals: np.ndarray, radius: float, view_from: np.
     # start: the surface's centroid pushed back by the radius, away from the camera
     away = o - view_from
     away -= (away @ a) * a
-    away /= (np.linalg.norm(away) or 1.0)
+    away /= np.linalg.norm(away) or 1.0
     return refine_axis(side, radius, o + radius * away, a)
 
 
@@ -121,12 +124,12 @@ def refine_axis(points: np.ndarray, radius: float, point: np.ndarray, direction:
     return _fit_surface(points, point, direction, lambda s: radius)
 
 
-def refine_profile_axis(points: np.ndarray, radii, point: np.ndarray, direction: np.ndarray,
-                        base_low: bool) -> AxisFit:
+def refine_profile_axis(points: np.ndarray, radii, point: np.ndarray, direction: np.ndarray, base_low: bool) -> AxisFit:
     """The body of revolution whose radius at ``h`` above its base is ``radii(h)`` (an
     array function) that ``points`` lie on, from a first guess of its axis; its base is
     the end of the points along ``direction`` that is lowest (``base_low``) or highest.
     A tapered body (a cup) fits no cylinder; its whole profile fixes its axis."""
+
     def radius_along(s):
         lo, hi = np.percentile(s, (0.5, 99.5))
         return radii(np.clip(s - lo if base_low else hi - s, 0.0, None))
@@ -156,5 +159,9 @@ def _fit_surface(points: np.ndarray, point: np.ndarray, direction: np.ndarray, r
     res = least_squares(residual, [theta0, phi0, 0.0, 0.0], loss="huber", f_scale=0.002, max_nfev=60)
     d = unit(res.x[0], res.x[1])
     e = residual(res.x)
-    return AxisFit(point=point + res.x[2] * u + res.x[3] * v, direction=d if d[2] >= 0 else -d,
-                   rms=float(np.sqrt(np.mean(e * e))), side=points)
+    return AxisFit(
+        point=point + res.x[2] * u + res.x[3] * v,
+        direction=d if d[2] >= 0 else -d,
+        rms=float(np.sqrt(np.mean(e * e))),
+        side=points,
+    )

@@ -22,6 +22,7 @@ stamp) -> base_link -> camera_link -> camera_optical_frame (the robot descriptio
 whose pose tf cannot give within ``MAX_POSE_GAP`` of its stamp (the robot is not localised
 yet) is dropped. Nothing here imports the simulator.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -39,8 +40,8 @@ DEPTH_TOPIC = "/camera/depth/image_raw"
 INFO_TOPIC = "/camera/camera_info"
 MAP_FRAME = "map"
 BASE_FRAME = "base_footprint"
-MAX_POSE_GAP = 0.25                     # [s] how long a frame may wait for tf to pose it
-TF_POLL = 0.02                          # [s] between two tries meanwhile
+MAX_POSE_GAP = 0.25  # [s] how long a frame may wait for tf to pose it
+TF_POLL = 0.02  # [s] between two tries meanwhile
 #: [s] frames that tf cannot pose for this long end the stream with the reason: the
 #: robot is not localised (a look's own deadline, 3 s, would only say "timed out")
 UNPOSED_LIMIT = 2.0
@@ -66,7 +67,7 @@ def image_to_array(msg: Image) -> np.ndarray:
     buf = np.frombuffer(msg.data, np.uint8)
     if enc in ("rgb8", "bgr8", "rgba8", "bgra8"):
         ch = 4 if enc.endswith("a8") else 3
-        img = buf.reshape(h, msg.step)[:, :w * ch].reshape(h, w, ch)
+        img = buf.reshape(h, msg.step)[:, : w * ch].reshape(h, w, ch)
         if enc == "rgb8":
             return np.ascontiguousarray(img[:, :, ::-1])
         if enc == "rgba8":
@@ -78,10 +79,10 @@ def image_to_array(msg: Image) -> np.ndarray:
         return buf.reshape(h, msg.step)[:, :w].copy()
     if enc == "32FC1":
         dt: np.dtype = np.dtype(">f4" if msg.is_bigendian else "<f4")
-        return buf.reshape(h, msg.step)[:, :w * 4].copy().view(dt).reshape(h, w).astype(np.float32)
+        return buf.reshape(h, msg.step)[:, : w * 4].copy().view(dt).reshape(h, w).astype(np.float32)
     if enc == "16UC1":
         dt = np.dtype(">u2" if msg.is_bigendian else "<u2")
-        mm = buf.reshape(h, msg.step)[:, :w * 2].copy().view(dt).reshape(h, w)
+        mm = buf.reshape(h, msg.step)[:, : w * 2].copy().view(dt).reshape(h, w)
         out = mm.astype(np.float32) / 1000.0
         out[mm == 0] = np.nan
         return out
@@ -91,6 +92,7 @@ def image_to_array(msg: Image) -> np.ndarray:
 @dataclass(frozen=True)
 class Intrinsics:
     """Pinhole intrinsics [px] of a CameraInfo (no distortion is modelled)."""
+
     fx: float
     fy: float
     cx: float
@@ -102,12 +104,20 @@ class Intrinsics:
     @classmethod
     def from_msg(cls, msg: CameraInfo) -> "Intrinsics":
         k = msg.k
-        return cls(float(k[0]), float(k[4]), float(k[2]), float(k[5]), int(msg.width), int(msg.height),
-                   msg.header.frame_id)
+        return cls(
+            float(k[0]), float(k[4]), float(k[2]), float(k[5]), int(msg.width), int(msg.height), msg.header.frame_id
+        )
 
     def as_dict(self) -> dict:
-        return {"fx": self.fx, "fy": self.fy, "cx": self.cx, "cy": self.cy,
-                "width": self.width, "height": self.height, "frame_id": self.frame_id}
+        return {
+            "fx": self.fx,
+            "fy": self.fy,
+            "cx": self.cx,
+            "cy": self.cy,
+            "width": self.width,
+            "height": self.height,
+            "frame_id": self.frame_id,
+        }
 
 
 @dataclass(frozen=True)
@@ -118,6 +128,7 @@ class RGBDFrame:
     ``T_map_cam``: camera optical frame (z forward, x right, y down) in the map frame;
     ``T_map_base``: the robot base (``base_footprint``) in the map frame; ``stamp`` [s].
     """
+
     stamp: float
     bgr: np.ndarray
     depth: np.ndarray
@@ -132,9 +143,14 @@ class Camera(SubSystem):
     """An RGB-D camera reached through its ROS topics, posed by the robot's transform tree
     (the localisation's map frame)."""
 
-    def __init__(self, color_topic: str = COLOR_TOPIC, depth_topic: str = DEPTH_TOPIC,
-                 info_topic: str = INFO_TOPIC, map_frame: str = MAP_FRAME,
-                 base_frame: str = BASE_FRAME) -> None:
+    def __init__(
+        self,
+        color_topic: str = COLOR_TOPIC,
+        depth_topic: str = DEPTH_TOPIC,
+        info_topic: str = INFO_TOPIC,
+        map_frame: str = MAP_FRAME,
+        base_frame: str = BASE_FRAME,
+    ) -> None:
         super().__init__()
         self.register_subscriber("color_raw", Image, color_topic, 2)
         self.register_subscriber("depth_raw", Image, depth_topic, 2)
@@ -180,9 +196,11 @@ class Camera(SubSystem):
         """Synchronised RGB-D frames: colour and depth with the same header stamp, the
         intrinsics, and the camera pose in the map frame at that stamp (from tf)."""
         info: Intrinsics | None = None
-        with self.run_actor_mode("camera_info", "iterator") as infos, \
-                self.run_actor_mode("color_raw", "iterator") as colors, \
-                self.run_actor_mode("depth_raw", "iterator") as depths:
+        with (
+            self.run_actor_mode("camera_info", "iterator") as infos,
+            self.run_actor_mode("color_raw", "iterator") as colors,
+            self.run_actor_mode("depth_raw", "iterator") as depths,
+        ):
             dmsg = None
             unposed_since = None
             for cmsg in colors:
@@ -190,21 +208,29 @@ class Camera(SubSystem):
                 while dmsg is None or stamp_seconds(dmsg.header) < t - 1e-6:
                     dmsg = next(depths)
                 if stamp_seconds(dmsg.header) > t + 1e-6:
-                    continue                      # this colour frame has no depth twin
+                    continue  # this colour frame has no depth twin
                 if info is None or (info.width, info.height) != (cmsg.width, cmsg.height):
-                    info = Intrinsics.from_msg(next(infos))   # sent with the images
+                    info = Intrinsics.from_msg(next(infos))  # sent with the images
                 frame_id = cmsg.header.frame_id or info.frame_id
                 poses = self._poses(frame_id, t)
-                if isinstance(poses, TransformError):     # tf cannot pose it: not localised
+                if isinstance(poses, TransformError):  # tf cannot pose it: not localised
                     now = self.runtime.now()
                     unposed_since = now if unposed_since is None else unposed_since
                     if now - unposed_since >= UNPOSED_LIMIT:
-                        raise CameraError(f"no camera pose for {now - unposed_since:.1f} s of frames: "
-                                          f"{poses} (is the robot localised? the localiser publishes "
-                                          "map -> odom on /tf)")
+                        raise CameraError(
+                            f"no camera pose for {now - unposed_since:.1f} s of frames: "
+                            f"{poses} (is the robot localised? the localiser publishes "
+                            "map -> odom on /tf)"
+                        )
                     continue
                 unposed_since = None
                 T_map_cam, T_map_base = poses
-                yield RGBDFrame(stamp=t, bgr=image_to_array(cmsg), depth=image_to_array(dmsg),
-                                intrinsics=info, T_map_cam=T_map_cam, T_map_base=T_map_base,
-                                frame_id=frame_id)
+                yield RGBDFrame(
+                    stamp=t,
+                    bgr=image_to_array(cmsg),
+                    depth=image_to_array(dmsg),
+                    intrinsics=info,
+                    T_map_cam=T_map_cam,
+                    T_map_base=T_map_base,
+                    frame_id=frame_id,
+                )

@@ -11,44 +11,82 @@ views, put-down spots), ``catch_approach`` (``approach_object``), ``catch_place`
 (``carry_pose``, ``place``, ``place_on``) and ``catch_errors``; this module keeps
 ``Catcher`` with its shared helpers, ``pick`` and the grip checks.
 """
+
 from __future__ import annotations
 
 import math
 from typing import Any
 
 from bt_engine import ActorbtError, SubSystem, actor
-from categories.check import TEST_LIFT   # the first, short lift that checks the grip [m]
+from categories.check import TEST_LIFT  # the first, short lift that checks the grip [m]
 
 # Everything the modules define, importable from actors.catch as before the split
-from .catch_approach import (ASIDE, CONFIRM_RANGE, FINGER_SPAN, FINGER_THICKNESS,  # noqa: F401
-                             HAND_HALF_WIDTH, LOOK_SEEN, MAX_LOOK, RAISED, RAISED_LOOK_STEPS, UNNAMED_GATE,
-                             UNNAMED_SIZE, Approaching)
+from .catch_approach import (
+    ASIDE,
+    CONFIRM_RANGE,
+    FINGER_SPAN,
+    FINGER_THICKNESS,
+    HAND_HALF_WIDTH,
+    LOOK_SEEN,
+    MAX_LOOK,
+    RAISED,
+    RAISED_LOOK_STEPS,
+    UNNAMED_GATE,
+    UNNAMED_SIZE,
+    Approaching,
+)
 from .catch_errors import ApproachError, GraspError
-from .catch_geometry import (BASE_MARGIN, BASE_OUTLINE, FINGERTIPS, MARK_MARGIN, MARK_SPACING,  # noqa: F401
-                             NEW_VIEW, OUTLINE_REACH, PLACE_EDGE_MARGIN, PLACE_SPACING, SAME_OBJECT,
-                             STANDOFF_CLEARANCE, ends_swapped, fresh_views_first, grasp_xy, object_yaw,
-                             outline_discs, seen_again, segment_distance, surface_spots, target_marks,
-                             target_xy)
-from .catch_place import (GENTLE_RELEASE, MIN_PLACE_REACH, PLACE_ABOVE, PLACE_INSET, PLACE_SHORT,  # noqa: F401
-                          PLACE_STANDOFF, RELEASE_CLEARANCE, Placing)
+from .catch_geometry import (
+    BASE_MARGIN,
+    BASE_OUTLINE,
+    FINGERTIPS,
+    MARK_MARGIN,
+    MARK_SPACING,
+    NEW_VIEW,
+    OUTLINE_REACH,
+    PLACE_EDGE_MARGIN,
+    PLACE_SPACING,
+    SAME_OBJECT,
+    STANDOFF_CLEARANCE,
+    ends_swapped,
+    fresh_views_first,
+    grasp_xy,
+    object_yaw,
+    outline_discs,
+    seen_again,
+    segment_distance,
+    surface_spots,
+    target_marks,
+    target_xy,
+)
+from .catch_place import (
+    GENTLE_RELEASE,
+    MIN_PLACE_REACH,
+    PLACE_ABOVE,
+    PLACE_INSET,
+    PLACE_SHORT,
+    PLACE_STANDOFF,
+    RELEASE_CLEARANCE,
+    Placing,
+)
 from .category_check import check_registered
 from .ros_conv import wrap
 from .strategies import GraspPlan, Strategy, strategy_for
 
-GIVE_UP = 3                 # failed grasps of one object after which the search passes it over
+GIVE_UP = 3  # failed grasps of one object after which the search passes it over
 DRIVE_IN_TOLERANCE = 0.015  # how close the drive around an object must end [m]: the
 #                             fingers are 70 mm long
-PUSHED = 0.45               # a failed grasp may push the object this far [m]
+PUSHED = 0.45  # a failed grasp may push the object this far [m]
 LOOK_AROUND = math.radians(35)  # after a failed grasp, also look this far to either side
-MIN_LOOK = 0.3              # [m] nearer than this, the camera sees too little of an object
-CHORD_MARGIN = 0.004        # [m] fingers that stall this much narrower than a round body is
+MIN_LOOK = 0.3  # [m] nearer than this, the camera sees too little of an object
+CHORD_MARGIN = 0.004  # [m] fingers that stall this much narrower than a round body is
 #                             wide closed on a chord of it, at their tips
-PINCH_MIN_CHORD = 0.8       # of a round body's width: on a narrower chord the tips meet its
+PINCH_MIN_CHORD = 0.8  # of a round body's width: on a narrower chord the tips meet its
 #                             side more than 37 degrees off square and squeeze it out
-LONG_DRIVE = 0.25            # [m] a longer drive in faces the object again on the way
-LONG_DRIVE_SPEED = 0.22     # [m/s] the first part of it (the Waffle's top speed is 0.26)
-REGRASP_BACK = 0.05         # [m] the base backs off this far before it grasps again
-SLIP = 0.004                # [m] a held object slipped when the fingers close this much
+LONG_DRIVE = 0.25  # [m] a longer drive in faces the object again on the way
+LONG_DRIVE_SPEED = 0.22  # [m/s] the first part of it (the Waffle's top speed is 0.26)
+REGRASP_BACK = 0.05  # [m] the base backs off this far before it grasps again
+SLIP = 0.004  # [m] a held object slipped when the fingers close this much
 #                             narrower than they held it after the pick (and narrower than
 #                             the grasp's range)
 
@@ -81,7 +119,7 @@ def _beyond_tips(plan: GraspPlan, grip: dict) -> float:
         return 0.0
     body, w = plan.across, grip["width"]
     if not min(plan.closed_min, PINCH_MIN_CHORD * body) <= w <= body - CHORD_MARGIN:
-        return 0.0      # narrower still: a miss (squeezed out, tipped), which the tree retries
+        return 0.0  # narrower still: a miss (squeezed out, tipped), which the tree retries
     return math.sqrt((body / 2) ** 2 - (w / 2) ** 2)
 
 
@@ -90,8 +128,11 @@ def _still_holds(plan: GraspPlan, held_width: float, grip: dict) -> bool:
     still held? The fingers stall on it, no more than SLIP narrower than they held it
     (or within the grasp's range): squeezing, they creep in a little over a carry, and
     one that slips out closes them fully."""
-    return (bool(grip["stalled"]) and grip["width"] <= plan.closed_max
-            and grip["width"] >= min(plan.closed_min, held_width - SLIP))
+    return (
+        bool(grip["stalled"])
+        and grip["width"] <= plan.closed_max
+        and grip["width"] >= min(plan.closed_min, held_width - SLIP)
+    )
 
 
 def _grip_text(grip: dict) -> str:
@@ -104,21 +145,22 @@ class Catcher(Approaching, Placing, SubSystem):
 
     def __init__(self) -> None:
         super().__init__()
-        check_registered()     # a category that cannot work fails now, not at the object
+        check_registered()  # a category that cannot work fails now, not at the object
         self.set_value("holding", None)
-        self.set_value("held_plan", None)       # the GraspPlan the held object was picked with
-        self.set_value("failed_views", [])   # (x, y, heading) of grasps that failed
-        self.set_value("moved_to", None)     # (was x, y; the detection seen after): where
+        self.set_value("held_plan", None)  # the GraspPlan the held object was picked with
+        self.set_value("failed_views", [])  # (x, y, heading) of grasps that failed
+        self.set_value("moved_to", None)  # (was x, y; the detection seen after): where
         #                                      a failed grasp left the object
-        self.set_value("lost_at", None)      # (x, y): the sighting whose failed grasp left
+        self.set_value("lost_at", None)  # (x, y): the sighting whose failed grasp left
         #                                      the object nowhere the look round saw
-        self.set_value("rejected", [])       # (x, y, category): a close look saw something else there
-        self.set_value("put_down", [])       # (x, y): where place_on put objects down
+        self.set_value("rejected", [])  # (x, y, category): a close look saw something else there
+        self.set_value("put_down", [])  # (x, y): where place_on put objects down
         self.set_value("camera_view", None)  # see _camera_view
-        self.set_value("sighted_at", None)   # (x, y): the target approach_object was last given
+        self.set_value("sighted_at", None)  # (x, y): the target approach_object was last given
 
-    def _fresh_views_first(self, poses: list[tuple[float, float, float]],
-                           xy: tuple[float, float]) -> list[tuple[float, float, float]]:
+    def _fresh_views_first(
+        self, poses: list[tuple[float, float, float]], xy: tuple[float, float]
+    ) -> list[tuple[float, float, float]]:
         return fresh_views_first(poses, xy, self.get_value("failed_views"))
 
     def _remember_failed_view(self, xy: tuple[float, float], category: str) -> None:
@@ -155,9 +197,11 @@ class Catcher(Approaching, Placing, SubSystem):
             if turn:
                 self.run_actor("mini_turn", turn)
                 turned += turn
-            near = [d for d in self.run_actor("object_glance")
-                    if d["category"] == category and math.dist((d["x"], d["y"]), xy) <= PUSHED
-                    and d["distance"] >= MIN_LOOK]
+            near = [
+                d
+                for d in self.run_actor("object_glance")
+                if d["category"] == category and math.dist((d["x"], d["y"]), xy) <= PUSHED and d["distance"] >= MIN_LOOK
+            ]
             if near:
                 seen = min(near, key=lambda d: math.dist((d["x"], d["y"]), xy))
                 self.set_value("moved_to", (xy, seen))
@@ -174,13 +218,15 @@ class Catcher(Approaching, Placing, SubSystem):
         lost = self.get_value("lost_at")
         if lost is not None and tuple(lost) == target_xy(target):
             # the same sighting retried; a new search's sighting there is looked at afresh
-            raise ApproachError(f"no {target.get('category') or 'object'} at ({lost[0]:.2f}, {lost[1]:.2f}) "
-                                f"any more: the failed grasp there left it where the look round did not see it")
+            raise ApproachError(
+                f"no {target.get('category') or 'object'} at ({lost[0]:.2f}, {lost[1]:.2f}) "
+                f"any more: the failed grasp there left it where the look round did not see it"
+            )
         moved = self.get_value("moved_to")
         if moved is None:
             return target
         was, seen = moved
-        if math.dist(was, target_xy(target)) > PUSHED:   # another object
+        if math.dist(was, target_xy(target)) > PUSHED:  # another object
             return target
         return seen_again(target, seen)
 
@@ -230,7 +276,7 @@ class Catcher(Approaching, Placing, SubSystem):
         strategy = self._strategy(target, category)
         g = self._plan(strategy, target)
         xy = grasp_xy(target, g)
-        self.run_actor("require_localised")       # never grasp where the map pose is a guess
+        self.run_actor("require_localised")  # never grasp where the map pose is a guess
         height = float(target.get("z", 0.0)) + g.height  # the object may stand on something
         self.run_actor("open", g.open_width)
         # over a lying object the hand comes in high and goes down once in place
@@ -246,8 +292,12 @@ class Catcher(Approaching, Placing, SubSystem):
             # for the fingertips to close in front of a bottle, where the localisation is
             # within about a centimetre, and alike at the look.
             # Briskly: the gyro's drift, which bends the way, grows with the time it takes.
-            driven += self.run_actor("mini_walk", distance - g.reach - strategy.approach.standoff,
-                                     speed=LONG_DRIVE_SPEED, tolerance=DRIVE_IN_TOLERANCE)
+            driven += self.run_actor(
+                "mini_walk",
+                distance - g.reach - strategy.approach.standoff,
+                speed=LONG_DRIVE_SPEED,
+                tolerance=DRIVE_IN_TOLERANCE,
+            )
             distance = self._face(xy, strategy)
         driven += self._drive_in(distance - g.reach)
         if above != height:
@@ -270,9 +320,11 @@ class Catcher(Approaching, Placing, SubSystem):
             self._remember_failed_view(xy, strategy.category)
             self._back_off(driven, g)
             self._look_for_it(xy, strategy.category)
-            raise GraspError(f"{strategy.category} grasp missed: {_grip_text(grip)}, expected "
-                             f"them to stall on it at {_ranges_text(g)} mm")
-        g = held_side       # the slip checks expect the width across the side held
+            raise GraspError(
+                f"{strategy.category} grasp missed: {_grip_text(grip)}, expected "
+                f"them to stall on it at {_ranges_text(g)} mm"
+            )
+        g = held_side  # the slip checks expect the width across the side held
         # Test lift: a slip shows when the fingers close again, and the object drops only
         # a little (a can dropped from the full lift height may fall over).
         for x, z in ((g.reach, height + TEST_LIFT), self._lift_pose(g, height)):
@@ -289,10 +341,8 @@ class Catcher(Approaching, Placing, SubSystem):
                 self._remember_failed_view(xy, strategy.category)
                 self._back_off(driven, g)
                 self._look_for_it(xy, strategy.category)
-                raise GraspError(f"{strategy.category} slipped out while lifting "
-                                 f"({_grip_text(grip)})")
-        held = {"category": strategy.category, "width": grip["width"],
-                "pose": target.get("pose") or "upright"}
+                raise GraspError(f"{strategy.category} slipped out while lifting ({_grip_text(grip)})")
+        held = {"category": strategy.category, "width": grip["width"], "pose": target.get("pose") or "upright"}
         self.set_value("holding", held)
         self.set_value("held_plan", g)
         self.set_value("moved_to", None)
@@ -304,7 +354,7 @@ class Catcher(Approaching, Placing, SubSystem):
         try:
             self.run_actor("move_to_pose", g.reach, 0.0, height + 0.003, g.pitch)
         except ActorbtError:
-            pass            # the arm stays where it stopped: let go there
+            pass  # the arm stays where it stopped: let go there
 
     def _felt_xy(self, g: GraspPlan, grip: dict, beyond: float) -> tuple[float, float]:
         """The map x, y of a round body's axis the fingertips closed on (``beyond`` [m]
@@ -325,7 +375,7 @@ class Catcher(Approaching, Placing, SubSystem):
                 if self.run_actor("reachable", x, 0.0, z, g.pitch):
                     return x, z
                 z -= 0.01
-        return g.reach, height + TEST_LIFT      # stay where the test lift held it
+        return g.reach, height + TEST_LIFT  # stay where the test lift held it
 
     @actor(moves=True)
     def grip_check(self) -> dict:
@@ -341,8 +391,7 @@ class Catcher(Approaching, Placing, SubSystem):
         held = self.get_value("holding")
         if not held:
             return False
-        return _still_holds(self.get_value("held_plan"), float(held.get("width") or 0.0),
-                            self.run_actor("grip_check"))
+        return _still_holds(self.get_value("held_plan"), float(held.get("width") or 0.0), self.run_actor("grip_check"))
 
     def _drive_in(self, distance: float) -> float:
         """Drive straight in by ``distance`` [m]; returns how far it drove. The walk stops
@@ -353,7 +402,7 @@ class Catcher(Approaching, Placing, SubSystem):
 
     def _back_off(self, distance: float, plan: GraspPlan) -> None:
         self.run_actor("open", plan.open_width)
-        if plan.pitch > math.radians(45):       # from above: lift the open hand out first
+        if plan.pitch > math.radians(45):  # from above: lift the open hand out first
             self.run_actor("move_to_pose", plan.reach, 0.0, plan.height + plan.lift, plan.pitch)
         self.run_actor("mini_walk", -max(0.05, distance))
         self.run_actor("home")

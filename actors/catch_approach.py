@@ -2,6 +2,7 @@
 the helpers only it uses: the closer looks, the standoffs with room for the base and a
 clear way in, and the drive there.
 """
+
 from __future__ import annotations
 
 import math
@@ -14,33 +15,45 @@ import numpy as np
 from bt_engine import ActorbtError, SubSystem, actor
 
 from .catch_errors import ApproachError
-from .catch_geometry import (BASE_MARGIN, FINGERTIPS, OUTLINE_REACH, SAME_OBJECT, STANDOFF_CLEARANCE, ends_swapped,
-                             grasp_xy, object_yaw, outline_discs, seen_again, segment_distance, target_marks,
-                             target_xy)
+from .catch_geometry import (
+    BASE_MARGIN,
+    FINGERTIPS,
+    OUTLINE_REACH,
+    SAME_OBJECT,
+    STANDOFF_CLEARANCE,
+    ends_swapped,
+    grasp_xy,
+    object_yaw,
+    outline_discs,
+    seen_again,
+    segment_distance,
+    target_marks,
+    target_xy,
+)
 from .strategies import GraspPlan, Strategy
 
 if TYPE_CHECKING:
-    _CatcherBase = SubSystem    # the mixin runs only as a part of Catcher, which adds SubSystem
+    _CatcherBase = SubSystem  # the mixin runs only as a part of Catcher, which adds SubSystem
 else:
     _CatcherBase = object
 
-HAND_HALF_WIDTH = 0.07      # half the open hand's width, with margin [m]
+HAND_HALF_WIDTH = 0.07  # half the open hand's width, with margin [m]
 CONFIRM_RANGE = (0.45, 1.2)  # [m] from this near, a close look that sees something else at
 #                             the target's place (and never the category) rejects the target;
 #                             nearer than the first, a lying box's faces are misread (unknown)
-UNNAMED_GATE = 0.04         # [m] an object of no known category this near the target,
-UNNAMED_SIZE = 0.012        # [m] and as wide and high within this, seen from near, is it
+UNNAMED_GATE = 0.04  # [m] an object of no known category this near the target,
+UNNAMED_SIZE = 0.012  # [m] and as wide and high within this, seen from near, is it
 ASIDE = (math.radians(45), math.radians(-45))  # headings, relative to a lying body's axis,
 #                             of the closer look at it
-FINGER_THICKNESS = 0.010    # [m] of each finger, outside the opening
-FINGER_SPAN = (-0.10, -0.04, 0.0, FINGERTIPS)   # [m] along the hand from the object's axis
+FINGER_THICKNESS = 0.010  # [m] of each finger, outside the opening
+FINGER_SPAN = (-0.10, -0.04, 0.0, FINGERTIPS)  # [m] along the hand from the object's axis
 #                             at the grasp: where the fingers pass (the last of the way in)
-RAISED = 0.05               # [m] an object whose base is higher stands on a surface (a table)
-LOOK_SEEN = 0.75            # the closer look at a raised object is from where the camera sees
+RAISED = 0.05  # [m] an object whose base is higher stands on a surface (a table)
+LOOK_SEEN = 0.75  # the closer look at a raised object is from where the camera sees
 #                             this much of its height: the camera looks down, and from the
 #                             usual look distance it sees nothing of a bottle on a 0.25 m TV
 #                             bench (perception found it from 1.8 m, not from 1.5 m or less)
-MAX_LOOK = 2.5              # [m] the farthest look distance
+MAX_LOOK = 2.5  # [m] the farthest look distance
 RAISED_LOOK_STEPS = (0.0, -0.1, -0.2, 0.15, 0.3)  # [m] look distances tried around a
 #                             raised object's (a bottle on a 0.25 m bench is recognised
 #                             from 1.7 to 2.3 m)
@@ -55,20 +68,29 @@ RAISED_SQUARE = math.radians(5)  # a box on a table is grasped straight in from 
 class Approaching(_CatcherBase):
     """Catcher's approach (a mixin of it: it uses Catcher's shared helpers)."""
 
-    if TYPE_CHECKING:   # Catcher's shared helpers (actors/catch.py) the approach uses
+    if TYPE_CHECKING:  # Catcher's shared helpers (actors/catch.py) the approach uses
+
         def _strategy(self, target: Any, category: str | None) -> Strategy: ...
         def _where_now(self, target: dict) -> dict: ...
         @staticmethod
         def _plan(strategy: Strategy, target: dict) -> GraspPlan: ...
         def _face(self, xy: tuple[float, float], strategy: Strategy) -> float: ...
         def _pass_over(self, xy: tuple[float, float], category: str) -> None: ...
-        def _fresh_views_first(self, poses: list[tuple[float, float, float]],
-                               xy: tuple[float, float]) -> list[tuple[float, float, float]]: ...
+        def _fresh_views_first(
+            self, poses: list[tuple[float, float, float]], xy: tuple[float, float]
+        ) -> list[tuple[float, float, float]]: ...
 
-    def _free_standoff(self, robot_xy: tuple[float, float], xy: tuple[float, float],
-                       strategy: Strategy, extra: float = 0.0, others: Sequence[dict] = (),
-                       corridor: bool = True, object_yaw: float | None = None,
-                       plan: GraspPlan | None = None) -> list[tuple[float, float, float]]:
+    def _free_standoff(
+        self,
+        robot_xy: tuple[float, float],
+        xy: tuple[float, float],
+        strategy: Strategy,
+        extra: float = 0.0,
+        others: Sequence[dict] = (),
+        corridor: bool = True,
+        object_yaw: float | None = None,
+        plan: GraspPlan | None = None,
+    ) -> list[tuple[float, float, float]]:
         """Standoff poses with room for the base around them and (with ``corridor``) a
         clear straight approach to the object, best first (``others``: perceived objects
         to keep clear of; ``object_yaw``: the measured yaw of a box or of a lying body's
@@ -76,16 +98,20 @@ class Approaching(_CatcherBase):
         plan = plan or strategy.upright
         free = []
         for pose in strategy.standoff_poses(robot_xy, xy, extra, object_yaw, plan):
-            if (self.run_actor("clearance", pose[0], pose[1]) >= STANDOFF_CLEARANCE
-                    and (not corridor or self._corridor_clear(pose, xy, plan.reach, others))):
+            if self.run_actor("clearance", pose[0], pose[1]) >= STANDOFF_CLEARANCE and (
+                not corridor or self._corridor_clear(pose, xy, plan.reach, others)
+            ):
                 free.append(pose)
         if not free:
-            raise ApproachError(f"no free standoff around ({xy[0]:.2f}, {xy[1]:.2f}): walls, "
-                                "furniture or other objects are in the way on every side")
+            raise ApproachError(
+                f"no free standoff around ({xy[0]:.2f}, {xy[1]:.2f}): walls, "
+                "furniture or other objects are in the way on every side"
+            )
         return free
 
-    def _corridor_clear(self, pose: tuple[float, float, float], xy: tuple[float, float],
-                        reach: float, others: Sequence[dict]) -> bool:
+    def _corridor_clear(
+        self, pose: tuple[float, float, float], xy: tuple[float, float], reach: float, others: Sequence[dict]
+    ) -> bool:
         """Can the base drive straight in from ``pose`` until the hand, ``reach`` ahead of
         the base, is at the object?"""
         sx, sy, yaw = pose
@@ -95,7 +121,7 @@ class Approaching(_CatcherBase):
             f = k / 4
             bx, by = sx + f * (gx - sx), sy + f * (gy - sy)
             if self.run_actor("clearance", bx, by) >= OUTLINE_REACH + BASE_MARGIN:
-                continue   # nothing near the whole outline: no need to look closer
+                continue  # nothing near the whole outline: no need to look closer
             centres, radius = outline_discs((bx, by, yaw))
             if any(self.run_actor("clearance", px, py) < radius + BASE_MARGIN for px, py in centres):
                 return False
@@ -112,9 +138,11 @@ class Approaching(_CatcherBase):
             return []
         xy = target_xy(target)
         own = strategy.length if target.get("pose") == "lying" else SAME_OBJECT
-        return [{"x": d["x"], "y": d["y"], "radius": max(0.04, float(d.get("width", 0.08)) / 2) + 0.02}
-                for d in self.run_actor("object_glance")
-                if math.dist((d["x"], d["y"]), xy) > max(SAME_OBJECT, own)]
+        return [
+            {"x": d["x"], "y": d["y"], "radius": max(0.04, float(d.get("width", 0.08)) / 2) + 0.02}
+            for d in self.run_actor("object_glance")
+            if math.dist((d["x"], d["y"]), xy) > max(SAME_OBJECT, own)
+        ]
 
     def _refine(self, target: dict, category: str, confirm: bool = False) -> dict:
         """Look again from close by, when a perception actor is available. With
@@ -147,8 +175,10 @@ class Approaching(_CatcherBase):
         if not other or math.dist(target_xy(other), xy) > UNNAMED_GATE:
             return target
         for size in ("width", "height"):
-            if isinstance(target.get(size), (int, float)) and \
-                    abs(float(other.get(size) or 0.0) - float(target[size])) > UNNAMED_SIZE:
+            if (
+                isinstance(target.get(size), (int, float))
+                and abs(float(other.get(size) or 0.0) - float(target[size])) > UNNAMED_SIZE
+            ):
                 return target
         return {**target, "x": float(other["x"]), "y": float(other["y"])}
 
@@ -161,17 +191,19 @@ class Approaching(_CatcherBase):
         rx, ry, _ = self.run_actor("get_pose")
         near, far = CONFIRM_RANGE
         if not near <= math.dist((rx, ry), xy) <= far:
-            return                                  # too far to tell shapes apart, or too near
+            return  # too far to tell shapes apart, or too near
         # what is at its place: the object seen most, or nearest, may be another one (a
         # piece of furniture near it), and then the thing taken for the target is never
         # asked about
         other = self.run_actor("get_found", "unknown", near=list(xy), within=SAME_OBJECT)
         if not other:
-            return                                  # nothing else there: a missed look
+            return  # nothing else there: a missed look
         self.set_value("rejected", self.get_value("rejected")[-19:] + [(xy[0], xy[1], category)])
         self._pass_over(xy, category)
-        raise ApproachError(f"no {category} at ({xy[0]:.2f}, {xy[1]:.2f}): seen from "
-                            f"{math.dist((rx, ry), xy):.2f} m, the object there is of no known category")
+        raise ApproachError(
+            f"no {category} at ({xy[0]:.2f}, {xy[1]:.2f}): seen from "
+            f"{math.dist((rx, ry), xy):.2f} m, the object there is of no known category"
+        )
 
     @actor(moves=True)
     def approach_object(self, target: dict, category: str | None = None) -> dict:
@@ -201,8 +233,10 @@ class Approaching(_CatcherBase):
             # the retry of a target the close look rejected: the next look might call the
             # distractor by the category again, and the grasp would close on it
             if c == cat and math.dist((x, y), xy) < SAME_OBJECT:
-                raise ApproachError(f"no {cat} at ({xy[0]:.2f}, {xy[1]:.2f}): a close look saw an "
-                                    f"object of no known category there before")
+                raise ApproachError(
+                    f"no {cat} at ({xy[0]:.2f}, {xy[1]:.2f}): a close look saw an "
+                    f"object of no known category there before"
+                )
         plan = self._plan(strategy, target)
         look = self._look_distance(target, strategy)
         # a raised object (on a table): from nearer than its look distance the camera sees
@@ -231,8 +265,12 @@ class Approaching(_CatcherBase):
                 # category, and it would be grasped and carried off)
                 # (a box only if square to a side: its grasp comes straight in from here)
                 square_enough = not _upright_box(target, plan) or self._off_sides(target, plan) <= RAISED_SQUARE
-                if raised and abs(here - look) <= 0.3 and square_enough and self._corridor_clear(
-                        (rx, ry, math.atan2(xy[1] - ry, xy[0] - rx)), xy, plan.reach, others):
+                if (
+                    raised
+                    and abs(here - look) <= 0.3
+                    and square_enough
+                    and self._corridor_clear((rx, ry, math.atan2(xy[1] - ry, xy[0] - rx)), xy, plan.reach, others)
+                ):
                     direct = True
                     continue  # a look pose already, the way in clear
                 looks = _look_plans(target, plan, raised)
@@ -243,17 +281,23 @@ class Approaching(_CatcherBase):
                 steps = RAISED_LOOK_STEPS if raised else (0.0,)
                 for look_plan, distance in ((p, look + k) for p in looks for k in steps if look + k <= MAX_LOOK):
                     try:
-                        poses = self._free_standoff((rx, ry), xy, strategy,
-                                                    distance - plan.reach - strategy.approach.standoff,
-                                                    others, object_yaw=target.get("yaw"), plan=look_plan)
+                        poses = self._free_standoff(
+                            (rx, ry),
+                            xy,
+                            strategy,
+                            distance - plan.reach - strategy.approach.standoff,
+                            others,
+                            object_yaw=target.get("yaw"),
+                            plan=look_plan,
+                        )
                         break
                     except ApproachError:
                         continue
                 if not poses:
                     continue  # no room to look from there (a cramped corner): go closer
-                direct = raised     # the look poses have a clear way in (the corridor)
+                direct = raised  # the look poses have a clear way in (the corridor)
             else:
-                plan = self._plan(strategy, target)    # the close look may see it otherwise
+                plan = self._plan(strategy, target)  # the close look may see it otherwise
                 try:
                     poses = self._grasp_standoffs((rx, ry), target, strategy, plan, others)
                 except ApproachError:
@@ -278,8 +322,9 @@ class Approaching(_CatcherBase):
             rx, ry, _ = self.run_actor("get_pose")
             extra = math.dist((rx, ry), xy) - plan.reach - strategy.approach.standoff if direct else 0.0
             try:
-                poses = self._free_standoff((rx, ry), xy, strategy, extra, others=others,
-                                            object_yaw=object_yaw(target, plan), plan=plan)
+                poses = self._free_standoff(
+                    (rx, ry), xy, strategy, extra, others=others, object_yaw=object_yaw(target, plan), plan=plan
+                )
             except ApproachError:
                 poses = []
             if poses:
@@ -290,8 +335,9 @@ class Approaching(_CatcherBase):
         self._face(xy, strategy)
         return {**target, "category": cat}
 
-    def _grasp_standoffs(self, robot_xy: tuple[float, float], target: dict, strategy: Strategy,
-                         plan: GraspPlan, others: list[dict]) -> list[tuple[float, float, float]]:
+    def _grasp_standoffs(
+        self, robot_xy: tuple[float, float], target: dict, strategy: Strategy, plan: GraspPlan, others: list[dict]
+    ) -> list[tuple[float, float, float]]:
         """The free standoffs for ``plan``. A leaning or lying target is taken from some
         sides only; where none has room, it is approached as an upright one would be: a
         pose measured from afar is a guess, and the look from the standoff measures it
@@ -299,29 +345,33 @@ class Approaching(_CatcherBase):
         wall, or an upright carton lying)."""
         xy = target_xy(target)
         try:
-            return self._free_standoff(robot_xy, xy, strategy, others=others,
-                                       object_yaw=object_yaw(target, plan), plan=plan)
+            return self._free_standoff(
+                robot_xy, xy, strategy, others=others, object_yaw=object_yaw(target, plan), plan=plan
+            )
         except ApproachError:
             if target.get("pose") in (None, "upright"):
                 raise
         return self._free_standoff(robot_xy, xy, strategy, others=others, plan=strategy.upright)
 
-    def _finger_room_first(self, poses: list[tuple[float, float, float]], xy: tuple[float, float],
-                           plan: GraspPlan, target: dict) -> list[tuple[float, float, float]]:
+    def _finger_room_first(
+        self, poses: list[tuple[float, float, float]], xy: tuple[float, float], plan: GraspPlan, target: dict
+    ) -> list[tuple[float, float, float]]:
         """Standoff ``poses`` from which the open fingers, coming in beside an object on
         the floor, stay off the map's obstacles first (else in their order). A finger that
         runs into furniture the object stands against stops the base short, its wheels
         slipping, and the fingertips pinch the object (a bottle against a bench's side,
         the hand coming along the bench, held at 60 of its 70 mm)."""
         if float(target.get("z") or 0.0) > RAISED or plan.pitch > math.radians(45):
-            return poses        # above a table, or from above: the fingers are clear of the map
+            return poses  # above a table, or from above: the fingers are clear of the map
         side = 0.5 * plan.open_width + FINGER_THICKNESS
 
         def blocked(pose: tuple[float, float, float]) -> bool:
             c, s = math.cos(pose[2]), math.sin(pose[2])
-            return any(self.run_actor("clearance", xy[0] + a * c - k * side * s,
-                                      xy[1] + a * s + k * side * c) <= 0.0
-                       for a in FINGER_SPAN for k in (1, -1))
+            return any(
+                self.run_actor("clearance", xy[0] + a * c - k * side * s, xy[1] + a * s + k * side * c) <= 0.0
+                for a in FINGER_SPAN
+                for k in (1, -1)
+            )
 
         flags = [blocked(pose) for pose in poses]
         return [p for p, b in zip(poses, flags) if not b] + [p for p, b in zip(poses, flags) if b]
@@ -360,7 +410,7 @@ class Approaching(_CatcherBase):
             return None
         T = np.linalg.inv(frame.T_map_base) @ frame.T_map_cam
         k = frame.intrinsics
-        ray = T[:3, :3] @ np.array([0.0, -k.cy / k.fy, 1.0])     # image row 0, centre column
+        ray = T[:3, :3] @ np.array([0.0, -k.cy / k.fy, 1.0])  # image row 0, centre column
         view = (float(T[0, 3]), float(T[2, 3]), float(ray[2] / math.hypot(ray[0], ray[1])))
         self.set_value("camera_view", view)
         return view
@@ -372,8 +422,14 @@ class Approaching(_CatcherBase):
         gx, gy = grasp_xy(target, plan)
         return plan.off_sides(math.atan2(gy - y, gx - x), object_yaw(target, plan))
 
-    def _goto_first(self, poses: list[tuple[float, float, float]], xy: tuple[float, float],
-                    target: dict | None = None, length: float = 0.0, others: Sequence[dict] = ()) -> None:
+    def _goto_first(
+        self,
+        poses: list[tuple[float, float, float]],
+        xy: tuple[float, float],
+        target: dict | None = None,
+        length: float = 0.0,
+        others: Sequence[dict] = (),
+    ) -> None:
         """Go to the first of ``poses`` that the base can reach (up to three tries). With
         ``target``, the way there keeps off it (``target_marks``; ``others`` are the
         marks already made, kept); if no way does, the base goes there as before."""
@@ -381,7 +437,7 @@ class Approaching(_CatcherBase):
         for pose in poses[:3]:
             marks = target_marks(target, length, pose[:2]) if target is not None else []
             try:
-                for keep_off in ([True, False] if marks else [False]):
+                for keep_off in [True, False] if marks else [False]:
                     self.run_actor("mark_obstacles", list(others) + (marks if keep_off else []))
                     try:
                         self.run_actor("goto", *pose)
@@ -391,8 +447,7 @@ class Approaching(_CatcherBase):
             finally:
                 if marks:
                     self.run_actor("mark_obstacles", list(others))
-        raise ApproachError(f"could not reach a standoff near ({xy[0]:.2f}, {xy[1]:.2f}): "
-                            + "; ".join(errors))
+        raise ApproachError(f"could not reach a standoff near ({xy[0]:.2f}, {xy[1]:.2f}): " + "; ".join(errors))
 
 
 def _look_plans(target: dict, plan: GraspPlan, raised: bool) -> list[GraspPlan]:

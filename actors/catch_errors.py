@@ -1,4 +1,5 @@
 """The errors the catch actors (actors/catch.py) raise."""
+
 from __future__ import annotations
 
 from bt_engine import ActorbtError

@@ -4,6 +4,7 @@ that keep the way to a lying target off it, the order of standoff views after a 
 grasp, and the spots on a surface to put objects down on; with the constants they and
 the actors share.
 """
+
 from __future__ import annotations
 
 import math
@@ -14,20 +15,20 @@ from bt_engine import ActorbtError
 from .ros_conv import wrap
 from .strategies import GraspPlan
 
-STANDOFF_CLEARANCE = 0.26   # room the base needs around a standoff pose [m]
+STANDOFF_CLEARANCE = 0.26  # room the base needs around a standoff pose [m]
 #: the base's outline in base_footprint, x_min, x_max, |y| max [m]: the Waffle Pi chassis.
 #: Along the straight drive in, only this must stay clear of the map's obstacles: the
 #: arm and the hand are above a table whose edge the base stops at.
 BASE_OUTLINE = (-0.205, 0.076, 0.153)
-BASE_MARGIN = 0.025         # room kept between that outline and an obstacle [m]
-OUTLINE_REACH = math.hypot(-BASE_OUTLINE[0], BASE_OUTLINE[2])   # its farthest corner [m]
-SAME_OBJECT = 0.12          # detections closer than this to the target are the target [m]
-PLACE_SPACING = 0.11        # [m] between the axes of objects put down on one surface
-PLACE_EDGE_MARGIN = 0.06    # [m] an object's axis stays this far from a surface's corner
-NEW_VIEW = math.radians(25) # after a failed grasp, headings this close to it come last
-MARK_SPACING = 0.03         # [m] between the discs that mark a lying target on the way to it
-MARK_MARGIN = 0.02          # [m] around the target's body, marked on the way to it
-FINGERTIPS = 0.024          # [m] the finger pads end this far ahead of the tool point
+BASE_MARGIN = 0.025  # room kept between that outline and an obstacle [m]
+OUTLINE_REACH = math.hypot(-BASE_OUTLINE[0], BASE_OUTLINE[2])  # its farthest corner [m]
+SAME_OBJECT = 0.12  # detections closer than this to the target are the target [m]
+PLACE_SPACING = 0.11  # [m] between the axes of objects put down on one surface
+PLACE_EDGE_MARGIN = 0.06  # [m] an object's axis stays this far from a surface's corner
+NEW_VIEW = math.radians(25)  # after a failed grasp, headings this close to it come last
+MARK_SPACING = 0.03  # [m] between the discs that mark a lying target on the way to it
+MARK_MARGIN = 0.02  # [m] around the target's body, marked on the way to it
+FINGERTIPS = 0.024  # [m] the finger pads end this far ahead of the tool point
 
 
 def segment_distance(p: tuple[float, float], a: tuple[float, float], b: tuple[float, float]) -> float:
@@ -38,8 +39,9 @@ def segment_distance(p: tuple[float, float], a: tuple[float, float], b: tuple[fl
     return math.hypot(ax + t * dx - px, ay + t * dy - py)
 
 
-def outline_discs(pose: tuple[float, float, float], outline: tuple[float, float, float] = BASE_OUTLINE,
-                  spacing: float = 0.07) -> tuple[list[tuple[float, float]], float]:
+def outline_discs(
+    pose: tuple[float, float, float], outline: tuple[float, float, float] = BASE_OUTLINE, spacing: float = 0.07
+) -> tuple[list[tuple[float, float]], float]:
     """Discs that together cover the base's rectangular ``outline`` at ``pose`` (x, y,
     heading): their centres in the map frame and their common radius [m]. The base is
     clear of obstacles when each centre is farther than that radius from all of them."""
@@ -113,12 +115,12 @@ def target_marks(target: dict, length: float, goal: tuple[float, float]) -> list
             bx, by, r = x, y, 0.5 * length + MARK_MARGIN
         k = max(1, math.ceil(length / MARK_SPACING))
         pts += [(bx + i / k * length * ux, by + i / k * length * uy) for i in range(k + 1)]
-    return [{"x": px, "y": py, "radius": r} for px, py in pts
-            if math.dist((px, py), goal) - r >= STANDOFF_CLEARANCE]
+    return [{"x": px, "y": py, "radius": r} for px, py in pts if math.dist((px, py), goal) - r >= STANDOFF_CLEARANCE]
 
 
-def fresh_views_first(poses: list[tuple[float, float, float]], xy: tuple[float, float],
-                      failed_views: list[tuple[float, float, float]]) -> list[tuple[float, float, float]]:
+def fresh_views_first(
+    poses: list[tuple[float, float, float]], xy: tuple[float, float], failed_views: list[tuple[float, float, float]]
+) -> list[tuple[float, float, float]]:
     """Standoff ``poses`` (x, y, heading) with those within NEW_VIEW of the heading of a
     failed grasp of the object at ``xy`` (``failed_views``: x, y, heading) moved last, so
     that a retry comes from a new view."""
@@ -138,8 +140,14 @@ def seen_again(target: dict, seen: dict) -> dict:
     return out
 
 
-def surface_spots(surface: tuple[float, float, float, float], inset: float, standoff: float,
-                  taken: list, robot: tuple[float, float], yaw: float = 0.0) -> list[tuple[float, ...]]:
+def surface_spots(
+    surface: tuple[float, float, float, float],
+    inset: float,
+    standoff: float,
+    taken: list,
+    robot: tuple[float, float],
+    yaw: float = 0.0,
+) -> list[tuple[float, ...]]:
     """Where an object may be put down on a box-shaped surface (x, y, size_x, size_y) [m]
     turned ``yaw`` [rad] (its sizes along its own axes): ``inset`` inside an edge, along it
     PLACE_SPACING apart (the middle first), at least PLACE_SPACING from the ``taken``
@@ -148,9 +156,13 @@ def surface_spots(surface: tuple[float, float, float, float], inset: float, stan
     x, y, size_x, size_y = surface
     c, s = math.cos(yaw), math.sin(yaw)
     spots = []
-    for nx, ny, half, along in ((1.0, 0.0, size_x / 2, size_y / 2), (-1.0, 0.0, size_x / 2, size_y / 2),
-                                (0.0, 1.0, size_y / 2, size_x / 2), (0.0, -1.0, size_y / 2, size_x / 2)):
-        nx, ny = c * nx - s * ny, s * nx + c * ny       # the edge's outward normal, map frame
+    for nx, ny, half, along in (
+        (1.0, 0.0, size_x / 2, size_y / 2),
+        (-1.0, 0.0, size_x / 2, size_y / 2),
+        (0.0, 1.0, size_y / 2, size_x / 2),
+        (0.0, -1.0, size_y / 2, size_x / 2),
+    ):
+        nx, ny = c * nx - s * ny, s * nx + c * ny  # the edge's outward normal, map frame
         heading = math.atan2(-ny, -nx)
         for k in (0, 1, -1, 2, -2):
             t = k * PLACE_SPACING

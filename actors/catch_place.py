@@ -1,6 +1,7 @@
 """Carrying and putting down: carry_pose, place and place_on, actors of Catcher
 (actors/catch.py).
 """
+
 from __future__ import annotations
 
 import math
@@ -15,38 +16,46 @@ from .catch_geometry import BASE_MARGIN, BASE_OUTLINE, STANDOFF_CLEARANCE, surfa
 from .strategies import GraspPlan, Strategy, strategy_for
 
 if TYPE_CHECKING:
-    _CatcherBase = SubSystem    # the mixin runs only as a part of Catcher, which adds SubSystem
+    _CatcherBase = SubSystem  # the mixin runs only as a part of Catcher, which adds SubSystem
 else:
     _CatcherBase = object
 
 #: place surface height and the part of the object held decide the release height
-RELEASE_CLEARANCE = 0.008   # [m] above the surface when the fingers open
-GENTLE_RELEASE = 0.006      # first opening step past the held width when letting go [m]
-PLACE_INSET = 0.12          # how far inside a surface's edge the object is put down [m],
+RELEASE_CLEARANCE = 0.008  # [m] above the surface when the fingers open
+GENTLE_RELEASE = 0.006  # first opening step past the held width when letting go [m]
+PLACE_INSET = 0.12  # how far inside a surface's edge the object is put down [m],
 #                             at most: a hand of short reach (from above) puts it nearer
-PLACE_SHORT = 0.04          # [m] a drive in to put an object down may stop this short
-PLACE_ABOVE = 0.03          # the hand comes this far above where it lets go [m]
-MIN_PLACE_REACH = 0.10      # [m] nearer the base, the object would be on it
-PLACE_STANDOFF = 0.39       # the base stops at least this far from where it puts an
+PLACE_SHORT = 0.04  # [m] a drive in to put an object down may stop this short
+PLACE_ABOVE = 0.03  # the hand comes this far above where it lets go [m]
+MIN_PLACE_REACH = 0.10  # [m] nearer the base, the object would be on it
+PLACE_STANDOFF = 0.39  # the base stops at least this far from where it puts an
 #                             object down before driving in [m]: room to turn (the
 #                             upright grasp's standoff; a grasp from above reaches less)
-STANDOFF_FARTHER = 0.30     # [m] how much farther back a standoff may move to find room:
+STANDOFF_FARTHER = 0.30  # [m] how much farther back a standoff may move to find room:
 #                             the nearest one is often a few cm short (a surface's edge on
 #                             the map is rounded out to whole cells), the drive in makes up
-STANDOFF_STEP = 0.02        # [m] the steps it moves back in
+STANDOFF_STEP = 0.02  # [m] the steps it moves back in
 
 
 class Placing(_CatcherBase):
     """Catcher's carry and place (a mixin of it: it uses Catcher's shared helpers and
     the approach's ``_free_standoff``)."""
 
-    if TYPE_CHECKING:   # Catcher's shared helpers (actors/catch.py) and the approach's (Approaching)
+    if TYPE_CHECKING:  # Catcher's shared helpers (actors/catch.py) and the approach's (Approaching)
+
         def _face(self, xy: tuple[float, float], strategy: Strategy) -> float: ...
         def _drive_in(self, distance: float) -> float: ...
-        def _free_standoff(self, robot_xy: tuple[float, float], xy: tuple[float, float],
-                           strategy: Strategy, extra: float = 0.0, others: Sequence[dict] = (),
-                           corridor: bool = True, object_yaw: float | None = None,
-                           plan: GraspPlan | None = None) -> list[tuple[float, float, float]]: ...
+        def _free_standoff(
+            self,
+            robot_xy: tuple[float, float],
+            xy: tuple[float, float],
+            strategy: Strategy,
+            extra: float = 0.0,
+            others: Sequence[dict] = (),
+            corridor: bool = True,
+            object_yaw: float | None = None,
+            plan: GraspPlan | None = None,
+        ) -> list[tuple[float, float, float]]: ...
 
     @actor(moves=True)
     def carry_pose(self) -> None:
@@ -54,8 +63,9 @@ class Placing(_CatcherBase):
         self.run_actor("home")
 
     @actor(moves=True)
-    def place(self, x: float, y: float, surface: float = 0.0, heading: float | None = None,
-              standoff: float | None = None) -> dict:
+    def place(
+        self, x: float, y: float, surface: float = 0.0, heading: float | None = None, standoff: float | None = None
+    ) -> dict:
         """Put the held object down with its axis at (x, y) [m] on a surface ``surface`` [m]
         high, the base facing ``heading`` [rad] (default: from where it is).
 
@@ -82,8 +92,7 @@ class Placing(_CatcherBase):
         if heading is None:
             rx, ry, _ = self.run_actor("get_pose")
             # the surface under the release point is on the map: no corridor check
-            sx, sy, syaw = self._free_standoff((rx, ry), (x, y), strategy, corridor=False,
-                                               plan=replace(g, sides=()))[0]
+            sx, sy, syaw = self._free_standoff((rx, ry), (x, y), strategy, corridor=False, plan=replace(g, sides=()))[0]
         else:
             d = standoff if standoff is not None else max(g.reach + a.standoff, PLACE_STANDOFF)
             sx, sy, syaw = x - d * math.cos(heading), y - d * math.sin(heading), heading
@@ -136,13 +145,14 @@ class Placing(_CatcherBase):
         while not self.run_actor("reachable", reach, 0.0, release_z + PLACE_ABOVE, plan.pitch):
             reach -= 0.01
             if reach < MIN_PLACE_REACH:
-                raise ApproachError(f"the arm cannot put the object down {release_z:.2f} m high "
-                                    f"holding it as it does (tool pitch {math.degrees(plan.pitch):.0f} deg)")
+                raise ApproachError(
+                    f"the arm cannot put the object down {release_z:.2f} m high "
+                    f"holding it as it does (tool pitch {math.degrees(plan.pitch):.0f} deg)"
+                )
         return reach
 
     @actor(moves=True)
-    def place_on(self, x: float, y: float, size_x: float, size_y: float, height: float,
-                 yaw: float = 0.0) -> dict:
+    def place_on(self, x: float, y: float, size_x: float, size_y: float, height: float, yaw: float = 0.0) -> dict:
         """Place the held object on a box-shaped surface (a pallet) centred at (x, y) [m],
         ``size_x`` by ``size_y`` [m] along its own axes, turned ``yaw`` [rad], ``height``
         [m] high: near the edge the robot can reach best, since the base cannot drive over
@@ -172,10 +182,11 @@ class Placing(_CatcherBase):
         taken = self.get_value("put_down")
         spots = surface_spots((x, y, size_x, size_y), inset, standoff, taken, (rx, ry), yaw)
         if not spots:
-            raise ApproachError(f"the surface at ({x:.2f}, {y:.2f}) has no free spot left: "
-                                f"{len(taken)} objects were put down on it")
+            raise ApproachError(
+                f"the surface at ({x:.2f}, {y:.2f}) has no free spot left: {len(taken)} objects were put down on it"
+            )
         failed = None
-        room: dict[float, float] = {}      # each side's heading -> the most room found [m]
+        room: dict[float, float] = {}  # each side's heading -> the most room found [m]
         for px, py, heading, _, _ in spots:
             d, clear = self._roomy_standoff((px, py), heading, standoff)
             side = round(heading, 3)
@@ -195,16 +206,18 @@ class Placing(_CatcherBase):
             return released
         if failed is not None:
             raise failed
-        sides = ", ".join(f"base facing {round(math.degrees(h)) % 360} deg: {c:.2f} m"
-                          for h, c in sorted(room.items(), key=lambda hc: math.degrees(hc[0]) % 360))
+        sides = ", ".join(
+            f"base facing {round(math.degrees(h)) % 360} deg: {c:.2f} m"
+            for h, c in sorted(room.items(), key=lambda hc: math.degrees(hc[0]) % 360)
+        )
         raise ApproachError(
             f"no side of the surface at ({x:.2f}, {y:.2f}) has room for the base: it needs "
             f"{STANDOFF_CLEARANCE:.2f} m clear of the map's obstacles {standoff:.2f}-"
             f"{standoff + STANDOFF_FARTHER:.2f} m back from a spot on the edge; the most "
-            f"room on each side ({sides})")
+            f"room on each side ({sides})"
+        )
 
-    def _roomy_standoff(self, spot: tuple[float, float], heading: float,
-                        nearest: float) -> tuple[float | None, float]:
+    def _roomy_standoff(self, spot: tuple[float, float], heading: float, nearest: float) -> tuple[float | None, float]:
         """The nearest standoff distance from ``spot`` [m], ``nearest`` or up to
         STANDOFF_FARTHER farther back along ``heading``, where the base has
         STANDOFF_CLEARANCE around it on the map (None if none), and the most clearance
@@ -213,8 +226,7 @@ class Placing(_CatcherBase):
         steps = int(round(STANDOFF_FARTHER / STANDOFF_STEP))
         for k in range(steps + 1):
             d = nearest + k * STANDOFF_STEP
-            clear = float(self.run_actor("clearance", spot[0] - d * math.cos(heading),
-                                         spot[1] - d * math.sin(heading)))
+            clear = float(self.run_actor("clearance", spot[0] - d * math.cos(heading), spot[1] - d * math.sin(heading)))
             best = max(best, clear)
             if clear >= STANDOFF_CLEARANCE:
                 return d, best

@@ -5,6 +5,7 @@ The rules are categories/check.py's; this side supplies what the plain library d
 know, the arm. The catch subsystem checks every registered category when the robot
 starts, so a category that cannot work fails before the robot crosses the house.
 """
+
 from __future__ import annotations
 
 import functools

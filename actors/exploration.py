@@ -4,6 +4,7 @@ The map comes from whatever publishes ``/map`` while the robot maps (navstack's 
 the simulator, slam_toolbox on a robot); the robot's pose from tf; the driving is the
 navigation's ``goto``. Nothing here knows how the map is made.
 """
+
 from __future__ import annotations
 
 import logging
@@ -19,9 +20,9 @@ from .navigation import ROBOT_RADIUS
 
 log = logging.getLogger("actors.exploration")
 
-MAP_WAIT = 10.0         # [s] for the first /map
-SETTLE = 1.0            # [s] after each goal, so the map takes in the new scans
-LOOK_AROUND = 3         # turns of a third of a circle each: a look all round
+MAP_WAIT = 10.0  # [s] for the first /map
+SETTLE = 1.0  # [s] after each goal, so the map takes in the new scans
+LOOK_AROUND = 3  # turns of a third of a circle each: a look all round
 
 
 class ExplorationError(ActorbtError):
@@ -60,8 +61,10 @@ class Exploration(SubSystem):
         while True:
             elapsed = self.runtime.now() - start
             if elapsed > max_time or len(visited) + len(failed) >= max_goals:
-                raise ExplorationError(f"exploration unfinished after {elapsed:.0f} s and "
-                                       f"{len(visited) + len(failed)} goals ({len(failed)} not reached)")
+                raise ExplorationError(
+                    f"exploration unfinished after {elapsed:.0f} s and "
+                    f"{len(visited) + len(failed)} goals ({len(failed)} not reached)"
+                )
             x, y, _ = self.run_actor("get_pose")
             costmap = inflate(self._map(), ROBOT_RADIUS)
             if not np.isfinite(path_distances(costmap, (x, y))).any():
@@ -79,13 +82,18 @@ class Exploration(SubSystem):
                 looked_around = True
                 continue
             if frontier is None:
-                return {"finished": True, "goals": len(visited), "failed": len(failed),
-                        "seconds": round(self.runtime.now() - start, 1)}
+                return {
+                    "finished": True,
+                    "goals": len(visited),
+                    "failed": len(failed),
+                    "seconds": round(self.runtime.now() - start, 1),
+                }
             goal = frontier.goal
-            assert goal is not None     # next_frontier passes over frontiers without a goal
+            assert goal is not None  # next_frontier passes over frontiers without a goal
             gx, gy, gyaw = goal
-            log.info("frontier of %d cells at (%.2f, %.2f): going to (%.2f, %.2f)",
-                     frontier.size, *frontier.middle, gx, gy)
+            log.info(
+                "frontier of %d cells at (%.2f, %.2f): going to (%.2f, %.2f)", frontier.size, *frontier.middle, gx, gy
+            )
             try:
                 self.run_actor("goto", gx, gy, gyaw)
                 visited.append(goal)
@@ -107,6 +115,5 @@ class Exploration(SubSystem):
                     self.run_actor("mini_turn", direction * 2 * math.pi / LOOK_AROUND)
                 break
             except ActorError as e:
-                log.info("the look round is blocked turning %s: %s",
-                         "left" if direction > 0 else "right", e.root_cause)
+                log.info("the look round is blocked turning %s: %s", "left" if direction > 0 else "right", e.root_cause)
         self.run_actor("sleep", SETTLE)

@@ -9,6 +9,7 @@ rest. The gripper moves through ``/gripper_controller/gripper_cmd``
 (control_msgs/GripperCommand): its result's ``stalled`` and ``position`` tell a grasp on
 something from fingers that closed on nothing.
 """
+
 from __future__ import annotations
 
 import logging
@@ -21,8 +22,16 @@ from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 from bt_engine import ActorbtError, ActorTimeout, SubSystem, actor
-from planning import (ArmKinematics, JointLimits, MotionPlan, PlanningScene, TimedTrajectory,
-                      plan_joint_motion, plan_pose_motion, time_trajectory)
+from planning import (
+    ArmKinematics,
+    JointLimits,
+    MotionPlan,
+    PlanningScene,
+    TimedTrajectory,
+    plan_joint_motion,
+    plan_pose_motion,
+    time_trajectory,
+)
 
 from .ros_conv import duration_msg, named
 
@@ -30,18 +39,18 @@ log = logging.getLogger("actors.manipulator")
 
 #: Joint positions of the folded "home" pose [rad] (joint1..joint4).
 HOME = (0.0, -1.05, 0.35, 0.70)
-GRIPPER_OPEN = 0.085    # finger opening [m]
+GRIPPER_OPEN = 0.085  # finger opening [m]
 GRIPPER_CLOSED = 0.0
 FINGERS = ("gripper_left_joint", "gripper_right_joint")
-SAMPLE_DT = 0.02        # spacing of the trajectory's points [s]
-CONVERGED = 0.01        # goal tolerance of each joint at the end of a motion [rad]
-SETTLE_TIME = 2.0       # how long past the trajectory's end the arm may take to settle [s]
+SAMPLE_DT = 0.02  # spacing of the trajectory's points [s]
+CONVERGED = 0.01  # goal tolerance of each joint at the end of a motion [rad]
+SETTLE_TIME = 2.0  # how long past the trajectory's end the arm may take to settle [s]
 #: [rad] a motion whose goal the controller gave up on (GOAL_TOLERANCE_VIOLATED: not
 #: settled within CONVERGED in SETTLE_TIME) still counts as arrived when every joint is
 #: this near its goal: an arm that carries something sags under it, or rocks a little
 #: with it, by about a hundredth of a radian (3 mm at the tool)
 ARRIVED = 0.03
-GRIPPER_TIMEOUT = 5.0   # how long a gripper command may take to end [s]
+GRIPPER_TIMEOUT = 5.0  # how long a gripper command may take to end [s]
 ARM_ACTION = "/arm_controller/follow_joint_trajectory"
 GRIPPER_ACTION = "/gripper_controller/gripper_cmd"
 
@@ -92,13 +101,13 @@ class Manipulator(SubSystem):
     is the tool's angle below the horizontal [rad] (pi/2 points straight down).
     """
 
-    def __init__(self, velocity_scale: float = 0.35, acceleration: float = 2.0,
-                 jerk: float = 15.0) -> None:
+    def __init__(self, velocity_scale: float = 0.35, acceleration: float = 2.0, jerk: float = 15.0) -> None:
         super().__init__()
         self.kinematics = ArmKinematics.from_urdf()
         self.scene = PlanningScene(self.kinematics, fixed_joints={f: GRIPPER_OPEN / 2 for f in FINGERS})
         self.limits = JointLimits.from_kinematics(
-            self.kinematics, acceleration=acceleration, jerk=jerk, velocity_scale=velocity_scale)
+            self.kinematics, acceleration=acceleration, jerk=jerk, velocity_scale=velocity_scale
+        )
         self.joints = tuple(self.kinematics.joint_names)
         self.register_action("follow_joint_trajectory", FollowJointTrajectory, ARM_ACTION, moves=True)
         self.register_action("gripper_cmd", GripperCommand, GRIPPER_ACTION, moves=True)
@@ -119,8 +128,12 @@ class Manipulator(SubSystem):
         last command left it (see ``close``; None before the first)."""
         q, qd = self._state()
         pose = self.kinematics.fk_pose(q)
-        return {"joints": q, "velocities": qd, "gripper": self.get_value("gripper"),
-                "pose": {"x": pose.x, "y": pose.y, "z": pose.z, "pitch": pose.pitch}}
+        return {
+            "joints": q,
+            "velocities": qd,
+            "gripper": self.get_value("gripper"),
+            "pose": {"x": pose.x, "y": pose.y, "z": pose.z, "pitch": pose.pitch},
+        }
 
     # -- motions -----------------------------------------------------------------------
     @actor(moves=True)
@@ -216,7 +229,7 @@ class Manipulator(SubSystem):
         goal.command.position = gripper_command_position(float(width))
         try:
             result = self.run_actor_mode("gripper_cmd", "timed", GRIPPER_TIMEOUT, goal)
-        except ActorTimeout as e:   # the goal is canceled: the fingers hold where they are
+        except ActorTimeout as e:  # the goal is canceled: the fingers hold where they are
             raise MotionError(f"the gripper did not settle within {GRIPPER_TIMEOUT:g} s") from e
         except ActorbtError as e:
             # the controller aborts a goal on which the fingers stalled (allow_stalling
@@ -224,9 +237,14 @@ class Manipulator(SubSystem):
             result = goal_result(e)
             if result is None or not result.stalled:
                 raise
-        state = {"width": gripper_width(result.position), "position": float(result.position),
-                 "effort": float(result.effort), "stalled": bool(result.stalled),
-                 "reached_goal": bool(result.reached_goal), "centre": self._finger_centre()}
+        state = {
+            "width": gripper_width(result.position),
+            "position": float(result.position),
+            "effort": float(result.effort),
+            "stalled": bool(result.stalled),
+            "reached_goal": bool(result.reached_goal),
+            "centre": self._finger_centre(),
+        }
         self.set_value("gripper", state)
         return state
 
@@ -258,7 +276,7 @@ class Manipulator(SubSystem):
             pt.velocities = [float(a) for a in v]
             pt.time_from_start = duration_msg(float(t))
             msg.points.append(pt)
-        msg.points[-1].velocities = [0.0] * len(self.joints)   # the controller wants it at rest
+        msg.points[-1].velocities = [0.0] * len(self.joints)  # the controller wants it at rest
         return msg
 
     def _execute(self, traj: TimedTrajectory) -> list[float]:
@@ -276,11 +294,16 @@ class Manipulator(SubSystem):
             target = goal.trajectory.points[-1].positions
             off = max(abs(a - b) for a, b in zip(q, target))
             if result.error_code == FollowJointTrajectory.Result.GOAL_TOLERANCE_VIOLATED and off <= ARRIVED:
-                log.info("the arm arrived %.3f rad from its goal, not settled within %.2f rad: %s",
-                         off, CONVERGED, result.error_string)
+                log.info(
+                    "the arm arrived %.3f rad from its goal, not settled within %.2f rad: %s",
+                    off,
+                    CONVERGED,
+                    result.error_string,
+                )
                 return q
-            raise MotionError(f"the arm did not reach its goal: {result.error_string} "
-                              f"(error_code {result.error_code})") from e
+            raise MotionError(
+                f"the arm did not reach its goal: {result.error_string} (error_code {result.error_code})"
+            ) from e
         q, _ = self._state()
         return q
 

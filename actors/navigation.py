@@ -23,6 +23,7 @@ navstack stands in for both):
 
 Cancelling any motion stops the base.
 """
+
 from __future__ import annotations
 
 import array
@@ -44,16 +45,16 @@ from planning.viewpoints import viewpoints
 from .ros_conv import pose2d, wrap, yaw_of
 from .tf_listener import BASE, MAP, TransformError, tf_listener
 
-MAX_TURN = 1.2          # [rad/s] (TurtleBot3 Waffle: 1.82)
-MAX_SPEED = 0.26        # [m/s] the TurtleBot3 Waffle Pi's top speed: mini_walk's limit
-ROBOT_RADIUS = 0.20     # footprint radius used to inflate the map [m] (the navigation's)
-INFLATION = 0.45        # distance over which the map cost decays [m]
-YAW_TOLERANCE = math.radians(0.5)   # mini_turn's
-POSE_WAIT = 5.0         # [s] how long get_pose waits for map -> base_footprint
-LOCALISED_STD_XY = 0.10     # [m] position std of /amcl_pose above which the robot is delocalised
-LOCALISED_STD_YAW = 0.10    # [rad] heading std likewise
-INITIAL_STD_XY = 0.5        # [m] set_initial_pose's position std: RViz's "2D Pose Estimate" default
-INITIAL_STD_YAW = 0.2618    # [rad] its heading std: RViz's, pi/12
+MAX_TURN = 1.2  # [rad/s] (TurtleBot3 Waffle: 1.82)
+MAX_SPEED = 0.26  # [m/s] the TurtleBot3 Waffle Pi's top speed: mini_walk's limit
+ROBOT_RADIUS = 0.20  # footprint radius used to inflate the map [m] (the navigation's)
+INFLATION = 0.45  # distance over which the map cost decays [m]
+YAW_TOLERANCE = math.radians(0.5)  # mini_turn's
+POSE_WAIT = 5.0  # [s] how long get_pose waits for map -> base_footprint
+LOCALISED_STD_XY = 0.10  # [m] position std of /amcl_pose above which the robot is delocalised
+LOCALISED_STD_YAW = 0.10  # [rad] heading std likewise
+INITIAL_STD_XY = 0.5  # [m] set_initial_pose's position std: RViz's "2D Pose Estimate" default
+INITIAL_STD_YAW = 0.2618  # [rad] its heading std: RViz's, pi/12
 ACTION = "/navigate_to_pose"
 #: the base's velocity command: diff_drive_controller's ~/cmd_vel (ROS 2 Jazzy takes only
 #: TwistStamped there; ROBOTIS' bring-up leaves it unremapped)
@@ -62,7 +63,7 @@ BASE_COMMAND = "/diff_drive_controller/cmd_vel"
 #: wheel radius off by a few per cent does not scale as it scales the wheels'
 IMU = "/imu_broadcaster/imu"
 PERCEIVED = "/perceived_obstacles"
-MARK_SPACING = 0.025    # [m] between the points that mark a perceived object's disc
+MARK_SPACING = 0.025  # [m] between the points that mark a perceived object's disc
 
 
 class NavigationError(ActorbtError):
@@ -85,7 +86,7 @@ def disc_points(circles) -> np.ndarray:
         k = int(math.ceil(r / MARK_SPACING))
         g = np.arange(-k, k + 1) * MARK_SPACING
         dx, dy = np.meshgrid(g, g)
-        inside = dx ** 2 + dy ** 2 <= r * r + 1e-12
+        inside = dx**2 + dy**2 <= r * r + 1e-12
         out.append(np.column_stack([x + dx[inside], y + dy[inside]]))
     return np.vstack(out) if out else np.zeros((0, 2))
 
@@ -95,8 +96,7 @@ def cloud_msg(points: np.ndarray, frame: str = MAP) -> PointCloud2:
     msg = PointCloud2()
     msg.header.frame_id = frame
     msg.height, msg.width = 1, len(points)
-    msg.fields = [PointField(name=n, offset=4 * i, datatype=PointField.FLOAT32, count=1)
-                  for i, n in enumerate("xyz")]
+    msg.fields = [PointField(name=n, offset=4 * i, datatype=PointField.FLOAT32, count=1) for i, n in enumerate("xyz")]
     msg.is_bigendian = False
     msg.point_step, msg.row_step = 12, 12 * len(points)
     xyz = np.zeros((len(points), 3), "<f4")
@@ -124,7 +124,7 @@ class Navigation(SubSystem):
         self.register_publisher("cmd_vel", TwistStamped, BASE_COMMAND, moves=True)
         self.register_subscriber("odom", Odometry, "/odom", 1)
         self.register_subscriber("imu", Imu, IMU, 1)
-        self.register_subscriber("map", OccupancyGridMsg, "/map", "latched")   # map_server latches it
+        self.register_subscriber("map", OccupancyGridMsg, "/map", "latched")  # map_server latches it
         self.register_action("navigate_to_pose", NavigateToPose, ACTION, moves=True)
         # the localiser's estimate and its covariance (AMCL latches it)
         self.register_subscriber("amcl_pose", PoseWithCovarianceStamped, "/amcl_pose", "latched")
@@ -132,9 +132,9 @@ class Navigation(SubSystem):
         self.register_publisher("initialpose", PoseWithCovarianceStamped, "/initialpose", "reliable")
         self._perceived = self.runtime.bus.publisher(PERCEIVED, PointCloud2, "latched")
         self.tf = tf_listener(self)
-        self.set_value("grid", None)        # the static map, once received
-        self.set_value("obstacles", {})     # perceived objects marked on it
-        self.set_value("planner", None)     # built from both
+        self.set_value("grid", None)  # the static map, once received
+        self.set_value("obstacles", {})  # perceived objects marked on it
+        self.set_value("planner", None)  # built from both
         self.set_value("last_path", None)
 
     # -- queries -----------------------------------------------------------------------
@@ -148,13 +148,16 @@ class Navigation(SubSystem):
                 return self.tf.pose(MAP, BASE)
             except TransformError as e:
                 if self.runtime.now() >= end:
-                    raise NavigationError(f"the robot is not localised: no {MAP} -> {BASE} transform "
-                                          f"on /tf after {POSE_WAIT:g} s (give /initialpose): {e}") from None
+                    raise NavigationError(
+                        f"the robot is not localised: no {MAP} -> {BASE} transform "
+                        f"on /tf after {POSE_WAIT:g} s (give /initialpose): {e}"
+                    ) from None
             self.run_actor("sleep", 0.05)
 
     @actor(limits={"std_xy": (0.0, None), "std_yaw": (0.0, None)})
-    def set_initial_pose(self, x: float, y: float, yaw: float, std_xy: float = INITIAL_STD_XY,
-                         std_yaw: float = INITIAL_STD_YAW) -> tuple[float, float, float]:
+    def set_initial_pose(
+        self, x: float, y: float, yaw: float, std_xy: float = INITIAL_STD_XY, std_yaw: float = INITIAL_STD_YAW
+    ) -> tuple[float, float, float]:
         """Tell the localiser where the robot is, as RViz's "2D Pose Estimate" does: one
         /initialpose in the map frame, which the localiser (AMCL) starts from. The robot
         does not move. Returns the pose given.
@@ -173,8 +176,9 @@ class Navigation(SubSystem):
         return float(x), float(y), float(yaw)
 
     @actor(read_only=True)
-    def require_localised(self, max_std_xy: float = LOCALISED_STD_XY,
-                          max_std_yaw: float = LOCALISED_STD_YAW, wait: float = 10.0) -> dict:
+    def require_localised(
+        self, max_std_xy: float = LOCALISED_STD_XY, max_std_yaw: float = LOCALISED_STD_YAW, wait: float = 10.0
+    ) -> dict:
         """Wait until the localiser is sure of the pose (the covariance of its latest
         /amcl_pose within the limits), and fail with NavigationError if it is not within
         ``wait``: a robot that does not know where it is must not grasp. Returns the
@@ -189,7 +193,7 @@ class Navigation(SubSystem):
         last = "no /amcl_pose received"
         while True:
             try:
-                msg = self.run_actor_mode("amcl_pose", "timed", 0.5)   # latched: the latest at once
+                msg = self.run_actor_mode("amcl_pose", "timed", 0.5)  # latched: the latest at once
             except ActorbtError:
                 msg = None
             if msg is not None:
@@ -198,9 +202,11 @@ class Navigation(SubSystem):
                 std_yaw = math.sqrt(max(cov[35], 0.0))
                 if std_xy <= max_std_xy and std_yaw <= max_std_yaw:
                     return {"std_xy": round(std_xy, 4), "std_yaw": round(std_yaw, 4)}
-                last = (f"the localisation is uncertain: std {std_xy * 100:.1f} cm, "
-                        f"{math.degrees(std_yaw):.1f} deg (limits {max_std_xy * 100:.0f} cm, "
-                        f"{math.degrees(max_std_yaw):.0f} deg)")
+                last = (
+                    f"the localisation is uncertain: std {std_xy * 100:.1f} cm, "
+                    f"{math.degrees(std_yaw):.1f} deg (limits {max_std_xy * 100:.0f} cm, "
+                    f"{math.degrees(max_std_yaw):.0f} deg)"
+                )
             if self.runtime.now() >= end:
                 raise NavigationError(f"the robot is delocalised: {last} after {wait:g} s")
             self.run_actor("sleep", 0.2)
@@ -278,8 +284,10 @@ class Navigation(SubSystem):
         except (TypeError, ValueError, IndexError):
             raise NavigationError(f"seen_from must be a list of [x, y], got {seen_from!r}") from None
         x, y, _ = self.get_pose()
-        return [[round(px, 2), round(py, 2)]
-                for px, py in viewpoints(self._planner().costmap, (x, y), view_range=view_range, seen_from=seen)]
+        return [
+            [round(px, 2), round(py, 2)]
+            for px, py in viewpoints(self._planner().costmap, (x, y), view_range=view_range, seen_from=seen)
+        ]
 
     def _plan_from_here(self, x: float, y: float) -> BasePath:
         sx, sy, _ = self.get_pose()
@@ -352,7 +360,7 @@ class Navigation(SubSystem):
         dist = math.hypot(dx, dy)
         if dist > 1e-3:
             bearing = math.atan2(dy, dx)
-            if abs(bearing) > math.pi / 2:          # behind: back up instead of turning round
+            if abs(bearing) > math.pi / 2:  # behind: back up instead of turning round
                 bearing = wrap(bearing + math.pi)
                 dist = -dist
             if abs(bearing) > 1e-3:
@@ -434,4 +442,5 @@ class Navigation(SubSystem):
             def __exit__(self, *exc):
                 nav.run_actor("cmd_vel", _twist())
                 return False
+
         return _Stop()

@@ -32,6 +32,7 @@ colour model), ``perception_segments`` (steps 2 and 3), ``perception_round`` and
 ``perception_fit``) and ``perception_detect`` (the pipeline, :func:`detect`, and
 :func:`combine_sightings`).
 """
+
 from __future__ import annotations
 
 from typing import Iterator
@@ -39,27 +40,78 @@ from typing import Iterator
 from bt_engine import SubSystem, actor
 
 from .camera import Camera, RGBDFrame
+
 # Everything the steps' modules define, importable from actors.perception as before the split
-from .perception_box import (FACE_BOW, GRAZING, GRAZING_SLACK, TILT_FACE_ANGLE,  # noqa: F401
-                             _bow, _box_centre, _box_faces, _box_tolerances, _face_direction, _Rectangle,
-                             _rectangle_fit, _resting_bow, _score_box, _score_box_resting, _score_box_tilted,
-                             _whole_faces)
-from .perception_colour import (HUE_WINDOW, MIN_SATURATION, MIN_VALUE, PALETTE, SATURATION_SHARE,  # noqa: F401
-                                Appearance, PerceptionError, _hsv_of, _hue_lut, appearance_of, colour_labels,
-                                hue_of, palette_colour, registered_appearances)
-from .perception_detect import PATCH_SHARE, UNKNOWN, _axis, _score, base_height, combine_sightings, detect  # noqa: F401
-from .perception_fit import FIT_POINTS, LYING_TILT, MAX_ERROR, UPRIGHT_TILT, _confidence  # noqa: F401
-from .perception_round import (MIN_VISIBLE_WIDTH, _profile_fit, _rise_error, _score_posed,  # noqa: F401
-                               _score_upright, _visible_top, fit_circle_fixed)
-from .perception_segments import (DEPTH_NOISE, LABEL_GAP, MAX_RANGE, MAX_UNKNOWN_SIZE, MIN_PIXELS,  # noqa: F401
-                                  OCCLUDER_LOOK, OCCLUSION_JUMP, _bridge_labels, _components, _continued_share,
-                                  _measure, _occluded_sides, _occlusion_cuts, _Segment, _segment_grid, _segments,
-                                  _structure, backproject)
+from .perception_box import (
+    FACE_BOW,
+    GRAZING,
+    GRAZING_SLACK,
+    TILT_FACE_ANGLE,
+    _bow,
+    _box_centre,
+    _box_faces,
+    _box_tolerances,
+    _face_direction,
+    _Rectangle,
+    _rectangle_fit,
+    _resting_bow,
+    _score_box,
+    _score_box_resting,
+    _score_box_tilted,
+    _whole_faces,
+)
+from .perception_colour import (
+    HUE_WINDOW,
+    MIN_SATURATION,
+    MIN_VALUE,
+    PALETTE,
+    SATURATION_SHARE,
+    Appearance,
+    PerceptionError,
+    _hsv_of,
+    _hue_lut,
+    appearance_of,
+    colour_labels,
+    hue_of,
+    palette_colour,
+    registered_appearances,
+)
+from .perception_detect import PATCH_SHARE, UNKNOWN, _axis, _score, base_height, combine_sightings, detect
+from .perception_fit import FIT_POINTS, LYING_TILT, MAX_ERROR, UPRIGHT_TILT, _confidence
+from .perception_round import (
+    MIN_VISIBLE_WIDTH,
+    _profile_fit,
+    _rise_error,
+    _score_posed,
+    _score_upright,
+    _visible_top,
+    fit_circle_fixed,
+)
+from .perception_segments import (
+    DEPTH_NOISE,
+    LABEL_GAP,
+    MAX_RANGE,
+    MAX_UNKNOWN_SIZE,
+    MIN_PIXELS,
+    OCCLUDER_LOOK,
+    OCCLUSION_JUMP,
+    _bridge_labels,
+    _components,
+    _continued_share,
+    _measure,
+    _occluded_sides,
+    _occlusion_cuts,
+    _Segment,
+    _segment_grid,
+    _segments,
+    _structure,
+    backproject,
+)
 
 
 # ----------------------------------------------------------------------------- subsystem
-GLANCE_TIMEOUT = 3.0    # [s] how long one look may wait for a frame
-ANY = "any"             # the category that means any known one (the trees' default)
+GLANCE_TIMEOUT = 3.0  # [s] how long one look may wait for a frame
+ANY = "any"  # the category that means any known one (the trees' default)
 
 
 def _targets(dets: list[dict], category: str | None, apps: dict) -> list[dict]:
@@ -93,8 +145,9 @@ class Perception(SubSystem):
         if category in (None, ANY):
             return None
         if category != UNKNOWN and category not in self._apps():
-            raise PerceptionError(f"unknown category {category!r}; known: "
-                                  f"{', '.join(sorted(self._apps()))}, {UNKNOWN}, or {ANY}")
+            raise PerceptionError(
+                f"unknown category {category!r}; known: {', '.join(sorted(self._apps()))}, {UNKNOWN}, or {ANY}"
+            )
         return category
 
     def _frame(self) -> RGBDFrame:
@@ -141,8 +194,9 @@ class Perception(SubSystem):
         return ret
 
     @actor(read_only=True)
-    def get_found(self, category: str | None = None, looks: int = 5, near: list[float] | None = None,
-                  within: float = 0.3) -> dict | None:
+    def get_found(
+        self, category: str | None = None, looks: int = 5, near: list[float] | None = None, within: float = 0.3
+    ) -> dict | None:
         """A reliable estimate from ``looks`` consecutive frames: sightings are grouped by
         position, outliers dropped, and the median kept. Adds ``sightings``, ``looks`` and
         ``spread`` [m] to the detection fields; None when nothing was seen.
@@ -169,8 +223,9 @@ class Perception(SubSystem):
                     break
         if n == 0:
             raise PerceptionError("no camera frames")
-        return combine_sightings(sightings, n, near=None if near is None else (float(near[0]), float(near[1])),
-                                 within=float(within))
+        return combine_sightings(
+            sightings, n, near=None if near is None else (float(near[0]), float(near[1])), within=float(within)
+        )
 
     @actor(read_only=True)
     def measure_distance(self, category: str | None = None) -> Iterator[dict | None]:
@@ -190,8 +245,14 @@ class Perception(SubSystem):
                     yield None
                     continue
                 d = found[0]
-                yield {"distance": d["distance"], "bearing": d["bearing"], "x": d["x"], "y": d["y"],
-                       "category": d["category"], "stamp": d["stamp"]}
+                yield {
+                    "distance": d["distance"],
+                    "bearing": d["bearing"],
+                    "x": d["x"],
+                    "y": d["y"],
+                    "category": d["category"],
+                    "stamp": d["stamp"],
+                }
 
     @actor(read_only=True)
     def measure_center(self, category: str | None = None) -> Iterator[dict | None]:
@@ -212,5 +273,10 @@ class Perception(SubSystem):
                     continue
                 d, k = found[0], frame.intrinsics
                 u, v = d["pixel"]
-                yield {"dx": (u - k.cx) / (k.width / 2), "dy": (v - k.cy) / (k.height / 2),
-                       "pixel": d["pixel"], "category": d["category"], "stamp": d["stamp"]}
+                yield {
+                    "dx": (u - k.cx) / (k.width / 2),
+                    "dy": (v - k.cy) / (k.height / 2),
+                    "pixel": d["pixel"],
+                    "category": d["category"],
+                    "stamp": d["stamp"],
+                }

@@ -1,6 +1,7 @@
 """Shape scoring for boxes (cartons): resting on any face (a rectangle fitted to the top
 view, flat faces of the right lengths) or leaning (a plane face fitted in 3-D); and the
 centre of a box-like footprint of unknown size."""
+
 from __future__ import annotations
 
 import math
@@ -14,9 +15,9 @@ from .perception_colour import Appearance
 from .perception_fit import FIT_POINTS, LYING_TILT, UPRIGHT_TILT, _confidence
 from .perception_segments import _Segment
 
-GRAZING = 0.3           # a face seen at less than ~17 degrees (sin) is not measured
-FACE_STEP = 0.008       # [m] the shortest step along a face over which its direction is measured
-GRAZING_SLACK = 0.10    # [m] a face seen at a grazing angle may look this much longer than
+GRAZING = 0.3  # a face seen at less than ~17 degrees (sin) is not measured
+FACE_STEP = 0.008  # [m] the shortest step along a face over which its direction is measured
+GRAZING_SLACK = 0.10  # [m] a face seen at a grazing angle may look this much longer than
 #                         the box's longest side (depth noise along the view); no more
 
 
@@ -24,6 +25,7 @@ GRAZING_SLACK = 0.10    # [m] a face seen at a grazing angle may look this much 
 class _Rectangle:
     """A rectangle fitted to top-view points: centre ``c``, unit axes ``e1``, ``e2``,
     extents ``s1``, ``s2`` along them, and the RMS distance of the points to its sides."""
+
     c: np.ndarray
     e1: np.ndarray
     e2: np.ndarray
@@ -46,7 +48,7 @@ def _face_direction(grid: np.ndarray, lo: float, hi: float, stride: int = 3) -> 
         return None
     length = np.hypot(t[:, 0], t[:, 1])
     step = float(np.median(length))
-    keep = (length > 0.3 * step) & (length < 3.0 * step)   # no depth jumps across an edge
+    keep = (length > 0.3 * step) & (length < 3.0 * step)  # no depth jumps across an edge
     ang = 4 * np.arctan2(t[keep, 1], t[keep, 0])
     w = length[keep]
     return float(np.arctan2((w * np.sin(ang)).sum(), (w * np.cos(ang)).sum()) / 4)
@@ -70,14 +72,14 @@ def _rectangle_fit(xy: np.ndarray, direction: float | None = None) -> _Rectangle
             rms = float(np.sqrt(np.mean(d * d)))
             if best is None or rms < best[0]:
                 best = (rms, e1, e2, c1, c2)
-        assert best is not None     # the first of the 25 angles sets it
+        assert best is not None  # the first of the 25 angles sets it
         rms, e1, e2, c1, c2 = best
         m1, m2 = 0.5 * (c1.max() + c1.min()), 0.5 * (c2.max() + c2.min())
         return _Rectangle(xy.mean(axis=0) + m1 * e1 + m2 * e2, e1, e2, float(np.ptp(c1)), float(np.ptp(c2)), rms)
     o = xy.mean(axis=0)
     q = xy - o
     th = np.radians(np.arange(0.0, 90.0, 1.0))
-    c1 = q @ np.stack([np.cos(th), np.sin(th)])           # (N, A)
+    c1 = q @ np.stack([np.cos(th), np.sin(th)])  # (N, A)
     c2 = q @ np.stack([-np.sin(th), np.cos(th)])
     d1 = np.minimum(c1.max(axis=0) - c1, c1 - c1.min(axis=0))
     d2 = np.minimum(c2.max(axis=0) - c2, c2 - c2.min(axis=0))
@@ -124,13 +126,13 @@ def _score_box(seg: _Segment, app: Appearance) -> tuple[float, dict]:
     if seg.colour != app.colour:
         return 0.0, {"reason": "colour"}
     box = app.box
-    assert box is not None      # called for a box's appearance only (_score: app.is_box)
+    assert box is not None  # called for a box's appearance only (_score: app.is_box)
     best: tuple[float, dict] = (0.0, {"reason": "body not visible"})
     for pose, sides, height in categories.Box(*box).rests():
         conf, ev = _score_box_resting(seg, sides, height)
         if conf > best[0] or "reason" in best[1]:
             best = (conf, {**ev, "pose": pose, "width": min(sides)} if "reason" not in ev else ev)
-    if best[0] < 0.9:                              # no resting face fits well: leaning?
+    if best[0] < 0.9:  # no resting face fits well: leaning?
         conf, ev = _score_box_tilted(seg, box)
         if conf > best[0]:
             best = (conf, ev)
@@ -144,7 +146,7 @@ def _box_tolerances(seg: _Segment) -> tuple[float, float, float]:
     return max(0.008, 1.6 * px), max(0.006, 1.5 * px), max(2 * seg.surface_tolerance, 0.25 * px)
 
 
-FACE_BOW = 0.001        # [m] a flat face may seem to bow this much (edge pixels, the render
+FACE_BOW = 0.001  # [m] a flat face may seem to bow this much (edge pixels, the render
 #                         mesh) on top of what its noise allows
 
 
@@ -244,8 +246,12 @@ def _score_box_tilted(seg: _Segment, box: tuple[float, float, float]) -> tuple[f
     z_all = seg.pts[:, 2]
     near = 2.5 * px
     touches = []
-    for side, vals, lim, sgn in (("left", lat_all, lat_all.max(), 1), ("right", lat_all, lat_all.min(), -1),
-                                 ("top", z_all, z_all.max(), 1), ("bottom", z_all, z_all.min(), -1)):
+    for side, vals, lim, sgn in (
+        ("left", lat_all, lat_all.max(), 1),
+        ("right", lat_all, lat_all.min(), -1),
+        ("top", z_all, z_all.max(), 1),
+        ("bottom", z_all, z_all.min(), -1),
+    ):
         if seg.may_continue(side):
             touches.append((side, vals[on], lim, sgn))
     ext, mid, open_ends = [], [], []
@@ -257,7 +263,7 @@ def _score_box_tilted(seg: _Segment, box: tuple[float, float, float]) -> tuple[f
             ends.append(any(bool(np.any(sgn * (vals[end_sel] - lim) >= -near)) for _, vals, lim, sgn in touches))
         ext.append(hi - lo + px)
         mid.append(0.5 * (lo + hi))
-        open_ends.append(ends)            # [low end open, high end open]
+        open_ends.append(ends)  # [low end open, high end open]
     if all(any(e) for e in open_ends) or any(all(e) for e in open_ends):
         return 0.0, {"reason": "too little of it in view", "extents": ext}
     dims = [float(d) for d in box]
@@ -268,7 +274,7 @@ def _score_box_tilted(seg: _Segment, box: tuple[float, float, float]) -> tuple[f
         e = math.sqrt(float(np.mean(np.square(errs))))
         if best is None or e < best[0]:
             best = (e, (i0, i1, i2), true)
-    assert best is not None     # the first of the six assignments sets it
+    assert best is not None  # the first of the six assignments sets it
     e_face, assign, true = best
     # the box's centre: along each face axis the middle of its extent, or half its size
     # from the end in view; behind the face half the third size
@@ -279,11 +285,11 @@ def _score_box_tilted(seg: _Segment, box: tuple[float, float, float]) -> tuple[f
             centre = centre + mid[k] * a
         else:
             s = q @ a
-            if open_ends[k][1]:                         # the low end is in view
+            if open_ends[k][1]:  # the low end is in view
                 centre = centre + (float(s.min()) + 0.5 * true[k]) * a
             else:
                 centre = centre + (float(s.max()) - 0.5 * true[k]) * a
-    by_size = {assign[0]: axes[0], assign[1]: axes[1], assign[2]: n}   # assign: a permutation of 0, 1, 2
+    by_size = {assign[0]: axes[0], assign[1]: axes[1], assign[2]: n}  # assign: a permutation of 0, 1, 2
     box_axes = [by_size[k] for k in range(3)]
     up = box_axes[2] if box_axes[2][2] >= 0 else -box_axes[2]
     tilt = math.acos(min(1.0, abs(float(up[2]))))
@@ -291,8 +297,9 @@ def _score_box_tilted(seg: _Segment, box: tuple[float, float, float]) -> tuple[f
         return 0.0, {"reason": "not leaning", "tilt": tilt}
     # its corners: the lowest on the support, nothing of it seen above the highest
     half = [0.5 * dims[k] * box_axes[k] for k in range(3)]
-    corners = np.array([centre + sx * half[0] + sy * half[1] + sz * half[2]
-                        for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)])
+    corners = np.array(
+        [centre + sx * half[0] + sy * half[1] + sz * half[2] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)]
+    )
     e_base = float(corners[:, 2].min()) - seg.base
     e_top = max(0.0, seg.top - float(corners[:, 2].max()))
     # a second face beside it: perpendicular, as deep as the third size
@@ -306,12 +313,12 @@ def _score_box_tilted(seg: _Segment, box: tuple[float, float, float]) -> tuple[f
             if on2.sum() >= 30:
                 d2 = (seg.pts[on2] - F.mean(axis=0)) @ -n
                 e_depth = float(np.ptp(d2)) + px - dims[assign[2]]
-                e_depth = e_depth if e_depth > 0 else 0.5 * e_depth   # seen at an angle: shorter
+                e_depth = e_depth if e_depth > 0 else 0.5 * e_depth  # seen at an angle: shorter
     # the face must be flat (a mug on its side is not): its edges left out, where the
     # points of a face beside it are as near its plane as the band that took its points
     trim = max(3 * tol_r, 0.004) + px
     s0, s1 = q @ axes[0], q @ axes[1]
-    keep = ((s0 > s0.min() + trim) & (s0 < s0.max() - trim) & (s1 > s1.min() + trim) & (s1 < s1.max() - trim))
+    keep = (s0 > s0.min() + trim) & (s0 < s0.max() - trim) & (s1 > s1.min() + trim) & (s1 < s1.max() - trim)
     bow = _bow(s0[keep], s1[keep], off[on][keep])
     z = np.array([e_face / tol_w, max(rms / tol_r, bow), e_base / (2 * tol_h), e_top / tol_h, e_depth / tol_w])
     conf = _confidence(z)
@@ -321,10 +328,22 @@ def _score_box_tilted(seg: _Segment, box: tuple[float, float, float]) -> tuple[f
     # the side the fingers close across: the box's x or y axis the more level, across the lean
     across = np.cross(up, [0.0, 0.0, 1.0])
     width = dims[0] if abs(float(box_axes[0] @ across)) >= abs(float(box_axes[1] @ across)) else dims[1]
-    return conf, {"pose": "tilted", "axis": centre[:2].copy(), "yaw": math.atan2(up[1], up[0]), "tilt": tilt,
-                  "axis_base": base_pt.tolist(), "axis_dir": up.tolist(), "width": width,
-                  "face_err": e_face, "rect_rms": rms, "bow": bow, "base_err": e_base, "top_err": e_top,
-                  "depth_err": e_depth, "extents": ext}
+    return conf, {
+        "pose": "tilted",
+        "axis": centre[:2].copy(),
+        "yaw": math.atan2(up[1], up[0]),
+        "tilt": tilt,
+        "axis_base": base_pt.tolist(),
+        "axis_dir": up.tolist(),
+        "width": width,
+        "face_err": e_face,
+        "rect_rms": rms,
+        "bow": bow,
+        "base_err": e_base,
+        "top_err": e_top,
+        "depth_err": e_depth,
+        "extents": ext,
+    }
 
 
 def _whole_faces(seg: _Segment, side: np.ndarray, rect: _Rectangle) -> list[bool]:
@@ -333,7 +352,7 @@ def _whole_faces(seg: _Segment, side: np.ndarray, rect: _Rectangle) -> list[bool
     the object may continue out of view (``may_continue``: the image border, or something
     nearer). A face reaches a side when its points come within two pixels of the
     segment's outermost point there, across the view."""
-    perp = np.array([-seg.ray[1], seg.ray[0]])     # towards the image's left
+    perp = np.array([-seg.ray[1], seg.ray[0]])  # towards the image's left
     lat = (side - seg.cam_xy) @ perp
     q = side - rect.c
     a1, a2 = q @ rect.e1, q @ rect.e2
@@ -345,8 +364,9 @@ def _whole_faces(seg: _Segment, side: np.ndarray, rect: _Rectangle) -> list[bool
             out.append(False)
             continue
         f = lat[face]
-        reaches_cut = ((seg.may_continue("left") and f.max() >= lat.max() - near)
-                       or (seg.may_continue("right") and f.min() <= lat.min() + near))
+        reaches_cut = (seg.may_continue("left") and f.max() >= lat.max() - near) or (
+            seg.may_continue("right") and f.min() <= lat.min() + near
+        )
         out.append(not reaches_cut)
     return out
 
@@ -359,16 +379,21 @@ def _resting_bow(seg: _Segment, pts: np.ndarray, rect: _Rectangle, seen: list[bo
     perp = np.array([-seg.ray[1], seg.ray[0]])
     lat = (pts[:, :2] - seg.cam_xy) @ perp
     ends = [(a, b) for a in (-0.5, 0.5) for b in (-0.5, 0.5)]
-    a, b = min(ends, key=lambda ab: float(np.linalg.norm(
-        rect.c + ab[0] * rect.s1 * rect.e1 + ab[1] * rect.s2 * rect.e2 - seg.cam_xy)))
+    a, b = min(
+        ends,
+        key=lambda ab: float(
+            np.linalg.norm(rect.c + ab[0] * rect.s1 * rect.e1 + ab[1] * rect.s2 * rect.e2 - seg.cam_xy)
+        ),
+    )
     corner = rect.c + a * rect.s1 * rect.e1 + b * rect.s2 * rect.e2
     lat_c = float((corner - seg.cam_xy) @ perp)
     margin = 1.5 * seg.m_per_px
     inner = (lat > lat.min() + margin) & (lat < lat.max() - margin)
     z = 0.0
     # the face along e1 runs from the corner by -2a s1 e1; the one along e2 by -2b s2 e2
-    for i, (e, n, step) in enumerate(((rect.e1, rect.e2, -2 * a * rect.s1 * rect.e1),
-                                      (rect.e2, rect.e1, -2 * b * rect.s2 * rect.e2))):
+    for i, (e, n, step) in enumerate(
+        ((rect.e1, rect.e2, -2 * a * rect.s1 * rect.e1), (rect.e2, rect.e1, -2 * b * rect.s2 * rect.e2))
+    ):
         if not seen[i]:
             continue
         away = 1.0 if float(step @ perp) > 0 else -1.0
@@ -401,7 +426,7 @@ def _score_box_resting(seg: _Segment, sides: tuple[float, float], bz: float) -> 
     # A side's length is measured only on faces seen well: at a grazing angle a face is
     # a few scattered pixels. The faces along e1 face the camera by |ray . e2|.
     seen = [abs(float(seg.ray @ rect.e2)) >= GRAZING, abs(float(seg.ray @ rect.e1)) >= GRAZING]
-    ext = [rect.s1 + px, rect.s2 + px]             # the points stop half a pixel short each side
+    ext = [rect.s1 + px, rect.s2 + px]  # the points stop half a pixel short each side
     # ... but a face seen at a grazing angle still spans its points: one far longer than
     # the box's longest side is part of something larger (a pallet's side seen edge-on)
     if any(not seen[i] and ext[i] > max(bx, by) + GRAZING_SLACK for i in (0, 1)):
@@ -417,11 +442,11 @@ def _score_box_resting(seg: _Segment, sides: tuple[float, float], bz: float) -> 
         return 0.0, {"reason": "too little of it in view", "extents": ext}
 
     def err(i: int, true: float) -> float:
-        return ext[i] - true if whole[i] else max(0.0, ext[i] - true)   # cut: only shorter
+        return ext[i] - true if whole[i] else max(0.0, ext[i] - true)  # cut: only shorter
 
     axes = [rect.e1, rect.e2]
     fits = []
-    for x_is in (0, 1):                            # the box's x side along e1, or along e2
+    for x_is in (0, 1):  # the box's x side along e1, or along e2
         true = [bx, by] if x_is == 0 else [by, bx]
         errs = [err(i, true[i]) for i in (0, 1) if seen[i]]
         fits.append((math.sqrt(float(np.mean(np.square(errs)))), x_is, true))
@@ -430,23 +455,23 @@ def _score_box_resting(seg: _Segment, sides: tuple[float, float], bz: float) -> 
     # half the box behind the face that is seen; along a face cut off, half its length
     # from its end in view
     centre = rect.c.copy()
-    perp = np.array([-seg.ray[1], seg.ray[0]])     # towards the image's left
+    perp = np.array([-seg.ray[1], seg.ray[0]])  # towards the image's left
     for i in (0, 1):
         e = axes[i]
-        if not seen[i]:                            # the face seen squarely has normal +-axes[i]
+        if not seen[i]:  # the face seen squarely has normal +-axes[i]
             away = 1.0 if float(seg.ray @ e) > 0 else -1.0
-            near = _densest(side @ e, seg.surface_tolerance)        # that face, nearest the camera
+            near = _densest(side @ e, seg.surface_tolerance)  # that face, nearest the camera
             centre = centre + (near + away * 0.5 * true[i] - float(rect.c @ e)) * e
         elif not whole[i]:
             # towards the cut (+e or -e): the side of the image that is cut off
             to_cut = 1.0 if (float(perp @ e) > 0) == seg.may_continue("left") else -1.0
-            end = float(rect.c @ e) - to_cut * 0.5 * ext[i]         # the end in view
+            end = float(rect.c @ e) - to_cut * 0.5 * ext[i]  # the end in view
             centre = centre + (end + to_cut * 0.5 * true[i] - float(rect.c @ e)) * e
     x_axis = axes[x_is]
     one_face = not all(seen)
     e_h = seg.height - bz
     if seg.cut("top") or seg.occluded["top"]:
-        e_h = max(0.0, e_h)                           # part of it may be hidden: a lower bound
+        e_h = max(0.0, e_h)  # part of it may be hidden: a lower bound
     # the points on the rectangle's sides: each within the noise, and the faces flat
     # (averaged over many points: a mug's side hugs a rectangle within the noise far off)
     bow = _resting_bow(seg, side3, rect, seen)
@@ -459,6 +484,15 @@ def _score_box_resting(seg: _Segment, sides: tuple[float, float], bz: float) -> 
         yaw += math.pi
     elif yaw > math.pi / 2:
         yaw -= math.pi
-    return conf, {"face_err": e_face, "height_err": e_h, "rect_rms": rect.rms, "bow": bow,
-                  "faces": 1 if one_face else 2, "extents": ext, "seen": seen, "whole": whole,
-                  "axis": centre, "yaw": yaw}
+    return conf, {
+        "face_err": e_face,
+        "height_err": e_h,
+        "rect_rms": rect.rms,
+        "bow": bow,
+        "faces": 1 if one_face else 2,
+        "extents": ext,
+        "seen": seen,
+        "whole": whole,
+        "axis": centre,
+        "yaw": yaw,
+    }

@@ -1,6 +1,7 @@
 """Colour: how a category looks (its :class:`Appearance`: a colour and a shape) and the
 colour model that names each pixel's colour (:data:`PALETTE`, widened around the
 categories' hues: :func:`colour_labels`)."""
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -21,12 +22,12 @@ PALETTE: dict[str, tuple[tuple[int, int], ...]] = {
     "blue": ((100, 130),),
     "purple": ((130, 165),),
 }
-MIN_SATURATION = 80     # HSV S (0..255): floor, walls and shadows are below ~40
-MIN_VALUE = 20          # HSV V (0..255): darker pixels have no reliable hue
-SATURATION_SHARE = 0.55 # a category's segments keep this share of its saturation or more
+MIN_SATURATION = 80  # HSV S (0..255): floor, walls and shadows are below ~40
+MIN_VALUE = 20  # HSV V (0..255): darker pixels have no reliable hue
+SATURATION_SHARE = 0.55  # a category's segments keep this share of its saturation or more
 #                         (light and shade change the value more; brown furniture whose
 #                         hue drifts into a category's keeps about 0.45 of its saturation)
-HUE_WINDOW = 7          # OpenCV hue units (2 degrees each) either side of a category's hue
+HUE_WINDOW = 7  # OpenCV hue units (2 degrees each) either side of a category's hue
 
 
 class PerceptionError(ActorbtError):
@@ -42,17 +43,18 @@ class Appearance:
     section is the body whose radius is fitted to find the axis. A can is one section; a
     wine bottle is body, shoulder and neck.
     """
+
     name: str
     colour: str
     sections: tuple[tuple[float, float], ...] = ()
     min_confidence: float = 0.3
     description: str = ""
     box: tuple[float, float, float] | None = None
-    hue: int | None = None      # its OpenCV hue (0..180): pixels within HUE_WINDOW count
-                                # as its colour, across a palette boundary
-    saturation: int | None = None   # its saturation (0..255): a segment far less saturated
-                                    # (SATURATION_SHARE) is something else of its hue
-    label: tuple[float, float] | None = None   # a band round it, from .. to [m] above its base,
+    hue: int | None = None  # its OpenCV hue (0..180): pixels within HUE_WINDOW count
+    # as its colour, across a palette boundary
+    saturation: int | None = None  # its saturation (0..255): a segment far less saturated
+    # (SATURATION_SHARE) is something else of its hue
+    label: tuple[float, float] | None = None  # a band round it, from .. to [m] above its base,
     #                                            in another colour (a paper label)
 
     @property
@@ -89,11 +91,13 @@ class Appearance:
 def _hsv_of(rgba) -> tuple[int, int, int]:
     """OpenCV's hue (0..180), saturation and value (0..255) of a colour given as rgb(a)
     in 0..1; PerceptionError for a colour with no clear hue (white, grey, black)."""
-    px = np.array([[[round(255 * float(c)) for c in reversed(tuple(rgba)[:3])]]], dtype=np.uint8)   # BGR
+    px = np.array([[[round(255 * float(c)) for c in reversed(tuple(rgba)[:3])]]], dtype=np.uint8)  # BGR
     h, sat, val = (int(v) for v in cv2.cvtColor(px, cv2.COLOR_BGR2HSV)[0, 0])
     if sat < MIN_SATURATION or val < MIN_VALUE:
-        raise PerceptionError(f"colour {tuple(rgba)} has no clear hue (saturation {sat}, value {val}): "
-                              "perception finds objects by a saturated colour")
+        raise PerceptionError(
+            f"colour {tuple(rgba)} has no clear hue (saturation {sat}, value {val}): "
+            "perception finds objects by a saturated colour"
+        )
     return h, sat, val
 
 
@@ -128,8 +132,17 @@ def appearance_of(category: categories.Category) -> Appearance:
         box = (shape.x, shape.y, shape.z)
     else:
         sections = tuple(shape.sections)
-    return Appearance(name=category.name, colour=colour, sections=sections, box=box, hue=hue, saturation=sat,
-                      min_confidence=category.min_confidence, description=category.description, label=band)
+    return Appearance(
+        name=category.name,
+        colour=colour,
+        sections=sections,
+        box=box,
+        hue=hue,
+        saturation=sat,
+        min_confidence=category.min_confidence,
+        description=category.description,
+        label=band,
+    )
 
 
 def _same_colour(rgba, colour: str) -> bool:
@@ -158,7 +171,7 @@ def _hue_lut(appearances=()) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[s
     palette = np.zeros(256, np.uint8)
     for i, name in enumerate(names, 1):
         for lo, hi in PALETTE[name]:
-            palette[lo:min(hi, 256)] = i
+            palette[lo : min(hi, 256)] = i
     widened = palette.copy()
     floor = np.full(256, MIN_SATURATION, np.int32)
     for app in appearances:

@@ -1,5 +1,6 @@
 """The detection pipeline: :func:`detect` (a frame's segments named by the best fitting
 appearance, and located) and :func:`combine_sightings` (one estimate from several)."""
+
 from __future__ import annotations
 
 import math
@@ -13,7 +14,7 @@ from .perception_fit import UPRIGHT_TILT
 from .perception_round import _score_posed, _score_upright, fit_circle_fixed
 from .perception_segments import MAX_UNKNOWN_SIZE, _Segment, _segments, backproject
 
-PATCH_SHARE = 0.4       # a segment whose surroundings continue it in colour this much
+PATCH_SHARE = 0.4  # a segment whose surroundings continue it in colour this much
 #                         (or more) is a patch of something larger
 
 UNKNOWN = "unknown"
@@ -56,10 +57,9 @@ def _base(seg: _Segment, app: Appearance | None, evidence: dict) -> float:
     colour, that label's top less the label's height above the base (a table's edge can
     hide a bottle's body below its label: taken at the label's top, the base would be
     14 cm too high, and the arm sent out of reach)."""
-    if app is None or app.label is None or evidence.get("pose", "upright") == "lying" \
-            or not seg.continues_below:
+    if app is None or app.label is None or evidence.get("pose", "upright") == "lying" or not seg.continues_below:
         return seg.base
-    return seg.base - app.label[1]   # (a leaning one's is a little less; its lean, seen so, is noise)
+    return seg.base - app.label[1]  # (a leaning one's is a little less; its lean, seen so, is noise)
 
 
 def detect(frame: RGBDFrame, appearances: dict[str, Appearance] | None = None) -> list[dict]:
@@ -91,13 +91,13 @@ def detect(frame: RGBDFrame, appearances: dict[str, Appearance] | None = None) -
     out: list[dict] = []
     for seg in _segments(frame, P, list(apps.values())):
         if seg.continued > PATCH_SHARE:
-            continue                                   # a patch of furniture, of any shape
+            continue  # a patch of furniture, of any shape
         best, best_conf, evidence = None, 0.0, {}
         for candidate in apps.values():
             conf, ev = _score(seg, candidate)
             if conf > best_conf:
                 best, best_conf, evidence = candidate, conf, ev
-        app: Appearance | None      # the category's, None for an object of no known category
+        app: Appearance | None  # the category's, None for an object of no known category
         if best is not None and best_conf >= best.min_confidence:
             category, conf, app = best.name, best_conf, best
         else:
@@ -107,27 +107,32 @@ def detect(frame: RGBDFrame, appearances: dict[str, Appearance] | None = None) -
             c, r = evidence["axis"], app.body_radius
         else:
             c, r = _axis(seg)
-        widths = [wd for hm, wd in seg.band_widths(max(0.01, 1.6 * seg.m_per_px))
-                  if app is None or hm < app.body_top]
+        widths = [wd for hm, wd in seg.band_widths(max(0.01, 1.6 * seg.m_per_px)) if app is None or hm < app.body_top]
         width = float(np.median(widths)) if widths else 2 * r
         if app is not None and (seg.cut("left") or seg.cut("right") or evidence.get("pose", "upright") != "upright"):
-            width = evidence.get("width", 2 * r)       # partly out of view: the model's width
-        if app is None and (width > MAX_UNKNOWN_SIZE[0] or seg.height > MAX_UNKNOWN_SIZE[1]
-                            or seg.in_structure > 0.5):
-            continue                                   # a wall, furniture (or a patch of it)
+            width = evidence.get("width", 2 * r)  # partly out of view: the model's width
+        if app is None and (width > MAX_UNKNOWN_SIZE[0] or seg.height > MAX_UNKNOWN_SIZE[1] or seg.in_structure > 0.5):
+            continue  # a wall, furniture (or a patch of it)
         base = _base(seg, app, evidence)
         b = T_base_map @ np.array([c[0], c[1], base, 1.0])
-        out.append({
-            "category": category,
-            "x": float(c[0]), "y": float(c[1]), "z": float(base),
-            "height": float(seg.top - base), "width": width,
-            "distance": float(math.hypot(b[0], b[1])), "bearing": float(math.atan2(b[1], b[0])),
-            "confidence": round(float(conf), 3),
-            "pixel": [round(seg.u, 1), round(seg.v, 1)],
-            "colour": seg.colour,
-            "truncated": [k for k in ("left", "right", "top", "bottom") if seg.cut(k)],
-            "stamp": frame.stamp, "frame": "map",
-        })
+        out.append(
+            {
+                "category": category,
+                "x": float(c[0]),
+                "y": float(c[1]),
+                "z": float(base),
+                "height": float(seg.top - base),
+                "width": width,
+                "distance": float(math.hypot(b[0], b[1])),
+                "bearing": float(math.atan2(b[1], b[0])),
+                "confidence": round(float(conf), 3),
+                "pixel": [round(seg.u, 1), round(seg.v, 1)],
+                "colour": seg.colour,
+                "truncated": [k for k in ("left", "right", "top", "bottom") if seg.cut(k)],
+                "stamp": frame.stamp,
+                "frame": "map",
+            }
+        )
         if app is not None:
             if evidence.get("yaw") is not None:
                 out[-1]["yaw"] = float(evidence["yaw"])
@@ -153,8 +158,9 @@ def base_height(sightings: list[dict]) -> float:
     return float(np.median([s["z"] for s in sightings if float(s.get("height") or 0.0) >= BASE_SEEN * most]))
 
 
-def combine_sightings(sightings: list[dict], looks: int, gate: float = 0.08,
-                      near: tuple[float, float] | None = None, within: float = 0.3) -> dict | None:
+def combine_sightings(
+    sightings: list[dict], looks: int, gate: float = 0.08, near: tuple[float, float] | None = None, within: float = 0.3
+) -> dict | None:
     """One estimate from several detections of possibly several objects.
 
     Detections are grouped by position (within ``gate`` [m] of a group's median); the group
@@ -191,13 +197,18 @@ def combine_sightings(sightings: list[dict], looks: int, gate: float = 0.08,
     m[2] = base_height(kept_c)
     last = max(kept_c, key=lambda s: s["stamp"])
     est = dict(last)
-    est.update({
-        "category": category,
-        "x": float(m[0]), "y": float(m[1]), "z": float(m[2]),
-        "height": float(np.median([s["height"] for s in kept_c])),
-        "width": float(np.median([s["width"] for s in kept_c])),
-        "confidence": round(float(np.median([s["confidence"] for s in kept_c])) * len(kept_c) / max(looks, 1), 3),
-        "sightings": len(kept_c), "looks": looks,
-        "spread": float(np.max(np.hypot(*(xyz[:, :2] - m[:2]).T))) if len(kept_c) > 1 else 0.0,
-    })
+    est.update(
+        {
+            "category": category,
+            "x": float(m[0]),
+            "y": float(m[1]),
+            "z": float(m[2]),
+            "height": float(np.median([s["height"] for s in kept_c])),
+            "width": float(np.median([s["width"] for s in kept_c])),
+            "confidence": round(float(np.median([s["confidence"] for s in kept_c])) * len(kept_c) / max(looks, 1), 3),
+            "sightings": len(kept_c),
+            "looks": looks,
+            "spread": float(np.max(np.hypot(*(xyz[:, :2] - m[:2]).T))) if len(kept_c) > 1 else 0.0,
+        }
+    )
     return est

@@ -1,5 +1,6 @@
 """Shape scoring for bodies of revolution (cans, bottles): standing (width profile, a
 circle of the body radius, the height in view) or in any pose (an axis fitted in 3-D)."""
+
 from __future__ import annotations
 
 import math
@@ -11,14 +12,14 @@ from .perception_colour import Appearance
 from .perception_fit import FIT_POINTS, LYING_TILT, UPRIGHT_TILT, _confidence
 from .perception_segments import DEPTH_NOISE, _Segment
 
-MIN_VISIBLE_WIDTH = 0.5 # fraction of its body an object cut by the image border or an
-                        # occluder must show to be classified (a sliver fits any cylinder)
+MIN_VISIBLE_WIDTH = 0.5  # fraction of its body an object cut by the image border or an
+# occluder must show to be classified (a sliver fits any cylinder)
 
 
 def fit_circle_fixed(xy: np.ndarray, r: float, c0: np.ndarray, iters: int = 12) -> tuple[np.ndarray, float]:
     """Centre of the circle of radius ``r`` through 2-D points ``xy`` (Gauss-Newton from
     ``c0``, Huber-weighted); returns (centre, RMS residual [m])."""
-    if len(xy) > FIT_POINTS:                 # an even subsample (points come row by row)
+    if len(xy) > FIT_POINTS:  # an even subsample (points come row by row)
         xy = xy[np.linspace(0, len(xy) - 1, FIT_POINTS).astype(int)]
     c = np.asarray(c0, float).copy()
     for _ in range(iters):
@@ -55,11 +56,11 @@ def _score_upright(seg: _Segment, app: Appearance) -> tuple[float, dict]:
     # width profile: measured band widths against the appearance's diameter at that height
     errs = []
     for hmid, wm in widths:
-        if hmid < band or hmid > seg.height - band:   # bottom rim and top rim bands are partial
+        if hmid < band or hmid > seg.height - band:  # bottom rim and top rim bands are partial
             continue
         we = 2 * app.radius_at(hmid) * tangent
         if side_cut:
-            errs.append(max(0.0, wm - we))           # a cut segment is only narrower
+            errs.append(max(0.0, wm - we))  # a cut segment is only narrower
         else:
             errs.append(wm - we)
     if len(errs) < 2:
@@ -91,9 +92,8 @@ def _score_upright(seg: _Segment, app: Appearance) -> tuple[float, dict]:
     z = np.array([e_prof / tol_w, e_h / tol_h, rms / tol_r])
     conf = _confidence(z)
     if seg.cut("top") or side_cut:
-        conf *= 0.85                                 # part of the evidence is out of view
-    return conf, {"profile_err": e_prof, "height_err": e_h, "cylinder_rms": rms, "line_rms": flat,
-                  "axis": axis}
+        conf *= 0.85  # part of the evidence is out of view
+    return conf, {"profile_err": e_prof, "height_err": e_h, "cylinder_rms": rms, "line_rms": flat, "axis": axis}
 
 
 def _score_posed(seg: _Segment, app: Appearance, direction: np.ndarray) -> tuple[float, dict]:
@@ -116,7 +116,7 @@ def _score_posed(seg: _Segment, app: Appearance, direction: np.ndarray) -> tuple
         return 0.0, {"reason": "body not visible"}
     side = fit.side
     best = _profile_fit(seg, app, fit)
-    if best is not None and len(best[4]) >= 15:      # refit on the body alone (not a neck)
+    if best is not None and len(best[4]) >= 15:  # refit on the body alone (not a neck)
         fit = axis_fit.refine_axis(best[4], app.body_radius, fit.point, fit.direction)
         best = _profile_fit(seg, app, fit)
     conf, evidence = _posed(seg, app, fit, best)
@@ -150,12 +150,12 @@ def _posed(seg: _Segment, app: Appearance, fit: axis_fit.AxisFit, best) -> tuple
         return 0.0, {"reason": "too little of its side in view"}
     rms, sign, lo, hi, _ = best
     d = fit.direction
-    up = d * sign                            # from the base to the top
+    up = d * sign  # from the base to the top
     base_pt = fit.point + (lo if sign > 0 else hi) * d
     length = hi - lo
     e_len = length - app.height
     if cut or seg.occluded["top"]:
-        e_len = max(0.0, e_len)              # part of it out of view: only shorter
+        e_len = max(0.0, e_len)  # part of it out of view: only shorter
     e_rise = _rise_error(seg, app, base_pt, up)
     z = np.array([rms / tol_r, e_len / tol_h, e_rise / tol_h])
     conf = _confidence(z)
@@ -169,9 +169,17 @@ def _posed(seg: _Segment, app: Appearance, fit: axis_fit.AxisFit, best) -> tuple
         yaw = yaw - math.pi if yaw > math.pi / 2 else yaw + math.pi if yaw <= -math.pi / 2 else yaw
     else:
         yaw = math.atan2(up[1], up[0])
-    return conf, {"pose": pose, "axis": centre[:2].copy(), "yaw": yaw, "tilt": tilt,
-                  "axis_base": base_pt.tolist(), "axis_dir": up.tolist(), "profile_rms": rms,
-                  "length_err": e_len, "rise_err": e_rise}
+    return conf, {
+        "pose": pose,
+        "axis": centre[:2].copy(),
+        "yaw": yaw,
+        "tilt": tilt,
+        "axis_base": base_pt.tolist(),
+        "axis_dir": up.tolist(),
+        "profile_rms": rms,
+        "length_err": e_len,
+        "rise_err": e_rise,
+    }
 
 
 def _rise_error(seg: _Segment, app: Appearance, base_pt: np.ndarray, up: np.ndarray) -> float:
@@ -180,9 +188,12 @@ def _rise_error(seg: _Segment, app: Appearance, base_pt: np.ndarray, up: np.ndar
     its highest (a lying can rises 2 r). A lower segment counts only when its top is in
     view. An axis fits a flat box's long side as well as a lying can's; its rise does not
     (a 4 cm box is no 6.6 cm can)."""
-    across = math.sqrt(max(0.0, 1.0 - float(up[2]) ** 2))     # a rim's vertical half-extent per radius
-    rims = [(base_pt, app.body_radius), (base_pt + app.body_top * up, app.body_radius),
-            (base_pt + app.height * up, app.radius_at(app.height - 1e-3))]
+    across = math.sqrt(max(0.0, 1.0 - float(up[2]) ** 2))  # a rim's vertical half-extent per radius
+    rims = [
+        (base_pt, app.body_radius),
+        (base_pt + app.body_top * up, app.body_radius),
+        (base_pt + app.height * up, app.radius_at(app.height - 1e-3)),
+    ]
     low = min(float(c[2]) - r * across for c, r in rims[:2])
     high = max(float(c[2]) + r * across for c, r in rims)
     e = (seg.top - seg.base) - (high - low)
@@ -209,7 +220,7 @@ def _profile_fit(seg: _Segment, app: Appearance, fit: axis_fit.AxisFit, signs=(1
             continue
         e = radial[inner] - app.radii_at(h[inner])
         # trimmed: the worst 15 % (a rim, a label's edge, stray pixels) do not count
-        e2 = np.sort(e * e)[:max(1, int(0.85 * len(e)))]
+        e2 = np.sort(e * e)[: max(1, int(0.85 * len(e)))]
         rms = float(np.sqrt(np.mean(e2)))
         if best is None or rms < best[0]:
             best = (rms, sign, lo, hi, fit.side[inner & (h < app.body_top - 0.005)])

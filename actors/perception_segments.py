@@ -1,6 +1,7 @@
 """Segmentation: a frame's pixels turned into object segments (:class:`_Segment`): regions
 of one colour, cut where the depth steps, joined over labels, each measured in the map
 frame (its base, width profile and the sides that may be out of view)."""
+
 from __future__ import annotations
 
 import math
@@ -13,15 +14,15 @@ from . import axis_fit
 from .camera import RGBDFrame
 from .perception_colour import colour_labels
 
-MIN_PIXELS = 40         # smaller segments are ignored
-MAX_RANGE = 4.0         # [m] farther segments are ignored
-MAX_UNKNOWN_SIZE = (0.35, 0.60)   # [m] width, height: larger coloured things are structure
-OCCLUSION_JUMP = 0.03   # [m] (and 4 % of the range) depth step that separates two objects
-DEPTH_NOISE = 0.001     # [m] RMS a true cylinder's surface may deviate from the fitted one
-                        # with exact depth (the rendering's own error is ~0.3 mm)
-OCCLUDER_LOOK = 3       # [px] how far beyond a segment's edge an occluder is looked for
-LABEL_GAP = 0.10        # [m] a printed label this tall may split an object's colour in two
-FOOT_ROWS = 8           # [px] below a segment, where an occluder hiding its foot is looked for
+MIN_PIXELS = 40  # smaller segments are ignored
+MAX_RANGE = 4.0  # [m] farther segments are ignored
+MAX_UNKNOWN_SIZE = (0.35, 0.60)  # [m] width, height: larger coloured things are structure
+OCCLUSION_JUMP = 0.03  # [m] (and 4 % of the range) depth step that separates two objects
+DEPTH_NOISE = 0.001  # [m] RMS a true cylinder's surface may deviate from the fitted one
+# with exact depth (the rendering's own error is ~0.3 mm)
+OCCLUDER_LOOK = 3  # [px] how far beyond a segment's edge an occluder is looked for
+LABEL_GAP = 0.10  # [m] a printed label this tall may split an object's colour in two
+FOOT_ROWS = 8  # [px] below a segment, where an occluder hiding its foot is looked for
 BELOW_ROWS = (3, 4, 5)  # [px] below a segment's lowest pixels, where its surface is looked
 #                         for going on down (a label below it) rather than meeting a support
 
@@ -61,35 +62,36 @@ def backproject(frame: RGBDFrame) -> np.ndarray:
 @dataclass
 class _Segment:
     """Measurements of one coloured region (internal)."""
+
     colour: str
     pixels: int
-    u: float                  # centroid [px]
+    u: float  # centroid [px]
     v: float
     bbox: tuple[int, int, int, int]
-    truncated: dict           # sides cut by the image border
-    occluded: dict            # sides hidden by something nearer (right next to it)
-    hidden: dict              # sides that may be hidden: something nearer is within
+    truncated: dict  # sides cut by the image border
+    occluded: dict  # sides hidden by something nearer (right next to it)
+    hidden: dict  # sides that may be hidden: something nearer is within
     #                           OCCLUDER_LOOK pixels (past pixels with no depth, or its
     #                           own pixels cut off by an occluder of its colour)
-    pts: np.ndarray           # (N, 3) map-frame surface points
-    hts: np.ndarray           # (N,) height above the base [m]
-    base: float               # support height [m]
-    top: float                # highest surface point [m]
+    pts: np.ndarray  # (N, 3) map-frame surface points
+    hts: np.ndarray  # (N,) height above the base [m]
+    base: float  # support height [m]
+    top: float  # highest surface point [m]
     cam_xy: np.ndarray
-    ray: np.ndarray           # unit horizontal viewing direction
-    lateral: np.ndarray       # (N,) coordinate across the viewing direction [m]
-    m_per_px: float           # metres per pixel at the segment
-    range: float              # median horizontal distance camera -> surface [m]
-    frame: RGBDFrame                 # the frame it was measured in
-    grid: np.ndarray                 # (h, w, 3) map-frame points over the bounding box,
-                                     # NaN outside the segment (image neighbours stay neighbours)
-    in_structure: float = 0.0        # share of its pixels in a coloured region of furniture size
+    ray: np.ndarray  # unit horizontal viewing direction
+    lateral: np.ndarray  # (N,) coordinate across the viewing direction [m]
+    m_per_px: float  # metres per pixel at the segment
+    range: float  # median horizontal distance camera -> surface [m]
+    frame: RGBDFrame  # the frame it was measured in
+    grid: np.ndarray  # (h, w, 3) map-frame points over the bounding box,
+    # NaN outside the segment (image neighbours stay neighbours)
+    in_structure: float = 0.0  # share of its pixels in a coloured region of furniture size
     #                                  (its surface going on without a depth step)
-    saturation: float = 255.0        # median saturation of its pixels (0..255)
-    continued: float = 0.0           # share of its surroundings that continue its surface
+    saturation: float = 255.0  # median saturation of its pixels (0..255)
+    continued: float = 0.0  # share of its surroundings that continue its surface
     #                                  in colour (measured when it is mostly in a coloured
     #                                  region of furniture size in the image: a patch of it)
-    continues_below: bool = False    # its surface goes on straight down below it, in no
+    continues_below: bool = False  # its surface goes on straight down below it, in no
     #                                  category's colour: its lowest part is not its base
 
     @property
@@ -155,13 +157,14 @@ class _Segment:
         ends = np.searchsorted(idx_s, np.arange(n), side="right")
         for i in range(n):
             if ends[i] - starts[i] >= 2:
-                seg = lat_s[starts[i]:ends[i]]
+                seg = lat_s[starts[i] : ends[i]]
                 out.append(((i + 0.5) * band, float(seg.max() - seg.min()) + self.m_per_px))
         return out
 
 
-def _measure(colour: str, comp: np.ndarray, x0: int, y0: int, P: np.ndarray, depth: np.ndarray,
-             lab: np.ndarray, frame: RGBDFrame) -> _Segment | None:
+def _measure(
+    colour: str, comp: np.ndarray, x0: int, y0: int, P: np.ndarray, depth: np.ndarray, lab: np.ndarray, frame: RGBDFrame
+) -> _Segment | None:
     h, w = lab.shape
     ys, xs = np.nonzero(comp)
     ys = ys + y0
@@ -188,16 +191,33 @@ def _measure(colour: str, comp: np.ndarray, x0: int, y0: int, P: np.ndarray, dep
     trunc = {"left": bx0 <= 0, "right": x1 >= w, "top": by0 <= 0, "bottom": y1 >= h}
     occluded = _occluded_sides(xs, ys, depth, P, base)
     hidden = _occluded_sides(xs, ys, depth, P, base, OCCLUDER_LOOK)
-    return _Segment(colour=colour, pixels=int(len(xs)), u=float(xs.mean()), v=float(ys.mean()),
-                    bbox=(bx0, by0, x1, y1), truncated=trunc, occluded=occluded, hidden=hidden, pts=pts,
-                    hts=pts[:, 2] - base, base=base, top=float(pts[:, 2].max()), cam_xy=cam_xy,
-                    ray=ray, lateral=lateral,
-                    m_per_px=m_per_px, range=rng, frame=frame, grid=_segment_grid(comp, x0, y0, P),
-                    continues_below=not foot_hidden and _continues_below(low, cols, P, lab, cam_xy, m_per_px))
+    return _Segment(
+        colour=colour,
+        pixels=int(len(xs)),
+        u=float(xs.mean()),
+        v=float(ys.mean()),
+        bbox=(bx0, by0, x1, y1),
+        truncated=trunc,
+        occluded=occluded,
+        hidden=hidden,
+        pts=pts,
+        hts=pts[:, 2] - base,
+        base=base,
+        top=float(pts[:, 2].max()),
+        cam_xy=cam_xy,
+        ray=ray,
+        lateral=lateral,
+        m_per_px=m_per_px,
+        range=rng,
+        frame=frame,
+        grid=_segment_grid(comp, x0, y0, P),
+        continues_below=not foot_hidden and _continues_below(low, cols, P, lab, cam_xy, m_per_px),
+    )
 
 
-def _support(low: np.ndarray, cols: np.ndarray, P: np.ndarray, lab: np.ndarray, depth: np.ndarray,
-             zmin: float) -> tuple[float, bool]:
+def _support(
+    low: np.ndarray, cols: np.ndarray, P: np.ndarray, lab: np.ndarray, depth: np.ndarray, zmin: float
+) -> tuple[float, bool]:
     """The height [m] of what a segment stands on, and whether its foot is hidden.
 
     The uncoloured pixels 2..4 rows below its lowest pixel in each of ``cols`` (``low``)
@@ -235,7 +255,7 @@ def _support(low: np.ndarray, cols: np.ndarray, P: np.ndarray, lab: np.ndarray, 
                 tops.append(float(P[r + dy, c, 2]))
                 break
             if q < d - 0.5 * OCCLUSION_JUMP:
-                break      # nearer, gradually: the floor in front of it
+                break  # nearer, gradually: the floor in front of it
     if len(tops) >= max(2, 0.5 * len(cols)):
         top = float(np.median(tops))
         if top < zmin:
@@ -243,8 +263,9 @@ def _support(low: np.ndarray, cols: np.ndarray, P: np.ndarray, lab: np.ndarray, 
     return zmin, False
 
 
-def _continues_below(low: np.ndarray, cols: np.ndarray, P: np.ndarray, lab: np.ndarray,
-                     cam_xy: np.ndarray, m_per_px: float) -> bool:
+def _continues_below(
+    low: np.ndarray, cols: np.ndarray, P: np.ndarray, lab: np.ndarray, cam_xy: np.ndarray, m_per_px: float
+) -> bool:
     """Does the surface go on straight down below a segment (``low``: its lowest pixel's
     row in each of ``cols``), in no category's colour? A pixel BELOW_ROWS rows lower is
     then about as many pixel heights lower and no nearer; on a support it is at the same
@@ -271,13 +292,14 @@ def _continues_below(low: np.ndarray, cols: np.ndarray, P: np.ndarray, lab: np.n
 def _segment_grid(comp: np.ndarray, x0: int, y0: int, P: np.ndarray) -> np.ndarray:
     """The segment's points laid out as in the image (NaN off the segment)."""
     h, w = comp.shape
-    grid = P[y0:y0 + h, x0:x0 + w].copy()
+    grid = P[y0 : y0 + h, x0 : x0 + w].copy()
     grid[~comp.astype(bool)] = np.nan
     return grid
 
 
-def _occluded_sides(xs: np.ndarray, ys: np.ndarray, depth: np.ndarray, P: np.ndarray,
-                    base: float, look: int = 1) -> dict[str, bool]:
+def _occluded_sides(
+    xs: np.ndarray, ys: np.ndarray, depth: np.ndarray, P: np.ndarray, base: float, look: int = 1
+) -> dict[str, bool]:
     """Sides (left, right, top) along which something nearer hides part of the segment:
     on at least a quarter of the rows (columns), the nearest of the ``look`` pixels beyond
     the outermost one is nearer by more than OCCLUSION_JUMP. Rows within 2 cm of the base
@@ -308,7 +330,7 @@ def _occluded_sides(xs: np.ndarray, ys: np.ndarray, depth: np.ndarray, P: np.nda
                 nx, ny = ks, np.maximum(edge - k, 0)
             else:
                 nx, ny = np.clip(edge + k * step, 0, w - 1), ks
-            d_next = np.fmin(d_next, depth[ny, nx][keep])        # (NaN: no depth, skipped)
+            d_next = np.fmin(d_next, depth[ny, nx][keep])  # (NaN: no depth, skipped)
         with np.errstate(invalid="ignore"):
             nearer = np.isfinite(d_next) & (d_next < d_edge - OCCLUSION_JUMP)
         out[side] = bool(nearer.mean() >= 0.25)
@@ -322,7 +344,7 @@ def _components(mask: np.ndarray) -> list[tuple[int, int, np.ndarray]]:
     for j in range(1, n):
         x0, y0, bw, bh, area = (int(a) for a in stats[j])
         if area >= MIN_PIXELS:
-            out.append((x0, y0, cc[y0:y0 + bh, x0:x0 + bw] == j))
+            out.append((x0, y0, cc[y0 : y0 + bh, x0 : x0 + bw] == j))
     return out
 
 
@@ -339,7 +361,7 @@ def _bridge_labels(mask: np.ndarray, lab: np.ndarray, depth: np.ndarray, P: np.n
     full, samples = [], []
     for x0, y0, roi in comps:
         m = np.zeros((h, w), bool)
-        m[y0:y0 + roi.shape[0], x0:x0 + roi.shape[1]] = roi
+        m[y0 : y0 + roi.shape[0], x0 : x0 + roi.shape[1]] = roi
         pts = P[m]
         pts = pts[np.isfinite(pts).all(axis=1)]
         full.append(m)
@@ -363,8 +385,14 @@ def _bridge_labels(mask: np.ndarray, lab: np.ndarray, depth: np.ndarray, P: np.n
             d = d[np.isfinite(d)]
             lo_z = float(min(a[:, 2].min(), b[:, 2].min()))
             with np.errstate(invalid="ignore"):
-                fill = ((inside > 0) & ~union & (lab == 0) & (depth > d.min() - 0.05) & (depth < d.max() + 0.05)
-                        & (P[:, :, 2] > lo_z + 0.01))
+                fill = (
+                    (inside > 0)
+                    & ~union
+                    & (lab == 0)
+                    & (depth > d.min() - 0.05)
+                    & (depth < d.max() + 0.05)
+                    & (P[:, :, 2] > lo_z + 0.01)
+                )
             merged = union | fill
             if len(_components(merged)) == 1 and int(fill.sum()) > 0:
                 out |= merged
@@ -398,18 +426,17 @@ def _structure(coloured: np.ndarray, P: np.ndarray) -> np.ndarray:
     patches of two hues; none of them is an object."""
     big = np.zeros(coloured.shape, bool)
     for x0, y0, roi in _components(coloured):
-        pts = P[y0:y0 + roi.shape[0], x0:x0 + roi.shape[1]][roi]
+        pts = P[y0 : y0 + roi.shape[0], x0 : x0 + roi.shape[1]][roi]
         pts = pts[np.isfinite(pts).all(axis=1)]
         if len(pts) < MIN_PIXELS:
             continue
         lo, hi = np.percentile(pts, (2, 98), axis=0)
         if max(hi[0] - lo[0], hi[1] - lo[1]) > MAX_UNKNOWN_SIZE[0] or hi[2] - lo[2] > MAX_UNKNOWN_SIZE[1]:
-            big[y0:y0 + roi.shape[0], x0:x0 + roi.shape[1]] |= roi
+            big[y0 : y0 + roi.shape[0], x0 : x0 + roi.shape[1]] |= roi
     return big
 
 
-def _continued_share(roi: np.ndarray, x0: int, y0: int, lab: np.ndarray, depth: np.ndarray,
-                     pad: int = 2) -> float:
+def _continued_share(roi: np.ndarray, x0: int, y0: int, lab: np.ndarray, depth: np.ndarray, pad: int = 2) -> float:
     """Share of the pixels just around a segment that are coloured and continue its
     surface without a depth step: high for a patch of something larger (light breaks a
     table into patches of two hues, one of them a category's), low for an object, which
@@ -418,14 +445,14 @@ def _continued_share(roi: np.ndarray, x0: int, y0: int, lab: np.ndarray, depth: 
     bh, bw = roi.shape
     Y0, X0, Y1, X1 = max(0, y0 - pad), max(0, x0 - pad), min(h, y0 + bh + pad), min(w, x0 + bw + pad)
     inside = np.zeros((Y1 - Y0, X1 - X0), np.uint8)
-    inside[y0 - Y0:y0 - Y0 + bh, x0 - X0:x0 - X0 + bw] = roi
+    inside[y0 - Y0 : y0 - Y0 + bh, x0 - X0 : x0 - X0 + bw] = roi
     kernel = np.ones((2 * pad + 1, 2 * pad + 1), np.uint8)
     ring = (cv2.dilate(inside, kernel) > 0) & (inside == 0)
     if not ring.any():
         return 0.0
     d = depth[Y0:Y1, X0:X1]
     own = np.where((inside > 0) & np.isfinite(d), d, np.nan).astype(np.float32)
-    near_max = cv2.dilate(np.nan_to_num(own, nan=0.0), kernel)         # its depths nearby
+    near_max = cv2.dilate(np.nan_to_num(own, nan=0.0), kernel)  # its depths nearby
     near_min = cv2.erode(np.nan_to_num(own, nan=np.inf), kernel)
     tol = np.maximum(0.02, 0.03 * d)
     with np.errstate(invalid="ignore"):
@@ -438,7 +465,7 @@ def _segments(frame: RGBDFrame, P: np.ndarray, appearances=()) -> list[_Segment]
     lab, names = colour_labels(frame.bgr, appearances, hsv)
     cut = _occlusion_cuts(lab, frame.depth)
     coloured = lab > 0
-    flat = _structure(coloured, P)                       # patches of furniture: see continued
+    flat = _structure(coloured, P)  # patches of furniture: see continued
     structure = _structure(coloured & ~_depth_steps(coloured, frame.depth), P)
     saturation = hsv[:, :, 1]
     out = []
@@ -454,8 +481,8 @@ def _segments(frame: RGBDFrame, P: np.ndarray, appearances=()) -> list[_Segment]
             filled = np.zeros(roi.shape, np.uint8)
             cv2.drawContours(filled, contours, -1, 1, thickness=cv2.FILLED)
             holes = (filled > 0) & ~roi
-            d = frame.depth[y0:y0 + bh, x0:x0 + bw]
-            if holes.any() and np.isfinite(d[roi]).any():   # (no depth at all: nothing to fill)
+            d = frame.depth[y0 : y0 + bh, x0 : x0 + bw]
+            if holes.any() and np.isfinite(d[roi]).any():  # (no depth at all: nothing to fill)
                 dm = float(np.nanmedian(d[roi]))
                 roi = roi | (holes & (np.abs(d - dm) < 0.1))
             seg = _measure(name, roi, x0, y0, P, frame.depth, lab, frame)
@@ -463,10 +490,10 @@ def _segments(frame: RGBDFrame, P: np.ndarray, appearances=()) -> list[_Segment]
                 # structure: what it is one region with where the depth goes on; the
                 # patch test looks at the regions of colour in the image (a patch of a
                 # bench may be cut from the rest of it by a step in its surface)
-                seg.in_structure = float(structure[y0:y0 + bh, x0:x0 + bw][roi].mean())
-                own = roi & (lab[y0:y0 + bh, x0:x0 + bw] == i)    # not a label it was bridged over
-                seg.saturation = float(np.median(saturation[y0:y0 + bh, x0:x0 + bw][own])) if own.any() else 0.0
-                if float(flat[y0:y0 + bh, x0:x0 + bw][roi].mean()) > 0.5:
+                seg.in_structure = float(structure[y0 : y0 + bh, x0 : x0 + bw][roi].mean())
+                own = roi & (lab[y0 : y0 + bh, x0 : x0 + bw] == i)  # not a label it was bridged over
+                seg.saturation = float(np.median(saturation[y0 : y0 + bh, x0 : x0 + bw][own])) if own.any() else 0.0
+                if float(flat[y0 : y0 + bh, x0 : x0 + bw][roi].mean()) > 0.5:
                     seg.continued = _continued_share(roi, x0, y0, lab, frame.depth)
                 out.append(seg)
     return out

@@ -1,5 +1,6 @@
 """The whole robot: navigation, arm, perception, search, catch, exploration and tidy-up
 under one SubSystem."""
+
 from __future__ import annotations
 
 from bt_engine import SubSystem

@@ -1,4 +1,5 @@
 """Small conversions between ROS messages and plain values, shared by the actors."""
+
 from __future__ import annotations
 
 import math
@@ -31,5 +32,4 @@ def wrap(a: float) -> float:
 def named(names: Sequence[str], values: Sequence[float], wanted: Sequence[str]) -> list[float]:
     """The values of ``wanted`` joints from a JointState's name/value lists."""
     index = {n: i for i, n in enumerate(names)}
-    return [float(values[index[n]]) if index.get(n) is not None and index[n] < len(values) else 0.0
-            for n in wanted]
+    return [float(values[index[n]]) if index.get(n) is not None and index[n] < len(values) else 0.0 for n in wanted]

@@ -3,6 +3,7 @@
 The mission runs ``patrol`` and ``watch`` in parallel; the first sighting ends the search
 (the tree halts the patrol, which stops the base).
 """
+
 from __future__ import annotations
 
 import logging
@@ -18,16 +19,16 @@ log = logging.getLogger("actors.search")
 
 #: a "category" meaning any category the perception knows
 ANY = ("any", "mixed", "", None)
-LOOK_STEP = math.radians(80)   # turn per look, about the camera's field of view [rad]
-LOOK_PAUSE = 0.6               # time to hold still at each look [s]
-HAND_RANGE = 0.45              # detections closer than this may be in the gripper [m]
-WAYPOINT_CLEARANCE = 0.25      # room a search location needs for the base [m] (navigation
-                               # plans with a 0.20 m robot radius)
-MAX_SHIFT = 1.0                # how far a blocked search location may be moved [m]
-SIDESTEP = 0.45                # where to look from when the navigation refuses a location [m]
-SAME_OBJECT = 0.20             # survey sightings closer than this are one object [m]
-REJECTED_RADIUS = 0.2          # sightings this near a rejected one are passed over [m]
-LOOKS_PER_TURN = 2             # frames a survey takes at each of its views
+LOOK_STEP = math.radians(80)  # turn per look, about the camera's field of view [rad]
+LOOK_PAUSE = 0.6  # time to hold still at each look [s]
+HAND_RANGE = 0.45  # detections closer than this may be in the gripper [m]
+WAYPOINT_CLEARANCE = 0.25  # room a search location needs for the base [m] (navigation
+# plans with a 0.20 m robot radius)
+MAX_SHIFT = 1.0  # how far a blocked search location may be moved [m]
+SIDESTEP = 0.45  # where to look from when the navigation refuses a location [m]
+SAME_OBJECT = 0.20  # survey sightings closer than this are one object [m]
+REJECTED_RADIUS = 0.2  # sightings this near a rejected one are passed over [m]
+LOOKS_PER_TURN = 2  # frames a survey takes at each of its views
 
 
 def in_own_hand(detection: dict) -> bool:
@@ -52,8 +53,7 @@ def group_sightings(sightings: list[dict], gate: float = SAME_OBJECT) -> list[di
     out = []
     for g in groups:
         cats = [s["category"] for s in g]
-        category = max(set(cats), key=lambda c: (cats.count(c),
-                                                 max(s["confidence"] for s in g if s["category"] == c)))
+        category = max(set(cats), key=lambda c: (cats.count(c), max(s["confidence"] for s in g if s["category"] == c)))
         mine = [s for s in g if s["category"] == category]
         best = max(mine, key=lambda s: s["confidence"])
         obj = {"category": category, "sightings": len(mine), "confidence": best["confidence"]}
@@ -61,8 +61,7 @@ def group_sightings(sightings: list[dict], gate: float = SAME_OBJECT) -> list[di
             obj[k] = float(statistics.median(s[k] for s in mine))
         obj["z"] = base_height(mine)
         poses = [s.get("pose") for s in mine]
-        pose = max(set(poses), key=lambda p: (poses.count(p),
-                                              max(s["confidence"] for s in mine if s.get("pose") == p)))
+        pose = max(set(poses), key=lambda p: (poses.count(p), max(s["confidence"] for s in mine if s.get("pose") == p)))
         posed = max((s for s in mine if s.get("pose") == pose), key=lambda s: s["confidence"])
         for k in ("yaw", "pose", "axis_base", "axis_dir"):
             if posed.get(k) is not None:
@@ -81,7 +80,7 @@ class Search(SubSystem):
 
     def __init__(self) -> None:
         super().__init__()
-        self.set_value("rejected", [])   # (x, y, category) a closer look said were not
+        self.set_value("rejected", [])  # (x, y, category) a closer look said were not
 
     @actor(read_only=True)
     def watch(self, category: str = "any") -> dict:
@@ -112,8 +111,10 @@ class Search(SubSystem):
         self.set_value("rejected", [*self.get_value("rejected"), (float(x), float(y), category)])
 
     def _rejected(self, detection: dict) -> bool:
-        return any(c == detection["category"] and math.hypot(detection["x"] - x, detection["y"] - y) < REJECTED_RADIUS
-                   for x, y, c in self.get_value("rejected"))
+        return any(
+            c == detection["category"] and math.hypot(detection["x"] - x, detection["y"] - y) < REJECTED_RADIUS
+            for x, y, c in self.get_value("rejected")
+        )
 
     @actor(moves=True, limits={"turns": (1, 8)})
     def look_around(self, turns: int = 4) -> None:
@@ -150,9 +151,11 @@ class Search(SubSystem):
             return None
         except ActorError as e:
             first = e.root_cause
-        back = heading + math.pi                # the robot's side of the location first
-        spots = [(x + SIDESTEP * math.cos(back + k * math.pi / 3), y + SIDESTEP * math.sin(back + k * math.pi / 3))
-                 for k in (0, 1, -1, 2, -2, 3)]
+        back = heading + math.pi  # the robot's side of the location first
+        spots = [
+            (x + SIDESTEP * math.cos(back + k * math.pi / 3), y + SIDESTEP * math.sin(back + k * math.pi / 3))
+            for k in (0, 1, -1, 2, -2, 3)
+        ]
         tries = 0
         for px, py in spots:
             if tries == 3 or self.run_actor("clearance", px, py) < WAYPOINT_CLEARANCE:
@@ -188,14 +191,16 @@ class Search(SubSystem):
         if cover_map and given:
             rest = [tuple(p) for p in self.run_actor("search_views", seen_from=looked_from)]
             if rest:
-                log.info("search: %d more places from the map see the floor the %d locations did not",
-                         len(rest), len(places))
+                log.info(
+                    "search: %d more places from the map see the floor the %d locations did not", len(rest), len(places)
+                )
                 self._look_from_each(rest, at_each, missed)
                 places += rest
         return places, missed
 
-    def _look_from_each(self, places: list[tuple[float, float]], at_each: Callable[[], None],
-                        missed: list[str]) -> list[list[float]]:
+    def _look_from_each(
+        self, places: list[tuple[float, float]], at_each: Callable[[], None], missed: list[str]
+    ) -> list[list[float]]:
         """The visiting loop of ``_visit``: returns where the robot looked from; why a
         place was not reached goes into ``missed``."""
         looked_from = []
@@ -215,7 +220,7 @@ class Search(SubSystem):
                 log.info("search location (%.2f, %.2f) not reached: %s", x, y, error)
                 sx, sy, _ = self.run_actor("get_pose")
                 if math.hypot(sx - rx, sy - ry) < 0.5:
-                    continue                    # it did not get anywhere new
+                    continue  # it did not get anywhere new
             at_each()
             sx, sy, _ = self.run_actor("get_pose")
             looked_from.append([sx, sy])
@@ -239,8 +244,10 @@ class Search(SubSystem):
                 every corner)
         """
         places, missed = self._visit(locations, lambda: self.run_actor("look_around", turns), cover_map)
-        raise SearchExhausted(f"visited {len(places)} search locations and saw nothing"
-                              + (f"; {len(missed)} not reached: " + "; ".join(missed) if missed else ""))
+        raise SearchExhausted(
+            f"visited {len(places)} search locations and saw nothing"
+            + (f"; {len(missed)} not reached: " + "; ".join(missed) if missed else "")
+        )
 
     @actor(moves=True, limits={"views": (1, 16)})
     def survey(self, locations: list, views: int = 8, cover_map: bool = True) -> list:
@@ -267,8 +274,9 @@ class Search(SubSystem):
                     self.run_actor("mini_turn", step)
                 self.run_actor("sleep", LOOK_PAUSE)
                 for _ in range(LOOKS_PER_TURN):
-                    sightings.extend(d for d in self.run_actor("object_glance")
-                                     if d["category"] != "unknown" and not in_own_hand(d))
+                    sightings.extend(
+                        d for d in self.run_actor("object_glance") if d["category"] != "unknown" and not in_own_hand(d)
+                    )
 
         self._visit(locations, look, cover_map)
         found = group_sightings(sightings)

@@ -1,6 +1,7 @@
 """Per-category strategies, read from the category files (``categories``): how the base
 approaches an object and how the gripper holds it. A new category brings its own; see
 docs/categories.md."""
+
 from __future__ import annotations
 
 import categories

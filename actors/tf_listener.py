@@ -7,6 +7,7 @@ Frames (REP 105): map -> odom (the localiser: AMCL, or navstack's stand-in) -> b
 links. Only the base's dynamic edges are kept; the arm's joints also go out on /tf 30
 times a second and would only cost time here.
 """
+
 from __future__ import annotations
 
 from typing import Any

@@ -4,6 +4,7 @@ The mission ``bt_tidy_up`` surveys the house (``survey``, in actors/search.py), 
 takes the objects one by one (``tidy_next``) and has ``tidy_one`` catch each and carry it
 to its category's place, recording what happened to it; ``tidy_report`` is the list.
 """
+
 from __future__ import annotations
 
 import logging
@@ -42,7 +43,7 @@ class Tidy(SubSystem):
         if not todo:
             return False
         rx, ry, _ = self.run_actor("get_pose")
-        todo.sort(key=lambda o: math.hypot(o["x"] - rx, o["y"] - ry))   # nearest first
+        todo.sort(key=lambda o: math.hypot(o["x"] - rx, o["y"] - ry))  # nearest first
         self.set_value("todo", todo[1:])
         return todo[0]
 
@@ -63,10 +64,14 @@ class Tidy(SubSystem):
         """
         category = target.get("category", "")
         place_name = belongs.get(category)
-        if place_name not in places:        # none named, or this world has no such place
+        if place_name not in places:  # none named, or this world has no such place
             place_name = belongs.get(DEFAULT_PLACE)
-        entry = {"category": category, "x": round(float(target["x"]), 3),
-                 "y": round(float(target["y"]), 3), "place": place_name}
+        entry = {
+            "category": category,
+            "x": round(float(target["x"]), 3),
+            "y": round(float(target["y"]), 3),
+            "place": place_name,
+        }
         try:
             if place_name not in places:
                 raise LookupError(f"no place {place_name!r} for {category} (places: {', '.join(places)})")

@@ -1,4 +1,5 @@
 """The first examples of actors, one of each kind, as a SubSystem: a starting point for new actors."""
+
 from __future__ import annotations
 
 from typing import Iterator
@@ -51,6 +52,7 @@ class Tutorial(SubSystem):
             if state["n"] <= 0:
                 timer.cancel()
                 emit.end()
+
         timer = self.runtime.call_every(period, tick)
         return timer.cancel
 

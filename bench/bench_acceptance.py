@@ -13,6 +13,7 @@ episodes' rms and max), sim and wall time per episode (medians), real-time facto
 the issue's targets (>= 95 % per category, >= 90 % of objects tidied, tilt median <= 5 deg).
 CSVs and traces go to --out (default out/acceptance/<category>/, out/acceptance/tidy_up/).
 """
+
 from __future__ import annotations
 
 import argparse
@@ -28,10 +29,10 @@ from demo.episode import Episode
 from demo.evaluate import evaluate
 
 CATEGORIES = ("can", "bottle", "carton")
-TARGET_PICK = 0.95       # success per category
-TARGET_TIDY = 0.90       # objects where they belong
-TARGET_TILT = 5.0        # [deg] median tilt of the held object
-MAX_FAILED = 20          # failed episodes listed under the table
+TARGET_PICK = 0.95  # success per category
+TARGET_TIDY = 0.90  # objects where they belong
+TARGET_TILT = 5.0  # [deg] median tilt of the held object
+MAX_FAILED = 20  # failed episodes listed under the table
 
 
 def _median(xs) -> float:
@@ -43,8 +44,10 @@ def _num(x: float, fmt: str) -> str:
     return "-" if x != x else format(x, fmt)
 
 
-HEAD = (f"{'':12s} {'success':>9s} {'rate':>7s} {'objects placed':>15s} {'tilt med/max deg':>17s} "
-        f"{'loc rms/max cm':>15s} {'sim s':>7s} {'wall s':>7s} {'x real':>7s}  target")
+HEAD = (
+    f"{'':12s} {'success':>9s} {'rate':>7s} {'objects placed':>15s} {'tilt med/max deg':>17s} "
+    f"{'loc rms/max cm':>15s} {'sim s':>7s} {'wall s':>7s} {'x real':>7s}  target"
+)
 
 
 def row(name: str, eps: list[Episode], tidy: bool = False) -> str:
@@ -52,8 +55,10 @@ def row(name: str, eps: list[Episode], tidy: bool = False) -> str:
     rate = ok / n if n else math.nan
     tilts = [e.grasp_tilt_deg for e in eps if e.grasp_tilt_deg == e.grasp_tilt_deg]
     tilt = f"{_num(_median(tilts), '.1f')}/{_num(max(tilts) if tilts else math.nan, '.1f')}"
-    loc = (f"{_num(100 * _median(e.loc_rmse_m for e in eps), '.1f')}/"
-           f"{_num(100 * _median(e.loc_max_m for e in eps), '.1f')}")
+    loc = (
+        f"{_num(100 * _median(e.loc_rmse_m for e in eps), '.1f')}/"
+        f"{_num(100 * _median(e.loc_max_m for e in eps), '.1f')}"
+    )
     placed = "-"
     if tidy:
         total, done = sum(e.objects or 0 for e in eps), sum(e.placed or 0 for e in eps)
@@ -64,10 +69,12 @@ def row(name: str, eps: list[Episode], tidy: bool = False) -> str:
         target = f">= {TARGET_PICK:.0%}: {'ok' if rate >= TARGET_PICK else 'MISSED'}"
         if tilts:
             target += f"; tilt <= {TARGET_TILT:g}: {'ok' if _median(tilts) <= TARGET_TILT else 'MISSED'}"
-    return (f"{name:12s} {f'{ok}/{n}':>9s} {_num(100 * rate, '6.1f')}% {placed:>15s} {tilt:>17s} "
-            f"{loc:>15s} {_num(_median(e.sim_time for e in eps), '7.1f')} "
-            f"{_num(_median(e.wall_time for e in eps), '7.1f')} "
-            f"{_num(_median(e.realtime_factor for e in eps), '6.1f')}x  {target}")
+    return (
+        f"{name:12s} {f'{ok}/{n}':>9s} {_num(100 * rate, '6.1f')}% {placed:>15s} {tilt:>17s} "
+        f"{loc:>15s} {_num(_median(e.sim_time for e in eps), '7.1f')} "
+        f"{_num(_median(e.wall_time for e in eps), '7.1f')} "
+        f"{_num(_median(e.realtime_factor for e in eps), '6.1f')}x  {target}"
+    )
 
 
 def table(picks: list[tuple[str, list[Episode]]], tidy: list[Episode] | None, out=sys.stdout) -> None:
@@ -82,8 +89,7 @@ def table(picks: list[tuple[str, list[Episode]]], tidy: list[Episode] | None, ou
     if failed:
         print(f"\nfailed episodes ({len(failed)}; the CSVs have every reason):", file=out)
         for e in failed[:MAX_FAILED]:
-            print(f"  {e.tree:13s} seed {e.seed} {e.category:7s} at {e.failed_node or '?'}: {e.reason[:110]}",
-                  file=out)
+            print(f"  {e.tree:13s} seed {e.seed} {e.category:7s} at {e.failed_node or '?'}: {e.reason[:110]}", file=out)
         if len(failed) > MAX_FAILED:
             print(f"  ... and {len(failed) - MAX_FAILED} more", file=out)
 
@@ -92,13 +98,22 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", type=int, default=50, help="bt_pick_place seeds per category (default 50)")
     ap.add_argument("--tidy-seeds", type=int, default=20, help="bt_tidy_up seeds (default 20; 0: none)")
-    ap.add_argument("--categories", default=",".join(CATEGORIES),
-                    help=f"comma-separated (default {','.join(CATEGORIES)}; empty: no pick-and-place)")
+    ap.add_argument(
+        "--categories",
+        default=",".join(CATEGORIES),
+        help=f"comma-separated (default {','.join(CATEGORIES)}; empty: no pick-and-place)",
+    )
     ap.add_argument("--world", default="house_hard")
     ap.add_argument("--first-seed", type=int, default=2000)
     ap.add_argument("--jobs", type=int, default=2, help="episodes at once on this machine (default 2)")
-    ap.add_argument("--ray", nargs="?", const=True, default=None, metavar="ADDRESS",
-                    help="run the episodes on Ray instead (see docs/evaluation.md)")
+    ap.add_argument(
+        "--ray",
+        nargs="?",
+        const=True,
+        default=None,
+        metavar="ADDRESS",
+        help="run the episodes on Ray instead (see docs/evaluation.md)",
+    )
     ap.add_argument("--out", default="out/acceptance", help="CSVs and traces, a folder per row")
     ap.add_argument("--resume", action="store_true", help="keep the episodes --out already has")
     args = ap.parse_args(argv)
@@ -110,29 +125,38 @@ def main(argv: list[str] | None = None) -> int:
     t0 = time.perf_counter()
     picks: list[tuple[str, list[Episode]]] = []
     tidy = None
-    if args.ray is not None:   # one Ray for every row (evaluate uses the one running)
+    if args.ray is not None:  # one Ray for every row (evaluate uses the one running)
         from demo.eval_ray import RayRunner
+
         cluster = RayRunner(args.ray)
     else:
         cluster = nullcontext()
-    how = dict(jobs=args.jobs, first_seed=args.first_seed, resume=args.resume,
-               ray=True if args.ray is not None else None)
+    how = dict(
+        jobs=args.jobs, first_seed=args.first_seed, resume=args.resume, ray=True if args.ray is not None else None
+    )
     with cluster:
         for category in chosen:
             print(f"\n--- bt_pick_place, {category}: {args.seeds} seeds in {args.world} ---", flush=True)
-            picks.append((category, evaluate("bt_pick_place", args.seeds, args.world, category,
-                                             out_dir=out / category, **how)))
+            picks.append(
+                (category, evaluate("bt_pick_place", args.seeds, args.world, category, out_dir=out / category, **how))
+            )
         if args.tidy_seeds:
             print(f"\n--- bt_tidy_up: {args.tidy_seeds} seeds in {args.world} ---", flush=True)
             # the category is not a tidy-up's input: the first registered one names the folder
-            tidy = evaluate("bt_tidy_up", args.tidy_seeds, args.world, categories.names()[0],
-                            out_dir=out / "tidy_up", **how)
+            tidy = evaluate(
+                "bt_tidy_up", args.tidy_seeds, args.world, categories.names()[0], out_dir=out / "tidy_up", **how
+            )
     wall = time.perf_counter() - t0
-    print(f"\nacceptance: bt_pick_place x {args.seeds} seeds per category, bt_tidy_up x {args.tidy_seeds} "
-          f"seeds, in {args.world} from seed {args.first_seed}; medians per episode")
+    print(
+        f"\nacceptance: bt_pick_place x {args.seeds} seeds per category, bt_tidy_up x {args.tidy_seeds} "
+        f"seeds, in {args.world} from seed {args.first_seed}; medians per episode"
+    )
     table(picks, tidy)
-    where = f"on Ray ({args.ray if isinstance(args.ray, str) else 'ray.init()'})" if args.ray is not None \
+    where = (
+        f"on Ray ({args.ray if isinstance(args.ray, str) else 'ray.init()'})"
+        if args.ray is not None
         else f"with {args.jobs} parallel jobs"
+    )
     print(f"\ntotal wall time {wall:.0f} s {where}; CSVs in {out}/*/episodes.csv")
     return 0
 

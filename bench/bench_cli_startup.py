@@ -15,6 +15,7 @@ Targets: ``--help`` <= 2x and ``check trees/*.yaml`` <= 3x the baseline; the oth
 commands are shown for information. "quiet" says no output of the command carried
 pybullet's ``pybullet build time`` banner (the simulator was not imported).
 """
+
 from __future__ import annotations
 
 import argparse
@@ -78,8 +79,10 @@ def main() -> int:
             quiet[shown(args)] = quiet[shown(args)] and BANNER not in out
 
     base = statistics.median(t for ts in paired.values() for t in ts)
-    print(f"baseline `python -c \"import yaml, py_trees\"`: {base * 1e3:.0f} ms "
-          f"(median of {opts.rounds * len(COMMANDS)}); {opts.rounds} rounds, medians")
+    print(
+        f'baseline `python -c "import yaml, py_trees"`: {base * 1e3:.0f} ms '
+        f"(median of {opts.rounds * len(COMMANDS)}); {opts.rounds} rounds, medians"
+    )
     print(f"{'command':<22} {'ms':>6} {'base ms':>8} {'ratio':>6} {'target':>7}  {'quiet':<5} result")
     missed = 0
     for args, target in COMMANDS:
@@ -89,8 +92,10 @@ def main() -> int:
         result = "-" if target is None else ("PASS" if ratio <= target else "FAIL")
         missed += result == "FAIL"
         goal = "-" if target is None else f"<={target:g}x"
-        print(f"{name:<22} {t * 1e3:6.0f} {b * 1e3:8.0f} {ratio:5.2f}x {goal:>7}  "
-              f"{'yes' if quiet[name] else 'NO':<5} {result}")
+        print(
+            f"{name:<22} {t * 1e3:6.0f} {b * 1e3:8.0f} {ratio:5.2f}x {goal:>7}  "
+            f"{'yes' if quiet[name] else 'NO':<5} {result}"
+        )
     if cold:
         print(f"(the untimed first run rebuilt the actor index: {', '.join(cold)} printed the banner)")
     return 1 if missed and opts.strict else 0

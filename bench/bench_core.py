@@ -1,7 +1,8 @@
 """Engine core micro-benchmarks (issue [core]). Medians over repeated batches, one run.
 
-    .venv/bin/python bench/bench_core.py
+.venv/bin/python bench/bench_core.py
 """
+
 from __future__ import annotations
 
 import gc
@@ -36,6 +37,7 @@ class Bench(SubSystem):
                 for i in range(64):
                     emit(i)
                 self.runtime.hub.call_soon(produce)
+
         self.runtime.hub.call_soon(produce)
         return lambda: state.update(open=False)
 

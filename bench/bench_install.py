@@ -11,6 +11,7 @@ and install time.
 Each environment is made in a temporary folder and removed after. Needs the package
 registry, as ``make`` does; ``all`` builds the interfaces with cmake (several minutes).
 """
+
 from __future__ import annotations
 
 import argparse
@@ -41,11 +42,11 @@ def measure(name: str) -> tuple[float, float, int]:
         python = str(env / "bin" / "python")
         start = time.perf_counter()
         for args in INSTALLS[name]:
-            subprocess.run([python, "-m", "pip", "install", "-q", "--disable-pip-version-check", *args],
-                           check=True)
+            subprocess.run([python, "-m", "pip", "install", "-q", "--disable-pip-version-check", *args], check=True)
         seconds = time.perf_counter() - start
-        listed = subprocess.run([python, "-m", "pip", "list", "--format", "freeze"], check=True,
-                                capture_output=True, text=True).stdout.split()
+        listed = subprocess.run(
+            [python, "-m", "pip", "list", "--format", "freeze"], check=True, capture_output=True, text=True
+        ).stdout.split()
         return size_mb(env), seconds, len(listed)
 
 

@@ -19,6 +19,7 @@ The world is a provider (``make_world(seed) -> object`` with ``map``, ``t``, ``o
 ``kidnap_pose()``): :class:`navstack.synthetic.SyntheticWorld` (default) or
 :class:`SimHouse`, the pybullet simulator (``--world sim``).
 """
+
 from __future__ import annotations
 
 import argparse
@@ -66,7 +67,7 @@ class SimHouse:
         g = self.sim.grid
         self.map = OccupancyMap(g.data, g.resolution, (g.origin[0], g.origin[1], 0.0))
         self.rng = np.random.default_rng(seed)
-        self.tour, self.target = list(HOUSE_TOUR), 1     # the house's start is the tour's first point
+        self.tour, self.target = list(HOUSE_TOUR), 1  # the house's start is the tour's first point
         self.speed, self.turn = 0.22, 1.2
         self.t, self.dt, self.distance, self._k = 0.0, 0.05, 0.0, 0
         self.truth, self.odom = self.sim.robot_pose(), self.sim.odom_pose()
@@ -76,8 +77,9 @@ class SimHouse:
 
         r = self.sim.robot
         pos, _ = p.getBasePositionAndOrientation(r.body, physicsClientId=r.cid)
-        p.resetBasePositionAndOrientation(r.body, [pose[0], pose[1], pos[2]],
-                                          p.getQuaternionFromEuler([0, 0, pose[2]]), physicsClientId=r.cid)
+        p.resetBasePositionAndOrientation(
+            r.body, [pose[0], pose[1], pos[2]], p.getQuaternionFromEuler([0, 0, pose[2]]), physicsClientId=r.cid
+        )
         self.truth, self.target = tuple(pose), target
 
     def step(self):
@@ -92,7 +94,7 @@ class SimHouse:
         self.truth, self.odom = self.sim.robot_pose(), self.sim.odom_pose()
         self.distance += math.hypot(self.truth[0] - before[0], self.truth[1] - before[1])
         scan = None
-        if self._k % 4 == 0:                               # 5 Hz
+        if self._k % 4 == 0:  # 5 Hz
             m = self.sim.lidar_model
             scan = Scan(self.sim.scan(), m.angle_min, m.angle_increment, m.range_min, m.range_max)
         return Sample(self.t, self.odom, self.truth, scan)
@@ -111,19 +113,19 @@ def make_localiser(world, seed: int, **overrides) -> Amcl:
 
 
 def err(est, truth):
-    return math.hypot(est[0] - truth[0], est[1] - truth[1]), \
-        abs((est[2] - truth[2] + math.pi) % (2 * math.pi) - math.pi)
+    return math.hypot(est[0] - truth[0], est[1] - truth[1]), abs(
+        (est[2] - truth[2] + math.pi) % (2 * math.pi) - math.pi
+    )
 
 
-def run_trial(make_world, seed: int, track: float, after: float, overrides: dict, verbose=False,
-              trace=False) -> dict:
+def run_trial(make_world, seed: int, track: float, after: float, overrides: dict, verbose=False, trace=False) -> dict:
     world = make_world(seed)
     amcl = make_localiser(world, seed, **overrides)
     rng = np.random.default_rng(seed + 1000)
     x, y, th = world.truth
     init = (x + rng.normal(0, 0.1), y + rng.normal(0, 0.1), th + rng.normal(0, math.radians(5)))
     amcl.on_odometry(world.odom)
-    amcl.initialise(init, np.diag([0.2 ** 2, 0.2 ** 2, math.radians(10) ** 2]), odom=world.odom)
+    amcl.initialise(init, np.diag([0.2**2, 0.2**2, math.radians(10) ** 2]), odom=world.odom)
     track_err, yaw_err = [], []
     t_kidnap, detected, recovered_at = None, None, None
     next_pose = 0.0
@@ -134,12 +136,14 @@ def run_trial(make_world, seed: int, track: float, after: float, overrides: dict
             amcl.on_scan(s.scan, s.odom)
             if trace and t_kidnap is not None:
                 st, p = amcl.status, amcl.pose(s.odom)
-                print(f"    t+{s.t - t_kidnap:5.1f} truth {s.truth[0]:5.2f} {s.truth[1]:5.2f} {s.truth[2]:5.2f}"
-                      f"  est {p[0]:5.2f} {p[1]:5.2f} {p[2]:5.2f}  {st.state:9s} score {st.score:.2f}"
-                      f" std {st.std_xy:.2f} clusters {st.clusters} n {st.particles} recoveries {st.recoveries}")
+                print(
+                    f"    t+{s.t - t_kidnap:5.1f} truth {s.truth[0]:5.2f} {s.truth[1]:5.2f} {s.truth[2]:5.2f}"
+                    f"  est {p[0]:5.2f} {p[1]:5.2f} {p[2]:5.2f}  {st.state:9s} score {st.score:.2f}"
+                    f" std {st.std_xy:.2f} clusters {st.clusters} n {st.particles} recoveries {st.recoveries}"
+                )
         if s.t + 1e-9 < next_pose:
             continue
-        next_pose += 0.1                      # the pose at 10 Hz
+        next_pose += 0.1  # the pose at 10 Hz
         e, ey = err(amcl.pose(s.odom), s.truth)
         if t_kidnap is None:
             if world.distance >= 1.0:
@@ -163,13 +167,24 @@ def run_trial(make_world, seed: int, track: float, after: float, overrides: dict
                 break
     times = amcl.update_times
     if verbose:
-        print(f"  seed {seed}: rms {1000 * rms(track_err):.0f} mm, worst {1000 * max(track_err):.0f} mm,"
-              f" yaw rms {math.degrees(rms(yaw_err)):.2f} deg, noticed after {fmt(detected)} s,"
-              f" back under 10 cm after {fmt(recovered_at)} s,"
-              f" final err {e:.2f} m, recoveries {amcl.status.recoveries} (false {false_alarms})", flush=True)
-    return dict(track_err=track_err, yaw_err=yaw_err, update_times=times, detected=detected,
-                recovered=recovered_at, recoveries=amcl.status.recoveries, final=e,
-                false_alarms=false_alarms, search_times=amcl.search_times)
+        print(
+            f"  seed {seed}: rms {1000 * rms(track_err):.0f} mm, worst {1000 * max(track_err):.0f} mm,"
+            f" yaw rms {math.degrees(rms(yaw_err)):.2f} deg, noticed after {fmt(detected)} s,"
+            f" back under 10 cm after {fmt(recovered_at)} s,"
+            f" final err {e:.2f} m, recoveries {amcl.status.recoveries} (false {false_alarms})",
+            flush=True,
+        )
+    return dict(
+        track_err=track_err,
+        yaw_err=yaw_err,
+        update_times=times,
+        detected=detected,
+        recovered=recovered_at,
+        recoveries=amcl.status.recoveries,
+        final=e,
+        false_alarms=false_alarms,
+        search_times=amcl.search_times,
+    )
 
 
 def fmt(v):
@@ -186,11 +201,20 @@ def main(argv=None) -> int:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--track", type=float, default=60.0, help="seconds of tracking before the kidnapping")
     ap.add_argument("--after", type=float, default=40.0, help="seconds after the kidnapping")
-    ap.add_argument("--world", choices=("synthetic", "sim"), default="synthetic",
-                    help="synthetic: the numpy house (fast); sim: the pybullet simulator (about 14 s a trial)")
+    ap.add_argument(
+        "--world",
+        choices=("synthetic", "sim"),
+        default="synthetic",
+        help="synthetic: the numpy house (fast); sim: the pybullet simulator (about 14 s a trial)",
+    )
     ap.add_argument("--unmapped", type=int, default=8, help="unmapped boxes per synthetic world")
-    ap.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
-                    help="override a localiser parameter (AmclParams, FilterParams, LaserModelParams)")
+    ap.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="override a localiser parameter (AmclParams, FilterParams, LaserModelParams)",
+    )
     ap.add_argument("-v", "--verbose", action="store_true")
     ap.add_argument("--trace", type=int, metavar="TRIAL", help="print every scan after the kidnapping in this trial")
     a = ap.parse_args(argv)
@@ -200,38 +224,55 @@ def main(argv=None) -> int:
         overrides[k] = eval(v, {"math": math})  # noqa: S307 (a bench knob)
     make_world = synthetic_house(a.unmapped) if a.world == "synthetic" else SimHouse
     wall0 = time.perf_counter()
-    results = [run_trial(make_world, a.seed + i, a.track, a.after, overrides, a.verbose, a.trace == i)
-               for i in range(a.trials)]
+    results = [
+        run_trial(make_world, a.seed + i, a.track, a.after, overrides, a.verbose, a.trace == i) for i in range(a.trials)
+    ]
     wall = time.perf_counter() - wall0
     track = [e for r in results for e in r["track_err"]]
     worst_per_trial = [max(r["track_err"]) for r in results]
     yaw = [e for r in results for e in r["yaw_err"]]
     upd = [1000 * t for r in results for t in r["update_times"]]
-    ok = [r for r in results if r["detected"] is not None and r["detected"] <= 5.0
-          and r["recovered"] is not None and r["recovered"] <= 30.0]
+    ok = [
+        r
+        for r in results
+        if r["detected"] is not None and r["detected"] <= 5.0 and r["recovered"] is not None and r["recovered"] <= 30.0
+    ]
     det = [r["detected"] for r in results if r["detected"] is not None]
     rec = [r["recovered"] for r in results if r["recovered"] is not None]
-    print(f"{a.world} house, {a.trials} trials, {len(track)} poses at 10 Hz after 1 m of travel"
-          f" ({wall:.0f} s wall)")
-    print(f"position error: RMS {1000 * rms(track):.1f} mm, worst {1000 * max(track):.1f} mm"
-          f" (per-trial worst: median {1000 * statistics.median(worst_per_trial):.0f} mm)"
-          f"   (targets <= 50 / <= 100 mm)")
-    print(f"heading error: RMS {math.degrees(rms(yaw)):.2f} deg, worst {math.degrees(max(yaw)):.2f} deg"
-          f"   (target <= 2 deg RMS)")
-    print(f"filter update: median {statistics.median(upd):.1f} ms, p95 {np.percentile(upd, 95):.1f} ms,"
-          f" max {max(upd):.1f} ms over {len(upd)} updates   (target <= 20 ms median)")
+    print(f"{a.world} house, {a.trials} trials, {len(track)} poses at 10 Hz after 1 m of travel ({wall:.0f} s wall)")
+    print(
+        f"position error: RMS {1000 * rms(track):.1f} mm, worst {1000 * max(track):.1f} mm"
+        f" (per-trial worst: median {1000 * statistics.median(worst_per_trial):.0f} mm)"
+        f"   (targets <= 50 / <= 100 mm)"
+    )
+    print(
+        f"heading error: RMS {math.degrees(rms(yaw)):.2f} deg, worst {math.degrees(max(yaw)):.2f} deg"
+        f"   (target <= 2 deg RMS)"
+    )
+    print(
+        f"filter update: median {statistics.median(upd):.1f} ms, p95 {np.percentile(upd, 95):.1f} ms,"
+        f" max {max(upd):.1f} ms over {len(upd)} updates   (target <= 20 ms median)"
+    )
     srch = [1000 * t for r in results for t in r["search_times"]]
     if srch:
-        print(f"global search (relocalisation): median {statistics.median(srch):.0f} ms,"
-              f" max {max(srch):.0f} ms over {len(srch)}")
-    print(f"lost declared while tracking (false alarms): {sum(r['false_alarms'] for r in results)}"
-          f" in {a.trials * a.track:.0f} s")
+        print(
+            f"global search (relocalisation): median {statistics.median(srch):.0f} ms,"
+            f" max {max(srch):.0f} ms over {len(srch)}"
+        )
+    print(
+        f"lost declared while tracking (false alarms): {sum(r['false_alarms'] for r in results)}"
+        f" in {a.trials * a.track:.0f} s"
+    )
     if det:
-        print(f"kidnapping noticed: {len(det)}/{a.trials}, after median {statistics.median(det):.1f} s,"
-              f" max {max(det):.1f} s   (target <= 5 s)")
+        print(
+            f"kidnapping noticed: {len(det)}/{a.trials}, after median {statistics.median(det):.1f} s,"
+            f" max {max(det):.1f} s   (target <= 5 s)"
+        )
     if rec:
-        print(f"back under 10 cm for good: {len(rec)}/{a.trials}, after median {statistics.median(rec):.1f} s,"
-              f" max {max(rec):.1f} s   (target <= 30 s)")
+        print(
+            f"back under 10 cm for good: {len(rec)}/{a.trials}, after median {statistics.median(rec):.1f} s,"
+            f" max {max(rec):.1f} s   (target <= 30 s)"
+        )
     print(f"kidnapped recoveries: {len(ok)}/{a.trials}")
     return 0
 

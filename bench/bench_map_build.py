@@ -21,6 +21,7 @@ Targets of the issue: precision >= 0.95, recall >= 0.90, trajectory error <= 5 c
 Maps go to out/bench_map_build/seed<N>/map.yaml. One seed takes about ten minutes of wall
 time on two cores.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -50,8 +51,10 @@ def scan_truth(truth: dict):
     def observe(rt, sim):
         def on_scan(m: LaserScan) -> None:
             truth[round(m.header.stamp.sec + 1e-9 * m.header.stamp.nanosec, 6)] = tuple(sim.robot_pose())
+
         sub = rt.bus.subscribe("/scan", LaserScan, on_scan, 100)
         return sub.close
+
     return observe
 
 
@@ -72,11 +75,20 @@ def one(world: str, seed: int, max_time: float, out: pathlib.Path) -> dict:
     truth: dict = {}
     run = build_map(world, seed, out / f"seed{seed}", max_time=max_time, observe=scan_truth(truth))
     tum = run.mapping.get("trajectory")
-    row = {"seed": seed, "finished": run.success, "reason": run.reason, "sim": run.sim_time,
-           "wall": run.wall_time, "traj_cm": 100 * run.traj_rmse_m, "traj_max_cm": 100 * run.traj_max_m,
-           "ate_cm": 100 * keyframe_ate(tum, truth) if tum else math.nan,
-           "goals": run.explore.get("goals", math.nan), "closures": run.mapping.get("loop_closures", math.nan),
-           "precision": math.nan, "recall": math.nan}
+    row = {
+        "seed": seed,
+        "finished": run.success,
+        "reason": run.reason,
+        "sim": run.sim_time,
+        "wall": run.wall_time,
+        "traj_cm": 100 * run.traj_rmse_m,
+        "traj_max_cm": 100 * run.traj_max_m,
+        "ate_cm": 100 * keyframe_ate(tum, truth) if tum else math.nan,
+        "goals": run.explore.get("goals", math.nan),
+        "closures": run.mapping.get("loop_closures", math.nan),
+        "precision": math.nan,
+        "recall": math.nan,
+    }
     if run.map_yaml:
         built = read_map(run.map_yaml).grid
         s = score_maps(built, truth_grid(world, seed, resolution=built.resolution))
@@ -98,21 +110,30 @@ def main(argv=None) -> int:
     for seed in range(args.seed, args.seed + args.seeds):
         r = one(args.world, seed, args.max_time, out)
         rows.append(r)
-        print(f"seed {seed}: {'finished' if r['finished'] else 'UNFINISHED'} in {r['sim']:.0f} s sim / "
-              f"{r['wall']:.0f} s wall, {r['goals']} goals, {r['closures']} loop closures; trajectory: ATE "
-              f"{r['ate_cm']:.1f} cm rms, online {r['traj_cm']:.1f} cm rms ({r['traj_max_cm']:.1f} max); "
-              f"precision {r['precision']:.3f} "
-              f"recall {r['recall']:.3f}" + (f"  [{r['reason']}]" if r["reason"] else ""), flush=True)
+        print(
+            f"seed {seed}: {'finished' if r['finished'] else 'UNFINISHED'} in {r['sim']:.0f} s sim / "
+            f"{r['wall']:.0f} s wall, {r['goals']} goals, {r['closures']} loop closures; trajectory: ATE "
+            f"{r['ate_cm']:.1f} cm rms, online {r['traj_cm']:.1f} cm rms ({r['traj_max_cm']:.1f} max); "
+            f"precision {r['precision']:.3f} "
+            f"recall {r['recall']:.3f}" + (f"  [{r['reason']}]" if r["reason"] else ""),
+            flush=True,
+        )
 
     def med(key):
         vals = [r[key] for r in rows if not math.isnan(r[key])]
         return statistics.median(vals) if vals else math.nan
+
     done = sum(r["finished"] for r in rows)
-    print(f"\n{args.world}, {len(rows)} seed(s) from {args.seed}: exploration finished {done}/{len(rows)}; "
-          f"medians: sim {med('sim'):.0f} s, wall {med('wall'):.0f} s")
+    print(
+        f"\n{args.world}, {len(rows)} seed(s) from {args.seed}: exploration finished {done}/{len(rows)}; "
+        f"medians: sim {med('sim'):.0f} s, wall {med('wall'):.0f} s"
+    )
     print(f"{'online trajectory [cm rms]':27s} {med('traj_cm'):7.3f}")
-    for key, label, better in (("ate_cm", "trajectory ATE [cm rms]", min),
-                               ("precision", "precision", max), ("recall", "recall", max)):
+    for key, label, better in (
+        ("ate_cm", "trajectory ATE [cm rms]", min),
+        ("precision", "precision", max),
+        ("recall", "recall", max),
+    ):
         v, t = med(key), TARGETS[key]
         ok = v <= t if better is min else v >= t
         print(f"{label:27s} {v:7.3f}   target {'<=' if better is min else '>='} {t}: {'ok' if ok else 'MISSED'}")

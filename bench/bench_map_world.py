@@ -24,6 +24,7 @@ traces, top views and a CSV per map go to out/bench_map_world/.
 
 Target: success >= 90 % on each map.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -42,7 +43,7 @@ from sim.map_world import write_locations
 OUT = pathlib.Path("out/bench_map_world")
 TARGET_RATE = 0.90
 FIRST_SEED = 2000
-DEGRADE_SEED = 7            # the SLAM-like map is one fixed map (a user's map does not change)
+DEGRADE_SEED = 7  # the SLAM-like map is one fixed map (a user's map does not change)
 ROTATION = math.radians(3.0)
 
 
@@ -66,19 +67,26 @@ def make_maps(out: pathlib.Path) -> dict:
     _, house_yaml = write_map("house", 0, out / "house.pgm", height=lidar_height())
     house_locs = write_locations(out / "house_locations.yaml", places)
     slam_yaml, slam_locs, m = write_slam_like(house_yaml, out / "slam.pgm", places, DEGRADE_SEED, ROTATION)
-    note = (f"turned {math.degrees(ROTATION):g} deg, origin ({m.grid.origin[0]:g}, {m.grid.origin[1]:g}), "
-            f"{len(m.gaps)} 1-cell gaps, {len(m.speckles)} speckles, {len(m.patches)} unknown patches")
-    return {"house": (house_yaml, house_locs, "the house's export at the lidar's height"),
-            "slam": (slam_yaml, slam_locs, note)}
+    note = (
+        f"turned {math.degrees(ROTATION):g} deg, origin ({m.grid.origin[0]:g}, {m.grid.origin[1]:g}), "
+        f"{len(m.gaps)} 1-cell gaps, {len(m.speckles)} speckles, {len(m.patches)} unknown patches"
+    )
+    return {
+        "house": (house_yaml, house_locs, "the house's export at the lidar's height"),
+        "slam": (slam_yaml, slam_locs, note),
+    }
 
 
 def describe(name: str, yml: pathlib.Path, locs: pathlib.Path, note: str) -> None:
     grid = read_map(yml).grid
     spec = load_world(str(yml), FIRST_SEED, str(locs))
     occupied = int((grid.data == 100).sum())
-    print(f"{name}: {yml} ({grid.width} x {grid.height} cells at {grid.resolution} m, "
-          f"{occupied} occupied) -> {len(spec.walls)} wall boxes, "
-          f"{len(spec.search_locations)} search locations; {note}", flush=True)
+    print(
+        f"{name}: {yml} ({grid.width} x {grid.height} cells at {grid.resolution} m, "
+        f"{occupied} occupied) -> {len(spec.walls)} wall boxes, "
+        f"{len(spec.search_locations)} search locations; {note}",
+        flush=True,
+    )
 
 
 def main(argv=None) -> int:
@@ -87,8 +95,11 @@ def main(argv=None) -> int:
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--maps", default="house,slam", help="comma-separated: house, slam")
     args = ap.parse_args(argv)
-    print("$ " + " ".join([".venv/bin/python", "bench/bench_map_world.py"]
-                          + (argv if argv is not None else sys.argv[1:])), flush=True)
+    print(
+        "$ "
+        + " ".join([".venv/bin/python", "bench/bench_map_world.py"] + (argv if argv is not None else sys.argv[1:])),
+        flush=True,
+    )
     names = [n for n in args.maps.split(",") if n]
     for n in names:
         if n not in ("house", "slam"):
@@ -100,13 +111,23 @@ def main(argv=None) -> int:
         yml, locs, note = maps[n]
         print(f"\n--- {n}: {args.seeds} seeds ---")
         describe(n, yml, locs, note)
-        eps = evaluate("bt_pick_place", args.seeds, str(yml), "mixed", args.jobs, OUT / n,
-                       first_seed=FIRST_SEED, locations=str(locs))
+        eps = evaluate(
+            "bt_pick_place",
+            args.seeds,
+            str(yml),
+            "mixed",
+            args.jobs,
+            OUT / n,
+            first_seed=FIRST_SEED,
+            locations=str(locs),
+        )
         print_table(eps)
         rows.append((n, eps))
     print_rates(rows, "map", TARGET_RATE)
-    print(f"\nseeds {FIRST_SEED}..{FIRST_SEED + args.seeds - 1}, total wall time "
-          f"{time.perf_counter() - t0:.0f} s with {args.jobs} parallel jobs; output in {OUT}/")
+    print(
+        f"\nseeds {FIRST_SEED}..{FIRST_SEED + args.seeds - 1}, total wall time "
+        f"{time.perf_counter() - t0:.0f} s with {args.jobs} parallel jobs; output in {OUT}/"
+    )
     return 0
 
 

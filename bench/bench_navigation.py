@@ -4,6 +4,7 @@ of goals reached within 10 cm and 5 degrees.
 
     .venv/bin/python bench/bench_navigation.py [N]
 """
+
 from __future__ import annotations
 
 import math
@@ -50,8 +51,10 @@ def main(n: int = 50, seed: int = 1) -> None:
         rt.run_on_hub(world.close)
     print()
     print(f"goals reached (<10 cm, <5 deg): {reached}/{n} = {100 * reached / n:.0f} %  (target >= 98 %)")
-    print(f"base planning time: median {statistics.median(plan_ms):.1f} ms, "
-          f"max {max(plan_ms):.1f} ms over {len(plan_ms)} plans")
+    print(
+        f"base planning time: median {statistics.median(plan_ms):.1f} ms, "
+        f"max {max(plan_ms):.1f} ms over {len(plan_ms)} plans"
+    )
     print(f"final position error: median {1000 * statistics.median(errors):.0f} mm")
     print(f"sim time {sim:.0f} s in {wall:.0f} s wall: {sim / wall:.1f}x real time")
     for f in failures:

@@ -9,6 +9,7 @@ share of objects put where they belong, each episode a fresh world from its seed
 Targets (the issue's, for its harder world): >= 95 % per category, >= 90 % of objects
 tidied. Traces and CSVs go to out/bench_objects/.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -39,8 +40,15 @@ def main() -> None:
     rows = []
     for category in chosen:
         print(f"\n--- bt_pick_place, {category}: {args.seeds} seeds in {args.world} ---", flush=True)
-        eps = evaluate("bt_pick_place", args.seeds, args.world, category, args.jobs,
-                       f"out/bench_objects/{category}", first_seed=args.first_seed)
+        eps = evaluate(
+            "bt_pick_place",
+            args.seeds,
+            args.world,
+            category,
+            args.jobs,
+            f"out/bench_objects/{category}",
+            first_seed=args.first_seed,
+        )
         print_table(eps)
         rows.append((category, eps))
     if rows:
@@ -48,17 +56,28 @@ def main() -> None:
         print_pose_table([e for _, eps in rows for e in eps])
     tilts = [e.grasp_tilt_deg for _, eps in rows for e in eps if e.grasp_tilt_deg == e.grasp_tilt_deg]
     if tilts:
-        print(f"held object's tilt in the hand: median {statistics.median(tilts):.1f} deg, "
-              f"max {max(tilts):.1f} deg over {len(tilts)} episodes (target: median <= 5 deg)")
+        print(
+            f"held object's tilt in the hand: median {statistics.median(tilts):.1f} deg, "
+            f"max {max(tilts):.1f} deg over {len(tilts)} episodes (target: median <= 5 deg)"
+        )
     if args.tidy_seeds:
         print(f"\n--- bt_tidy_up: {args.tidy_seeds} seeds in {args.world} ---", flush=True)
-        eps = evaluate("bt_tidy_up", args.tidy_seeds, args.world, categories.names()[0], args.jobs,
-                       "out/bench_objects/tidy_up", first_seed=args.first_seed)
+        eps = evaluate(
+            "bt_tidy_up",
+            args.tidy_seeds,
+            args.world,
+            categories.names()[0],
+            args.jobs,
+            "out/bench_objects/tidy_up",
+            first_seed=args.first_seed,
+        )
         print_table(eps)
         total, placed = sum(e.objects or 0 for e in eps), sum(e.placed or 0 for e in eps)
         rate = placed / total if total else 0.0
-        print(f"tidy-up: {placed}/{total} objects where they belong ({100 * rate:.1f}%)   "
-              f"target >= {TARGET_TIDY:.0%}: {'ok' if rate >= TARGET_TIDY else 'MISSED'}")
+        print(
+            f"tidy-up: {placed}/{total} objects where they belong ({100 * rate:.1f}%)   "
+            f"target >= {TARGET_TIDY:.0%}: {'ok' if rate >= TARGET_TIDY else 'MISSED'}"
+        )
     print(f"\ntotal wall time {time.perf_counter() - t0:.0f} s with {args.jobs} parallel jobs")
 
 

@@ -13,6 +13,7 @@ yaw error. Target: position <= 10 mm.
 
     .venv/bin/python bench/bench_perception.py [--placements N] [--seed S]
 """
+
 from __future__ import annotations
 
 import argparse
@@ -44,11 +45,13 @@ def in_front(d, b):
 
 def layout(rng):
     while True:
-        out = [(k, rng.uniform(0.4, 1.5), rng.uniform(-0.45, 0.45), rng.uniform(-math.pi, math.pi))
-               for k in NAMES]
+        out = [(k, rng.uniform(0.4, 1.5), rng.uniform(-0.45, 0.45), rng.uniform(-math.pi, math.pi)) for k in NAMES]
         pos = [in_front(d, b) for _, d, b, _ in out]
-        if all(abs(out[i][2] - out[j][2]) > 0.2 and math.dist(pos[i], pos[j]) > 0.25
-               for i in range(len(out)) for j in range(i + 1, len(out))):
+        if all(
+            abs(out[i][2] - out[j][2]) > 0.2 and math.dist(pos[i], pos[j]) > 0.25
+            for i in range(len(out))
+            for j in range(i + 1, len(out))
+        ):
             return out
 
 
@@ -127,23 +130,34 @@ def main() -> int:
         rt.close()
 
     allxy = [e for k in TARGETS for e in err[k]]
-    print(f"open_floor, {args.placements} placements x (can, bottle, carton, box), 0.4-1.5 m, renderer {renderer}, "
-          f"camera 320x240 @ 5 Hz, virtual clock")
-    print(f"  find_object('can')      {statistics.median(find_ms):7.1f} ms/call median "
-          f"(p95 {pct(find_ms, 95):.1f}; waits for the next frame and renders it)")
+    print(
+        f"open_floor, {args.placements} placements x (can, bottle, carton, box), 0.4-1.5 m, renderer {renderer}, "
+        f"camera 320x240 @ 5 Hz, virtual clock"
+    )
+    print(
+        f"  find_object('can')      {statistics.median(find_ms):7.1f} ms/call median "
+        f"(p95 {pct(find_ms, 95):.1f}; waits for the next frame and renders it)"
+    )
     print(f"  object_glance()         {statistics.median(glance_ms):7.1f} ms/call median")
-    print(f"  detect() alone          {statistics.median(detect_ms):7.1f} ms/frame median "
-          f"(p95 {pct(detect_ms, 95):.1f})")
-    print(f"  category right          {right}/{total}  (missed {missed}; distractor labelled can/bottle: "
-          f"{false_targets})")
+    print(
+        f"  detect() alone          {statistics.median(detect_ms):7.1f} ms/frame median (p95 {pct(detect_ms, 95):.1f})"
+    )
+    print(
+        f"  category right          {right}/{total}  (missed {missed}; distractor labelled can/bottle: {false_targets})"
+    )
     for k in TARGETS:
         e = err[k]
-        print(f"  {k:6s} axis x,y error    median {pct(e, 50):5.2f}  p95 {pct(e, 95):5.2f}  max {pct(e, 100):5.2f} mm"
-              f"  (n={len(e)})")
-    print(f"  carton yaw error        median {pct(yaw_err, 50):5.2f}  p95 {pct(yaw_err, 95):5.2f}  "
-          f"max {pct(yaw_err, 100):5.2f} deg")
-    print(f"  base z error            median {pct(zerr, 50):5.2f}  p95 {pct(zerr, 95):5.2f}  "
-          f"max {pct(zerr, 100):5.2f} mm")
+        print(
+            f"  {k:6s} axis x,y error    median {pct(e, 50):5.2f}  p95 {pct(e, 95):5.2f}  max {pct(e, 100):5.2f} mm"
+            f"  (n={len(e)})"
+        )
+    print(
+        f"  carton yaw error        median {pct(yaw_err, 50):5.2f}  p95 {pct(yaw_err, 95):5.2f}  "
+        f"max {pct(yaw_err, 100):5.2f} deg"
+    )
+    print(
+        f"  base z error            median {pct(zerr, 50):5.2f}  p95 {pct(zerr, 95):5.2f}  max {pct(zerr, 100):5.2f} mm"
+    )
     ok = allxy and max(allxy) <= 10.0 and right == total and false_targets == 0
     print(f"  target <= 10 mm, every category right: {'met' if ok else 'NOT met'}")
     return 0 if ok else 1

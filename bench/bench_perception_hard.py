@@ -21,6 +21,7 @@ furniture taken for objects).
 
     .venv/bin/python bench/bench_perception_hard.py [--seeds 10] [--views 4] [--band 0.45,0.9] [--png DIR]
 """
+
 from __future__ import annotations
 
 import argparse
@@ -36,10 +37,10 @@ from actors.perception import detect, registered_appearances
 from sim import SimWorld
 from common.quiet_pybullet import pybullet as p
 
-MATCH = 0.06          # [m] a detection this close to the body centre is the object
-FALSE = 0.12          # [m] a category detection farther than this from any of its objects
-DECOY_MATCH = 0.08    # [m] a detection this close to a distractor's origin is of it
-STRAY = 0.15          # [m] an unknown object farther than this from every object is none
+MATCH = 0.06  # [m] a detection this close to the body centre is the object
+FALSE = 0.12  # [m] a category detection farther than this from any of its objects
+DECOY_MATCH = 0.08  # [m] a detection this close to a distractor's origin is of it
+STRAY = 0.15  # [m] an unknown object farther than this from every object is none
 
 
 def _pose_matrix(pos, orn) -> np.ndarray:
@@ -54,9 +55,15 @@ def _frame(sim: SimWorld) -> RGBDFrame:
     cam = sim.camera
     k = cam.K()
     intr = Intrinsics(k[0], k[4], k[2], k[5], cam.width, cam.height, "camera_optical_frame")
-    return RGBDFrame(0.0, np.ascontiguousarray(rgb[:, :, ::-1]), depth, intr,
-                     _pose_matrix(*sim.link_pose("camera_optical_frame")),
-                     _pose_matrix(*sim.link_pose("base_footprint")), "map")
+    return RGBDFrame(
+        0.0,
+        np.ascontiguousarray(rgb[:, :, ::-1]),
+        depth,
+        intr,
+        _pose_matrix(*sim.link_pose("camera_optical_frame")),
+        _pose_matrix(*sim.link_pose("base_footprint")),
+        "map",
+    )
 
 
 def _free(sim: SimWorld, x: float, y: float, clearance: float = 0.2) -> bool:
@@ -65,14 +72,15 @@ def _free(sim: SimWorld, x: float, y: float, clearance: float = 0.2) -> bool:
     r = int(math.ceil(clearance / g.resolution))
     if not (r <= row < g.height - r and r <= col < g.width - r):
         return False
-    return not (g.data[row - r:row + r + 1, col - r:col + r + 1] != 0).any()
+    return not (g.data[row - r : row + r + 1, col - r : col + r + 1] != 0).any()
 
 
 def _teleport(sim: SimWorld, x: float, y: float, yaw: float) -> None:
     body = sim.robot.body
     pos, _ = p.getBasePositionAndOrientation(body, physicsClientId=sim.cid)
-    p.resetBasePositionAndOrientation(body, [x, y, pos[2]], p.getQuaternionFromEuler([0, 0, yaw]),
-                                      physicsClientId=sim.cid)
+    p.resetBasePositionAndOrientation(
+        body, [x, y, pos[2]], p.getQuaternionFromEuler([0, 0, yaw]), physicsClientId=sim.cid
+    )
 
 
 def main() -> int:
@@ -81,9 +89,11 @@ def main() -> int:
     ap.add_argument("--seeds", type=int, default=10)
     ap.add_argument("--first-seed", type=int, default=0)
     ap.add_argument("--views", type=int, default=4)
-    ap.add_argument("--band", default="0.45,0.9",
-                    help="near,far [m]: the distances of the views of an object on the floor "
-                         "(0.33,0.45: from the grasp standoffs)")
+    ap.add_argument(
+        "--band",
+        default="0.45,0.9",
+        help="near,far [m]: the distances of the views of an object on the floor (0.33,0.45: from the grasp standoffs)",
+    )
     ap.add_argument("--png", default=None, help="save each missed view's frame here")
     ap.add_argument("--verbose", action="store_true")
     args = ap.parse_args()
@@ -96,7 +106,7 @@ def main() -> int:
     for seed in range(args.first_seed, args.first_seed + args.seeds):
         sim = SimWorld(None, args.world, seed=seed)
         rng = np.random.default_rng(seed)
-        decoy_rng = np.random.default_rng(seed + 100_000)   # the category views stay as they were
+        decoy_rng = np.random.default_rng(seed + 100_000)  # the category views stay as they were
         try:
             placed_by_name = {o.name: o for o in sim.spec.objects}
             truth = {n: (sim.object_category(n), placed_by_name[n]) for n in sim.object_names()}
@@ -130,35 +140,49 @@ def main() -> int:
                             row["pose"] += 1
                     elif args.png:
                         import cv2
+
                         cv2.imwrite(f"{args.png}/miss_s{seed}_{name}_{got}.png", frame.bgr)
                     if args.verbose and not hit:
-                        print(f"  seed {seed} {name} {placed.pose_kind} on {placed.support} view {got}: "
-                              f"missed; saw {[(dd['category'], round(dd['x'], 2), round(dd['y'], 2)) for dd in dets]}"
-                              f" (object at {ox:.2f}, {oy:.2f})")
-                    stray += sum(1 for dd in dets if dd["category"] not in apps
-                                 and min(math.dist((dd["x"], dd["y"]), q[:2]) for q in poses.values()) > STRAY)
+                        print(
+                            f"  seed {seed} {name} {placed.pose_kind} on {placed.support} view {got}: "
+                            f"missed; saw {[(dd['category'], round(dd['x'], 2), round(dd['y'], 2)) for dd in dets]}"
+                            f" (object at {ox:.2f}, {oy:.2f})"
+                        )
+                    stray += sum(
+                        1
+                        for dd in dets
+                        if dd["category"] not in apps
+                        and min(math.dist((dd["x"], dd["y"]), q[:2]) for q in poses.values()) > STRAY
+                    )
                     for dd in dets:
                         if dd["category"] in apps and not any(
-                                c == dd["category"] and math.dist((dd["x"], dd["y"]), poses[n][:2]) < FALSE
-                                for n, (c, _) in truth.items()):
+                            c == dd["category"] and math.dist((dd["x"], dd["y"]), poses[n][:2]) < FALSE
+                            for n, (c, _) in truth.items()
+                        ):
                             false += 1
                             if args.verbose:
-                                print(f"  seed {seed} view of {name}: false {dd['category']} at "
-                                      f"({dd['x']:.2f}, {dd['y']:.2f})")
+                                print(
+                                    f"  seed {seed} view of {name}: false {dd['category']} at "
+                                    f"({dd['x']:.2f}, {dd['y']:.2f})"
+                                )
         finally:
             sim.close()
         print(f"seed {seed} done", file=sys.stderr)
 
-    print(f"{'category':10s} {'pose':8s} {'views':>5s} {'recognised':>10s} {'pose ok':>8s} "
-          f"{'err med':>8s} {'err p95':>8s} {'z err med':>9s} {'z err p95':>9s}  [mm]")
+    print(
+        f"{'category':10s} {'pose':8s} {'views':>5s} {'recognised':>10s} {'pose ok':>8s} "
+        f"{'err med':>8s} {'err p95':>8s} {'z err med':>9s} {'z err p95':>9s}  [mm]"
+    )
     for (cat, kind), row in sorted(rows.items()):
         err, z_err = row["err"], row["z_err"]
-        print(f"{cat:10s} {kind:8s} {row['views']:5d} {row['seen'] / row['views']:10.0%} "
-              f"{row['pose'] / max(1, row['seen']):8.0%} "
-              f"{statistics.median(err) if err else float('nan'):8.1f} "
-              f"{float(np.percentile(err, 95)) if err else float('nan'):8.1f} "
-              f"{statistics.median(z_err) if z_err else float('nan'):9.1f} "
-              f"{float(np.percentile(z_err, 95)) if z_err else float('nan'):9.1f}")
+        print(
+            f"{cat:10s} {kind:8s} {row['views']:5d} {row['seen'] / row['views']:10.0%} "
+            f"{row['pose'] / max(1, row['seen']):8.0%} "
+            f"{statistics.median(err) if err else float('nan'):8.1f} "
+            f"{float(np.percentile(err, 95)) if err else float('nan'):8.1f} "
+            f"{statistics.median(z_err) if z_err else float('nan'):9.1f} "
+            f"{float(np.percentile(z_err, 95)) if z_err else float('nan'):9.1f}"
+        )
     print(f"false category detections: {false} in {views_total} views")
     print(f"objects of no known category where no object is: {stray} in {views_total} views")
     print(f"\n{'distractor':10s} {'views':>5s} {'unknown':>8s} {'category':>8s} {'unseen':>7s}")
@@ -168,8 +192,10 @@ def main() -> int:
             for k in total:
                 total[k] += row[k]
         v = max(1, row["views"])
-        print(f"{kind:10s} {row['views']:5d} {row['unknown'] / v:8.0%} {row['category'] / v:8.0%} "
-              f"{(row['views'] - row['unknown'] - row['category']) / v:7.0%}")
+        print(
+            f"{kind:10s} {row['views']:5d} {row['unknown'] / v:8.0%} {row['category'] / v:8.0%} "
+            f"{(row['views'] - row['unknown'] - row['category']) / v:7.0%}"
+        )
     return 0
 
 
@@ -193,8 +219,7 @@ def _views(sim: SimWorld, rng, views: int, at: tuple, band: tuple[float, float])
         yield got, _frame(sim)
 
 
-def _look_at_decoy(sim: SimWorld, rng, views: int, apps: dict, at: tuple, band: tuple[float, float],
-                   row: dict) -> None:
+def _look_at_decoy(sim: SimWorld, rng, views: int, apps: dict, at: tuple, band: tuple[float, float], row: dict) -> None:
     """Views of a distractor at ``at`` (its x, y, z), as of a category object: seen as of no
     known category there, as a category, or not at all."""
     for _, frame in _views(sim, rng, views, at, band):

@@ -18,6 +18,7 @@ A config is HZ/ITERATIONS/RESIDUAL (RESIDUAL "-": pybullet's own threshold); HZ 
 rate, or MOVING:STILL for the rate while the hand moves and the rate while it is still
 (the ms per tick above are the still hand's). The first row is the simulator's default.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -39,7 +40,7 @@ from sim.simworld import PHYSICS_HZ, SOLVER_ITERATIONS, SOLVER_RESIDUAL, STILL_H
 DEFAULT = f"{PHYSICS_HZ}:{STILL_HAND_PHYSICS_HZ or PHYSICS_HZ}/{SOLVER_ITERATIONS}/{SOLVER_RESIDUAL or '-'}"
 CANDIDATES = [DEFAULT, "240/50/-", "120/50/-", "240/50/0.001", "240/20/-", "120/30/-"]
 WORLD, SEED = "house_hard", 2000
-OPEN = (7.5, 5.0)             # an open spot of that world
+OPEN = (7.5, 5.0)  # an open spot of that world
 REACH = 0.26
 
 
@@ -47,8 +48,12 @@ def parse(config: str) -> dict:
     hz, it, res = config.split("/")
     moving, _, still = hz.partition(":")
     residual = None if res in ("-", "None") else float(res)
-    return {"physics_hz": int(moving), "still_hand_physics_hz": int(still or moving),
-            "solver_iterations": int(it), "solver_residual": residual}
+    return {
+        "physics_hz": int(moving),
+        "still_hand_physics_hz": int(still or moving),
+        "solver_iterations": int(it),
+        "solver_residual": residual,
+    }
 
 
 def world(config: str) -> SimWorld:
@@ -84,20 +89,23 @@ def place(config: str) -> dict[str, tuple[float, float]]:
         put = {}
         for k, cat in enumerate(("can", "bottle", "carton")):
             name = sim.add_object(cat, pl.x + (k - 1) * 0.17, pl.y)
-            sim.set_object_pose(name, pl.x + (k - 1) * 0.17, pl.y, 0.3 * k,
-                                z=pl.sz + _half_height(sim, name) + 1e-3)
+            sim.set_object_pose(name, pl.x + (k - 1) * 0.17, pl.y, 0.3 * k, z=pl.sz + _half_height(sim, name) + 1e-3)
             put[f"{cat} on the pallet"] = name
         for k, cat in enumerate(("can", "bottle")):
             name = sim.add_object(cat, OPEN[0], OPEN[1] + 0.4 * k)
             body = sim.scene.objects[name]
             pos, _ = p.getBasePositionAndOrientation(body, physicsClientId=sim.cid)
-            p.resetBasePositionAndOrientation(body, [pos[0], pos[1], _radius(sim, name) + 1e-3],
-                                              p.getQuaternionFromEuler([math.pi / 2, 0, 0.4]),
-                                              physicsClientId=sim.cid)
+            p.resetBasePositionAndOrientation(
+                body,
+                [pos[0], pos[1], _radius(sim, name) + 1e-3],
+                p.getQuaternionFromEuler([math.pi / 2, 0, 0.4]),
+                physicsClientId=sim.cid,
+            )
             put[f"{cat} lying"] = name
-        sim.advance(1.0)                                   # come to rest after the drop
-        before = {k: p.getBasePositionAndOrientation(sim.scene.objects[n], physicsClientId=sim.cid)
-                  for k, n in put.items()}
+        sim.advance(1.0)  # come to rest after the drop
+        before = {
+            k: p.getBasePositionAndOrientation(sim.scene.objects[n], physicsClientId=sim.cid) for k, n in put.items()
+        }
         sim.advance(5.0)
         out = {}
         for k, n in put.items():
@@ -128,13 +136,13 @@ def grasp(config: str, category: str) -> tuple[bool, float, float]:
         x, y = OPEN
         z0 = p.getBasePositionAndOrientation(body, physicsClientId=sim.cid)[0][2]
         p.resetBasePositionAndOrientation(body, [x - REACH, y, z0], [0, 0, 0, 1], physicsClientId=sim.cid)
-        sim.set_object_pose(name, x + 0.3, y)            # out of the way while the arm unfolds
+        sim.set_object_pose(name, x + 0.3, y)  # out of the way while the arm unfolds
         h = 2 * _half_height(sim, name)
         grip_z = min(0.06, h / 2)
         sim.robot.set_gripper(0.09)
         sim.robot.set_arm(kin.ik(REACH, 0.0, grip_z, 0.0).best)
         sim.advance(2.0)
-        ee = sim.link_pose("end_effector_link")[0]        # between the fingertips
+        ee = sim.link_pose("end_effector_link")[0]  # between the fingertips
         sim.set_object_pose(name, ee[0], ee[1])
         sim.advance(0.5)
         sim.robot.set_gripper(0.0)
@@ -173,8 +181,12 @@ def odometry(config: str) -> float:
     """[%] of the distance: the raw odometry's error after an L of 10 m (east, north)."""
     sim = SimWorld(None, "open_floor", seed=0, camera=False, cmd_vel_timeout=0, **parse(config))
     try:
-        p.resetBasePositionAndOrientation(sim.robot.body, [-2.5, -2.5, p.getBasePositionAndOrientation(
-            sim.robot.body, physicsClientId=sim.cid)[0][2]], [0, 0, 0, 1], physicsClientId=sim.cid)
+        p.resetBasePositionAndOrientation(
+            sim.robot.body,
+            [-2.5, -2.5, p.getBasePositionAndOrientation(sim.robot.body, physicsClientId=sim.cid)[0][2]],
+            [0, 0, 0, 1],
+            physicsClientId=sim.cid,
+        )
         sim.odometry.reset(*sim.robot.joint_states()[0][:2], 0.0)
         sim.gyro.reset()
         start = sim.robot_pose()
@@ -193,8 +205,10 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--configs", default=",".join(CANDIDATES), help="HZ/ITERATIONS/RESIDUAL, comma-separated")
     a = ap.parse_args()
-    print(f"{'config':>14} {'ms/tick':>8} {'worst placed: drift mm':>23} {'tilt deg':>9} "
-          f"{'can held/slid mm/turned deg':>28} {'bottle':>18} {'carton':>18} {'odom %':>7}")
+    print(
+        f"{'config':>14} {'ms/tick':>8} {'worst placed: drift mm':>23} {'tilt deg':>9} "
+        f"{'can held/slid mm/turned deg':>28} {'bottle':>18} {'carton':>18} {'odom %':>7}"
+    )
     for config in a.configs.split(","):
         cost = step_cost(config)
         placed = place(config)
@@ -203,8 +217,11 @@ def main() -> int:
         grasps = [grasp(config, c) for c in ("can", "bottle", "carton")]
         odo = odometry(config)
         cells = [f"{'held' if held else 'LOST'} {slid:5.1f} {turn:5.1f}" for held, slid, turn in grasps]
-        print(f"{config:>14} {cost:>8.2f} {drift:>23.1f} {tilts:>9.1f} {cells[0]:>28} {cells[1]:>18} "
-              f"{cells[2]:>18} {odo:>7.2f}  ({worst})", flush=True)
+        print(
+            f"{config:>14} {cost:>8.2f} {drift:>23.1f} {tilts:>9.1f} {cells[0]:>28} {cells[1]:>18} "
+            f"{cells[2]:>18} {odo:>7.2f}  ({worst})",
+            flush=True,
+        )
     return 0
 
 

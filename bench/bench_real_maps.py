@@ -10,6 +10,7 @@ success, localisation error (RMS median, worst), real-time factor, and the failu
 
 Target: success >= 90 % on every map.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -40,10 +41,12 @@ def public_maps() -> dict[str, tuple[pathlib.Path, pathlib.Path | None]]:
 def describe(name: str, yml: pathlib.Path, locs: pathlib.Path | None) -> None:
     grid = read_map(yml).grid
     spec = load_world(str(yml), FIRST_SEED, str(locs) if locs else None)
-    print(f"{name}: {yml.relative_to(MAPS.parent.parent)} ({grid.width} x {grid.height} cells at "
-          f"{grid.resolution} m) -> {len(spec.walls)} wall boxes, {len(spec.search_locations)} "
-          f"search locations, locations file: {locs.name if locs else 'none (chosen from the map)'}",
-          flush=True)
+    print(
+        f"{name}: {yml.relative_to(MAPS.parent.parent)} ({grid.width} x {grid.height} cells at "
+        f"{grid.resolution} m) -> {len(spec.walls)} wall boxes, {len(spec.search_locations)} "
+        f"search locations, locations file: {locs.name if locs else 'none (chosen from the map)'}",
+        flush=True,
+    )
 
 
 def main(argv=None) -> int:
@@ -54,8 +57,11 @@ def main(argv=None) -> int:
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--maps", default=",".join(maps), help="comma-separated: " + ", ".join(maps))
     args = ap.parse_args(argv)
-    print("$ " + " ".join([".venv/bin/python", "bench/bench_real_maps.py"]
-                          + (argv if argv is not None else sys.argv[1:])), flush=True)
+    print(
+        "$ "
+        + " ".join([".venv/bin/python", "bench/bench_real_maps.py"] + (argv if argv is not None else sys.argv[1:])),
+        flush=True,
+    )
     names = [n for n in args.maps.split(",") if n]
     for n in names:
         if n not in maps:
@@ -66,8 +72,16 @@ def main(argv=None) -> int:
         yml, locs = maps[n]
         print(f"\n--- {n}: {args.seeds} seeds ---")
         describe(n, yml, locs)
-        eps = evaluate("bt_pick_place", args.seeds, str(yml), "mixed", args.jobs, OUT / n,
-                       first_seed=args.first_seed, locations=str(locs) if locs else None)
+        eps = evaluate(
+            "bt_pick_place",
+            args.seeds,
+            str(yml),
+            "mixed",
+            args.jobs,
+            OUT / n,
+            first_seed=args.first_seed,
+            locations=str(locs) if locs else None,
+        )
         print_table(eps)
         rows.append((n, eps))
     print_rates(rows, "map", TARGET_RATE)
@@ -75,10 +89,14 @@ def main(argv=None) -> int:
     for n, eps in rows:
         rms = [e.loc_rmse_m for e in eps if e.loc_rmse_m == e.loc_rmse_m]
         worst = [e.loc_max_m for e in eps if e.loc_max_m == e.loc_max_m]
-        print(f"{n:16s} {100 * statistics.median(rms) if rms else float('nan'):20.1f} "
-              f"{100 * max(worst) if worst else float('nan'):19.1f}")
-    print(f"\nseeds {args.first_seed}..{args.first_seed + args.seeds - 1}, total wall time "
-          f"{time.perf_counter() - t0:.0f} s with {args.jobs} parallel jobs; output in {OUT}/")
+        print(
+            f"{n:16s} {100 * statistics.median(rms) if rms else float('nan'):20.1f} "
+            f"{100 * max(worst) if worst else float('nan'):19.1f}"
+        )
+    print(
+        f"\nseeds {args.first_seed}..{args.first_seed + args.seeds - 1}, total wall time "
+        f"{time.perf_counter() - t0:.0f} s with {args.jobs} parallel jobs; output in {OUT}/"
+    )
     return 0
 
 

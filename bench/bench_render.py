@@ -13,6 +13,7 @@ three renderers side by side: colour above, depth below (0 m black .. 5 m white)
 
     .venv/bin/python bench/bench_render.py [--frames 50] [--size 320x240] [--worlds house,house_hard]
 """
+
 from __future__ import annotations
 
 import argparse
@@ -61,8 +62,9 @@ def place(sim, pose):
         return
     x, y, yaw = pose
     _, _, z = p.getBasePositionAndOrientation(sim.robot.body, physicsClientId=sim.cid)[0]
-    p.resetBasePositionAndOrientation(sim.robot.body, [x, y, z], [0, 0, math.sin(yaw / 2), math.cos(yaw / 2)],
-                                      physicsClientId=sim.cid)
+    p.resetBasePositionAndOrientation(
+        sim.robot.body, [x, y, z], [0, 0, math.sin(yaw / 2), math.cos(yaw / 2)], physicsClientId=sim.cid
+    )
 
 
 def run(world, renderer, size, frames, n_poses, keep):
@@ -76,12 +78,17 @@ def run(world, renderer, size, frames, n_poses, keep):
             place(sim, pose)
             pos, orn = sim.robot.link_pose("camera_optical_frame")
             look = sim.spec.lighting
-            args = (cam.width, cam.height, cam.view(pos, orn), cam.projection(),
-                    None if look is None else look.direction)
-            sim.render_camera()                  # a warm-up frame (a new size, new bodies)
+            args = (
+                cam.width,
+                cam.height,
+                cam.view(pos, orn),
+                cam.projection(),
+                None if look is None else look.direction,
+            )
+            sim.render_camera()  # a warm-up frame (a new size, new bodies)
             for _ in range(frames):
                 t0 = time.perf_counter()
-                sim._gl_call(sim.renderer.render, *args)    # on the world's GL thread
+                sim._gl_call(sim.renderer.render, *args)  # on the world's GL thread
                 raw.append(time.perf_counter() - t0)
                 t0 = time.perf_counter()
                 rgb, depth = sim.render_camera()
@@ -125,8 +132,11 @@ def main(argv=None) -> int:
         for r in a.renderers.split(","):
             got, raw, full = run(world, r, size, a.frames, a.poses, keep)
             q = np.percentile(full, 90)
-            print(f"{world:12s} {r:9s} {got:5s} {1000 * statistics.median(raw):14.2f} "
-                  f"{1000 * statistics.median(full):13.2f} {1000 * q:10.2f}", flush=True)
+            print(
+                f"{world:12s} {r:9s} {got:5s} {1000 * statistics.median(raw):14.2f} "
+                f"{1000 * statistics.median(full):13.2f} {1000 * q:10.2f}",
+                flush=True,
+            )
     if a.png:
         save_pngs(keep, pathlib.Path(a.png))
         print(f"frames side by side ({', '.join(a.renderers.split(','))}; colour above, depth below): {a.png}/")

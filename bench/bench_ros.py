@@ -15,6 +15,7 @@
 
 All figures are medians. A private ROS domain keeps other processes out.
 """
+
 from __future__ import annotations
 
 import json
@@ -127,6 +128,7 @@ def bench_in_process(tmp: pathlib.Path) -> None:
     print("\n-- one process: server runtime + client (two rclpy contexts) --")
     rt = Runtime(clock="wall", bus=RosTransport)
     from bt_engine.trees import register_tree_folder
+
     register_tree_folder(rt, write_trees(tmp / "trees"))
     server = serve(rt)
     remote = Remote()
@@ -137,9 +139,11 @@ def bench_in_process(tmp: pathlib.Path) -> None:
         call = statistics.median(call_latencies(remote, GOALS))
         print(f"/actorbt/call sleep(0) round trip {ms(call)}")
         sustained = goal_latencies(remote, 3 * GOALS)
-        print(f"goal -> result, sustained         {ms(statistics.median(sustained[-GOALS:]))}"
-              f"   (back to back for {sum(sustained):.1f} s: every kept result is in each"
-              " status message)")
+        print(
+            f"goal -> result, sustained         {ms(statistics.median(sustained[-GOALS:]))}"
+            f"   (back to back for {sum(sustained):.1f} s: every kept result is in each"
+            " status message)"
+        )
         srv, cli = cancel_latencies(remote, rt, CANCELS)
         s, c = statistics.median(srv), statistics.median(cli)
         print(f"cancel -> all transactions ended  {ms(s)}   ({CANCELS} cancels; {verdict(s, 0.05)})")
@@ -216,8 +220,13 @@ ex.spin()
 
 def plain_client_latency(action: str, way: str = "spin_once") -> float:
     """Median goal -> result latency [s] of a plain rclpy client in its own process."""
-    out = subprocess.run([sys.executable, "-c", PLAIN_CLIENT, action, str(GOALS), "30", way],
-                         cwd=ROOT, capture_output=True, text=True, timeout=120)
+    out = subprocess.run(
+        [sys.executable, "-c", PLAIN_CLIENT, action, str(GOALS), "30", way],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     if out.returncode != 0:
         raise RuntimeError(f"plain client failed: {out.stderr[-2000:]}")
     return statistics.median(json.loads(out.stdout.strip().splitlines()[-1]))
@@ -231,8 +240,13 @@ def drain(stream) -> None:
 def bench_floor() -> None:
     print("\n-- the floor: a plain rclpy server that succeeds at once + the plain client --")
     action = "/bench/floor/trivial"
-    proc = subprocess.Popen([sys.executable, "-c", FLOOR_SERVER, action], cwd=ROOT,
-                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    proc = subprocess.Popen(
+        [sys.executable, "-c", FLOOR_SERVER, action],
+        cwd=ROOT,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+    )
     try:
         for line in proc.stdout:
             if "ready" in line:
@@ -249,15 +263,20 @@ def bench_two_processes(tmp: pathlib.Path) -> None:
     print("\n-- two processes: `actorbt serve` on the ROS bus + client --")
     cfg = tmp / "actorbt.yaml"
     cfg.write_text(f"trees: {write_trees(tmp / 'trees2')}\nworld: null\ntransport: ros\nclock: wall\n")
-    proc = subprocess.Popen([sys.executable, "-m", "bt_cli.main", "--config", str(cfg),
-                             "serve", "--no-record"], cwd=ROOT, stdout=subprocess.PIPE,
-                            stderr=subprocess.STDOUT, text=True)
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "bt_cli.main", "--config", str(cfg), "serve", "--no-record"],
+        cwd=ROOT,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+    )
     try:
         for line in proc.stdout:
             if "ready" in line:
                 break
         drain(proc.stdout)  # a line per goal
         from actorbt_interfaces.action import RunTree
+
         remote = Remote()
         try:
             t0 = time.perf_counter()
@@ -274,8 +293,10 @@ def bench_two_processes(tmp: pathlib.Path) -> None:
         finally:
             remote.close()
         lat = plain_client_latency("/actorbt/tree/trivial")
-        print(f"goal -> result, plain rclpy client {ms(lat)}   ({GOALS} goals from a third process;"
-              f" {verdict(lat, 0.005)})")
+        print(
+            f"goal -> result, plain rclpy client {ms(lat)}   ({GOALS} goals from a third process;"
+            f" {verdict(lat, 0.005)})"
+        )
         lat = plain_client_latency("/actorbt/tree/trivial", "tutorial")
         print(f"  the same, spin_until_future_complete {ms(lat)}   (rclpy 7.1: the client spins flat out)")
     finally:
@@ -320,6 +341,7 @@ node.destroy_node(); ctx.shutdown()
 def bench_images(rate: float) -> None:
     """Frames from another process: a stream actor and a plain rclpy callback."""
     from sensor_msgs.msg import Image
+
     rt = Runtime(clock="wall", bus=RosTransport)
     raw_host = RosHost("bench-raw")
     raw_lat: list[float] = []
@@ -327,12 +349,14 @@ def bench_images(rate: float) -> None:
     def raw_cb(msg):
         if msg.header.frame_id != "end":
             raw_lat.append(time.time_ns() - (msg.header.stamp.sec * 10**9 + msg.header.stamp.nanosec))
+
     node = raw_host.create_node("bench_raw_sub")
     raw_host.call(node.create_subscription, Image, "/bench/image", raw_cb, qos_profile("sensor"))
     bus = rt.bus
 
     def frames(emit):
         return bus.subscribe("/bench/image", Image, emit, "sensor").close
+
     rt.run_on_hub(rt.root.add_actor, "frames", frames, Kind.STREAM, buffer=qos_depth("sensor"))
 
     def consume() -> tuple[list[float], float]:
@@ -346,9 +370,14 @@ def bench_images(rate: float) -> None:
                 last = time.perf_counter()
                 lat.append(now - (msg.header.stamp.sec * 10**9 + msg.header.stamp.nanosec))
         return lat, (last - first) if first and last else 0.0
+
     rt.run_on_hub(rt.root.add_actor, "consume", consume)
-    pub = subprocess.Popen([sys.executable, "-c", PUBLISHER, str(rate), str(IMAGE_SECONDS), "2"],
-                           cwd=ROOT, stdout=subprocess.PIPE, text=True)
+    pub = subprocess.Popen(
+        [sys.executable, "-c", PUBLISHER, str(rate), str(IMAGE_SECONDS), "2"],
+        cwd=ROOT,
+        stdout=subprocess.PIPE,
+        text=True,
+    )
     try:
         lat, span = rt.call("consume")
         out, _ = pub.communicate(timeout=30)
@@ -363,14 +392,18 @@ def bench_images(rate: float) -> None:
     actor_ms = statistics.median(lat) / 1e6
     raw_ms = statistics.median(raw_lat) / 1e6 if raw_lat else float("nan")
     label = f"{rate:g} Hz" if rate > 0 else "max rate"
-    print(f"{label:>8}: published {sent_fps:6.1f} fps, stream actor {got_fps:6.1f} fps "
-          f"({len(lat)} frames), rclpy callback {len(raw_lat) / max(span, 1e-9):6.1f} fps; "
-          f"latency actor {actor_ms:6.2f} ms, rclpy {raw_ms:6.2f} ms, added {actor_ms - raw_ms:+.2f} ms")
+    print(
+        f"{label:>8}: published {sent_fps:6.1f} fps, stream actor {got_fps:6.1f} fps "
+        f"({len(lat)} frames), rclpy callback {len(raw_lat) / max(span, 1e-9):6.1f} fps; "
+        f"latency actor {actor_ms:6.2f} ms, rclpy {raw_ms:6.2f} ms, added {actor_ms - raw_ms:+.2f} ms"
+    )
 
 
 def main() -> int:
-    print(f"ROS_DOMAIN_ID={os.environ['ROS_DOMAIN_ID']} "
-          f"ROS_AUTOMATIC_DISCOVERY_RANGE={os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE']}")
+    print(
+        f"ROS_DOMAIN_ID={os.environ['ROS_DOMAIN_ID']} "
+        f"ROS_AUTOMATIC_DISCOVERY_RANGE={os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE']}"
+    )
     with tempfile.TemporaryDirectory() as d:
         tmp = pathlib.Path(d)
         bench_in_process(tmp)

@@ -27,6 +27,7 @@ machine at the same time: every command runs from each root in turn within each 
 so machine noise hits them alike. A root other than this repository is imported ahead
 of the editable install (whose import hook is removed in the child process).
 """
+
 from __future__ import annotations
 
 import argparse
@@ -52,10 +53,12 @@ SIM_READY = re.compile(r"\bready\b|running on the")
 
 
 #: runs ``actorbt`` from the checkout in argv[1], not from the editable install
-LAUNCH = ("import sys; root = sys.argv.pop(1); "
-          "sys.meta_path[:] = [f for f in sys.meta_path if not type(f).__module__.startswith('_editable')]; "
-          "sys.path.insert(0, root); sys.argv[0] = 'actorbt'; "
-          "from bt_cli.main import main; sys.exit(main())")
+LAUNCH = (
+    "import sys; root = sys.argv.pop(1); "
+    "sys.meta_path[:] = [f for f in sys.meta_path if not type(f).__module__.startswith('_editable')]; "
+    "sys.path.insert(0, root); sys.argv[0] = 'actorbt'; "
+    "from bt_cli.main import main; sys.exit(main())"
+)
 
 
 def actorbt(root: Path = ROOT) -> list[str]:
@@ -67,8 +70,7 @@ def actorbt(root: Path = ROOT) -> list[str]:
 
 def ros_flag(root: Path = ROOT) -> list[str]:
     """``--bus ros`` when the command line has it, else the older ``--ros``."""
-    out = subprocess.run(actorbt(root) + ["serve", "--help"], cwd=root, env=ENV,
-                         capture_output=True, text=True).stdout
+    out = subprocess.run(actorbt(root) + ["serve", "--help"], cwd=root, env=ENV, capture_output=True, text=True).stdout
     return ["--bus", "ros"] if "--bus" in out else ["--ros"]
 
 
@@ -82,8 +84,9 @@ class Process:
         self._ready = threading.Event()
         self._pattern = ready
         self.t0 = time.perf_counter()
-        self.proc = subprocess.Popen(actorbt(root) + args, cwd=root, env=ENV, text=True,
-                                     stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
+        self.proc = subprocess.Popen(
+            actorbt(root) + args, cwd=root, env=ENV, text=True, stdout=subprocess.PIPE, stderr=subprocess.STDOUT
+        )
         self._reader = threading.Thread(target=self._read, daemon=True)
         self._reader.start()
 
@@ -101,8 +104,7 @@ class Process:
         self._ready.wait(timeout)
         if self.ready_at is None:
             self.stop()
-            raise SystemExit(f"actorbt {' '.join(self.args)} was not ready in {timeout:g} s:\n"
-                             + self.output())
+            raise SystemExit(f"actorbt {' '.join(self.args)} was not ready in {timeout:g} s:\n" + self.output())
         return self.ready_at
 
     def output(self) -> str:
@@ -120,13 +122,17 @@ class Process:
 
 
 def stats(values: list[float]) -> str:
-    return (f"median {statistics.median(values):6.2f} s   min {min(values):6.2f} s   "
-            f"max {max(values):6.2f} s   (n={len(values)})")
+    return (
+        f"median {statistics.median(values):6.2f} s   min {min(values):6.2f} s   "
+        f"max {max(values):6.2f} s   (n={len(values)})"
+    )
 
 
 def stats_ms(values: list[float]) -> str:
-    return (f"median {statistics.median(values) * 1e3:7.1f} ms   min {min(values) * 1e3:7.1f} ms   "
-            f"max {max(values) * 1e3:7.1f} ms   (n={len(values)})")
+    return (
+        f"median {statistics.median(values) * 1e3:7.1f} ms   min {min(values) * 1e3:7.1f} ms   "
+        f"max {max(values) * 1e3:7.1f} ms   (n={len(values)})"
+    )
 
 
 def main() -> int:
@@ -135,8 +141,14 @@ def main() -> int:
     ap.add_argument("--calls", type=int, default=5, help="Cold `actorbt rcall get_pose` runs (default 5).")
     ap.add_argument("--warm", type=int, default=20, help="Calls through one warm Remote (default 20).")
     ap.add_argument("--show", action="store_true", help="Print the first run's output, timed.")
-    ap.add_argument("--roots", nargs="+", type=Path, default=[ROOT], metavar="DIR",
-                    help="Checkouts to measure side by side (default: this repository).")
+    ap.add_argument(
+        "--roots",
+        nargs="+",
+        type=Path,
+        default=[ROOT],
+        metavar="DIR",
+        help="Checkouts to measure side by side (default: this repository).",
+    )
     opts = ap.parse_args()
     roots = [r.resolve() for r in opts.roots]
 
@@ -144,14 +156,19 @@ def main() -> int:
     for root in roots:
         subprocess.run(actorbt(root) + ["--help"], cwd=root, env=ENV, capture_output=True)
         flags[root] = ros_flag(root)
-    print(f"ROS_DOMAIN_ID={ENV['ROS_DOMAIN_ID']}  rounds: {opts.rounds}  "
-          f"PYTHONDONTWRITEBYTECODE={os.environ.get('PYTHONDONTWRITEBYTECODE', '')}", flush=True)
+    print(
+        f"ROS_DOMAIN_ID={ENV['ROS_DOMAIN_ID']}  rounds: {opts.rounds}  "
+        f"PYTHONDONTWRITEBYTECODE={os.environ.get('PYTHONDONTWRITEBYTECODE', '')}",
+        flush=True,
+    )
 
     def commands(root: Path) -> list[tuple[str, list[str], re.Pattern]]:
         ros = flags[root]
-        return [("serve --world none", ["serve", "--world", "none"], SERVE_READY),
-                ("serve <ros> --world none", ["serve", *ros, "--world", "none"], SERVE_READY),
-                ("sim run --world house <ros>", ["sim", "run", "--world", "house", *ros], SIM_READY)]
+        return [
+            ("serve --world none", ["serve", "--world", "none"], SERVE_READY),
+            ("serve <ros> --world none", ["serve", *ros, "--world", "none"], SERVE_READY),
+            ("sim run --world house <ros>", ["sim", "run", "--world", "house", *ros], SIM_READY),
+        ]
 
     times: dict[tuple[Path, str], list[float]] = {}
     for i in range(opts.rounds):
@@ -186,23 +203,24 @@ def calls(root: Path, ros: list[str], opts: argparse.Namespace) -> None:
         cold = []
         for _ in range(opts.calls):
             t0 = time.perf_counter()
-            proc = subprocess.run(actorbt(root) + ["rcall", "get_pose"], cwd=root, env=ENV,
-                                  capture_output=True, text=True)
+            proc = subprocess.run(
+                actorbt(root) + ["rcall", "get_pose"], cwd=root, env=ENV, capture_output=True, text=True
+            )
             cold.append(time.perf_counter() - t0)
             if proc.returncode != 0:
-                raise SystemExit(f"rcall get_pose failed ({proc.returncode}):\n"
-                                 f"{proc.stdout}{proc.stderr}")
+                raise SystemExit(f"rcall get_pose failed ({proc.returncode}):\n{proc.stdout}{proc.stderr}")
         print(f"actorbt rcall get_pose (cold, a process each)   {stats(cold)}", flush=True)
         unknown = []
         for _ in range(opts.calls):
             t0 = time.perf_counter()
-            proc = subprocess.run(actorbt(root) + ["goal", "nosuchtree"], cwd=root, env=ENV,
-                                  capture_output=True, text=True)
+            proc = subprocess.run(
+                actorbt(root) + ["goal", "nosuchtree"], cwd=root, env=ENV, capture_output=True, text=True
+            )
             unknown.append(time.perf_counter() - t0)
-        print(f"actorbt goal nosuchtree (exit {proc.returncode})               {stats(unknown)}",
-              flush=True)
+        print(f"actorbt goal nosuchtree (exit {proc.returncode})               {stats(unknown)}", flush=True)
 
         from bt_ros.remote import Remote  # this checkout's client, in this process
+
         t0 = time.perf_counter()
         with Remote() as remote:
             remote.call("get_pose", timeout=30)

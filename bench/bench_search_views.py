@@ -15,6 +15,7 @@ world's completed by map places that see the floor they leave unseen (``cover_ma
 
 ``--cover`` adds rows for the map's places chosen with other ``viewpoints()`` settings.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -29,9 +30,9 @@ from planning.viewpoints import viewpoints
 from sim import SimWorld
 from sim.description import load_world
 
-SEEN = 0.25           # [m] a detection of the category this near the object sees it
-VIEWS = 8             # the survey's views per place (actors/search.py)
-ROOM = 0.25           # [m] clearance the base needs at a place (search WAYPOINT_CLEARANCE)
+SEEN = 0.25  # [m] a detection of the category this near the object sees it
+VIEWS = 8  # the survey's views per place (actors/search.py)
+ROOM = 0.25  # [m] clearance the base needs at a place (search WAYPOINT_CLEARANCE)
 
 
 def _spot(sim: SimWorld, x: float, y: float) -> tuple[float, float] | None:
@@ -56,8 +57,11 @@ def _seen(sim: SimWorld, places: list, objects: dict, apps: dict) -> set[str]:
         for k in range(VIEWS):
             _teleport(sim, spot[0], spot[1], 2 * math.pi * k / VIEWS)
             for d in detect(_frame(sim), apps):
-                seen.update(n for n, (cat, ox, oy) in objects.items()
-                            if cat == d["category"] and math.dist((d["x"], d["y"]), (ox, oy)) < SEEN)
+                seen.update(
+                    n
+                    for n, (cat, ox, oy) in objects.items()
+                    if cat == d["category"] and math.dist((d["x"], d["y"]), (ox, oy)) < SEEN
+                )
     return seen
 
 
@@ -66,11 +70,19 @@ def main() -> int:
     ap.add_argument("--world", default="house_hard")
     ap.add_argument("--seeds", type=int, default=10)
     ap.add_argument("--first-seed", type=int, default=2001)
-    ap.add_argument("--cover", nargs="*", default=[], metavar="COVERAGE:MIN_GAIN",
-                    help="also the map's places chosen with these viewpoints() settings, e.g. 0.95:0.01 "
-                         "(the 'map' row is search_views' own)")
-    ap.add_argument("--world-locations", default="house",
-                    help="take the hand-made search locations from this world when --world lists none")
+    ap.add_argument(
+        "--cover",
+        nargs="*",
+        default=[],
+        metavar="COVERAGE:MIN_GAIN",
+        help="also the map's places chosen with these viewpoints() settings, e.g. 0.95:0.01 "
+        "(the 'map' row is search_views' own)",
+    )
+    ap.add_argument(
+        "--world-locations",
+        default="house",
+        help="take the hand-made search locations from this world when --world lists none",
+    )
     args = ap.parse_args()
 
     apps = registered_appearances()
@@ -79,17 +91,23 @@ def main() -> int:
     for seed in range(args.first_seed, args.first_seed + args.seeds):
         sim = SimWorld(None, args.world, seed=seed)
         try:
-            objects = {n: (sim.object_category(n), *sim.object_pose(n)[:2]) for n in sim.object_names()
-                       if sim.object_category(n) in apps}
-            given = [tuple(p) for p in (sim.spec.search_locations
-                                        or load_world(args.world_locations, 0).search_locations)]
+            objects = {
+                n: (sim.object_category(n), *sim.object_pose(n)[:2])
+                for n in sim.object_names()
+                if sim.object_category(n) in apps
+            }
+            given = [
+                tuple(p) for p in (sim.spec.search_locations or load_world(args.world_locations, 0).search_locations)
+            ]
             g = sim.grid
             costmap = inflate(OccupancyGrid(g.data, g.resolution, tuple(g.origin)), 0.20, inflation_radius=0.45)
             start = tuple(sim.spec.robot_start[:2])
             looked = [s for s in (_spot(sim, *p) for p in given) if s is not None]
-            sets = {"hand-made": given,
-                    "map": viewpoints(costmap, start),
-                    "hand-made + map": given + viewpoints(costmap, start, seen_from=looked)}
+            sets = {
+                "hand-made": given,
+                "map": viewpoints(costmap, start),
+                "hand-made + map": given + viewpoints(costmap, start, seen_from=looked),
+            }
             for setting in args.cover:
                 cover, gain = (float(v) for v in setting.split(":"))
                 sets[f"map {setting}"] = viewpoints(costmap, start, coverage=cover, min_gain=gain)
@@ -99,10 +117,15 @@ def main() -> int:
                 row[0] += len(seen)
                 row[1] += len(objects)
                 row[2] += len(places)
-                missed = ", ".join(f"{n} at ({objects[n][1]:.1f}, {objects[n][2]:.1f})"
-                                   for n in sorted(set(objects) - seen))
-                print(f"seed {seed} {label:16s} {len(places):2d} places: {len(seen)}/{len(objects)}"
-                      + (f"   missed {missed}" if missed else ""), file=sys.stderr, flush=True)
+                missed = ", ".join(
+                    f"{n} at ({objects[n][1]:.1f}, {objects[n][2]:.1f})" for n in sorted(set(objects) - seen)
+                )
+                print(
+                    f"seed {seed} {label:16s} {len(places):2d} places: {len(seen)}/{len(objects)}"
+                    + (f"   missed {missed}" if missed else ""),
+                    file=sys.stderr,
+                    flush=True,
+                )
         finally:
             sim.close()
     print(f"\n{'places':16s} {'per seed':>8s} {'objects seen':>14s}")

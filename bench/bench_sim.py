@@ -7,6 +7,7 @@ Targets: >= 15x real time with the camera off, >= 4x at 320x240 and 5 Hz.
 
     .venv/bin/python bench/bench_sim.py
 """
+
 from __future__ import annotations
 
 import statistics
@@ -33,8 +34,10 @@ def run_case(size):
     try:
         sim.start()
         # a mission listens to odometry and joint states in every case
-        subs = [rt.bus.subscribe("/odom", Odometry, lambda m: None),
-                rt.bus.subscribe("/joint_states", JointState, lambda m: None)]
+        subs = [
+            rt.bus.subscribe("/odom", Odometry, lambda m: None),
+            rt.bus.subscribe("/joint_states", JointState, lambda m: None),
+        ]
         if size is not None:
             frames = []
             subs.append(rt.bus.subscribe("/camera/color/image_raw", Image, frames.append))
@@ -56,8 +59,10 @@ def run_case(size):
 
 
 def main() -> int:
-    print(f"house, {SIM_SECONDS:.0f} s simulated per run, median of {REPEATS} runs; physics 240 Hz "
-          f"in 60 Hz control ticks; /odom and /joint_states subscribed (30 Hz)")
+    print(
+        f"house, {SIM_SECONDS:.0f} s simulated per run, median of {REPEATS} runs; physics 240 Hz "
+        f"in 60 Hz control ticks; /odom and /joint_states subscribed (30 Hz)"
+    )
     print(f"{'case':26s} {'real-time factor':>17s} {'ms/frame':>9s} {'frames':>7s}  renderer   target")
     bad = []
     for name, size in CASES:

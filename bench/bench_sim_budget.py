@@ -8,6 +8,7 @@ the actors' own Python).
 
     .venv/bin/python bench/bench_sim_budget.py [--world house] [--seed 0] [--category any]
 """
+
 from __future__ import annotations
 
 import argparse
@@ -24,23 +25,36 @@ sys.path.insert(0, str(ROOT))
 #: component: [(module, "Class.method" or "function")]
 PARTS = {
     "physics (step, motors, odometry)": [("sim.simworld", "SimWorld.step")],
-    "controllers (arm, gripper)": [("sim.controllers", "ArmController.update"),
-                                   ("sim.controllers", "GripperController.update")],
+    "controllers (arm, gripper)": [
+        ("sim.controllers", "ArmController.update"),
+        ("sim.controllers", "GripperController.update"),
+    ],
     "lidar ray casts": [("sim.simworld", "SimWorld.scan_now")],
     "camera render": [("sim.simworld", "SimWorld._render_camera")],
     "robot messages (/tf /odom /imu /joint_states /scan)": [
-        ("sim.topics", "SimTopics.tf_msg"), ("sim.topics", "SimTopics.odom_msg"),
-        ("sim.topics", "SimTopics.imu_msg"), ("sim.topics", "SimTopics.joint_state_msg"),
-        ("sim.topics", "SimTopics.scan_msg")],
-    "detection": [("actors.perception", "detect")],    # where the actors call it from
-    "localiser": [("navstack.localiser", "Localiser._on_scan"), ("navstack.localiser", "Localiser._on_odom"),
-                  ("navstack.localiser", "Localiser._on_imu")],
-    "navigator": [("navstack.navigator", "Navigator._on_scan"), ("navstack.navigator", "Navigator._on_tf"),
-                  ("navstack.navigator", "Navigator._on_depth")],
+        ("sim.topics", "SimTopics.tf_msg"),
+        ("sim.topics", "SimTopics.odom_msg"),
+        ("sim.topics", "SimTopics.imu_msg"),
+        ("sim.topics", "SimTopics.joint_state_msg"),
+        ("sim.topics", "SimTopics.scan_msg"),
+    ],
+    "detection": [("actors.perception", "detect")],  # where the actors call it from
+    "localiser": [
+        ("navstack.localiser", "Localiser._on_scan"),
+        ("navstack.localiser", "Localiser._on_odom"),
+        ("navstack.localiser", "Localiser._on_imu"),
+    ],
+    "navigator": [
+        ("navstack.navigator", "Navigator._on_scan"),
+        ("navstack.navigator", "Navigator._on_tf"),
+        ("navstack.navigator", "Navigator._on_depth"),
+    ],
     "tf listeners": [("planning.tf_listener", "TfListener._on_tf")],
-    "arm planning (OMPL, ruckig)": [("actors.manipulator", "plan_joint_motion"),
-                                    ("actors.manipulator", "plan_pose_motion"),
-                                    ("actors.manipulator", "time_trajectory")],
+    "arm planning (OMPL, ruckig)": [
+        ("actors.manipulator", "plan_joint_motion"),
+        ("actors.manipulator", "plan_pose_motion"),
+        ("actors.manipulator", "time_trajectory"),
+    ],
 }
 
 
@@ -66,6 +80,7 @@ class Timer:
                 self.seconds[part] += time.perf_counter() - t0
                 self.calls[part] += 1
                 self._depth -= 1
+
         return timed
 
     def _split_physics(self) -> None:
@@ -73,18 +88,19 @@ class Timer:
         change with what the hand does: still, moving, holding."""
         from sim.simworld import SimWorld
 
-        self.modes: dict[str, list[float]] = defaultdict(lambda: [0.0, 0, 0.0])   # wall, ticks, sim
+        self.modes: dict[str, list[float]] = defaultdict(lambda: [0.0, 0, 0.0])  # wall, ticks, sim
         step = SimWorld.step
 
         @functools.wraps(step)
         def step_by_mode(sim):
-            iterations = sim.solver_iterations_now      # chosen for this period
+            iterations = sim.solver_iterations_now  # chosen for this period
             t0 = time.perf_counter()
             step(sim)
             mode = self.modes[f"{sim.physics_hz} Hz, {iterations} solver iterations"]
             mode[0] += time.perf_counter() - t0
             mode[1] += 1
             mode[2] += sim.dt
+
         SimWorld.step = step_by_mode
 
     def install(self) -> None:
@@ -107,13 +123,16 @@ def main() -> int:
     timer = Timer()
     timer.install()
     from demo.episode import run_episode
+
     t0 = time.perf_counter()
     ep = run_episode(a.tree, a.world, a.seed, category=a.category)
     wall = time.perf_counter() - t0
     sim = ep.sim_time
     print(f"{a.tree} in {a.world} seed {a.seed}: {'success' if ep.success else 'FAILURE: ' + str(ep.reason)}")
-    print(f"sim {sim:.1f} s, wall {wall:.1f} s: {sim / wall:.1f}x real time "
-          "(wall time includes building the world and the runtime)")
+    print(
+        f"sim {sim:.1f} s, wall {wall:.1f} s: {sim / wall:.1f}x real time "
+        "(wall time includes building the world and the runtime)"
+    )
     print(f"\n{'component':<52} {'ms per sim s':>12} {'share':>7} {'calls':>8}")
     total = 0.0
     for part in PARTS:

@@ -13,6 +13,7 @@ simulator's speed.
 
     .venv/bin/python bench/bench_sim_sensors.py [--no-demo]
 """
+
 from __future__ import annotations
 
 import io
@@ -34,7 +35,7 @@ from sim.topics import CMD_VEL
 SCANS = 300
 POSES = [(1.0, 1.0, 0.0), (3.0, 1.5, 1.2), (7.5, 2.5, -2.0), (5.0, 6.0, 0.5), (2.0, 6.0, 3.0)]
 SIM_SECONDS = 10.0
-REPEATS = 5          # pairs of runs, without and with /scan, interleaved (the machine's load drifts)
+REPEATS = 5  # pairs of runs, without and with /scan, interleaved (the machine's load drifts)
 
 
 def bench_scan():
@@ -43,9 +44,9 @@ def bench_scan():
         times = []
         for x, y, yaw in POSES:
             # teleport the robot: the scan only reads geometry
-            p.resetBasePositionAndOrientation(sim.robot.body, [x, y, 0.0],
-                                              [0, 0, math.sin(yaw / 2), math.cos(yaw / 2)],
-                                              physicsClientId=sim.cid)
+            p.resetBasePositionAndOrientation(
+                sim.robot.body, [x, y, 0.0], [0, 0, math.sin(yaw / 2), math.cos(yaw / 2)], physicsClientId=sim.cid
+            )
             pos, orn = sim.robot.link_pose("base_scan")
             for _ in range(SCANS // len(POSES)):
                 t0 = time.perf_counter()
@@ -82,8 +83,10 @@ def run_sim(with_scan: bool):
     sim = SimWorld(rt, "house", seed=0, camera=False, cmd_vel_timeout=0)
     try:
         sim.start()
-        subs = [rt.bus.subscribe("/odom", Odometry, lambda m: None),
-                rt.bus.subscribe("/joint_states", JointState, lambda m: None)]
+        subs = [
+            rt.bus.subscribe("/odom", Odometry, lambda m: None),
+            rt.bus.subscribe("/joint_states", JointState, lambda m: None),
+        ]
         scans = []
         if with_scan:
             subs.append(rt.bus.subscribe("/scan", LaserScan, scans.append, "sensor"))
@@ -111,6 +114,7 @@ def run_demo(with_scan: bool):
         worlds.append(world)
         if with_scan:
             world.runtime.bus.subscribe("/scan", LaserScan, scans.append, "sensor")
+
     c0 = time.process_time()
     ep = run_episode("bt_pick_place", "house", 0, "any", progress=io.StringIO(), world_setup=setup)
     return ep, len(scans), worlds[0].lidar.seconds, time.process_time() - c0
@@ -119,13 +123,19 @@ def run_demo(with_scan: bool):
 def main() -> int:
     demo = "--no-demo" not in sys.argv[1:]
     med, worst = bench_scan()
-    print(f"scan (360 beams, one rayTestBatch, house): median {med:.2f} ms, max {worst:.2f} ms "
-          f"over {SCANS} scans at {len(POSES)} poses")
+    print(
+        f"scan (360 beams, one rayTestBatch, house): median {med:.2f} ms, max {worst:.2f} ms "
+        f"over {SCANS} scans at {len(POSES)} poses"
+    )
     model_us, tick_us = bench_odom()
-    print(f"odometry update: {model_us:.1f} us (model), {tick_us:.1f} us with the per-tick "
-          f"pybullet reads (wheel joints + base yaw)")
-    print(f"\nsimulator on house, {SIM_SECONDS:.0f} s simulated, median of {REPEATS}; "
-          f"/odom and /joint_states subscribed, camera off")
+    print(
+        f"odometry update: {model_us:.1f} us (model), {tick_us:.1f} us with the per-tick "
+        f"pybullet reads (wheel joints + base yaw)"
+    )
+    print(
+        f"\nsimulator on house, {SIM_SECONDS:.0f} s simulated, median of {REPEATS}; "
+        f"/odom and /joint_states subscribed, camera off"
+    )
     pairs = [(run_sim(False), run_sim(True)) for _ in range(REPEATS)]
     for with_scan in (False, True):
         runs = [pair[with_scan] for pair in pairs]
@@ -133,17 +143,23 @@ def main() -> int:
         share = statistics.median(r[2] for r in runs)
         per_cpu = statistics.median(r[3] for r in runs)
         label = "with /scan subscribed" if with_scan else "without /scan"
-        print(f"  {label:24s} {rtf:6.1f}x real time, {per_cpu:5.1f}x per CPU second   ({runs[0][1]} scans, "
-              f"{100 * share:.1f} % of the wall time casting)", flush=True)
+        print(
+            f"  {label:24s} {rtf:6.1f}x real time, {per_cpu:5.1f}x per CPU second   ({runs[0][1]} scans, "
+            f"{100 * share:.1f} % of the wall time casting)",
+            flush=True,
+        )
     if demo:
         print("\ndemo (bt_pick_place, house, seed 0; the actors' camera is on)")
         for with_scan in (False, True):
             ep, n, cast, cpu = run_demo(with_scan)
             label = "with /scan subscribed" if with_scan else "without /scan"
-            print(f"  {label:24s} {ep.realtime_factor:6.1f}x real time, {ep.sim_time / cpu:5.1f}x per CPU "
-                  f"second   sim {ep.sim_time:.1f} s, wall {ep.wall_time:.1f} s, "
-                  f"{'success' if ep.success else 'FAILED'}, {n} scans ({cast:.2f} s casting, "
-                  f"{100 * cast / ep.wall_time:.1f} % of the wall time)", flush=True)
+            print(
+                f"  {label:24s} {ep.realtime_factor:6.1f}x real time, {ep.sim_time / cpu:5.1f}x per CPU "
+                f"second   sim {ep.sim_time:.1f} s, wall {ep.wall_time:.1f} s, "
+                f"{'success' if ep.success else 'FAILED'}, {n} scans ({cast:.2f} s casting, "
+                f"{100 * cast / ep.wall_time:.1f} % of the wall time)",
+                flush=True,
+            )
     return 0
 
 

@@ -23,6 +23,7 @@ Targets of the issue: precision >= 0.95, recall >= 0.90, trajectory error <= 5 c
 
     .venv/bin/python bench/bench_slam.py [--trials 3] [--seed 0] [--no-odom-contrast] [-v]
 """
+
 from __future__ import annotations
 
 import argparse
@@ -93,7 +94,7 @@ def map_quality(occ_map, world: SyntheticWorld, samples, within: float = 0.10):
     cx, cy = occ_map.to_world(cols.ravel() + 0.5, rows.ravel() + 0.5)
     truth = world.boxes.contains(cx, cy).reshape(h, w)
     built = occ_map.data >= 65
-    d_truth = ndimage.distance_transform_edt(~truth) * res          # to the nearest true cell
+    d_truth = ndimage.distance_transform_edt(~truth) * res  # to the nearest true cell
     d_built = ndimage.distance_transform_edt(~built) * res if built.any() else np.full((h, w), np.inf)
     precision = float((d_truth[built] <= within + 1e-9).mean()) if built.any() else 0.0
     # the visible surface: where noise-free scans from the true poses end
@@ -120,7 +121,7 @@ def trial(seed: int, loop_closure: bool = True, **overrides):
     world = house_world(seed)
     params = SlamParams(initial_pose=world.truth, sensor_offset=world.laser.pose, **overrides)
     if not loop_closure:
-        params.loop_min_score = 2.0                  # no match scores above 1
+        params.loop_min_score = 2.0  # no match scores above 1
     slam = Slam(params)
     t0 = time.perf_counter()
     samples, times, key = drive_loop(world, slam)
@@ -132,13 +133,24 @@ def trial(seed: int, loop_closure: bool = True, **overrides):
     t_map = time.perf_counter() - t_map
     precision, recall, recall_all = map_quality(m, world, samples)
     final = math.dist(slam.pose()[:2], samples[-1].truth[:2])
-    return dict(rms=trajectory_rms(traj, truth_at), final=final, odom=odometry_rms(samples),
-                closures=slam.loop_closures, median_ms=1e3 * float(np.median(times)),
-                p95_ms=1e3 * float(np.percentile(times, 95)),
-                key_ms=1e3 * float(np.median(times[key])) if key.any() else float("nan"),
-                map_ms=1e3 * t_map, wall=wall, sim_time=samples[-1].t, scans=len(samples),
-                keyframes=len(traj), precision=precision, recall=recall, recall_all=recall_all,
-                distance=world.distance)
+    return dict(
+        rms=trajectory_rms(traj, truth_at),
+        final=final,
+        odom=odometry_rms(samples),
+        closures=slam.loop_closures,
+        median_ms=1e3 * float(np.median(times)),
+        p95_ms=1e3 * float(np.percentile(times, 95)),
+        key_ms=1e3 * float(np.median(times[key])) if key.any() else float("nan"),
+        map_ms=1e3 * t_map,
+        wall=wall,
+        sim_time=samples[-1].t,
+        scans=len(samples),
+        keyframes=len(traj),
+        precision=precision,
+        recall=recall,
+        recall_all=recall_all,
+        distance=world.distance,
+    )
 
 
 def main(argv=None) -> int:
@@ -155,25 +167,35 @@ def main(argv=None) -> int:
             r = trial(seed, loop_closure=lc)
             rows[lc].append(r)
             tag = "loop closure" if lc else "no closure  "
-            print(f"seed {seed} {tag}: traj RMS {100 * r['rms']:5.1f} cm (odometry {100 * r['odom']:5.1f} cm), "
-                  f"final {100 * r['final']:4.1f} cm, closures {r['closures']:2d}, precision {r['precision']:.3f}, "
-                  f"recall {r['recall']:.3f} (all surface {r['recall_all']:.3f}), scan median {r['median_ms']:.1f} ms "
-                  f"(p95 {r['p95_ms']:.1f}, keyframe {r['key_ms']:.1f}), map() {r['map_ms']:.0f} ms, "
-                  f"{r['scans']} scans / {r['keyframes']} keyframes / {r['distance']:.1f} m in {r['wall']:.1f} s wall "
-                  f"({r['sim_time']:.0f} s simulated)", flush=True)
+            print(
+                f"seed {seed} {tag}: traj RMS {100 * r['rms']:5.1f} cm (odometry {100 * r['odom']:5.1f} cm), "
+                f"final {100 * r['final']:4.1f} cm, closures {r['closures']:2d}, precision {r['precision']:.3f}, "
+                f"recall {r['recall']:.3f} (all surface {r['recall_all']:.3f}), scan median {r['median_ms']:.1f} ms "
+                f"(p95 {r['p95_ms']:.1f}, keyframe {r['key_ms']:.1f}), map() {r['map_ms']:.0f} ms, "
+                f"{r['scans']} scans / {r['keyframes']} keyframes / {r['distance']:.1f} m in {r['wall']:.1f} s wall "
+                f"({r['sim_time']:.0f} s simulated)",
+                flush=True,
+            )
 
     def mean(lc, key):
         return statistics.fmean(r[key] for r in rows[lc])
+
     print()
     print(f"trials: {args.trials} (seeds {args.seed}..{args.seed + args.trials - 1}), house loop")
-    print(f"trajectory RMS error: {100 * mean(True, 'rms'):.1f} cm with loop closure, "
-          f"{100 * mean(False, 'rms'):.1f} cm without, odometry alone {100 * mean(True, 'odom'):.1f} cm  (target <= 5)")
-    print(f"per-scan update: median {mean(True, 'median_ms'):.1f} ms, p95 {mean(True, 'p95_ms'):.1f} ms, "
-          f"keyframes median {mean(True, 'key_ms'):.1f} ms; map() after closure {mean(True, 'map_ms'):.0f} ms")
+    print(
+        f"trajectory RMS error: {100 * mean(True, 'rms'):.1f} cm with loop closure, "
+        f"{100 * mean(False, 'rms'):.1f} cm without, odometry alone {100 * mean(True, 'odom'):.1f} cm  (target <= 5)"
+    )
+    print(
+        f"per-scan update: median {mean(True, 'median_ms'):.1f} ms, p95 {mean(True, 'p95_ms'):.1f} ms, "
+        f"keyframes median {mean(True, 'key_ms'):.1f} ms; map() after closure {mean(True, 'map_ms'):.0f} ms"
+    )
     print(f"loop closures: {mean(True, 'closures'):.1f} per run")
-    print(f"map, occupied within 10 cm: precision {mean(True, 'precision'):.3f} (target >= 0.95), "
-          f"recall {mean(True, 'recall'):.3f} (target >= 0.90; all surface {mean(True, 'recall_all'):.3f}); "
-          f"without closure precision {mean(False, 'precision'):.3f} recall {mean(False, 'recall'):.3f}")
+    print(
+        f"map, occupied within 10 cm: precision {mean(True, 'precision'):.3f} (target >= 0.95), "
+        f"recall {mean(True, 'recall'):.3f} (target >= 0.90; all surface {mean(True, 'recall_all'):.3f}); "
+        f"without closure precision {mean(False, 'precision'):.3f} recall {mean(False, 'recall'):.3f}"
+    )
     return 0
 
 

@@ -4,6 +4,7 @@ call needs the same two hand-offs, so this is its floor on the machine at hand.
 
     .venv/bin/python bench/bench_thread_floor.py
 """
+
 from __future__ import annotations
 
 import statistics
@@ -23,6 +24,7 @@ def round_trip_us(n: int = 3000, repeats: int = 7) -> float:
             if stop:
                 return
             pong.release()
+
     t = threading.Thread(target=server)
     t.start()
     samples = []

@@ -39,6 +39,7 @@
    references, decorators): parse only, parse + validate (TreeLibrary), and parse +
    validate + register (``TreeHost.load_folder``, what ``register_tree_folder`` does).
 """
+
 from __future__ import annotations
 
 import collections
@@ -77,6 +78,7 @@ class BenchActors(SubSystem):
 
 
 # ---------------------------------------------------------------------------- tree shapes
+
 
 def make_shape(n: int, kinds: tuple[str, ...] = KINDS) -> Any:
     """A tree of exactly ``n`` nodes: ``"leaf"`` or ``(kind, [children])``; composite kinds
@@ -144,8 +146,7 @@ def bare_tree(shape: Any, leaf_cls: type) -> py_trees.behaviour.Behaviour:
             return py_trees.composites.Sequence(name, memory=True, children=kids)
         if kind == "selector":
             return py_trees.composites.Selector(name, memory=True, children=kids)
-        return py_trees.composites.Parallel(name, policy=ParallelPolicy.SuccessOnAll(synchronise=True),
-                                            children=kids)
+        return py_trees.composites.Parallel(name, policy=ParallelPolicy.SuccessOnAll(synchronise=True), children=kids)
 
     return make(shape)
 
@@ -160,6 +161,7 @@ def size_of(root: py_trees.behaviour.Behaviour) -> int:
 
 
 # ---------------------------------------------------------------------------- tick timing
+
 
 class BenchHost(TreeHost):
     """A TreeHost whose actor leaves, in the runs listed in ``done_runs``, are handed an
@@ -181,11 +183,13 @@ class BenchHost(TreeHost):
 def timed_ticks(rt: Runtime, tick: Any, n: int) -> float:
     """Seconds per call of ``tick``, ``n`` calls in one hub callback (every variant, bare or
     ours, is timed on the hub thread with nothing else running in between)."""
+
     def body() -> float:
         t0 = time.perf_counter()
         for _ in range(n):
             tick()
         return (time.perf_counter() - t0) / n
+
     gc.collect()
     return rt.run_on_hub(body)
 
@@ -194,8 +198,12 @@ def tick_bench(rt: Runtime, host: BenchHost, folder: Path, n_nodes: int) -> dict
     shape = make_shape(n_nodes)
     flat = make_shape(n_nodes, kinds=("parallel",))  # every leaf ticked on every tick
     composites, leaves = count(shape)
-    trees = {f"done_{n_nodes}": (shape, "instant"), f"wait_{n_nodes}": (shape, "pending"),
-             f"flat_{n_nodes}": (flat, "pending"), f"flatdone_{n_nodes}": (flat, "instant")}
+    trees = {
+        f"done_{n_nodes}": (shape, "instant"),
+        f"wait_{n_nodes}": (shape, "pending"),
+        f"flat_{n_nodes}": (flat, "pending"),
+        f"flatdone_{n_nodes}": (flat, "instant"),
+    }
     for name, (sh, leaf) in trees.items():
         (folder / f"{name}.yaml").write_text(shape_yaml(name, sh, f"{{do: {leaf}}}"))
         host.load_file(folder / f"{name}.yaml")
@@ -217,12 +225,21 @@ def tick_bench(rt: Runtime, host: BenchHost, folder: Path, n_nodes: int) -> dict
     run_wait = host.prepare(f"wait_{n_nodes}")
     run_flat = host.prepare(f"flat_{n_nodes}")
     # First ticks (untimed): completing trees complete, waiting trees start their actors.
-    for root, want in ((bare_done, Status.SUCCESS), (bare_run, Status.RUNNING), (bare_flat, Status.RUNNING),
-                       (bare_flatdone, Status.SUCCESS)):
+    for root, want in (
+        (bare_done, Status.SUCCESS),
+        (bare_run, Status.RUNNING),
+        (bare_flat, Status.RUNNING),
+        (bare_flatdone, Status.SUCCESS),
+    ):
         root.tick_once()
         assert root.status is want
-    for run, want in ((run_done, Status.SUCCESS), (run_inst, Status.SUCCESS),
-                      (run_wait, Status.RUNNING), (run_flat, Status.RUNNING), (run_flatdone, Status.SUCCESS)):
+    for run, want in (
+        (run_done, Status.SUCCESS),
+        (run_inst, Status.SUCCESS),
+        (run_wait, Status.RUNNING),
+        (run_flat, Status.RUNNING),
+        (run_flatdone, Status.SUCCESS),
+    ):
         assert rt.run_on_hub(run.tick) is want
 
     # Fairness checks: same size, same nodes ticked.
@@ -257,21 +274,29 @@ def tick_bench(rt: Runtime, host: BenchHost, folder: Path, n_nodes: int) -> dict
     inst_starts = host.real_starts[run_inst.id] / run_inst.ticks
     for run in (run_wait, run_flat):
         assert rt.run_on_hub(run.tick) is Status.RUNNING
-        assert host.real_starts[run.id] == sum(1 for b in run.root.iterate() if b.status is Status.RUNNING
-                                               and not b.children)  # started once, then polled
+        assert host.real_starts[run.id] == sum(
+            1 for b in run.root.iterate() if b.status is Status.RUNNING and not b.children
+        )  # started once, then polled
     for run in (run_done, run_inst, run_wait, run_flat, run_flatdone):
         rt.run_on_hub(run.close)
     return {
-        "nodes": n_nodes, "composites": composites, "leaves": leaves,
-        "visited_done": v_done, "visited_run": v_run, "visited_flat": v_flat,
-        "flat_composites": count(flat)[0], "ticks_per_batch": n,
-        "pending_txns": pending, "instant_starts_per_tick": inst_starts,
+        "nodes": n_nodes,
+        "composites": composites,
+        "leaves": leaves,
+        "visited_done": v_done,
+        "visited_run": v_run,
+        "visited_flat": v_flat,
+        "flat_composites": count(flat)[0],
+        "ticks_per_batch": n,
+        "pending_txns": pending,
+        "instant_starts_per_tick": inst_starts,
         "left_txns": len(rt.transactions()),
         **{k: statistics.median(v) * 1e6 for k, v in samples.items()},
     }
 
 
 # ---------------------------------------------------------------------------- idle cost
+
 
 class TickCounter(TreeObserver):
     def __init__(self) -> None:
@@ -287,7 +312,8 @@ class TickCounter(TreeObserver):
 
 def idle_bench(folder: Path, max_period: float | None, repeats: int = 5) -> dict[str, Any]:
     (folder / "idle_actor.yaml").write_text(
-        f"name: idle_actor\nroot:\n  do: sleep\n  with: {{seconds: {IDLE_SECONDS}}}\n")
+        f"name: idle_actor\nroot:\n  do: sleep\n  with: {{seconds: {IDLE_SECONDS}}}\n"
+    )
     (folder / "idle_wait.yaml").write_text(f"name: idle_wait\nroot:\n  wait: {IDLE_SECONDS}\n")
     out: dict[str, Any] = {}
     with Runtime(watchdog=None) as rt:
@@ -307,12 +333,17 @@ def idle_bench(folder: Path, max_period: float | None, repeats: int = 5) -> dict
                 virtual.add(round(v1 - v0, 6))
                 assert counter.runs == 1
             host.observers.clear()
-            out[tree] = {"ticks": sorted(ticks), "cpu_ms": statistics.median(cpu) * 1e3,
-                         "wall_ms": statistics.median(wall) * 1e3, "virtual_s": sorted(virtual)}
+            out[tree] = {
+                "ticks": sorted(ticks),
+                "cpu_ms": statistics.median(cpu) * 1e3,
+                "wall_ms": statistics.median(wall) * 1e3,
+                "virtual_s": sorted(virtual),
+            }
     return out
 
 
 # ---------------------------------------------------------------------------- load time
+
 
 def load_yaml(n_nodes: int) -> str:
     """A realistic mission of exactly ``n_nodes`` nodes: all composites and some decorators
@@ -345,9 +376,15 @@ def load_yaml(n_nodes: int) -> str:
             return "{do: sleep, with: [0.01]}"
         return 'wait: "{pause}"'
 
-    lines = ["name: load_500", "doc: generated for bench_trees",
-             "inputs:", "  pause: {type: float, default: 0.01}", "  limit: {type: int, default: 3}",
-             "outputs: [k0]", "root:"]
+    lines = [
+        "name: load_500",
+        "doc: generated for bench_trees",
+        "inputs:",
+        "  pause: {type: float, default: 0.01}",
+        "  limit: {type: int, default: 3}",
+        "outputs: [k0]",
+        "root:",
+    ]
 
     def emit(node: Any, indent: int, item: bool) -> None:
         pad = " " * indent
@@ -419,6 +456,7 @@ def load_bench(folder: Path, repeats: int = REPEATS) -> dict[str, Any]:
 
 # ---------------------------------------------------------------------------- report
 
+
 def verdict(value: float | None, target: float | None) -> str:
     if target is None or value is None:
         return ""
@@ -442,32 +480,51 @@ def main() -> None:
         idle_p = idle_bench(idle_dir2, 1.0, repeats=3)
         load = load_bench(load_dir)
 
-    print("1. Tick overhead vs bare py_trees 2.6 (median of "
-          f"{REPEATS} interleaved batches; no visitors, observers or recorder)")
+    print(
+        "1. Tick overhead vs bare py_trees 2.6 (median of "
+        f"{REPEATS} interleaved batches; no visitors, observers or recorder)"
+    )
     for r in results:
-        print(f"\n  {r['nodes']}-node tree: {r['composites']} composites (sequence/selector/parallel), "
-              f"{r['leaves']} leaves; {r['ticks_per_batch']} ticks per batch")
-        print(f"  nodes ticked per tick: {r['visited_done']} when every leaf completes (selectors stop at "
-              f"their first success), {r['visited_run']} when leaves run (memory sequences/selectors stop "
-              f"at their running child); all-parallel variant ({r['flat_composites']} parallels): "
-              f"all {r['visited_flat']}")
+        print(
+            f"\n  {r['nodes']}-node tree: {r['composites']} composites (sequence/selector/parallel), "
+            f"{r['leaves']} leaves; {r['ticks_per_batch']} ticks per batch"
+        )
+        print(
+            f"  nodes ticked per tick: {r['visited_done']} when every leaf completes (selectors stop at "
+            f"their first success), {r['visited_run']} when leaves run (memory sequences/selectors stop "
+            f"at their running child); all-parallel variant ({r['flat_composites']} parallels): "
+            f"all {r['visited_flat']}"
+        )
         print(f"  {'case':58s} {'us/tick':>9s} {'us/node':>8s} {'ratio':>6s} {'target':>7s}")
         rows = [
             ("done: bare Success leaves, root.tick_once() [baseline]", "bare_done", "visited_done", None, None),
             ("done: bare Success leaves, BehaviourTree.tick()", "bare_done_bt", "visited_done", "bare_done", None),
-            ("done: actor leaves, actor already done, TreeRun.tick()", "ours_done", "visited_done", "bare_done",
-             TICK_TARGET),
-            ("done: actor leaves, instant actor (engine call/leaf)", "ours_instant", "visited_done", "bare_done",
-             None),
+            (
+                "done: actor leaves, actor already done, TreeRun.tick()",
+                "ours_done",
+                "visited_done",
+                "bare_done",
+                TICK_TARGET,
+            ),
+            ("done: actor leaves, instant actor (engine call/leaf)", "ours_instant", "visited_done", "bare_done", None),
             ("done, all-parallel: bare Success leaves [baseline]", "bare_flatdone", "visited_flat", None, None),
-            ("done, all-parallel: actor leaves, actor already done", "ours_flatdone", "visited_flat",
-             "bare_flatdone", TICK_TARGET),
+            (
+                "done, all-parallel: actor leaves, actor already done",
+                "ours_flatdone",
+                "visited_flat",
+                "bare_flatdone",
+                TICK_TARGET,
+            ),
             ("running: bare Running leaves [baseline]", "bare_run", "visited_run", None, None),
-            ("running: actor leaves polling a pending transaction", "ours_run", "visited_run", "bare_run",
-             TICK_TARGET),
+            ("running: actor leaves polling a pending transaction", "ours_run", "visited_run", "bare_run", TICK_TARGET),
             ("running, all-parallel: bare Running leaves [baseline]", "bare_flat", "visited_flat", None, None),
-            ("running, all-parallel: actor leaves, pending transaction", "ours_flat", "visited_flat", "bare_flat",
-             TICK_TARGET),
+            (
+                "running, all-parallel: actor leaves, pending transaction",
+                "ours_flat",
+                "visited_flat",
+                "bare_flat",
+                TICK_TARGET,
+            ),
         ]
         for name, key, nodes_key, base, target in rows:
             us = r[key]
@@ -476,12 +533,16 @@ def main() -> None:
             target_s = f"<= {target}x" if target else "-"
             ok = verdict(ratio, target) if ratio is not None else ""
             print(f"  {name:58s} {us:9.1f} {us / r[nodes_key]:8.2f} {ratio_s:>6s} {target_s:>7s}  {ok}")
-        print(f"  already-done vs BehaviourTree.tick(): {r['ours_done'] / r['bare_done_bt']:.2f}x; engine calls "
-              f"per tick: 0 already-done, {r['instant_starts_per_tick']:.0f} instant; {r['pending_txns']} pending "
-              f"transactions while timing 'running', {r['left_txns']} left after closing the runs")
+        print(
+            f"  already-done vs BehaviourTree.tick(): {r['ours_done'] / r['bare_done_bt']:.2f}x; engine calls "
+            f"per tick: 0 already-done, {r['instant_starts_per_tick']:.0f} instant; {r['pending_txns']} pending "
+            f"transactions while timing 'running', {r['left_txns']} left after closing the runs"
+        )
 
-    print(f"\n2. Idle cost: one run of a tree waiting {IDLE_SECONDS:.0f} s of virtual time "
-          "(median CPU of 5 runs; CPU = time.process_time, all threads)")
+    print(
+        f"\n2. Idle cost: one run of a tree waiting {IDLE_SECONDS:.0f} s of virtual time "
+        "(median CPU of 5 runs; CPU = time.process_time, all threads)"
+    )
     print(f"  {'tree':44s} {'ticks':>6s} {'target':>7s} {'CPU ms':>8s} {'wall ms':>8s} {'virtual s':>9s}")
     for label, data, target in (
         ("do: sleep 60 s (event-driven, default host)", idle["idle_actor"], 2),
@@ -493,11 +554,14 @@ def main() -> None:
         target_s = f"== {target}" if target is not None else "-"
         ok = "" if target is None else ("ok" if ticks == [target] else "MISSED")
         virt = "/".join(f"{v:g}" for v in data["virtual_s"])
-        print(f"  {label:44s} {tick_s:>6s} {target_s:>7s} "
-              f"{data['cpu_ms']:8.2f} {data['wall_ms']:8.2f} {virt:>9s}  {ok}")
+        print(
+            f"  {label:44s} {tick_s:>6s} {target_s:>7s} {data['cpu_ms']:8.2f} {data['wall_ms']:8.2f} {virt:>9s}  {ok}"
+        )
 
-    print(f"\n3. Load time of a {load['nodes']}-node mission ({load['lines']} YAML lines; "
-          f"median of {REPEATS}; no target in the issue)")
+    print(
+        f"\n3. Load time of a {load['nodes']}-node mission ({load['lines']} YAML lines; "
+        f"median of {REPEATS}; no target in the issue)"
+    )
     print(f"  nodes: {load['mix']}")
     print(f"  {'step':58s} {'ms':>8s}")
     print(f"  {'parse only (read_mission: YAML with positions -> model)':58s} {load['parse']:8.1f}")

@@ -22,6 +22,7 @@ with ``--set`` overriding SlamParams (values are YAML), and prints:
 * with ``--edges``: each pose-graph edge kind's error along its own translation, against
   the truth [mm, and mm per metre of edge]: a negative figure is a shrink.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -56,29 +57,44 @@ def record(world: str, seed: int, out: pathlib.Path, max_time: float) -> None:
         def on_scan(m: LaserScan) -> None:
             rec["scan_t"].append(m.header.stamp.sec + 1e-9 * m.header.stamp.nanosec)
             rec["ranges"].append(np.asarray(m.ranges, np.float32))
-            rec["truth"].append(tuple(sim.robot_pose()))       # the referee's view, never the robot's
+            rec["truth"].append(tuple(sim.robot_pose()))  # the referee's view, never the robot's
             rec["meta"] = rec["meta"] or [m.angle_min, m.angle_increment, m.range_min, m.range_max]
 
         def on_odom(m: Odometry) -> None:
             p = m.pose.pose
-            rec["odom"].append((m.header.stamp.sec + 1e-9 * m.header.stamp.nanosec, p.position.x,
-                                p.position.y, yaw_of(p.orientation)))
+            rec["odom"].append(
+                (m.header.stamp.sec + 1e-9 * m.header.stamp.nanosec, p.position.x, p.position.y, yaw_of(p.orientation))
+            )
+
         def on_imu(m: Imu) -> None:
             rec["imu"].append((m.header.stamp.sec + 1e-9 * m.header.stamp.nanosec, yaw_of(m.orientation)))
-        subs = [rt.bus.subscribe("/scan", LaserScan, on_scan, 100), rt.bus.subscribe("/odom", Odometry, on_odom, 100),
-                rt.bus.subscribe(IMU_TOPIC, Imu, on_imu, 100)]
+
+        subs = [
+            rt.bus.subscribe("/scan", LaserScan, on_scan, 100),
+            rt.bus.subscribe("/odom", Odometry, on_odom, 100),
+            rt.bus.subscribe(IMU_TOPIC, Imu, on_imu, 100),
+        ]
         return lambda: [s.close() for s in subs]
 
     with tempfile.TemporaryDirectory() as tmp:
         run = build_map(world, seed, tmp, max_time=max_time, observe=observe, progress=sys.stdout)
     out.parent.mkdir(parents=True, exist_ok=True)
-    np.savez_compressed(out, scan_t=np.array(rec["scan_t"]), ranges=np.array(rec["ranges"]),
-                        truth=np.array(rec["truth"]), odom=np.array(rec["odom"]),
-                        imu=np.array(rec["imu"]).reshape(-1, 2), meta=np.array(rec["meta"]),
-                        world=np.array(world), seed=np.array(seed))
-    print(f"recorded {len(rec['scan_t'])} scans, {len(rec['odom'])} odometry and {len(rec['imu'])} IMU messages of a "
-          f"{run.sim_time:.0f} s run in {out}; live: online error {100 * run.traj_rmse_m:.1f} cm RMS "
-          f"({100 * run.traj_max_m:.1f} max), {run.mapping.get('loop_closures')} loop closures")
+    np.savez_compressed(
+        out,
+        scan_t=np.array(rec["scan_t"]),
+        ranges=np.array(rec["ranges"]),
+        truth=np.array(rec["truth"]),
+        odom=np.array(rec["odom"]),
+        imu=np.array(rec["imu"]).reshape(-1, 2),
+        meta=np.array(rec["meta"]),
+        world=np.array(world),
+        seed=np.array(seed),
+    )
+    print(
+        f"recorded {len(rec['scan_t'])} scans, {len(rec['odom'])} odometry and {len(rec['imu'])} IMU messages of a "
+        f"{run.sim_time:.0f} s run in {out}; live: online error {100 * run.traj_rmse_m:.1f} cm RMS "
+        f"({100 * run.traj_max_m:.1f} max), {run.mapping.get('loop_closures')} loop closures"
+    )
 
 
 # -- replaying -------------------------------------------------------------------------------
@@ -89,9 +105,9 @@ def fit(truth: np.ndarray, est: np.ndarray, scale: bool) -> tuple[float, float]:
     u, sv, vt = np.linalg.svd(b.T @ a / len(a))
     d = np.diag([1.0, np.sign(np.linalg.det(u @ vt))])
     rot = u @ d @ vt
-    s = float((sv * np.diag(d)).sum() / (a ** 2).sum() * len(a)) if scale else 1.0
+    s = float((sv * np.diag(d)).sum() / (a**2).sum() * len(a)) if scale else 1.0
     left = b - s * (rot @ a.T).T
-    return s, float(np.sqrt((left ** 2).sum(1).mean()))
+    return s, float(np.sqrt((left**2).sum(1).mean()))
 
 
 def replay(path: pathlib.Path, overrides: dict, edges: bool = False) -> dict:
@@ -104,13 +120,15 @@ def replay(path: pathlib.Path, overrides: dict, edges: bool = False) -> dict:
     from sim.gridmap import read_map
     from sim.map_score import score_maps, truth_grid
 
-    with np.load(path) as npz:                  # each access of an npz member reads it again
+    with np.load(path) as npz:  # each access of an npz member reads it again
         d = {k: npz[k] for k in npz.files}
     angle_min, angle_inc, range_min, range_max = (float(v) for v in d["meta"])
     angles = angle_min + angle_inc * np.arange(d["ranges"].shape[1])
     grid = {k.removeprefix("grid."): v for k, v in overrides.items() if k.startswith("grid.")}
-    params = {"sensor_offset": (-0.15, 0.0, 0.0),                 # the URDF's base_scan
-              **{k: v for k, v in overrides.items() if not k.startswith("grid.")}}
+    params = {
+        "sensor_offset": (-0.15, 0.0, 0.0),  # the URDF's base_scan
+        **{k: v for k, v in overrides.items() if not k.startswith("grid.")},
+    }
     if grid:
         params["grid"] = LogOddsParams(**{**SlamParams().grid.__dict__, **grid})
     slam = Slam(SlamParams(initial_pose=tuple(d["truth"][0]), **params))
@@ -145,11 +163,19 @@ def replay(path: pathlib.Path, overrides: dict, edges: bool = False) -> dict:
         built = read_map(yaml_path).grid
     world, seed = str(d["world"]), int(d["seed"])
     score = score_maps(built, truth_grid(world, seed, resolution=built.resolution))
-    out = {"online_rms_cm": 100 * float(np.sqrt(np.mean(np.square(online)))), "online_max_cm": 100 * max(online),
-           "keyframes_rms_cm": 100 * float(np.sqrt(np.mean(err ** 2))), "scale": scale,
-           "after_similarity_cm": 100 * after_similarity, "after_rigid_cm": 100 * after_rigid,
-           "precision": score.precision, "recall": score.recall, "keyframes": len(slam.keyframes),
-           "loop_closures": slam.loop_closures, "slam_wall_s": wall}
+    out = {
+        "online_rms_cm": 100 * float(np.sqrt(np.mean(np.square(online)))),
+        "online_max_cm": 100 * max(online),
+        "keyframes_rms_cm": 100 * float(np.sqrt(np.mean(err**2))),
+        "scale": scale,
+        "after_similarity_cm": 100 * after_similarity,
+        "after_rigid_cm": 100 * after_rigid,
+        "precision": score.precision,
+        "recall": score.recall,
+        "keyframes": len(slam.keyframes),
+        "loop_closures": slam.loop_closures,
+        "slam_wall_s": wall,
+    }
     if edges:
         out["edges"] = edge_errors(slam, kf_true, relative)
     return out
@@ -173,17 +199,20 @@ def edge_errors(slam, kf_true: np.ndarray, relative) -> dict:
         turns.setdefault(kind, []).append((math.remainder(e.z[2] - zt[2], 2 * math.pi), zt[2]))
         n = math.hypot(zt[0], zt[1])
         if n < 0.05:
-            continue                                  # a turn on the spot: no direction
+            continue  # a turn on the spot: no direction
         along = ((e.z[0] - zt[0]) * zt[0] + (e.z[1] - zt[1]) * zt[1]) / n
         rows.setdefault(kind, []).append((along, n))
     out = {}
     for k in sorted(turns):
         v, yaw = rows.get(k, [(0.0, 1.0)]), np.array(turns[k])
-        out[k] = {"n": len(turns[k]), "mean_mm": 1000 * float(np.mean([a for a, _ in v])),
-                  "per_metre_mm": 1000 * sum(a for a, _ in v) / sum(n for _, n in v),
-                  "yaw_mdeg": 1000 * math.degrees(float(yaw[:, 0].mean())),
-                  # the yaw error per radian turned (a rotation "shrink" is negative)
-                  "yaw_per_turn": float((yaw[:, 0] * yaw[:, 1]).sum() / max((yaw[:, 1] ** 2).sum(), 1e-12))}
+        out[k] = {
+            "n": len(turns[k]),
+            "mean_mm": 1000 * float(np.mean([a for a, _ in v])),
+            "per_metre_mm": 1000 * sum(a for a, _ in v) / sum(n for _, n in v),
+            "yaw_mdeg": 1000 * math.degrees(float(yaw[:, 0].mean())),
+            # the yaw error per radian turned (a rotation "shrink" is negative)
+            "yaw_per_turn": float((yaw[:, 0] * yaw[:, 1]).sum() / max((yaw[:, 1] ** 2).sum(), 1e-12)),
+        }
     return out
 
 
@@ -197,9 +226,14 @@ def main(argv=None) -> int:
     r.add_argument("--out", type=pathlib.Path, required=True)
     p = sub.add_parser("replay", help="replay a recording through the SLAM and score it")
     p.add_argument("recording", type=pathlib.Path)
-    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
-                   help="override a navstack.slam.SlamParams field (the value is YAML); "
-                        "grid.FIELD: a field of its occupancy grid's LogOddsParams")
+    p.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="override a navstack.slam.SlamParams field (the value is YAML); "
+        "grid.FIELD: a field of its occupancy grid's LogOddsParams",
+    )
     p.add_argument("--edges", action="store_true", help="also the pose-graph edges' errors")
     p.add_argument("--json", action="store_true")
     args = ap.parse_args(argv)
@@ -218,15 +252,19 @@ def main(argv=None) -> int:
     if args.json:
         print(json.dumps(res))
         return 0
-    print(f"online {res['online_rms_cm']:.1f} cm RMS ({res['online_max_cm']:.1f} max); keyframes "
-          f"{res['keyframes_rms_cm']:.1f} cm RMS, scale {res['scale']:.4f}, {res['after_similarity_cm']:.1f} cm "
-          f"after a similarity fit, {res['after_rigid_cm']:.1f} cm after a rigid one; precision "
-          f"{res['precision']:.3f} recall {res['recall']:.3f}; {res['keyframes']} keyframes, "
-          f"{res['loop_closures']} loop closures, SLAM {res['slam_wall_s']:.0f} s wall")
+    print(
+        f"online {res['online_rms_cm']:.1f} cm RMS ({res['online_max_cm']:.1f} max); keyframes "
+        f"{res['keyframes_rms_cm']:.1f} cm RMS, scale {res['scale']:.4f}, {res['after_similarity_cm']:.1f} cm "
+        f"after a similarity fit, {res['after_rigid_cm']:.1f} cm after a rigid one; precision "
+        f"{res['precision']:.3f} recall {res['recall']:.3f}; {res['keyframes']} keyframes, "
+        f"{res['loop_closures']} loop closures, SLAM {res['slam_wall_s']:.0f} s wall"
+    )
     for kind, e in res.get("edges", {}).items():
-        print(f"  {kind:6s} {e['n']:4d} edges: along-track error {e['mean_mm']:+6.2f} mm mean, "
-              f"{e['per_metre_mm']:+6.2f} mm/m; yaw error {e['yaw_mdeg']:+6.1f} mdeg mean, "
-              f"{1000 * e['yaw_per_turn']:+6.2f} mrad per rad turned")
+        print(
+            f"  {kind:6s} {e['n']:4d} edges: along-track error {e['mean_mm']:+6.2f} mm mean, "
+            f"{e['per_metre_mm']:+6.2f} mm/m; yaw error {e['yaw_mdeg']:+6.1f} mdeg mean, "
+            f"{1000 * e['yaw_per_turn']:+6.2f} mrad per rad turned"
+        )
     return 0
 
 

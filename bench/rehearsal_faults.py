@@ -9,6 +9,7 @@ failure, from the lines both processes print as they go.
 
     .venv/bin/python bench/rehearsal_faults.py [--only NAME ...] [--timeout 400]
 """
+
 from __future__ import annotations
 
 import argparse
@@ -70,8 +71,7 @@ def run(name: str, faults: list[str], timeout: float) -> dict:
     args = [*ACTORBT, "robot", "--world", "open_floor", "--seed", "0", "--truth", str(truth)]
     for f in faults:
         args += ["--fault", f]
-    robot = subprocess.Popen(args, cwd=ROOT, env=ENV, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                             text=True)
+    robot = subprocess.Popen(args, cwd=ROOT, env=ENV, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     robot_out = Lines(robot)
     out = {"fault": name, "faults": faults}
     try:
@@ -79,10 +79,27 @@ def run(name: str, faults: list[str], timeout: float) -> dict:
             return {**out, "outcome": "robot side did not start"}
         t0 = time.time()
         mission = subprocess.Popen(
-            [*ACTORBT, "--config", str(ROOT / "actorbt.real.yaml"), "run", "bt_pick_place",
-             "--arg", "category=can", "--arg", f"place={json.dumps(PLACE)}",
-             "--arg", "home={x: 0.0, y: 0.0, yaw: 0.0}", "--record", str(tmp / "run.jsonl")],
-            cwd=ROOT, env=ENV, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+            [
+                *ACTORBT,
+                "--config",
+                str(ROOT / "actorbt.real.yaml"),
+                "run",
+                "bt_pick_place",
+                "--arg",
+                "category=can",
+                "--arg",
+                f"place={json.dumps(PLACE)}",
+                "--arg",
+                "home={x: 0.0, y: 0.0, yaw: 0.0}",
+                "--record",
+                str(tmp / "run.jsonl"),
+            ],
+            cwd=ROOT,
+            env=ENV,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.STDOUT,
+            text=True,
+        )
         mission_out = Lines(mission)
         try:
             rc = mission.wait(timeout=timeout)
@@ -91,12 +108,17 @@ def run(name: str, faults: list[str], timeout: float) -> dict:
             rc = mission.wait(timeout=60)
             out["hung"] = True
         time.sleep(0.5)
-        out.update(exit=rc, wall=round(time.time() - t0, 1),
-                   last=[line for _, line in mission_out.lines[-4:]])
+        out.update(exit=rc, wall=round(time.time() - t0, 1), last=[line for _, line in mission_out.lines[-4:]])
         moment = next((t for t, line in robot_out.lines if any(m in line for m in MOMENT)), None)
         if moment is not None:
-            failed = next(((t, line) for t, line in mission_out.lines
-                           if t >= moment and ("failure" in line.lower() or "error" in line.lower())), None)
+            failed = next(
+                (
+                    (t, line)
+                    for t, line in mission_out.lines
+                    if t >= moment and ("failure" in line.lower() or "error" in line.lower())
+                ),
+                None,
+            )
             out["fault_at"] = round(moment - t0, 1)
             out["noticed_after"] = None if failed is None else round(failed[0] - moment, 1)
             out["noticed_by"] = None if failed is None else failed[1].strip()[:160]
@@ -111,8 +133,9 @@ def run(name: str, faults: list[str], timeout: float) -> dict:
     try:
         t = json.loads(truth.read_text())
         cans = [o["pose"] for o in t["objects"].values() if o["category"] == "can"]
-        out["placed"] = any(abs(p[0] - PLACE["x"]) <= 0.3 and abs(p[1] - PLACE["y"]) <= 0.2 and p[2] > 0.12
-                            for p in cans)
+        out["placed"] = any(
+            abs(p[0] - PLACE["x"]) <= 0.3 and abs(p[1] - PLACE["y"]) <= 0.2 and p[2] > 0.12 for p in cans
+        )
     except (OSError, ValueError, KeyError):
         out["placed"] = None
     return out

@@ -1,4 +1,5 @@
 """`make bench`: run every bench/bench_*.py in its own process, one after another."""
+
 from __future__ import annotations
 
 import pathlib

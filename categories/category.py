@@ -4,6 +4,7 @@ The simulator builds its body from ``shape``, ``mass``, ``rgba`` and ``friction`
 perception recognises it by its colour (the hue of ``rgba``) and its measured shape; the
 robot approaches and grasps it with ``approach`` and ``grasp``. See docs/categories.md.
 """
+
 from __future__ import annotations
 
 import math
@@ -59,20 +60,28 @@ class Category:
         if len(self.rgba) not in (3, 4) or not all(0 <= c <= 1 for c in self.rgba):
             raise ValueError(f"{self.name}: rgba must be 3 or 4 numbers in 0..1, got {self.rgba}")
         if not self.sides():
-            raise ValueError(f"{self.name}: no side of the {self.shape} fits the gripper's opening of "
-                             f"{self.grasp.open_width * 1000:.0f} mm")
+            raise ValueError(
+                f"{self.name}: no side of the {self.shape} fits the gripper's opening of "
+                f"{self.grasp.open_width * 1000:.0f} mm"
+            )
         if self.label is not None and self.label.top > self.shape.height:
-            raise ValueError(f"{self.name}: the label ends above the object ({self.label.top} > "
-                             f"{self.shape.height} m)")
+            raise ValueError(f"{self.name}: the label ends above the object ({self.label.top} > {self.shape.height} m)")
         if not 0 < self.grasp.height < self.shape.height:
-            raise ValueError(f"{self.name}: grasp height {self.grasp.height} m is not on the object "
-                             f"(0..{self.shape.height} m)")
+            raise ValueError(
+                f"{self.name}: grasp height {self.grasp.height} m is not on the object (0..{self.shape.height} m)"
+            )
         g = self.grasp
         if g.closed_min is None or g.closed_max is None:
             low, high = derived_window(self.held_width(), g.open_width)
-            object.__setattr__(self, "grasp", replace(
-                g, closed_min=low if g.closed_min is None else g.closed_min,
-                closed_max=high if g.closed_max is None else g.closed_max))
+            object.__setattr__(
+                self,
+                "grasp",
+                replace(
+                    g,
+                    closed_min=low if g.closed_min is None else g.closed_min,
+                    closed_max=high if g.closed_max is None else g.closed_max,
+                ),
+            )
 
     def held_width(self) -> float:
         """The width [m] the fingers close on, upright, at the grasp height: a body of
@@ -80,8 +89,11 @@ class Category:
         its wider end), a box across its narrowest side that fits the hand."""
         if isinstance(self.shape, Revolution):
             h = self.grasp.height
-            return 2 * max(self.shape.radius_at(z) for z in (h - PAD_HALF_HEIGHT, h, h + PAD_HALF_HEIGHT)
-                           if 0.0 <= z <= self.shape.height)
+            return 2 * max(
+                self.shape.radius_at(z)
+                for z in (h - PAD_HALF_HEIGHT, h, h + PAD_HALF_HEIGHT)
+                if 0.0 <= z <= self.shape.height
+            )
         return self.shape.width_across(self.sides()[0])
 
     @property
@@ -97,8 +109,11 @@ class Category:
         it, narrowest grip first. A round object: ``(0.0,)`` (any heading)."""
         if isinstance(self.shape, Revolution):
             return (0.0,) if 2 * self.shape.body_radius <= self.grasp.open_width - FINGER_MARGIN else ()
-        fits = [(self.shape.width_across(h), h) for h in (0.0, math.pi / 2)
-                if self.shape.width_across(h) <= self.grasp.open_width - FINGER_MARGIN]
+        fits = [
+            (self.shape.width_across(h), h)
+            for h in (0.0, math.pi / 2)
+            if self.shape.width_across(h) <= self.grasp.open_width - FINGER_MARGIN
+        ]
         return tuple(h for _, h in sorted(fits))
 
     def lying_plans(self) -> tuple[GraspPlan, ...]:
@@ -112,19 +127,37 @@ class Category:
             # base end, or the base, driving in, would push the longer end ahead of it
             faces = [(2 * r, r, len(self.shape.sections) > 1)]  # (width across, axis height, one way)
         else:
-            faces = [(across, height / 2, False) for pose, (_, across), height in self.shape.rests()
-                     if pose == "lying"]
-        return tuple(GraspPlan(reach=t.reach, height=mid + t.above_axis, pitch=math.pi / 2,
-                               open_width=self.grasp.open_width, closed_min=width - t.slack[0],
-                               closed_max=width + t.slack[1], lift=t.lift, sides=(0.0,), one_way=one_way,
-                               offsets=LYING_OFFSETS if one_way else (0.0,))
-                     for width, mid, one_way in faces if width <= self.grasp.open_width - FINGER_MARGIN)
+            faces = [(across, height / 2, False) for pose, (_, across), height in self.shape.rests() if pose == "lying"]
+        return tuple(
+            GraspPlan(
+                reach=t.reach,
+                height=mid + t.above_axis,
+                pitch=math.pi / 2,
+                open_width=self.grasp.open_width,
+                closed_min=width - t.slack[0],
+                closed_max=width + t.slack[1],
+                lift=t.lift,
+                sides=(0.0,),
+                one_way=one_way,
+                offsets=LYING_OFFSETS if one_way else (0.0,),
+            )
+            for width, mid, one_way in faces
+            if width <= self.grasp.open_width - FINGER_MARGIN
+        )
 
     @property
     def strategy(self) -> Strategy:
         sides = () if isinstance(self.shape, Revolution) else self.sides()
-        size = self.shape.height if isinstance(self.shape, Revolution) else \
-            max(self.shape.x, self.shape.y, self.shape.z)
-        return Strategy(self.name, self.approach, self.grasp, self.description, sides,
-                        self.lying_plans(), size,
-                        tuple(self.shape.width_across(h) for h in sides) if sides else ())
+        size = (
+            self.shape.height if isinstance(self.shape, Revolution) else max(self.shape.x, self.shape.y, self.shape.z)
+        )
+        return Strategy(
+            self.name,
+            self.approach,
+            self.grasp,
+            self.description,
+            sides,
+            self.lying_plans(),
+            size,
+            tuple(self.shape.width_across(h) for h in sides) if sides else (),
+        )

@@ -9,6 +9,7 @@ every registered category when the robot starts and in ``actorbt category check 
 Every grasp the category declares is put to it: upright, its test lift and its full
 lift at ``approach.reach``; lying, from above at ``top_grasp.reach``.
 """
+
 from __future__ import annotations
 
 import math
@@ -46,12 +47,15 @@ def _band_text(reachable: Reachable, reach: float, pitch: float) -> str:
 def _upright(category: Category, reachable: Reachable) -> list[str]:
     g, a = category.grasp, category.approach
     problems = []
-    for what, z, fix in (("grasp.height", g.height, "grasp.height or approach.reach"),
-                         ("the test lift (grasp.height + 0.02)", g.height + TEST_LIFT, "grasp.height"),
-                         ("the lift (grasp.height + grasp.lift)", g.height + g.lift, "grasp.lift")):
+    for what, z, fix in (
+        ("grasp.height", g.height, "grasp.height or approach.reach"),
+        ("the test lift (grasp.height + 0.02)", g.height + TEST_LIFT, "grasp.height"),
+        ("the lift (grasp.height + grasp.lift)", g.height + g.lift, "grasp.lift"),
+    ):
         if not reachable(a.reach, z, g.pitch):
-            problems.append(f"{what} {z:.3f} m is out of the arm's reach: {_band_text(reachable, a.reach, g.pitch)}; "
-                            f"change {fix}")
+            problems.append(
+                f"{what} {z:.3f} m is out of the arm's reach: {_band_text(reachable, a.reach, g.pitch)}; change {fix}"
+            )
     return problems
 
 
@@ -61,17 +65,23 @@ def _window(category: Category) -> list[str]:
     assert g.closed_min is not None and g.closed_max is not None
     problems = []
     if g.open_width > GRIPPER_MAX_OPENING:
-        problems.append(f"grasp.open_width {g.open_width * 1000:.0f} mm is wider than the gripper opens "
-                        f"({GRIPPER_MAX_OPENING * 1000:.0f} mm)")
+        problems.append(
+            f"grasp.open_width {g.open_width * 1000:.0f} mm is wider than the gripper opens "
+            f"({GRIPPER_MAX_OPENING * 1000:.0f} mm)"
+        )
     if g.closed_max > g.open_width - CLOSED_BELOW_OPEN + 1e-9:
-        problems.append(f"grasp.closed_max {g.closed_max * 1000:.0f} mm reaches the opening "
-                        f"({g.open_width * 1000:.0f} mm): a jammed hand would count as holding")
+        problems.append(
+            f"grasp.closed_max {g.closed_max * 1000:.0f} mm reaches the opening "
+            f"({g.open_width * 1000:.0f} mm): a jammed hand would count as holding"
+        )
     # a box's other side has the window moved by its width (GraspPlan.side_plans)
     w = category.held_width()
     if not g.closed_min <= w <= g.closed_max:
-        problems.append(f"at grasp.height {g.height:.3f} m the fingers close on {w * 1000:.0f} mm, outside "
-                        f"closed_min..closed_max {g.closed_min * 1000:.0f}..{g.closed_max * 1000:.0f} mm; "
-                        "leave both out to have them derived from the shape")
+        problems.append(
+            f"at grasp.height {g.height:.3f} m the fingers close on {w * 1000:.0f} mm, outside "
+            f"closed_min..closed_max {g.closed_min * 1000:.0f}..{g.closed_max * 1000:.0f} mm; "
+            "leave both out to have them derived from the shape"
+        )
     return problems
 
 
@@ -81,9 +91,11 @@ def _lying(category: Category, reachable: Reachable) -> list[str]:
     for plan in category.lying_plans():
         for what, z in (("lying, the grasp", plan.height), ("lying, the lift", plan.height + plan.lift)):
             if not reachable(plan.reach, z, plan.pitch):
-                problems.append(f"{what} at {z:.3f} m is out of the arm's reach: "
-                                f"{_band_text(reachable, plan.reach, plan.pitch)}; change top_grasp (reach "
-                                f"{t.reach:.3f} m, above_axis {t.above_axis:.3f} m, lift {t.lift:.3f} m)")
+                problems.append(
+                    f"{what} at {z:.3f} m is out of the arm's reach: "
+                    f"{_band_text(reachable, plan.reach, plan.pitch)}; change top_grasp (reach "
+                    f"{t.reach:.3f} m, above_axis {t.above_axis:.3f} m, lift {t.lift:.3f} m)"
+                )
     return problems
 
 
@@ -99,5 +111,7 @@ def category_problems(category: Category, reachable: Reachable) -> list[str]:
 
 
 def plan_text(plan: GraspPlan) -> str:
-    return (f"reach {plan.reach:.3f} m, height {plan.height:.3f} m, pitch {math.degrees(plan.pitch):.0f} deg, "
-            f"held at {plan.closed_min * 1000:.0f}..{plan.closed_max * 1000:.0f} mm")
+    return (
+        f"reach {plan.reach:.3f} m, height {plan.height:.3f} m, pitch {math.degrees(plan.pitch):.0f} deg, "
+        f"held at {plan.closed_min * 1000:.0f}..{plan.closed_max * 1000:.0f} mm"
+    )

@@ -3,6 +3,7 @@
 A category file declares ``CATEGORY = register(Category(...))``. ``load`` imports such a
 file by path (``my_robot/juice.py``) or module (``my_robot.juice``); importing it registers it.
 """
+
 from __future__ import annotations
 
 import difflib
@@ -17,7 +18,7 @@ from bt_engine.modules import import_file, is_file_reference
 from .category import Category
 
 _REGISTRY: dict[str, Category] = {}
-_WHERE: dict[str, str] = {}          # name -> "file:line" of its register() call
+_WHERE: dict[str, str] = {}  # name -> "file:line" of its register() call
 #: the categories that come with actorbt (categories/__init__.py loads them)
 BUILT_IN = ("categories.can", "categories.bottle", "categories.carton")
 _LOCK = threading.Lock()
@@ -46,14 +47,16 @@ def register(category: Category, replace: bool = False) -> Category:
     caller = sys._getframe(1)
     where = f"{caller.f_code.co_filename}:{caller.f_lineno}"
     from .check import gripper_problems
+
     problems = gripper_problems(category)
     if problems:
         raise CategoryError(f"{where}: category {category.name!r} cannot work: {'; '.join(problems)}")
     with _LOCK:
         old = _REGISTRY.get(category.name)
         if old is not None and old != category and not replace:
-            raise CategoryError(f"a different category {category.name!r} is registered already; "
-                                "pick another name or pass replace=True")
+            raise CategoryError(
+                f"a different category {category.name!r} is registered already; pick another name or pass replace=True"
+            )
         _REGISTRY[category.name] = category
         _WHERE.setdefault(category.name, where)
     return category
@@ -77,8 +80,7 @@ def get(name: str) -> Category:
     except (KeyError, TypeError):
         close = difflib.get_close_matches(str(name), list(_REGISTRY), n=3)
         hint = f" (did you mean {', '.join(close)}?)" if close else ""
-        raise UnknownCategoryError(
-            f"unknown category {name!r}{hint}; known: {', '.join(names())}") from None
+        raise UnknownCategoryError(f"unknown category {name!r}{hint}; known: {', '.join(names())}") from None
 
 
 def names() -> list[str]:
@@ -102,7 +104,7 @@ def load(ref: str | pathlib.Path, base: pathlib.Path | None = None) -> list[Cate
             raise CategoryError(f"category file {text!r} not found (looked at {path.resolve()})")
         try:
             import_file(path)
-        except (ValueError, TypeError) as e:      # a Category's own checks: where it is declared
+        except (ValueError, TypeError) as e:  # a Category's own checks: where it is declared
             raise CategoryError(f"{_where(e, path)}: {e}") from e
     else:
         try:

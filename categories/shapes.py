@@ -3,6 +3,7 @@ simulator builds a body from and perception measures against.
 
 Every shape is given standing upright, its frame at the centre of its bounding box, z up.
 """
+
 from __future__ import annotations
 
 import math

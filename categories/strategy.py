@@ -7,6 +7,7 @@ fingers around the object before they close. What differs per category is the nu
 the standoff, which part is held (height, tool pitch), the opening, the lift, what a
 successful grasp looks like, and (for a box) from which sides the hand may come.
 """
+
 from __future__ import annotations
 
 import math
@@ -91,10 +92,10 @@ class GraspPlan:
     closed_max: float
     lift: float
     sides: tuple[float, ...] = ()
-    one_way: bool = False       # only along sides, never from the opposite face
-    offsets: tuple[float, ...] = (0.0,)   # one way: headings off each side [rad] the hand
+    one_way: bool = False  # only along sides, never from the opposite face
+    offsets: tuple[float, ...] = (0.0,)  # one way: headings off each side [rad] the hand
     #                                       may also come from (a wall may be close)
-    widths: tuple[float, ...] = ()        # the width across the object from each of
+    widths: tuple[float, ...] = ()  # the width across the object from each of
     #                                       ``sides`` [m] (a box's); the closed range fits the first
 
     def side_plans(self) -> tuple[GraspPlan, ...]:
@@ -111,8 +112,11 @@ class GraspPlan:
     def shifted(self, by: float) -> GraspPlan:
         """This plan holding a body ``by`` [m] wider: its closed range moved by that,
         kept short of the opening."""
-        return replace(self, closed_min=self.closed_min + by,
-                       closed_max=min(self.closed_max + by, self.open_width - CLOSED_BELOW_OPEN))
+        return replace(
+            self,
+            closed_min=self.closed_min + by,
+            closed_max=min(self.closed_max + by, self.open_width - CLOSED_BELOW_OPEN),
+        )
 
     def holding(self, closed_width: float) -> bool:
         return self.closed_min <= closed_width <= self.closed_max
@@ -161,6 +165,8 @@ def derived_window(width: float, open_width: float) -> tuple[float, float]:
     to 10 mm narrower (the pads press in, or close on a chord near the fingertips) and up
     to 8 mm wider (a body met a little off square), short of the opening."""
     return round(width - 0.010, 4), round(min(width + 0.008, open_width - CLOSED_BELOW_OPEN), 4)
+
+
 #: a box upright (held across its narrow side) or a leaning body: the hand may come this
 #: far beyond its offsets (a 45 x 70 mm carton 15 degrees off spans 62 mm)
 SIDE_TOLERANCE = math.radians(15)
@@ -179,18 +185,27 @@ class Strategy:
     grasp: Grasp
     description: str = ""
     sides: tuple[float, ...] = ANY_SIDE
-    lying: tuple[GraspPlan, ...] = ()   # how it is held lying on its side: one per face
+    lying: tuple[GraspPlan, ...] = ()  # how it is held lying on its side: one per face
     #                                     it may lie on (a box's differ in width), or none
-    length: float = 0.0                 # the object's largest extent [m]
-    side_widths: tuple[float, ...] = () # the width across the object from each of ``sides``
+    length: float = 0.0  # the object's largest extent [m]
+    side_widths: tuple[float, ...] = ()  # the width across the object from each of ``sides``
 
     @property
     def upright(self) -> GraspPlan:
         g = self.grasp
         # the window is filled in by Category.__post_init__, which every Strategy comes from
         assert g.closed_min is not None and g.closed_max is not None
-        return GraspPlan(self.approach.reach, g.height, g.pitch, g.open_width, g.closed_min,
-                         g.closed_max, g.lift, self.sides, widths=self.side_widths)
+        return GraspPlan(
+            self.approach.reach,
+            g.height,
+            g.pitch,
+            g.open_width,
+            g.closed_min,
+            g.closed_max,
+            g.lift,
+            self.sides,
+            widths=self.side_widths,
+        )
 
     def plan_for(self, pose: str | None, width: float | None = None) -> GraspPlan | None:
         """The grasp for an object standing ``upright`` (or of unknown pose), ``lying`` on
@@ -210,17 +225,21 @@ class Strategy:
             return min(fits, key=lambda p: abs(p.across - width)) if fits else None
         if pose == "tilted":
             plan = replace(self.upright, sides=(0.0,), one_way=True, offsets=TILTED_OFFSETS, widths=())
-            if self.upright.sides and width is not None and not plan.holding(width) \
-                    and width < plan.open_width - 0.01:
+            if self.upright.sides and width is not None and not plan.holding(width) and width < plan.open_width - 0.01:
                 # a box leaning with another side across the lean (the hand closes on its
                 # 70 mm side at 73 mm): the same grip on that side
                 plan = plan.shifted(width - plan.across)
             return plan
         return self.upright
 
-    def standoff_poses(self, robot_xy: tuple[float, float], obj_xy: tuple[float, float],
-                       extra: float = 0.0, object_yaw: float | None = None,
-                       plan: GraspPlan | None = None) -> list[tuple[float, float, float]]:
+    def standoff_poses(
+        self,
+        robot_xy: tuple[float, float],
+        obj_xy: tuple[float, float],
+        extra: float = 0.0,
+        object_yaw: float | None = None,
+        plan: GraspPlan | None = None,
+    ) -> list[tuple[float, float, float]]:
         """Where the base may stop, facing the object (x, y, yaw), best first.
 
         Round objects: straight from the robot's side, then turning around the object in
@@ -253,7 +272,7 @@ class Strategy:
     def holding(self, closed_width: float) -> bool:
         """True when the fingers stopped at a width that means the object is held."""
         g = self.grasp
-        assert g.closed_min is not None and g.closed_max is not None    # see upright
+        assert g.closed_min is not None and g.closed_max is not None  # see upright
         return g.closed_min <= closed_width <= g.closed_max
 
 

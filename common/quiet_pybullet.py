@@ -1,6 +1,7 @@
 """pybullet without its build banner: importing it prints "pybullet build time: ..." from
 C to the process's stderr, a line a user would see before every command's own output.
 Import ``pybullet`` from here (``from common.quiet_pybullet import pybullet``)."""
+
 from __future__ import annotations
 
 import ctypes
@@ -14,11 +15,13 @@ def _import_quietly():
         saved = os.dup(2)
     except OSError:  # no stderr to keep clean
         import pybullet
+
         return pybullet
     try:
         with open(os.devnull, "wb") as null:
             os.dup2(null.fileno(), 2)
             import pybullet
+
             ctypes.CDLL(None).fflush(None)  # C's buffers, while they still go nowhere
     finally:
         os.dup2(saved, 2)

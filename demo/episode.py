@@ -7,6 +7,7 @@ own state (``SimWorld.robot_pose()``, object poses) to score the outcome, draw t
 true path and measure the localisation's error (the robot's map -> base_footprint on /tf
 against the true pose, every :data:`LOC_PERIOD` s).
 """
+
 from __future__ import annotations
 
 import argparse
@@ -39,15 +40,18 @@ LOC_PERIOD, PATH_PERIOD = 0.5, 0.1
 
 def without_map_server(setup: Any):
     """A world_setup that first turns the world's map server off, then runs ``setup``."""
+
     def run(world: SimWorld) -> None:
         world.serve_map = False
         if setup is not None:
             setup(world)
+
     return run
 
 
-def episode_app(world: str, seed: int, app: App | None = None, config: Config | None = None,
-                locations: str | None = None) -> App:
+def episode_app(
+    world: str, seed: int, app: App | None = None, config: Config | None = None, locations: str | None = None
+) -> App:
     """The App an episode builds its runtime with: ``app``'s configuration (else
     ``config``, else the nearest actorbt.yaml, else the repository's), for ``world``
     and ``seed`` (and ``locations``, a locations YAML for a map-built world). So the
@@ -70,29 +74,29 @@ class Episode:
     category: str
     success: bool = False
     tree_status: str = ""
-    failed_node: str = ""              # the first step that went wrong (tree:path), or where
-    reason: str = ""                   # the referee found it wrong ("ground truth"); why
-    tree_failure: str = ""             # where and why the tree itself failed, at the end
+    failed_node: str = ""  # the first step that went wrong (tree:path), or where
+    reason: str = ""  # the referee found it wrong ("ground truth"); why
+    tree_failure: str = ""  # where and why the tree itself failed, at the end
     found: dict | None = None
     placed_object: str = ""
     sim_time: float = 0.0
     wall_time: float = 0.0
     trace: str = ""
-    loc_rmse_m: float = float("nan")   # localisation error (position) over the episode
+    loc_rmse_m: float = float("nan")  # localisation error (position) over the episode
     loc_max_m: float = float("nan")
     grasp_tilt_deg: float = float("nan")  # largest tilt of the held object in the fingers
-    pose: str = ""                     # pose kind (upright, lying, tilted) the world gave
-    support: str = ""                  # the object placed, else the last pick's; what it stood on
-    target: str = ""                   # that object
-    end_pose: str = ""                 # its pose kind at the end of the episode
-    end_support: str = ""              # and what it ended on: place location, floor, a surface
-    pushed: list = field(default_factory=list)   # objects moved > PUSHED m that no pick went for
-    objects: int | None = None         # a tidy-up: objects of a known category in the world,
-    placed: int | None = None          # and how many ended where they belong
-    result: Any = field(default=None, repr=False)   # what the tree (or actor) returned
+    pose: str = ""  # pose kind (upright, lying, tilted) the world gave
+    support: str = ""  # the object placed, else the last pick's; what it stood on
+    target: str = ""  # that object
+    end_pose: str = ""  # its pose kind at the end of the episode
+    end_support: str = ""  # and what it ended on: place location, floor, a surface
+    pushed: list = field(default_factory=list)  # objects moved > PUSHED m that no pick went for
+    objects: int | None = None  # a tidy-up: objects of a known category in the world,
+    placed: int | None = None  # and how many ended where they belong
+    result: Any = field(default=None, repr=False)  # what the tree (or actor) returned
     path: list = field(default_factory=list, repr=False)
     detections: list = field(default_factory=list, repr=False)
-    loc_errors: list = field(default_factory=list, repr=False)   # (t, error [m])
+    loc_errors: list = field(default_factory=list, repr=False)  # (t, error [m])
 
     @property
     def realtime_factor(self) -> float:
@@ -109,9 +113,10 @@ class TruthProbe:
         self.sim, self.ep, self.rt = sim, ep, rt
         self.buf = TransformBuffer()
         self._path_t = self._loc_t = -math.inf
-        self._subs = [rt.bus.subscribe("/tf", TFMessage, self._on_tf, 100),
-                      rt.bus.subscribe("/tf_static", TFMessage,
-                                       lambda m: self.buf.add_message(m, static=True), "latched")]
+        self._subs = [
+            rt.bus.subscribe("/tf", TFMessage, self._on_tf, 100),
+            rt.bus.subscribe("/tf_static", TFMessage, lambda m: self.buf.add_message(m, static=True), "latched"),
+        ]
 
     def close(self) -> None:
         for s in self._subs:
@@ -122,13 +127,13 @@ class TruthProbe:
         base = None
         for ts in msg.transforms:
             if ts.child_frame_id == "odom":
-                self.buf.add_message(ts)            # the localiser's map -> odom
+                self.buf.add_message(ts)  # the localiser's map -> odom
             elif ts.child_frame_id == "base_footprint":
                 base = ts
         now = self.rt.now()
         if base is None or (now - self._path_t < PATH_PERIOD - 1e-9 and now - self._loc_t < LOC_PERIOD - 1e-9):
             return
-        self.buf.add_message(base)                  # only the newest is looked up
+        self.buf.add_message(base)  # only the newest is looked up
         if now - self._path_t >= PATH_PERIOD - 1e-9:
             self._path_t = now
             x, y, yaw = self.sim.robot_pose()
@@ -137,7 +142,7 @@ class TruthProbe:
             try:
                 ex, ey, _ = pose2d(self.buf.lookup("map", "base_footprint"))
             except TransformError:
-                return                       # not localised yet
+                return  # not localised yet
             self._loc_t = now
             x, y, _ = self.sim.robot_pose()
             self.ep.loc_errors.append((now, math.hypot(ex - x, ey - y)))
@@ -201,8 +206,7 @@ class DemoProgress(TreeObserver):
             return
         r = txn.result
         if actor == "watch" and isinstance(r, dict):
-            self._say(f"  found a {r['category']} at ({r['x']:.2f}, {r['y']:.2f}), "
-                      f"{r['distance']:.1f} m away")
+            self._say(f"  found a {r['category']} at ({r['x']:.2f}, {r['y']:.2f}), {r['distance']:.1f} m away")
         elif actor == "approach_object" and isinstance(r, dict):
             self._say(f"  close look: {r['category']} at ({r['x']:.3f}, {r['y']:.3f})")
         elif actor == "pick" and isinstance(r, dict):
@@ -228,7 +232,7 @@ class Sightings(TreeObserver):
         if txn.state.value != "done" or leaf.node.actor not in ("watch", "approach_object", "survey"):
             return
         r = txn.result
-        for d in (r if isinstance(r, list) else [r]):
+        for d in r if isinstance(r, list) else [r]:
             if isinstance(d, dict) and {"category", "x", "y"} <= d.keys():
                 self.detections.append(d)
 
@@ -260,7 +264,7 @@ def _tidied(sim: SimWorld, places: dict, belongs: dict) -> tuple[int, int]:
     for name in sim.object_names():
         cat = sim.object_category(name)
         if cat not in categories.names():
-            continue                            # a distractor
+            continue  # a distractor
         total += 1
         where = belongs.get(cat)
         if where not in places:
@@ -270,12 +274,22 @@ def _tidied(sim: SimWorld, places: dict, belongs: dict) -> tuple[int, int]:
     return total, done
 
 
-def run_episode(tree: str = "bt_pick_place", world: str = "house", seed: int = 0,
-                category: str = "any", out_dir: str | pathlib.Path | None = None,
-                progress: TextIO | None = None, world_setup: Any = None,
-                inputs: dict | None = None, observers: list | None = None,
-                app: App | None = None, config: Config | None = None,
-                locations: str | None = None, mapping: bool = False, live: Any = None) -> Episode:
+def run_episode(
+    tree: str = "bt_pick_place",
+    world: str = "house",
+    seed: int = 0,
+    category: str = "any",
+    out_dir: str | pathlib.Path | None = None,
+    progress: TextIO | None = None,
+    world_setup: Any = None,
+    inputs: dict | None = None,
+    observers: list | None = None,
+    app: App | None = None,
+    config: Config | None = None,
+    locations: str | None = None,
+    mapping: bool = False,
+    live: Any = None,
+) -> Episode:
     """Run ``tree`` once in a fresh ``world`` built from ``seed``.
 
     The runtime is built as every ``actorbt`` command builds it (see :func:`episode_app`):
@@ -328,9 +342,9 @@ def run_episode(tree: str = "bt_pick_place", world: str = "house", seed: int = 0
             args.setdefault("place", _surface(pl))
         if "places" in params and world_places(sim):
             args.setdefault("places", {name: _surface(b) for name, b in world_places(sim).items()})
-        if "locations" in params and sim.spec.search_locations:   # this world's, if it lists them
+        if "locations" in params and sim.spec.search_locations:  # this world's, if it lists them
             args.setdefault("locations", [list(p) for p in sim.spec.search_locations])
-        start = tuple(sim.spec.robot_start)   # the world's known start pose
+        start = tuple(sim.spec.robot_start)  # the world's known start pose
         if "home" in params:
             args.setdefault("home", {"x": start[0], "y": start[1], "yaw": start[2]})
         probe = TruthProbe(rt, sim, ep)
@@ -342,6 +356,7 @@ def run_episode(tree: str = "bt_pick_place", world: str = "house", seed: int = 0
         session = None
         if live:
             from bt_ros import LiveSession
+
             session = LiveSession(rt, host, live, tree=tree, inputs=args, seed=seed)
         before = {n: sim.object_pose(n) for n in sim.object_names()}
         sim0 = rt.now()
@@ -369,11 +384,13 @@ def run_episode(tree: str = "bt_pick_place", world: str = "house", seed: int = 0
                 session.close()
         ep.success = ep.tree_status == "SUCCESS"
         if ep.success and sim.place_location is not None and tree in ("bt_pick_place", "bt_carry"):
-            placed = [n for n in sim.object_names()
-                      if _on_surface(sim.object_pose(n), sim.place_location)
-                      and not _on_surface(before[n], sim.place_location)]
-            wanted = [n for n in placed if category in ("any", "mixed")
-                      or sim.object_category(n) == category]
+            placed = [
+                n
+                for n in sim.object_names()
+                if _on_surface(sim.object_pose(n), sim.place_location)
+                and not _on_surface(before[n], sim.place_location)
+            ]
+            wanted = [n for n in placed if category in ("any", "mixed") or sim.object_category(n) == category]
             ep.placed_object = wanted[0] if wanted else ""
             if not wanted:
                 ep.success = False
@@ -383,9 +400,12 @@ def run_episode(tree: str = "bt_pick_place", world: str = "house", seed: int = 0
         ep.pose, ep.support = _start_pose(sim, ep.target)
         if ep.target:
             ep.end_pose, ep.end_support = _end_state(sim, ep.target)
-        ep.pushed = sorted(n for n in sim.object_names() if n not in grasp.picked
-                           and math.dist(before[n][:2], sim.object_pose(n)[:2]) > PUSHED)
-        if "belongs" in params:                 # a tidy-up: every object where it belongs
+        ep.pushed = sorted(
+            n
+            for n in sim.object_names()
+            if n not in grasp.picked and math.dist(before[n][:2], sim.object_pose(n)[:2]) > PUSHED
+        )
+        if "belongs" in params:  # a tidy-up: every object where it belongs
             belongs = args.get("belongs", params["belongs"].default)
             ep.objects, ep.placed = _tidied(sim, world_places(sim), belongs)
             if ep.success and ep.placed < ep.objects:
@@ -444,8 +464,9 @@ def _draw(sim: SimWorld, ep: Episode, png: pathlib.Path) -> None:
         labelled = set()
         for d in ep.detections:
             label = f"detected {d['category']}"
-            ax.plot(d["x"], d["y"], "x", color="magenta", ms=10, mew=2, zorder=9,
-                    label=None if label in labelled else label)
+            ax.plot(
+                d["x"], d["y"], "x", color="magenta", ms=10, mew=2, zorder=9, label=None if label in labelled else label
+            )
             labelled.add(label)
         if ep.placed_object:
             x, y = sim.object_pose(ep.placed_object)[:2]
@@ -453,8 +474,9 @@ def _draw(sim: SimWorld, ep: Episode, png: pathlib.Path) -> None:
         ax.legend(loc="upper left", fontsize=8, framealpha=0.9)
 
     verdict = "success" if ep.success else f"FAILED at {ep.failed_node or '?'}"
-    draw_top_view(sim, png, title=f"{ep.tree} in {ep.world} (seed {ep.seed}): {verdict}, "
-                  f"{ep.sim_time:.0f} s sim", overlay=overlay)
+    draw_top_view(
+        sim, png, title=f"{ep.tree} in {ep.world} (seed {ep.seed}): {verdict}, {ep.sim_time:.0f} s sim", overlay=overlay
+    )
 
 
 def print_outcome(ep: Episode, out: TextIO = sys.stdout) -> None:
@@ -465,8 +487,7 @@ def print_outcome(ep: Episode, out: TextIO = sys.stdout) -> None:
         out.write(f"FAILURE at {ep.failed_node or '?'}: {ep.reason}\n")
         if ep.tree_failure and ep.tree_failure != ep.reason:
             out.write(f"  then the tree gave up: {ep.tree_failure}\n")
-    out.write(f"sim time {ep.sim_time:.1f} s, wall time {ep.wall_time:.1f} s "
-              f"({ep.realtime_factor:.1f}x real time)\n")
+    out.write(f"sim time {ep.sim_time:.1f} s, wall time {ep.wall_time:.1f} s ({ep.realtime_factor:.1f}x real time)\n")
     if ep.target:
         what = "placed" if ep.placed_object else "the last pick went for"
         start = f"{ep.pose} on the {ep.support}" if ep.pose else "?"
@@ -478,6 +499,7 @@ def print_outcome(ep: Episode, out: TextIO = sys.stdout) -> None:
     if ep.grasp_tilt_deg == ep.grasp_tilt_deg:
         out.write(f"held object's tilt in the hand: {ep.grasp_tilt_deg:.1f} deg at most\n")
     if ep.loc_errors:
-        out.write(f"localisation error: {ep.loc_rmse_m * 100:.1f} cm rms, {ep.loc_max_m * 100:.1f} cm max "
-                  f"({len(ep.loc_errors)} samples)\n")
-
+        out.write(
+            f"localisation error: {ep.loc_rmse_m * 100:.1f} cm rms, {ep.loc_max_m * 100:.1f} cm max "
+            f"({len(ep.loc_errors)} samples)\n"
+        )

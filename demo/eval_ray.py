@@ -9,6 +9,7 @@ over by the evaluation; one task per episode, one CPU each) and sends the
 (``pip install 'actorbt[sim,planning,cluster]'``, or one container image), see
 docs/evaluation.md.
 """
+
 from __future__ import annotations
 
 from typing import Any, Callable, Iterable, Iterator
@@ -92,9 +93,9 @@ class RayRunner:
                         ep = ray.get(ref)
                     except ray.exceptions.RayTaskError as exc:
                         cause = getattr(exc, "cause", None)
-                        if isinstance(cause, ActorbtError):   # a user's mistake: its message
+                        if isinstance(cause, ActorbtError):  # a user's mistake: its message
                             raise cause from None
-                        raise                                  # else Ray's, with the remote traceback
+                        raise  # else Ray's, with the remote traceback
                     yield ep
         finally:
             for ref in pending:

@@ -1,4 +1,5 @@
 """`actorbt eval`: a mission over many seeds, each in a fresh world, with a table and CSV."""
+
 from __future__ import annotations
 
 import collections
@@ -21,10 +22,32 @@ from bt_engine.errors import ActorbtError
 
 from .episode import Episode, episode_app, run_episode
 
-CSV_FIELDS = ["tree", "world", "seed", "category", "success", "tree_status", "failed_node",
-              "reason", "placed_object", "pose", "support", "sim_time", "wall_time", "loc_rmse_m", "loc_max_m",
-              "grasp_tilt_deg", "pushed", "objects", "placed", "trace", "target", "end_pose", "end_support",
-              "tree_failure"]
+CSV_FIELDS = [
+    "tree",
+    "world",
+    "seed",
+    "category",
+    "success",
+    "tree_status",
+    "failed_node",
+    "reason",
+    "placed_object",
+    "pose",
+    "support",
+    "sim_time",
+    "wall_time",
+    "loc_rmse_m",
+    "loc_max_m",
+    "grasp_tilt_deg",
+    "pushed",
+    "objects",
+    "placed",
+    "trace",
+    "target",
+    "end_pose",
+    "end_support",
+    "tree_failure",
+]
 
 #: each episode's live progress, in its folder
 PROGRESS_LOG = "progress.log"
@@ -42,8 +65,9 @@ def _one(job: tuple) -> Episode:
     out.mkdir(parents=True, exist_ok=True)
     # the episode's progress, which the evaluation's heartbeat reads (Progress.watch)
     with open(out / PROGRESS_LOG, "w", encoding="utf-8") as log:
-        return run_episode(tree, world, seed, category, out_dir=out, app=_app, locations=locations,
-                           mapping=mapping, progress=log)
+        return run_episode(
+            tree, world, seed, category, out_dir=out, app=_app, locations=locations, mapping=mapping, progress=log
+        )
 
 
 def _run_job(job: tuple) -> Episode:
@@ -61,9 +85,17 @@ def _run_job(job: tuple) -> Episode:
         raise
 
 
-def _jobs(tree: str, world: str, seeds: int, first_seed: int, category: str,
-          out: pathlib.Path, config: Config | None = None, locations: str | None = None,
-          mapping: bool = False) -> list[tuple]:
+def _jobs(
+    tree: str,
+    world: str,
+    seeds: int,
+    first_seed: int,
+    category: str,
+    out: pathlib.Path,
+    config: Config | None = None,
+    locations: str | None = None,
+    mapping: bool = False,
+) -> list[tuple]:
     cats = categories.names() if category == "mixed" else [category]
     jobs = []
     for i in range(seeds):
@@ -78,11 +110,22 @@ class EvalError(ActorbtError):
     """An evaluation that cannot start as asked: ``--resume`` on another run's CSV."""
 
 
-def evaluate(tree: str, seeds: int, world: str = "house", category: str = "mixed",
-             jobs: int = 1, out_dir: str | pathlib.Path = "out/eval", first_seed: int = 0,
-             progress: TextIO | None = sys.stdout, config: Config | None = None,
-             locations: str | None = None, mapping: bool = False, resume: bool = False,
-             ray: bool | str | None = None, ray_runtime_env: dict | None = None) -> list[Episode]:
+def evaluate(
+    tree: str,
+    seeds: int,
+    world: str = "house",
+    category: str = "mixed",
+    jobs: int = 1,
+    out_dir: str | pathlib.Path = "out/eval",
+    first_seed: int = 0,
+    progress: TextIO | None = sys.stdout,
+    config: Config | None = None,
+    locations: str | None = None,
+    mapping: bool = False,
+    resume: bool = False,
+    ray: bool | str | None = None,
+    ray_runtime_env: dict | None = None,
+) -> list[Episode]:
     """Run ``tree`` for ``seeds`` seeds; returns the episodes in seed order. ``locations``:
     a locations YAML for a world built from a map_server map (see sim/map_world.py);
     ``mapping``: the world has no map server, the robot maps it (see :func:`run_episode`).
@@ -101,7 +144,8 @@ def evaluate(tree: str, seeds: int, world: str = "house", category: str = "mixed
     """
     if ray:
         from .eval_ray import _ray
-        _ray()   # not installed: say so before anything runs
+
+        _ray()  # not installed: say so before anything runs
     out = pathlib.Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     if config is None:
@@ -110,7 +154,7 @@ def evaluate(tree: str, seeds: int, world: str = "house", category: str = "mixed
     total = len(work)
     csv_path, settings = out / "episodes.csv", out / SETTINGS
     kept: list[Episode] = []
-    others: list[Episode] = []   # rows of the CSV this run does not ask for: kept in the CSV
+    others: list[Episode] = []  # rows of the CSV this run does not ask for: kept in the CSV
     note = ""
     if resume:
         previous = _resumable(csv_path, tree, world, locations, mapping)
@@ -119,8 +163,11 @@ def evaluate(tree: str, seeds: int, world: str = "house", category: str = "mixed
         others = [e for e in previous if (e.seed, e.category) not in wanted]
         done = {(e.seed, e.category) for e in kept}
         work = [job for job in work if (job[2], job[3]) not in done]
-        note = (f"resuming: {len(kept)} of {total} episodes kept from {csv_path}, {len(work)} to run"
-                if csv_path.exists() else f"resuming: no {csv_path} yet, {len(work)} episodes to run")
+        note = (
+            f"resuming: {len(kept)} of {total} episodes kept from {csv_path}, {len(work)} to run"
+            if csv_path.exists()
+            else f"resuming: no {csv_path} yet, {len(work)} episodes to run"
+        )
         if others:
             note += f" ({len(others)} other rows stay in the CSV)"
     elif csv_path.exists():
@@ -129,10 +176,11 @@ def evaluate(tree: str, seeds: int, world: str = "house", category: str = "mixed
     bar = Progress(progress, total)
     bar.watch(work, episodes)
 
-    def save() -> None:   # the CSV so far: a run cut off keeps the episodes it finished
+    def save() -> None:  # the CSV so far: a run cut off keeps the episodes it finished
         write_csv(sorted(episodes + others, key=_order), csv_path)
-        settings.write_text(json.dumps({"tree": tree, "world": world, "locations": locations,
-                                        "mapping": mapping}, indent=1) + "\n")
+        settings.write_text(
+            json.dumps({"tree": tree, "world": world, "locations": locations, "mapping": mapping}, indent=1) + "\n"
+        )
 
     def finished(ep: Episode) -> None:
         with bar.lock:
@@ -143,6 +191,7 @@ def evaluate(tree: str, seeds: int, world: str = "house", category: str = "mixed
     try:
         if ray and work:
             from .eval_ray import RayRunner
+
             # on a cluster the traces are written on the node that ran the episode, so at
             # an absolute path (that of this machine's --out)
             work = [job[:4] + (pathlib.Path(job[4]).absolute(),) + job[5:] for job in work]
@@ -210,7 +259,7 @@ class Progress:
         self._watcher.start()
 
     def _heartbeat(self, folders: dict[pathlib.Path, str], done: set, episodes: list[Episode]) -> None:
-        assert self.out is not None      # watch() starts the heartbeat only with an out
+        assert self.out is not None  # watch() starts the heartbeat only with an out
         running = []
         for folder, label in folders.items():
             seed, category = label.split()[1:3]
@@ -222,8 +271,10 @@ class Progress:
         if self.tty:
             self._line(episodes)
         else:
-            self.out.write(f"[{len(episodes)}/{self.total}] {self.summary(episodes)}; running: "
-                           f"{' | '.join(running) or 'starting'}\n")
+            self.out.write(
+                f"[{len(episodes)}/{self.total}] {self.summary(episodes)}; running: "
+                f"{' | '.join(running) or 'starting'}\n"
+            )
         self.out.flush()
         self._said = time.monotonic()
 
@@ -248,8 +299,10 @@ class Progress:
                 self._line(episodes)
             else:
                 verdict = "success" if ep.success else f"FAILURE at {ep.failed_node or '?'}"
-                self.out.write(f"[{len(episodes)}/{self.total}] seed {ep.seed} {ep.category}: {verdict} "
-                               f"({ep.sim_time:.0f} s sim, {ep.wall_time:.0f} s wall); {self.summary(episodes)}\n")
+                self.out.write(
+                    f"[{len(episodes)}/{self.total}] seed {ep.seed} {ep.category}: {verdict} "
+                    f"({ep.sim_time:.0f} s sim, {ep.wall_time:.0f} s wall); {self.summary(episodes)}\n"
+                )
             self.out.flush()
 
     def end(self) -> None:
@@ -276,11 +329,11 @@ class Progress:
         return f"{ok} succeeded{rate}, {_duration(time.perf_counter() - self.t0)}, {eta}"
 
     def _line(self, episodes: list[Episode]) -> None:
-        assert self.out is not None      # a tty is an out
+        assert self.out is not None  # a tty is an out
         n = len(episodes)
         bar = "#" * int(30 * n / self.total) if self.total else ""
         text = f"\r[{bar:<30}] {n}/{self.total} episodes, {self.summary(episodes)}"
-        self.out.write(text.ljust(self._width))   # blanks what a longer line left
+        self.out.write(text.ljust(self._width))  # blanks what a longer line left
         self._width = len(text)
 
 
@@ -308,8 +361,7 @@ def _duration(s: float) -> str:
 SETTINGS = "eval.json"
 
 
-def _resumable(csv_path: pathlib.Path, tree: str, world: str, locations: str | None,
-               mapping: bool) -> list[Episode]:
+def _resumable(csv_path: pathlib.Path, tree: str, world: str, locations: str | None, mapping: bool) -> list[Episode]:
     """The episodes of ``csv_path`` that a run of ``tree`` in ``world`` may keep: all of them,
     or an :class:`EvalError` if they are another run's (another tree, world, locations or
     mapping), which must not be mixed in."""
@@ -319,22 +371,27 @@ def _resumable(csv_path: pathlib.Path, tree: str, world: str, locations: str | N
     theirs = sorted({(e.tree, e.world) for e in previous})
     if any(t != (tree, world) for t in theirs):
         runs = ", ".join(f"{t} in {w}" for t, w in theirs)
-        raise EvalError(f"--resume: {csv_path} holds episodes of {runs}, not of {tree} in {world}; "
-                        f"resume with the same tree and --world, or give another --out")
+        raise EvalError(
+            f"--resume: {csv_path} holds episodes of {runs}, not of {tree} in {world}; "
+            f"resume with the same tree and --world, or give another --out"
+        )
     settings = csv_path.with_name(SETTINGS)
     if settings.exists():
         was = json.loads(settings.read_text())
         for key, now in (("locations", locations), ("mapping", mapping)):
             if was.get(key, now) != now:
                 flag = "--locations" if key == "locations" else "--no-map"
-                raise EvalError(f"--resume: the episodes in {csv_path} ran with {key} {was[key]!r}, "
-                                f"this run with {now!r}; resume with the same {flag}, or give another --out")
+                raise EvalError(
+                    f"--resume: the episodes in {csv_path} ran with {key} {was[key]!r}, "
+                    f"this run with {now!r}; resume with the same {flag}, or give another --out"
+                )
     return previous
 
 
 def read_csv(path: str | pathlib.Path) -> list[Episode]:
     """The episodes of an episodes.csv :func:`write_csv` wrote (the columns it has; no
     traces, paths or results)."""
+
     def num(text: str | None) -> float:
         return float(text) if text not in (None, "") else float("nan")
 
@@ -349,17 +406,33 @@ def read_csv(path: str | pathlib.Path) -> list[Episode]:
         rows = list(reader)
     episodes = {}
     for r in rows:
-        e = Episode(r["tree"], r["world"], int(r["seed"]), r["category"], success=r["success"] == "True",
-                    tree_status=r.get("tree_status", ""), failed_node=r.get("failed_node", ""),
-                    reason=r.get("reason", ""), placed_object=r.get("placed_object", ""),
-                    pose=r.get("pose", ""), support=r.get("support", ""),
-                    sim_time=num(r.get("sim_time")), wall_time=num(r.get("wall_time")),
-                    loc_rmse_m=num(r.get("loc_rmse_m")), loc_max_m=num(r.get("loc_max_m")),
-                    grasp_tilt_deg=num(r.get("grasp_tilt_deg")), pushed=(r.get("pushed") or "").split(),
-                    objects=count(r.get("objects")), placed=count(r.get("placed")), trace=r.get("trace", ""),
-                    target=r.get("target", ""), end_pose=r.get("end_pose", ""), end_support=r.get("end_support", ""),
-                    tree_failure=r.get("tree_failure", ""))
-        episodes[e.tree, e.world, e.seed, e.category] = e    # a row given twice: the last
+        e = Episode(
+            r["tree"],
+            r["world"],
+            int(r["seed"]),
+            r["category"],
+            success=r["success"] == "True",
+            tree_status=r.get("tree_status", ""),
+            failed_node=r.get("failed_node", ""),
+            reason=r.get("reason", ""),
+            placed_object=r.get("placed_object", ""),
+            pose=r.get("pose", ""),
+            support=r.get("support", ""),
+            sim_time=num(r.get("sim_time")),
+            wall_time=num(r.get("wall_time")),
+            loc_rmse_m=num(r.get("loc_rmse_m")),
+            loc_max_m=num(r.get("loc_max_m")),
+            grasp_tilt_deg=num(r.get("grasp_tilt_deg")),
+            pushed=(r.get("pushed") or "").split(),
+            objects=count(r.get("objects")),
+            placed=count(r.get("placed")),
+            trace=r.get("trace", ""),
+            target=r.get("target", ""),
+            end_pose=r.get("end_pose", ""),
+            end_support=r.get("end_support", ""),
+            tree_failure=r.get("tree_failure", ""),
+        )
+        episodes[e.tree, e.world, e.seed, e.category] = e  # a row given twice: the last
     return list(episodes.values())
 
 
@@ -382,33 +455,41 @@ def print_table(episodes: list[Episode], out: TextIO = sys.stdout) -> None:
     by_cat: dict[str, list[Episode]] = collections.defaultdict(list)
     for e in episodes:
         by_cat[e.category].append(e)
-    out.write(f"\n{'category':10s} {'episodes':>8s} {'success':>8s} {'rate':>7s} "
-              f"{'sim s (median)':>15s} {'wall s (median)':>16s} {'x real time':>12s} "
-              f"{'loc rms cm':>11s} {'loc max cm':>11s} {'tilt deg':>9s}\n")
+    out.write(
+        f"\n{'category':10s} {'episodes':>8s} {'success':>8s} {'rate':>7s} "
+        f"{'sim s (median)':>15s} {'wall s (median)':>16s} {'x real time':>12s} "
+        f"{'loc rms cm':>11s} {'loc max cm':>11s} {'tilt deg':>9s}\n"
+    )
     for cat, eps in sorted(by_cat.items()) + [("all", episodes)]:
         ok = sum(e.success for e in eps)
         rms = [e.loc_rmse_m for e in eps if e.loc_rmse_m == e.loc_rmse_m]
         worst = [e.loc_max_m for e in eps if e.loc_max_m == e.loc_max_m]
         tilts = [e.grasp_tilt_deg for e in eps if e.grasp_tilt_deg == e.grasp_tilt_deg]
-        out.write(f"{cat:10s} {len(eps):8d} {ok:8d} {100 * ok / len(eps):6.1f}% "
-                  f"{statistics.median(e.sim_time for e in eps):15.1f} "
-                  f"{statistics.median(e.wall_time for e in eps):16.1f} "
-                  f"{statistics.median(e.realtime_factor for e in eps):12.1f} "
-                  f"{100 * statistics.median(rms) if rms else float('nan'):11.1f} "
-                  f"{100 * max(worst) if worst else float('nan'):11.1f} "
-                  f"{statistics.median(tilts) if tilts else float('nan'):9.1f}\n")
+        out.write(
+            f"{cat:10s} {len(eps):8d} {ok:8d} {100 * ok / len(eps):6.1f}% "
+            f"{statistics.median(e.sim_time for e in eps):15.1f} "
+            f"{statistics.median(e.wall_time for e in eps):16.1f} "
+            f"{statistics.median(e.realtime_factor for e in eps):12.1f} "
+            f"{100 * statistics.median(rms) if rms else float('nan'):11.1f} "
+            f"{100 * max(worst) if worst else float('nan'):11.1f} "
+            f"{statistics.median(tilts) if tilts else float('nan'):9.1f}\n"
+        )
     if any(e.pose for e in episodes):
         print_pose_table(episodes, out)
     # (objects, placed) of the tidy-ups; an episode sets both (a hand-edited CSV may not)
     tidy = [(e.objects, e.placed) for e in episodes if e.objects is not None and e.placed is not None]
     if tidy:
         total, placed = sum(o for o, _ in tidy), sum(p for _, p in tidy)
-        out.write(f"\nobjects where they belong: {placed} of {total} "
-                  f"({100 * placed / total if total else float('nan'):.1f}%)\n")
+        out.write(
+            f"\nobjects where they belong: {placed} of {total} "
+            f"({100 * placed / total if total else float('nan'):.1f}%)\n"
+        )
     pushed = [e for e in episodes if e.pushed]
     if pushed:
-        out.write(f"\nepisodes in which the robot pushed objects it did not pick: {len(pushed)} of "
-                  f"{len(episodes)} ({sum(len(e.pushed) for e in pushed)} objects)\n")
+        out.write(
+            f"\nepisodes in which the robot pushed objects it did not pick: {len(pushed)} of "
+            f"{len(episodes)} ({sum(len(e.pushed) for e in pushed)} objects)\n"
+        )
     failures = collections.Counter(e.failed_node or "?" for e in episodes if not e.success)
     if failures:
         out.write("\nfailures by node:\n")
@@ -433,20 +514,30 @@ def print_pose_table(episodes: list[Episode], out: TextIO = sys.stdout) -> None:
         out.write(f"{cat:10s}" + "".join(f"{f'{sum(r)}/{len(r)}' if r else '-':>10s}" for r in row) + "\n")
 
 
-def print_rates(rows: list[tuple[str, list[Episode]]], label: str, target_rate: float,
-                target_rtf: float | None = None, out: TextIO = sys.stdout) -> None:
+def print_rates(
+    rows: list[tuple[str, list[Episode]]],
+    label: str,
+    target_rate: float,
+    target_rtf: float | None = None,
+    out: TextIO = sys.stdout,
+) -> None:
     """One line per (name, episodes): successes, rate, median real-time factor, wall and
     sim time per episode, and the targets met or MISSED (the benchmarks' summary)."""
     width = max([8, len(label)] + [len(name) for name, _ in rows])
-    print(f"\n{label:{width}s} {'success':>12s} {'rate':>7s} {'RTF median':>11s} "
-          f"{'wall/episode':>13s} {'sim/episode':>12s}", file=out)
+    print(
+        f"\n{label:{width}s} {'success':>12s} {'rate':>7s} {'RTF median':>11s} "
+        f"{'wall/episode':>13s} {'sim/episode':>12s}",
+        file=out,
+    )
     for name, eps in rows:
         n, ok = len(eps), sum(e.success for e in eps)
         rtf = statistics.median(e.realtime_factor for e in eps)
-        line = (f"{name:{width}s} {ok:5d}/{n:<6d} {100 * ok / n:6.1f}% {rtf:10.1f}x "
-                f"{statistics.median(e.wall_time for e in eps):11.1f} s "
-                f"{statistics.median(e.sim_time for e in eps):10.1f} s   "
-                f"target >= {target_rate:.0%}: {'ok' if ok / n >= target_rate else 'MISSED'}")
+        line = (
+            f"{name:{width}s} {ok:5d}/{n:<6d} {100 * ok / n:6.1f}% {rtf:10.1f}x "
+            f"{statistics.median(e.wall_time for e in eps):11.1f} s "
+            f"{statistics.median(e.sim_time for e in eps):10.1f} s   "
+            f"target >= {target_rate:.0%}: {'ok' if ok / n >= target_rate else 'MISSED'}"
+        )
         if target_rtf is not None:
             line += f"; RTF >= {target_rtf:g}x: {'ok' if rtf >= target_rtf else 'MISSED'}"
         print(line, file=out)

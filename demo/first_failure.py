@@ -4,6 +4,7 @@ A failed episode's tree fails at its last step (a search that finds nothing more
 went wrong first is often earlier (the grasps that knocked the object over). Calls end
 innermost first, so the first failed call is the step itself, not a tree around it.
 """
+
 from __future__ import annotations
 
 from typing import Any

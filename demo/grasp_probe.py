@@ -10,6 +10,7 @@ the largest tilt seen while the object was held.
 It also notes which object each pick went for: the category object nearest the pick's
 target as the pick starts (the robot may stand 1.8 m from an object on a table).
 """
+
 from __future__ import annotations
 
 import math
@@ -47,7 +48,7 @@ def held_tilt(sim: SimWorld) -> float | None:
             best = (d, pose[3:])
     if best is None:
         return None
-    c = abs(float(np.dot(_axis_z(best[1]), _axis_z(hand_quat))))   # either way up
+    c = abs(float(np.dot(_axis_z(best[1]), _axis_z(hand_quat))))  # either way up
     return math.degrees(math.acos(min(1.0, c)))
 
 
@@ -84,8 +85,9 @@ class GraspProbe(TreeObserver):
             self._sample()
 
 
-def nearest_object(sim: SimWorld, categories: tuple[str, ...] = (),
-                   at: tuple[float, float] | None = None) -> str | None:
+def nearest_object(
+    sim: SimWorld, categories: tuple[str, ...] = (), at: tuple[float, float] | None = None
+) -> str | None:
     """The object (of one of ``categories``; () any) nearest ``at`` (x, y) [m], the pick's
     target (default: base_footprint), within PICKED_DISTANCE, or None. Reads the
     simulator's truth."""

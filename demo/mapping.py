@@ -7,6 +7,7 @@ actor drives to frontiers until none is left; then ``save_map`` writes the map_s
 The referee's side is the episode's: the true path and the error of the mapper's pose
 (map -> base_footprint on /tf) against the simulator's truth.
 """
+
 from __future__ import annotations
 
 import dataclasses
@@ -43,9 +44,16 @@ class MappingRun:
     path: list = dataclasses.field(default_factory=list)
 
 
-def build_map(world: str, seed: int, out_dir: str | pathlib.Path, *, locations: str | None = None,
-              max_time: float = 900.0, progress: TextIO | None = None,
-              observe: Callable[[Runtime, SimWorld], Callable[[], None]] | None = None) -> MappingRun:
+def build_map(
+    world: str,
+    seed: int,
+    out_dir: str | pathlib.Path,
+    *,
+    locations: str | None = None,
+    max_time: float = 900.0,
+    progress: TextIO | None = None,
+    observe: Callable[[Runtime, SimWorld], Callable[[], None]] | None = None,
+) -> MappingRun:
     """Explore ``world`` (seed ``seed``) from its start pose and write the map to
     ``out_dir``/map.yaml (+ map.pgm). The map frame is the world's: the mapper is told
     the start pose on ``/initialpose``, as slam_toolbox's ``map_start_pose``.
@@ -62,7 +70,8 @@ def build_map(world: str, seed: int, out_dir: str | pathlib.Path, *, locations: 
     stop_observing = observe(rt, sim) if observe is not None else None
     try:
         rt.bus.publisher("/initialpose", PoseWithCovarianceStamped).publish(
-            initial_pose_msg(tuple(sim.spec.robot_start)))
+            initial_pose_msg(tuple(sim.spec.robot_start))
+        )
         sim0 = rt.now()
         try:
             rt.call("start_mapping")

@@ -22,6 +22,7 @@ On the runtime's bus (SubSystems, imported on first use):
 
 navstack may import bt_engine and planning, never sim or actors.
 """
+
 from .amcl import Amcl, AmclParams, Scan, Status
 from .likelihood_field import LaserModelParams, LikelihoodField
 from .map_io import MapError, OccupancyMap, read_map_yaml, write_map_yaml
@@ -32,10 +33,24 @@ def __getattr__(name: str):
     # the SubSystems need bt_engine and the ROS messages: imported on first use (PEP 562)
     if name == "NavStack":
         from .stack import NavStack
+
         return NavStack
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
-__all__ = ["NavStack", "Amcl", "AmclParams", "Scan", "Status", "LaserModelParams", "LikelihoodField",
-           "MapError", "OccupancyMap", "read_map_yaml", "write_map_yaml", "Estimate",
-           "FilterParams", "ParticleFilter"]
+__all__ = [
+    "NavStack",
+    "Amcl",
+    "AmclParams",
+    "Scan",
+    "Status",
+    "LaserModelParams",
+    "LikelihoodField",
+    "MapError",
+    "OccupancyMap",
+    "read_map_yaml",
+    "write_map_yaml",
+    "Estimate",
+    "FilterParams",
+    "ParticleFilter",
+]

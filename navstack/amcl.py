@@ -30,6 +30,7 @@
   from its pose refined on all the beams (:meth:`Amcl._confirm_unique`): in a symmetric
   room it stays uncertain (``ambiguous``) rather than pick a look-alike pose.
 """
+
 from __future__ import annotations
 
 import math
@@ -46,16 +47,17 @@ from .particle_filter import Estimate, FilterParams, ParticleFilter, wrap1
 # states
 UNINITIALISED = "uninitialised"
 LOCALISED = "localised"
-UNCERTAIN = "uncertain"       # initialised or relocalising, not converged yet
-LOST = "lost"                 # the scan no longer fits the map at the estimate
+UNCERTAIN = "uncertain"  # initialised or relocalising, not converged yet
+LOST = "lost"  # the scan no longer fits the map at the estimate
 
 # the spread the filter starts again with round a held pose it keeps (5 cm, 3 degrees)
-KEPT_POSE_COV = np.diag([0.05 ** 2, 0.05 ** 2, math.radians(3) ** 2])
+KEPT_POSE_COV = np.diag([0.05**2, 0.05**2, math.radians(3) ** 2])
 
 
 @dataclass
 class Scan:
     """A planar laser scan (sensor_msgs/LaserScan's fields that matter)."""
+
     ranges: np.ndarray
     angle_min: float
     angle_increment: float
@@ -64,8 +66,9 @@ class Scan:
 
     @classmethod
     def from_msg(cls, msg) -> Scan:
-        return cls(np.asarray(msg.ranges, dtype=np.float32), msg.angle_min, msg.angle_increment,
-                   msg.range_min, msg.range_max)
+        return cls(
+            np.asarray(msg.ranges, dtype=np.float32), msg.angle_min, msg.angle_increment, msg.range_min, msg.range_max
+        )
 
     @property
     def angles(self) -> np.ndarray:
@@ -78,53 +81,53 @@ class Scan:
 
 @dataclass
 class AmclParams:
-    update_min_d: float = 0.25        # [m]
-    update_min_a: float = 0.2         # [rad]
+    update_min_d: float = 0.25  # [m]
+    update_min_a: float = 0.2  # [rad]
     resample_interval: int = 1
     max_beams: int = 60
-    laser_pose: tuple = (0.0, 0.0, 0.0)   # the laser in the base frame (x, y, yaw)
+    laser_pose: tuple = (0.0, 0.0, 0.0)  # the laser in the base frame (x, y, yaw)
     # health and recovery
-    inlier_dist: float = 0.15         # a beam fits when it ends this near an obstacle [m]
-    score_smoothing: float = 0.4      # weight of the newest scan in the smoothed score
+    inlier_dist: float = 0.15  # a beam fits when it ends this near an obstacle [m]
+    score_smoothing: float = 0.4  # weight of the newest scan in the smoothed score
     baseline_smoothing: float = 0.02  # ... and in the slow baseline it is compared with
-    lost_score: float = 0.45          # below this the scan does not fit
-    lost_drop: float = 0.75           # ... nor below this share of the baseline
-    lost_scans: int = 3               # consecutive scans like that: lost
-    min_beams: int = 30               # scans with fewer valid beams are not judged
-    keep_share: float = 0.25          # share of the current particles kept when lost
-    ok_score: float = 0.6             # converged needs at least this ...
-    converged_std_xy: float = 0.12    # ... and the heaviest cluster this tight [m]
-    converged_std_yaw: float = 0.12   # [rad]
-    converged_weight: float = 0.8     # ... holding this share of the weight
-    relocalise_grace: float = 6.0     # after a relocalisation, [s] before lost may be declared again
-    adopt_near: float = 0.5           # a relocalised pose this near the held one is adopted [m] ...
-    adopt_margin: float = 0.15        # ... one farther only if the scan fits it this much better
+    lost_score: float = 0.45  # below this the scan does not fit
+    lost_drop: float = 0.75  # ... nor below this share of the baseline
+    lost_scans: int = 3  # consecutive scans like that: lost
+    min_beams: int = 30  # scans with fewer valid beams are not judged
+    keep_share: float = 0.25  # share of the current particles kept when lost
+    ok_score: float = 0.6  # converged needs at least this ...
+    converged_std_xy: float = 0.12  # ... and the heaviest cluster this tight [m]
+    converged_std_yaw: float = 0.12  # [rad]
+    converged_weight: float = 0.8  # ... holding this share of the weight
+    relocalise_grace: float = 6.0  # after a relocalisation, [s] before lost may be declared again
+    adopt_near: float = 0.5  # a relocalised pose this near the held one is adopted [m] ...
+    adopt_margin: float = 0.15  # ... one farther only if the scan fits it this much better
     # a global localisation with no pose known converges only where the scan fits no other place
-    unique_margin: float = 0.1        # ... as well as the estimate, less this (share of beams)
-    unique_near: float = 0.5          # another place: this far from the estimate [m] ...
-    unique_near_yaw: float = 0.5      # ... or turned this far from it [rad]
-    unique_places: int = 6            # best places of a global search compared with it
+    unique_margin: float = 0.1  # ... as well as the estimate, less this (share of beams)
+    unique_near: float = 0.5  # another place: this far from the estimate [m] ...
+    unique_near_yaw: float = 0.5  # ... or turned this far from it [rad]
+    unique_places: int = 6  # best places of a global search compared with it
     auto_recover: bool = True
-    recovery: str = "informed"        # "informed" (scan-matched seeding) or "uniform"
+    recovery: str = "informed"  # "informed" (scan-matched seeding) or "uniform"
 
 
 @dataclass
 class Status:
     state: str = UNINITIALISED
-    score: float = 0.0                # smoothed share of beams that fit the map
-    baseline: float = 0.0             # its slow average while localised
+    score: float = 0.0  # smoothed share of beams that fit the map
+    baseline: float = 0.0  # its slow average while localised
     std_xy: float = math.inf
     std_yaw: float = math.inf
     particles: int = 0
     clusters: int = 0
     updates: int = 0
-    recoveries: int = 0               # global relocalisations started because lost
-    lost_count: int = 0               # times lost was declared
-    kept_count: int = 0               # relocalisations that found no better pose than the held one
-    ambiguous: bool = False           # a global localisation's estimate fits no better than another place
-    rival_score: float = 0.0          # ... the scan's fit at the best other place (its last check)
+    recoveries: int = 0  # global relocalisations started because lost
+    lost_count: int = 0  # times lost was declared
+    kept_count: int = 0  # relocalisations that found no better pose than the held one
+    ambiguous: bool = False  # a global localisation's estimate fits no better than another place
+    rival_score: float = 0.0  # ... the scan's fit at the best other place (its last check)
     last_update_ms: float = 0.0
-    last_lost: float | None = None    # when lost was last declared (clock time)
+    last_lost: float | None = None  # when lost was last declared (clock time)
 
     def as_dict(self) -> dict:
         return dict(self.__dict__)
@@ -144,21 +147,27 @@ def inverse(a) -> Pose:
 class Amcl:
     """Adaptive Monte Carlo localisation on an occupancy map."""
 
-    def __init__(self, occ_map: OccupancyMap, params: AmclParams | None = None,
-                 filter_params: FilterParams | None = None, laser: LaserModelParams | None = None,
-                 seed: int | None = None, clock=time.monotonic):
+    def __init__(
+        self,
+        occ_map: OccupancyMap,
+        params: AmclParams | None = None,
+        filter_params: FilterParams | None = None,
+        laser: LaserModelParams | None = None,
+        seed: int | None = None,
+        clock=time.monotonic,
+    ):
         self.params = params or AmclParams()
         self.pf = ParticleFilter(occ_map, filter_params, laser, seed)
         self.rng = self.pf.rng
         self.clock = clock
         self.status = Status()
-        self.map_to_odom = (0.0, 0.0, 0.0)          # published: held while relocalising
-        self.filter_map_to_odom = (0.0, 0.0, 0.0)   # the filter's own estimate
-        self.holding = False                         # relocalising after lost, map_to_odom held
-        self._trusted = False                        # map_to_odom is a pose given or converged to
+        self.map_to_odom = (0.0, 0.0, 0.0)  # published: held while relocalising
+        self.filter_map_to_odom = (0.0, 0.0, 0.0)  # the filter's own estimate
+        self.holding = False  # relocalising after lost, map_to_odom held
+        self._trusted = False  # map_to_odom is a pose given or converged to
         self.estimate: Estimate | None = None
-        self._odom_at_update: Pose | None = None   # odometry pose at the last filter update
-        self._last_odom: Pose | None = None        # the newest odometry pose
+        self._odom_at_update: Pose | None = None  # odometry pose at the last filter update
+        self._last_odom: Pose | None = None  # the newest odometry pose
         self._force_update = False
         # share of particles to keep, while an informed global localisation waits for a scan
         self._pending_global: float | None = None
@@ -166,8 +175,8 @@ class Amcl:
         self._grace_until = -math.inf
         # the scan's best places (map -> odom), their fits, the odometry pose
         self._rivals: tuple[list[Pose], list[float], Pose] | None = None
-        self.update_times: list[float] = []   # [s] per filter update
-        self.search_times: list[float] = []   # [s] per scan-informed global localisation
+        self.update_times: list[float] = []  # [s] per filter update
+        self.search_times: list[float] = []  # [s] per scan-informed global localisation
 
     # -- inputs ------------------------------------------------------------------------------
     def set_map(self, occ_map: OccupancyMap) -> None:
@@ -186,11 +195,10 @@ class Amcl:
         self.estimate = self.pf.mean()
         pose = tuple(float(v) for v in pose)
         self.map_to_odom = self.filter_map_to_odom = compose(pose, inverse(odom)) if odom is not None else pose
-        self.holding = False                         # told where it is: nothing to hold
+        self.holding = False  # told where it is: nothing to hold
         self._trusted = True
 
-    def global_localisation(self, informed: bool | None = None, keep_share: float = 0.0,
-                            hold: bool = False) -> None:
+    def global_localisation(self, informed: bool | None = None, keep_share: float = 0.0, hold: bool = False) -> None:
         """Forget the pose: uniform particles (AMCL), or seeded from the next scan's
         matches over the map (``informed``; the default follows ``params.recovery``),
         keeping ``keep_share`` of the current particles. ``hold``: keep ``map_to_odom``
@@ -201,14 +209,17 @@ class Amcl:
         if informed is None:
             informed = self.params.recovery == "informed"
         if informed:
-            self._pending_global = keep_share   # done on the next scan, which it needs
+            self._pending_global = keep_share  # done on the next scan, which it needs
         else:
             n_old = int(round(keep_share * self.pf.params.max_particles))
-            old = self.pf.particles[self.rng.choice(len(self.pf.particles), size=n_old, p=self.pf.weights)] \
-                if n_old and len(self.pf.particles) else np.zeros((0, 3))
+            old = (
+                self.pf.particles[self.rng.choice(len(self.pf.particles), size=n_old, p=self.pf.weights)]
+                if n_old and len(self.pf.particles)
+                else np.zeros((0, 3))
+            )
             self.pf.global_localisation()
             if len(old):
-                self.pf._set(np.vstack([self.pf.particles[len(old):], old]))
+                self.pf._set(np.vstack([self.pf.particles[len(old) :], old]))
         self._restart(None)
 
     def request_nomotion_update(self) -> None:
@@ -259,8 +270,10 @@ class Amcl:
             self._odom_at_update = odom
             self._force_update = True
         old = self._odom_at_update
-        moved = math.hypot(odom[0] - old[0], odom[1] - old[1]) > self.params.update_min_d \
+        moved = (
+            math.hypot(odom[0] - old[0], odom[1] - old[1]) > self.params.update_min_d
             or abs(wrap1(odom[2] - old[2])) > self.params.update_min_a
+        )
         if moved or self._force_update:
             t0 = time.perf_counter()
             self.pf.predict(old, odom, gyro)
@@ -306,7 +319,7 @@ class Amcl:
         p, st = self.params, self.status
         st.particles = len(self.pf.particles)
         if np.count_nonzero(scan.valid()) < p.min_beams:
-            return                      # too little to judge by (a blocked or empty view)
+            return  # too little to judge by (a blocked or empty view)
         score = self.match_score(scan, compose(self.filter_map_to_odom, tuple(odom)))
         a = p.score_smoothing
         st.score = score if st.updates <= 1 and st.score == 0 else (1 - a) * st.score + a * score
@@ -321,21 +334,24 @@ class Amcl:
         self._low_scans = self._low_scans + 1 if low else 0
         if self._low_scans >= p.lost_scans and now >= self._grace_until:
             # the transform of the last localised state is kept until the filter converges
-            hold = self._trusted        # (the low scans before have made the state uncertain)
+            hold = self._trusted  # (the low scans before have made the state uncertain)
             st.state = LOST
             st.last_lost = now
             st.lost_count += 1
             if p.auto_recover:
                 st.recoveries += 1
-                self.global_localisation(informed=p.recovery == "informed", keep_share=p.keep_share,
-                                         hold=hold)
+                self.global_localisation(informed=p.recovery == "informed", keep_share=p.keep_share, hold=hold)
             return
         if st.state in (UNCERTAIN, LOCALISED):
-            converged = est is not None and st.score >= p.ok_score \
-                and est.std_xy <= p.converged_std_xy and est.std_yaw <= p.converged_std_yaw \
+            converged = (
+                est is not None
+                and st.score >= p.ok_score
+                and est.std_xy <= p.converged_std_xy
+                and est.std_yaw <= p.converged_std_yaw
                 and est.weight >= p.converged_weight
+            )
             if converged and not self._trusted:
-                self._confirm_unique(scan, odom)     # uncertain still, or restarted round the pose
+                self._confirm_unique(scan, odom)  # uncertain still, or restarted round the pose
                 return
             st.state = LOCALISED if converged else UNCERTAIN
             self._trusted = self._trusted or converged
@@ -361,25 +377,32 @@ class Amcl:
         pose = tuple(self.pf.refine(compose(self.filter_map_to_odom, odom), beams, scan.range_max))
         fit = self.match_score(scan, pose)
         r = self._rivals
-        if r is None or math.hypot(odom[0] - r[2][0], odom[1] - r[2][1]) > p.update_min_d \
-                or abs(wrap1(odom[2] - r[2][2])) > p.update_min_a:
-            places = self.pf.best_places(beams, scan.range_max, p.unique_places, p.unique_near,
-                                         p.unique_near_yaw)
+        if (
+            r is None
+            or math.hypot(odom[0] - r[2][0], odom[1] - r[2][1]) > p.update_min_d
+            or abs(wrap1(odom[2] - r[2][2])) > p.update_min_a
+        ):
+            places = self.pf.best_places(beams, scan.range_max, p.unique_places, p.unique_near, p.unique_near_yaw)
             # kept as map -> odom, so that they follow the odometry until the view changes
-            r = self._rivals = ([compose(tuple(q), inverse(odom)) for q in places],
-                                [self.match_score(scan, tuple(q)) for q in places], odom)
+            r = self._rivals = (
+                [compose(tuple(q), inverse(odom)) for q in places],
+                [self.match_score(scan, tuple(q)) for q in places],
+                odom,
+            )
         rivals = [0.0]
         for m2o, f in zip(r[0], r[1]):
             q = compose(m2o, odom)
-            if math.hypot(q[0] - pose[0], q[1] - pose[1]) > p.unique_near \
-                    or abs(wrap1(q[2] - pose[2])) > p.unique_near_yaw:
+            if (
+                math.hypot(q[0] - pose[0], q[1] - pose[1]) > p.unique_near
+                or abs(wrap1(q[2] - pose[2])) > p.unique_near_yaw
+            ):
                 rivals.append(f)
         st.rival_score = max(rivals)
         st.ambiguous = st.rival_score > fit - p.unique_margin
         if st.ambiguous:
             st.state = UNCERTAIN
             return
-        self.initialise(pose, KEPT_POSE_COV, odom=odom)    # converges on the next update
+        self.initialise(pose, KEPT_POSE_COV, odom=odom)  # converges on the next update
 
     def _adopt_or_keep(self, scan: Scan, odom) -> None:
         """The relocalisation after a lost has converged: adopt its pose, unless it lies

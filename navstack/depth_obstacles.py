@@ -16,6 +16,7 @@ by the camera's mounting, and kept when they are
 Only their x, y are kept: the navigator checks them against the path ahead as it does
 the scan's beams.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -26,16 +27,24 @@ import numpy as np
 @dataclass
 class DepthObstacleParams:
     """Which depth pixels are obstacles (units: m)."""
-    stride: int = 4                  # use every stride-th pixel in each direction
-    min_height: float = 0.015        # above the floor (a jenga block lying flat is 24 mm)
+
+    stride: int = 4  # use every stride-th pixel in each direction
+    min_height: float = 0.015  # above the floor (a jenga block lying flat is 24 mm)
     max_height: float = 0.40
-    min_range: float = 0.25          # from the camera, along its view
+    min_range: float = 0.25  # from the camera, along its view
     max_range: float = 1.5
-    self_box: tuple = (-0.23, 0.10, 0.18)   # x_min, x_max, |y| max of the base itself
+    self_box: tuple = (-0.23, 0.10, 0.18)  # x_min, x_max, |y| max of the base itself
 
 
-def depth_obstacle_points(depth: np.ndarray, fx: float, fy: float, cx: float, cy: float,
-                          T_base_cam: np.ndarray, params: DepthObstacleParams | None = None) -> np.ndarray:
+def depth_obstacle_points(
+    depth: np.ndarray,
+    fx: float,
+    fy: float,
+    cx: float,
+    cy: float,
+    T_base_cam: np.ndarray,
+    params: DepthObstacleParams | None = None,
+) -> np.ndarray:
     """(N, 2) x, y in base_footprint of the depth image's obstacle points.
 
     Args:
@@ -47,7 +56,7 @@ def depth_obstacle_points(depth: np.ndarray, fx: float, fy: float, cx: float, cy
     p = params or DepthObstacleParams()
     s = max(1, int(p.stride))
     d = np.asarray(depth, dtype=float)[::s, ::s]
-    rows, cols = np.mgrid[0:depth.shape[0]:s, 0:depth.shape[1]:s]
+    rows, cols = np.mgrid[0 : depth.shape[0] : s, 0 : depth.shape[1] : s]
     with np.errstate(invalid="ignore"):
         ok = np.isfinite(d) & (d >= p.min_range) & (d <= p.max_range)
     if not ok.any():
@@ -56,8 +65,11 @@ def depth_obstacle_points(depth: np.ndarray, fx: float, fy: float, cx: float, cy
     cam = np.column_stack([(cols[ok] - cx) / fx * z, (rows[ok] - cy) / fy * z, z])
     pts = cam @ T_base_cam[:3, :3].T + T_base_cam[:3, 3]
     x0, x1, ymax = p.self_box
-    keep = (pts[:, 2] >= p.min_height) & (pts[:, 2] <= p.max_height) \
+    keep = (
+        (pts[:, 2] >= p.min_height)
+        & (pts[:, 2] <= p.max_height)
         & ~((pts[:, 0] >= x0) & (pts[:, 0] <= x1) & (np.abs(pts[:, 1]) <= ymax))
+    )
     return pts[keep, :2]
 
 

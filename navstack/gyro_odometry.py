@@ -13,6 +13,7 @@ turns a map -> fused transform into that, at the newest odometry pose. Without I
 messages (or with ones too old) the heading change is the wheels', and the fused frame
 is the wheel frame.
 """
+
 from __future__ import annotations
 
 import bisect
@@ -46,16 +47,16 @@ class GyroOdometry:
     until the next."""
 
     def __init__(self, maxlen: int = 400) -> None:
-        self._imu: deque = deque(maxlen=maxlen)     # (t, unwrapped yaw), by stamp
-        self._wheel_yaw: deque = deque(maxlen=maxlen)   # (t, unwrapped wheel yaw)
-        self._last: tuple[float, Pose] | None = None   # (t, wheel pose) of the last fuse
-        self._offset: float | None = None           # fused yaw - the IMU's (None: not anchored)
-        self.fused: Pose | None = None              # the newest fused pose
-        self.wheel: Pose | None = None              # the newest wheel pose
-        self.imu_used = 0                           # odometry steps turned by the gyro
-        self.bias = 0.0                             # [rad/s] the gyro's, from the last long stop
-        self._still: tuple[float, float] | None = None   # (first, last) stamp of the stop under way
-        self.gyro_heading = False                   # the newest fused heading came from the gyro
+        self._imu: deque = deque(maxlen=maxlen)  # (t, unwrapped yaw), by stamp
+        self._wheel_yaw: deque = deque(maxlen=maxlen)  # (t, unwrapped wheel yaw)
+        self._last: tuple[float, Pose] | None = None  # (t, wheel pose) of the last fuse
+        self._offset: float | None = None  # fused yaw - the IMU's (None: not anchored)
+        self.fused: Pose | None = None  # the newest fused pose
+        self.wheel: Pose | None = None  # the newest wheel pose
+        self.imu_used = 0  # odometry steps turned by the gyro
+        self.bias = 0.0  # [rad/s] the gyro's, from the last long stop
+        self._still: tuple[float, float] | None = None  # (first, last) stamp of the stop under way
+        self.gyro_heading = False  # the newest fused heading came from the gyro
 
     def reset(self) -> None:
         """Forget everything (a new run: time went backwards)."""
@@ -73,12 +74,12 @@ class GyroOdometry:
         """The fused heading at ``t``; ``fallback`` (the wheels' alone) without the IMU."""
         reading = _at_or_before(self._imu, t)
         if reading is None or t - reading[0] > IMU_STALE:
-            self._offset = None                       # re-anchor when it comes back
+            self._offset = None  # re-anchor when it comes back
             self.gyro_heading = False
             return fallback
         t_k, imu_yaw = reading
         imu_yaw -= self.bias * t_k
-        since = wheel_yaw - _interpolate(self._wheel_yaw, t_k, wheel_yaw)   # turned since t_k
+        since = wheel_yaw - _interpolate(self._wheel_yaw, t_k, wheel_yaw)  # turned since t_k
         if self._offset is None:
             self._offset = fallback - (imu_yaw + since)
         self.imu_used += 1
@@ -94,13 +95,13 @@ class GyroOdometry:
         wheel_yaw = self._wheel_yaw[-1][1]
         if self._last is None:
             self.fused, self._offset = wheel, None
-            self._heading(t, wheel_yaw, wheel[2])     # anchor to the IMU if it is there
+            self._heading(t, wheel_yaw, wheel[2])  # anchor to the IMU if it is there
         else:
             _, w0 = self._last
             dth_wheels = _wrap(wheel[2] - w0[2])
             mid = w0[2] + dth_wheels / 2
             ds = (wheel[0] - w0[0]) * math.cos(mid) + (wheel[1] - w0[1]) * math.sin(mid)
-            assert self.fused is not None               # set by every fuse, as _last is
+            assert self.fused is not None  # set by every fuse, as _last is
             x, y, yaw = self.fused
             if ds == 0.0 and dth_wheels == 0.0:
                 # the wheels stand still: so does the robot, whatever the gyro's bias says

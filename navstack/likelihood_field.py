@@ -34,6 +34,7 @@ Both are returned as log-weights.
 Everything is numpy on float32 arrays: N particles x K beams cost N cosines and sines,
 then (N, K) multiply-adds, one gather and the model.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -48,15 +49,15 @@ from .map_io import OccupancyMap
 class LaserModelParams:
     z_hit: float = 0.5
     z_rand: float = 0.5
-    sigma_hit: float = 0.1         # TB3's nav2 config: 0.2 (RMS error 40 vs 24 mm in bench_localisation)
-    max_dist: float = 2.0          # laser_likelihood_max_dist [m]
-    combine: str = "product"       # "product" (tempered log-likelihood) or "amcl" (1 + sum pz^3)
-    gamma: float = 1.0             # temperature of the product (1: independent beams)
-    surface: bool = True           # distances to the occupied cells' edges (centres - res/2), not centres
-    signed: bool = True            # and inside obstacles, the distance out to their edge (not 0)
-    upsample: int = 5              # distance map at resolution / upsample (1 cm for 5 cm maps)
-    interpolate: bool = False      # bilinear distance lookups (4 gathers) instead of the cell's value
-    unknown_is_obstacle: bool = True   # unknown cells (outside the walls, inside furniture) are
+    sigma_hit: float = 0.1  # TB3's nav2 config: 0.2 (RMS error 40 vs 24 mm in bench_localisation)
+    max_dist: float = 2.0  # laser_likelihood_max_dist [m]
+    combine: str = "product"  # "product" (tempered log-likelihood) or "amcl" (1 + sum pz^3)
+    gamma: float = 1.0  # temperature of the product (1: independent beams)
+    surface: bool = True  # distances to the occupied cells' edges (centres - res/2), not centres
+    signed: bool = True  # and inside obstacles, the distance out to their edge (not 0)
+    upsample: int = 5  # distance map at resolution / upsample (1 cm for 5 cm maps)
+    interpolate: bool = False  # bilinear distance lookups (4 gathers) instead of the cell's value
+    unknown_is_obstacle: bool = True  # unknown cells (outside the walls, inside furniture) are
     #                                    solid: a wall's far face, where unknown space begins, is no
     #                                    surface a beam can end on (see the module docstring)
 
@@ -64,8 +65,7 @@ class LaserModelParams:
 class LikelihoodField:
     """The distance map of an :class:`OccupancyMap` and the beam model on it."""
 
-    def __init__(self, occ_map: OccupancyMap, params: LaserModelParams | None = None,
-                 occupied_threshold: int = 65):
+    def __init__(self, occ_map: OccupancyMap, params: LaserModelParams | None = None, occupied_threshold: int = 65):
         self.map = occ_map
         self.params = p = params or LaserModelParams()
         occ = occ_map.occupied(occupied_threshold)
@@ -73,8 +73,7 @@ class LikelihoodField:
             occ = occ | (occ_map.data < 0)
         res = occ_map.resolution
         #: distance [m] from each map cell's centre to the nearest occupied cell's centre
-        self.clearance = (ndimage.distance_transform_edt(~occ) * res if occ.any()
-                          else np.full(occ.shape, np.inf))
+        self.clearance = ndimage.distance_transform_edt(~occ) * res if occ.any() else np.full(occ.shape, np.inf)
         f = max(1, int(p.upsample))
         if f > 1:
             occ = np.repeat(np.repeat(occ, f, axis=0), f, axis=1)
@@ -83,7 +82,7 @@ class LikelihoodField:
             dist = ndimage.distance_transform_edt(~occ) * fres
             if p.surface:
                 dist = np.maximum(dist - fres / 2, 0.0)
-                if p.signed:   # inside obstacles: the distance out to their surface
+                if p.signed:  # inside obstacles: the distance out to their surface
                     inside = np.maximum(ndimage.distance_transform_edt(occ) * fres - fres / 2, 0.0)
                     dist = np.where(occ, inside, dist)
         else:
@@ -92,7 +91,7 @@ class LikelihoodField:
         # one cell of border at max_dist: indices clipped into the border read "far"
         padded = np.full((occ.shape[0] + 2, occ.shape[1] + 2), p.max_dist, dtype=np.float32)
         padded[1:-1, 1:-1] = dist
-        self.distance = dist.astype(np.float32)     # (rows, cols) at resolution / upsample [m]
+        self.distance = dist.astype(np.float32)  # (rows, cols) at resolution / upsample [m]
         self._flat = padded.ravel()
         self._w2 = occ.shape[1] + 2
         self._hmax = occ.shape[0] + 1
@@ -101,7 +100,7 @@ class LikelihoodField:
         self._origin = (ox, oy)
         self._rot = (np.cos(oyaw), np.sin(oyaw)) if oyaw else None
         self._inv_res = 1.0 / fres
-        self._two_sigma2 = 2.0 * p.sigma_hit ** 2
+        self._two_sigma2 = 2.0 * p.sigma_hit**2
 
     # -- lookups ---------------------------------------------------------------------------
     def distance_at(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:

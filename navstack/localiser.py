@@ -53,6 +53,7 @@ the scan's frame) once it is there, and is the URDF's base_footprint -> base_sca
 at its stamp. All the work runs in the bus callbacks (a few ms a filter update; a global
 relocalisation's search about 0.2 s).
 """
+
 from __future__ import annotations
 
 import math
@@ -84,11 +85,11 @@ from .tf import TF, TfListener, TransformError, planar_transform, to_stamp
 #: base_footprint -> base_scan in sim/models/mobile_manipulator.urdf (x, y, yaw)
 LASER_POSE = (-0.15, 0.0, 0.0)
 #: the pose handed over by the mapper: as sure as its scan matching
-RESUME_COV = np.diag([0.05 ** 2, 0.05 ** 2, 0.03 ** 2])
+RESUME_COV = np.diag([0.05**2, 0.05**2, 0.03**2])
 #: AMCL's default initial covariance (0.5 m, 0.5 m, pi/12 rad standard deviations)
-INITIAL_COV = np.diag([0.5 ** 2, 0.5 ** 2, (math.pi / 12) ** 2])
+INITIAL_COV = np.diag([0.5**2, 0.5**2, (math.pi / 12) ** 2])
 #: the covariance /amcl_pose carries when the pose is forgotten (10 m, pi rad)
-UNKNOWN_COV = np.diag([10.0 ** 2, 10.0 ** 2, math.pi ** 2])
+UNKNOWN_COV = np.diag([10.0**2, 10.0**2, math.pi**2])
 #: [s] how far map -> odom is stamped into the future (AMCL's transform_tolerance)
 TRANSFORM_TOLERANCE = 0.2
 #: [Hz] at most this often map -> odom goes out between filter updates
@@ -132,16 +133,27 @@ class Localiser(SubSystem):
         imu_topic: the IMU whose heading turns the odometry; None: the wheels' alone
     """
 
-    def __init__(self, params: dict | None = None, seed: int = 0,
-                 initial_pose: tuple | None = None, pose_rate: float = 0.0,
-                 tf_rate: float = TF_RATE, transform_tolerance: float = TRANSFORM_TOLERANCE,
-                 global_after: float | None = None, smoothing: bool | dict = True,
-                 hold_radius: float = 0.75, imu_topic: str | None = IMU_TOPIC) -> None:
+    def __init__(
+        self,
+        params: dict | None = None,
+        seed: int = 0,
+        initial_pose: tuple | None = None,
+        pose_rate: float = 0.0,
+        tf_rate: float = TF_RATE,
+        transform_tolerance: float = TRANSFORM_TOLERANCE,
+        global_after: float | None = None,
+        smoothing: bool | dict = True,
+        hold_radius: float = 0.75,
+        imu_topic: str | None = IMU_TOPIC,
+    ) -> None:
         super().__init__()
         self.hold = LocalHold(hold_radius) if hold_radius > 0 else None
-        self._target: Pose | None = None        # the newest map -> odom, held or not
-        self.smoother = None if smoothing is False else PoseSmoother(
-            SmootherParams(**smoothing) if isinstance(smoothing, dict) else None)
+        self._target: Pose | None = None  # the newest map -> odom, held or not
+        self.smoother = (
+            None
+            if smoothing is False
+            else PoseSmoother(SmootherParams(**smoothing) if isinstance(smoothing, dict) else None)
+        )
         self._params = split_params(params)
         self._seed = seed
         self._initial_pose = initial_pose
@@ -151,19 +163,19 @@ class Localiser(SubSystem):
         self._global_after = global_after
         self._lock = threading.RLock()
         self.amcl: Amcl | None = None
-        self._map_key: tuple[int, int, float, float, float, int] | None = None   # size, resolution, origin, data
+        self._map_key: tuple[int, int, float, float, float, int] | None = None  # size, resolution, origin, data
         self._now = 0.0
-        self._odom = OdomHistory()              # (t, fused (x, y, yaw)), by stamp
-        self.odometry = GyroOdometry()          # the wheels' poses turned by the gyro
+        self._odom = OdomHistory()  # (t, fused (x, y, yaw)), by stamp
+        self.odometry = GyroOdometry()  # the wheels' poses turned by the gyro
         self._last_pub = -math.inf
-        self._pending_initial: tuple[Pose, np.ndarray] | None = None   # an /initialpose before the map
-        self._first_scan: float | None = None   # odometry time of the first scan with a map
-        self._tf_valid = False                  # map -> odom may go out
-        self._tf_sent = -math.inf               # odometry time of the last map -> odom
-        self._tf_stamp = -math.inf              # the stamp it carried
+        self._pending_initial: tuple[Pose, np.ndarray] | None = None  # an /initialpose before the map
+        self._first_scan: float | None = None  # odometry time of the first scan with a map
+        self._tf_valid = False  # map -> odom may go out
+        self._tf_sent = -math.inf  # odometry time of the last map -> odom
+        self._tf_stamp = -math.inf  # the stamp it carried
         self._laser_from_tf = False
         self.map_to_odom: Pose = (0.0, 0.0, 0.0)
-        self._paused = False                    # another node (the mapper) owns map -> odom
+        self._paused = False  # another node (the mapper) owns map -> odom
         bus = self.runtime.bus
         self._pub = bus.publisher("/amcl_pose", PoseWithCovarianceStamped, "latched")
         self._tf_pub = bus.publisher(TF, TFMessage, 100)
@@ -188,11 +200,17 @@ class Localiser(SubSystem):
     # -- bus callbacks --------------------------------------------------------------------
     def _on_map(self, msg: OccupancyGrid) -> None:
         info = msg.info
-        key = (info.width, info.height, info.resolution, info.origin.position.x, info.origin.position.y,
-               zlib.crc32(np.asarray(msg.data, dtype=np.int8).tobytes()))
+        key = (
+            info.width,
+            info.height,
+            info.resolution,
+            info.origin.position.x,
+            info.origin.position.y,
+            zlib.crc32(np.asarray(msg.data, dtype=np.int8).tobytes()),
+        )
         with self._lock:
             if self._paused or key == self._map_key:
-                return                     # mapping, or the same map republished
+                return  # mapping, or the same map republished
             self._map_key = key
             occ = OccupancyMap.from_msg(msg)
             if self.amcl is None:
@@ -201,7 +219,8 @@ class Localiser(SubSystem):
                 if len(self._odom):
                     self.amcl.on_odometry(self._odom.latest())
                 start = self._pending_initial or (
-                    (tuple(self._initial_pose), INITIAL_COV) if self._initial_pose is not None else None)
+                    (tuple(self._initial_pose), INITIAL_COV) if self._initial_pose is not None else None
+                )
                 if start is not None:
                     self._initialise(*start)
             else:
@@ -209,7 +228,7 @@ class Localiser(SubSystem):
 
     def _initialise(self, pose, cov) -> None:
         """Start from a pose the user gave: map -> odom is known at once."""
-        assert self.amcl is not None            # called once the map has made the filter
+        assert self.amcl is not None  # called once the map has made the filter
         self.amcl.initialise(pose, cov)
         self.map_to_odom = self._target = self.amcl.map_to_odom
         if self.hold is not None:
@@ -226,7 +245,7 @@ class Localiser(SubSystem):
         drift cannot explain. Until map -> odom is known (a global localisation before it
         first converges), the estimate is taken as it is: the transform there is nothing
         the robot has used, so there is nothing to hold or to smooth towards."""
-        assert self.amcl is not None            # called on a scan the filter took
+        assert self.amcl is not None  # called on a scan the filter took
         localised = self.amcl.status.state == LOCALISED
         big = not localised or not self._tf_valid
         if self.smoother is None:
@@ -241,7 +260,7 @@ class Localiser(SubSystem):
             target = self.smoother.map_to_odom()
         self._target = target
         if self.hold is not None and self.hold.holding and not big:
-            return                                  # kept until the robot moves away
+            return  # kept until the robot moves away
         if big and self.hold is not None:
             self.hold.release()
         self.map_to_odom = target
@@ -261,15 +280,19 @@ class Localiser(SubSystem):
         t = _seconds(msg.header.stamp)
         with self._lock:
             pose = self.odometry.fuse(t, (p.position.x, p.position.y, _yaw(p.orientation)))
-            if self._odom.add(t, pose):    # time went backwards (a new episode)
+            if self._odom.add(t, pose):  # time went backwards (a new episode)
                 self._tf_sent = self._tf_stamp = -math.inf
             self._now = max(self._now, t)
             if self.amcl is None or self._paused:
                 return
             self.amcl.on_odometry(pose)
-            if self.hold is not None and self.hold.on_odometry(t, pose) \
-                    and self._target is not None and self._target != self.map_to_odom:
-                self.map_to_odom = self._target      # the hold ended: apply what was kept
+            if (
+                self.hold is not None
+                and self.hold.on_odometry(t, pose)
+                and self._target is not None
+                and self._target != self.map_to_odom
+            ):
+                self.map_to_odom = self._target  # the hold ended: apply what was kept
                 if self._tf_valid:
                     self._send_tf()
             if self._tf_valid and t - self._tf_sent >= self._tf_period - 1e-9:
@@ -312,12 +335,12 @@ class Localiser(SubSystem):
                     # converge while standing still: the robot waits for its pose
                     self.amcl.request_nomotion_update()
                 elif self._global_after is not None and t - self._first_scan >= self._global_after:
-                    self.amcl.global_localisation()     # nobody said where the robot is
+                    self.amcl.global_localisation()  # nobody said where the robot is
             if self.amcl.on_scan(Scan.from_msg(msg), odom, self.odometry.gyro_heading):
                 self._estimate(odom)
                 if not self._tf_valid and self.amcl.status.state == LOCALISED:
-                    self._tf_valid = True           # a global localisation converged
-                if self._tf_valid:                  # else the pose is unknown: nothing to say
+                    self._tf_valid = True  # a global localisation converged
+                if self._tf_valid:  # else the pose is unknown: nothing to say
                     self._send_tf()
                     self._publish(msg.header.stamp, self.pose(odom))
 
@@ -340,8 +363,13 @@ class Localiser(SubSystem):
         """map -> odom on /tf, stamped transform_tolerance ahead of the odometry's time
         (and after the last one sent)."""
         stamp = max(self._now + self._tolerance, self._tf_stamp + 1e-3)
-        self._tf_pub.publish(TFMessage(transforms=[planar_transform(
-            GLOBAL_FRAME, ODOM_FRAME, self.odometry.map_to_wheel_odom(self.map_to_odom), stamp)]))
+        self._tf_pub.publish(
+            TFMessage(
+                transforms=[
+                    planar_transform(GLOBAL_FRAME, ODOM_FRAME, self.odometry.map_to_wheel_odom(self.map_to_odom), stamp)
+                ]
+            )
+        )
         self._tf_sent, self._tf_stamp = self._now, stamp
 
     def _publish(self, stamp, pose, cov3=None) -> None:
@@ -353,7 +381,7 @@ class Localiser(SubSystem):
         msg.pose.pose.orientation.w = math.cos(pose[2] / 2)
         cov = np.zeros((6, 6))
         if cov3 is None:
-            assert self.amcl is not None        # a pose is published only once the filter runs
+            assert self.amcl is not None  # a pose is published only once the filter runs
             cov3 = self.amcl.covariance()
         cov[np.ix_([0, 1, 5], [0, 1, 5])] = cov3
         msg.pose.covariance = cov.ravel().tolist()

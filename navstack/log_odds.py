@@ -21,6 +21,7 @@ and the samples' cell indices are scattered into a window around the sensor, so 
 occupied (100) where p >= ``occupied_thresh`` (0.65), free (0) where p <= ``free_thresh``
 (0.25), else unknown (-1).
 """
+
 from __future__ import annotations
 
 import math
@@ -37,22 +38,22 @@ def logit(p: float) -> float:
 
 @dataclass
 class LogOddsParams:
-    resolution: float = 0.05          # [m / cell]
-    l_occ: float = 0.85               # added to a return's cell (p 0.7)
-    l_free: float = -0.4              # added to a crossed cell (p 0.4)
-    l_miss: float = -0.1              # added to a cell crossed by a beam without a return: a
+    resolution: float = 0.05  # [m / cell]
+    l_occ: float = 0.85  # added to a return's cell (p 0.7)
+    l_free: float = -0.4  # added to a crossed cell (p 0.4)
+    l_miss: float = -0.1  # added to a cell crossed by a beam without a return: a
     #                                   drop-out (dark or shiny surface) is no proof of free space
-    l_min: float = -2.0               # clamp (p 0.12)
-    l_max: float = 3.5                # clamp (p 0.97)
-    trace_step: float = 0.5           # ray sampling step [cells]
-    free_margin: float = 0.0          # stop clearing this far before a return [m]
-    far_range: float = math.inf       # returns farther than this [m] add only far_occ: a
-    far_occ: float = 0.4              # far return is noisy, and a stray one behind a wall
+    l_min: float = -2.0  # clamp (p 0.12)
+    l_max: float = 3.5  # clamp (p 0.97)
+    trace_step: float = 0.5  # ray sampling step [cells]
+    free_margin: float = 0.0  # stop clearing this far before a return [m]
+    far_range: float = math.inf  # returns farther than this [m] add only far_occ: a
+    far_occ: float = 0.4  # far return is noisy, and a stray one behind a wall
     #                                   stays (no later beam clears it); below the occupied
     #                                   threshold, it takes two to mark a cell
-    grow_margin: float = 2.0          # grow the grid by at least this much at a time [m]
-    occupied_thresh: float = 0.65     # to_map(): occupied at p >= this
-    free_thresh: float = 0.25         # to_map(): free at p <= this
+    grow_margin: float = 2.0  # grow the grid by at least this much at a time [m]
+    occupied_thresh: float = 0.65  # to_map(): occupied at p >= this
+    free_thresh: float = 0.25  # to_map(): free at p <= this
 
 
 class LogOddsGrid:
@@ -65,7 +66,7 @@ class LogOddsGrid:
     def __init__(self, params: LogOddsParams | None = None, origin=(0.0, 0.0), shape=(0, 0)):
         self.params = p = params or LogOddsParams()
         self.resolution = float(p.resolution)
-        self.origin = (float(origin[0]), float(origin[1]))   # corner of cell (0, 0) [m]
+        self.origin = (float(origin[0]), float(origin[1]))  # corner of cell (0, 0) [m]
         self.logodds = np.zeros(shape, dtype=np.float32)
 
     # -- geometry ------------------------------------------------------------------------
@@ -82,8 +83,10 @@ class LogOddsGrid:
     def cell_of(self, x, y):
         """Integer (col, row) of map points [m] (may lie outside the grid)."""
         res = self.resolution
-        return (np.floor((np.asarray(x) - self.origin[0]) / res).astype(np.int64),
-                np.floor((np.asarray(y) - self.origin[1]) / res).astype(np.int64))
+        return (
+            np.floor((np.asarray(x) - self.origin[0]) / res).astype(np.int64),
+            np.floor((np.asarray(y) - self.origin[1]) / res).astype(np.int64),
+        )
 
     def ensure(self, x0: float, y0: float, x1: float, y1: float) -> None:
         """Grow the grid (keeping its cells' positions) to cover [x0, x1] x [y0, y1] [m]."""
@@ -99,7 +102,7 @@ class LogOddsGrid:
             add_r = int(math.ceil((x1 - gx1) / res + m / res)) if x1 > gx1 else 0
             add_t = int(math.ceil((y1 - gy1) / res + m / res)) if y1 > gy1 else 0
             grown = np.zeros((h + add_b + add_t, w + add_l + add_r), dtype=np.float32)
-            grown[add_b:add_b + h, add_l:add_l + w] = self.logodds
+            grown[add_b : add_b + h, add_l : add_l + w] = self.logodds
             self.logodds = grown
             self.origin = (gx0 - add_l * res, gy0 - add_b * res)
         else:
@@ -112,8 +115,9 @@ class LogOddsGrid:
             self.origin = (ox, oy)
 
     # -- the update ----------------------------------------------------------------------
-    def integrate(self, sensor_pose, ranges, angles, range_max: float, range_min: float = 0.0,
-                  clear_range: float | None = None) -> None:
+    def integrate(
+        self, sensor_pose, ranges, angles, range_max: float, range_min: float = 0.0, clear_range: float | None = None
+    ) -> None:
         """Add one scan taken from ``sensor_pose`` (x [m], y [m], yaw [rad], map frame).
 
         Args:
@@ -131,7 +135,7 @@ class LogOddsGrid:
         clear = float(range_max if clear_range is None else clear_range)
         with np.errstate(invalid="ignore"):
             hit = np.isfinite(r) & (r >= range_min) & (r < range_max)
-            miss = ~np.isnan(r) & ~hit & (r >= range_min)          # no return: clear only
+            miss = ~np.isnan(r) & ~hit & (r >= range_min)  # no return: clear only
         length = np.where(hit, r - p.free_margin, np.where(miss, clear, 0.0))
         keep = length > 0
         if not keep.any():
@@ -154,7 +158,7 @@ class LogOddsGrid:
         # free: samples every trace_step cells along each beam, short of its end (only the
         # samples that exist: np.repeat, not a (beams x max samples) mask)
         step = p.trace_step * res
-        count = np.ceil(length / step - 0.5).astype(np.int64)          # samples at (i + 0.5) step
+        count = np.ceil(length / step - 0.5).astype(np.int64)  # samples at (i + 0.5) step
         total = int(count.sum())
         kk = np.repeat(np.arange(len(count)), count)
         start = np.cumsum(count) - count

@@ -9,6 +9,7 @@ metres a cell, and the origin (x, y, yaw) is the map-frame pose of the corner of
 ``trinary`` (default), ``scale`` or ``raw``), for PGM images (P5 binary or P2 ASCII,
 8 or 16 bits); :func:`write_map_yaml` writes what ``map_saver`` writes (trinary).
 """
+
 from __future__ import annotations
 
 import math
@@ -31,9 +32,9 @@ class MapError(ValueError):
 
 @dataclass(frozen=True)
 class OccupancyMap:
-    data: np.ndarray                      # int8 (height, width), row 0 at the origin
-    resolution: float                     # [m / cell]
-    origin: tuple = (0.0, 0.0, 0.0)       # map-frame pose (x, y, yaw) of cell (0, 0)'s corner
+    data: np.ndarray  # int8 (height, width), row 0 at the origin
+    resolution: float  # [m / cell]
+    origin: tuple = (0.0, 0.0, 0.0)  # map-frame pose (x, y, yaw) of cell (0, 0)'s corner
 
     def __post_init__(self) -> None:
         arr = np.asarray(self.data)
@@ -103,8 +104,11 @@ class OccupancyMap:
         data = np.frombuffer(bytes(np.asarray(msg.data, dtype=np.int8).tobytes()), dtype=np.int8)
         if data.size != n:
             raise MapError(f"OccupancyGrid has {data.size} cells, width x height = {n}")
-        return cls(data.reshape(info.height, info.width).copy(), float(info.resolution),
-                   (info.origin.position.x, info.origin.position.y, yaw))
+        return cls(
+            data.reshape(info.height, info.width).copy(),
+            float(info.resolution),
+            (info.origin.position.x, info.origin.position.y, yaw),
+        )
 
     def to_msg(self, frame_id: str = "map", stamp=None):
         """A ``nav_msgs/msg/OccupancyGrid``."""
@@ -154,7 +158,7 @@ def read_map_yaml(path: str | Path) -> OccupancyMap:
         value = np.rint(bright * 255)
         data = np.where(value <= 100, value, UNKNOWN).astype(np.int8)
     else:
-        p = bright if negate else 1.0 - bright   # occupancy probability, as map_server
+        p = bright if negate else 1.0 - bright  # occupancy probability, as map_server
         data = np.full(p.shape, UNKNOWN, dtype=np.int8)
         data[p > occ_t] = OCCUPIED
         data[p < free_t] = FREE
@@ -178,7 +182,8 @@ def write_map_yaml(m: OccupancyMap, out_yaml: str | Path) -> tuple[Path, Path]:
     out_yaml.write_text(
         f"image: {out_pgm.name}\nmode: trinary\nresolution: {m.resolution}\n"
         f"origin: [{m.origin[0]:.6g}, {m.origin[1]:.6g}, {m.origin[2]:.6g}]\n"
-        f"negate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\n")
+        f"negate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\n"
+    )
     return out_yaml, out_pgm
 
 
@@ -187,8 +192,7 @@ def write_trajectory_tum(poses, path: str | Path) -> Path:
     tools (evo, the TUM RGB-D benchmark's scripts) read: ``t x y z qx qy qz qw`` per line,
     z 0 and the yaw as a quaternion about z."""
     path = Path(path)
-    lines = [f"{t:.6f} {x:.6f} {y:.6f} 0 0 0 {math.sin(yaw / 2):.9f} {math.cos(yaw / 2):.9f}"
-             for t, x, y, yaw in poses]
+    lines = [f"{t:.6f} {x:.6f} {y:.6f} 0 0 0 {math.sin(yaw / 2):.9f} {math.cos(yaw / 2):.9f}" for t, x, y, yaw in poses]
     path.write_text("# t x y z qx qy qz qw: the SLAM keyframes in the map frame\n" + "\n".join(lines) + "\n")
     return path
 

@@ -13,6 +13,7 @@ scan, stamped ``transform_tolerance`` ahead as AMCL does.
 The mapping itself is :class:`navstack.slam.Slam`; this node only feeds it and publishes.
 :class:`navstack.stack.NavStack` makes it (``start_mapping``) and offers its actors.
 """
+
 from __future__ import annotations
 
 import math
@@ -35,8 +36,8 @@ from .slam import Slam, SlamParams
 from .tf import TF, TfListener, TransformError, planar_transform
 
 BASE_FRAME = "base_footprint"
-MAP_PERIOD = 1.0             # [s] between /map messages
-TRANSFORM_TOLERANCE = 0.2    # [s] map -> odom is stamped this far ahead
+MAP_PERIOD = 1.0  # [s] between /map messages
+TRANSFORM_TOLERANCE = 0.2  # [s] map -> odom is stamped this far ahead
 
 
 class MappingError(ActorbtError):
@@ -54,15 +55,20 @@ class Mapper(SubSystem):
         imu_topic: the IMU whose heading turns the odometry; None: the wheels' alone
     """
 
-    def __init__(self, start_pose: tuple = (0.0, 0.0, 0.0), map_period: float = MAP_PERIOD,
-                 slam: dict | None = None, imu_topic: str | None = IMU_TOPIC) -> None:
+    def __init__(
+        self,
+        start_pose: tuple = (0.0, 0.0, 0.0),
+        map_period: float = MAP_PERIOD,
+        slam: dict | None = None,
+        imu_topic: str | None = IMU_TOPIC,
+    ) -> None:
         super().__init__()
         self._start = tuple(float(v) for v in start_pose)
         self._period = float(map_period)
         self._slam_args = dict(slam or {})
         self._lock = threading.RLock()
         self.slam: Slam | None = None
-        self._odom = OdomHistory()              # fused poses (see GyroOdometry)
+        self._odom = OdomHistory()  # fused poses (see GyroOdometry)
         self.odometry = GyroOdometry()
         self._map_sent = -math.inf
         self._frozen = False
@@ -70,7 +76,7 @@ class Mapper(SubSystem):
         bus = self.runtime.bus
         self._map_pub = bus.publisher("/map", OccupancyGrid, "latched")
         self._tf_pub = bus.publisher(TF, TFMessage, 100)
-        self.tf = TfListener(bus, children=())     # /tf_static only: the laser's mounting
+        self.tf = TfListener(bus, children=())  # /tf_static only: the laser's mounting
         self._subs = [
             bus.subscribe("/odom", Odometry, self._on_odom, 50),
             bus.subscribe("/scan", LaserScan, self._on_scan, "sensor"),
@@ -99,7 +105,7 @@ class Mapper(SubSystem):
     def _on_initial_pose(self, msg: PoseWithCovarianceStamped) -> None:
         p = msg.pose.pose
         with self._lock:
-            if self.slam is None:           # the map frame is fixed by the first scan
+            if self.slam is None:  # the map frame is fixed by the first scan
                 self._start = (p.position.x, p.position.y, yaw_of(p.orientation))
 
     def _on_scan(self, msg: LaserScan) -> None:
@@ -114,25 +120,31 @@ class Mapper(SubSystem):
                 try:
                     laser = self.tf.pose(BASE_FRAME, msg.header.frame_id)
                 except TransformError:
-                    return                  # wait for /tf_static
-                self.slam = Slam(SlamParams(**{**self._slam_args, "sensor_offset": laser,
-                                                "initial_pose": self._start}))
-                self._map_sent = t     # the first map after a period of scans: one scan
+                    return  # wait for /tf_static
+                self.slam = Slam(SlamParams(**{**self._slam_args, "sensor_offset": laser, "initial_pose": self._start}))
+                self._map_sent = t  # the first map after a period of scans: one scan
                 #                        alone leaves the floor unknown (a free cell needs a few)
             ranges = np.asarray(msg.ranges, dtype=float)
             angles = msg.angle_min + msg.angle_increment * np.arange(ranges.size)
-            self.slam.add(odom, ranges, angles, msg.range_max, t, range_min=msg.range_min,
-                          gyro=self.odometry.gyro_heading)
+            self.slam.add(
+                odom, ranges, angles, msg.range_max, t, range_min=msg.range_min, gyro=self.odometry.gyro_heading
+            )
             self.scans += 1
             self._send_tf(t)
             if t - self._map_sent >= self._period:
                 self.publish_map(t)
 
     def _send_tf(self, t: float) -> None:
-        assert self.slam is not None            # sent after a scan went into it
-        self._tf_pub.publish(TFMessage(transforms=[
-            planar_transform("map", "odom", self.odometry.map_to_wheel_odom(self.slam.map_to_odom()),
-                             t + TRANSFORM_TOLERANCE)]))
+        assert self.slam is not None  # sent after a scan went into it
+        self._tf_pub.publish(
+            TFMessage(
+                transforms=[
+                    planar_transform(
+                        "map", "odom", self.odometry.map_to_wheel_odom(self.slam.map_to_odom()), t + TRANSFORM_TOLERANCE
+                    )
+                ]
+            )
+        )
 
     def map_msg(self) -> OccupancyGrid | None:
         """The map so far as a nav_msgs/OccupancyGrid (None before the first scan)."""
@@ -143,7 +155,7 @@ class Mapper(SubSystem):
         with self._lock:
             if self.slam is None:
                 return
-            msg = self.slam.map(fresh=t is None).to_msg("map")     # while mapping: rebuilt now and then
+            msg = self.slam.map(fresh=t is None).to_msg("map")  # while mapping: rebuilt now and then
             if t is not None:
                 sec, nsec = divmod(int(round(t * 1e9)), 1_000_000_000)
                 msg.header.stamp.sec, msg.header.stamp.nanosec = sec, nsec
@@ -174,20 +186,30 @@ class Mapper(SubSystem):
         except OSError as e:
             raise MappingError(f"cannot write the map to {out}: {e}") from None
         length = sum(math.dist(a[1:3], b[1:3]) for a, b in zip(traj, traj[1:]))
-        return {"yaml": str(yaml_path), "pgm": str(pgm_path), "trajectory": str(tum_path), "width": occ.width,
-                "height": occ.height, "resolution": occ.resolution, "keyframes": len(traj),
-                "travelled": round(length, 2)}
+        return {
+            "yaml": str(yaml_path),
+            "pgm": str(pgm_path),
+            "trajectory": str(tum_path),
+            "width": occ.width,
+            "height": occ.height,
+            "resolution": occ.resolution,
+            "keyframes": len(traj),
+            "travelled": round(length, 2),
+        }
 
     def status(self) -> dict:
         """How the mapping is doing: scans taken, keyframes, loop closures, the pose
         [x m, y m, yaw rad] in the map frame, and whether it is frozen."""
         with self._lock:
             if self.slam is None:
-                return {"scans": self.scans, "keyframes": 0, "loop_closures": 0, "pose": None,
-                        "frozen": self._frozen}
-            return {"scans": self.scans, "keyframes": len(self.slam.trajectory()),
-                    "loop_closures": int(self.slam.loop_closures),
-                    "pose": [round(float(v), 4) for v in self.slam.pose()], "frozen": self._frozen}
+                return {"scans": self.scans, "keyframes": 0, "loop_closures": 0, "pose": None, "frozen": self._frozen}
+            return {
+                "scans": self.scans,
+                "keyframes": len(self.slam.trajectory()),
+                "loop_closures": int(self.slam.loop_closures),
+                "pose": [round(float(v), 4) for v in self.slam.pose()],
+                "frozen": self._frozen,
+            }
 
     def stop(self) -> list[float]:
         """Freeze the map: no more scans go in, /map keeps the last one (as map_server

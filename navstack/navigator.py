@@ -37,6 +37,7 @@ A newer goal preempts the running one, which is aborted. Only ``/scan``, ``/map`
 ``/perceived_obstacles``, the depth camera (during a goal: a simulated camera renders only
 while someone subscribes) and tf are read; only the base's velocity command (:data:`BASE_COMMAND`) is commanded.
 """
+
 from __future__ import annotations
 
 import logging
@@ -75,21 +76,34 @@ PERCEIVED = "/perceived_obstacles"
 # error codes: Jazzy's NavigateToPose defines only NONE; bt_navigator reports the code of
 # the node that failed, from ComputePathToPose (2xx) and FollowPath (1xx)
 NONE = 0
-FOLLOW_UNKNOWN, FOLLOW_TF_ERROR, PATIENCE_EXCEEDED, FAILED_TO_MAKE_PROGRESS, CONTROLLER_TIMED_OUT = \
-    100, 102, 104, 105, 107
-PLAN_UNKNOWN, PLAN_TF_ERROR, START_OUTSIDE_MAP, GOAL_OUTSIDE_MAP, START_OCCUPIED, GOAL_OCCUPIED, \
-    NO_VALID_PATH = 200, 202, 203, 204, 205, 206, 208
+FOLLOW_UNKNOWN, FOLLOW_TF_ERROR, PATIENCE_EXCEEDED, FAILED_TO_MAKE_PROGRESS, CONTROLLER_TIMED_OUT = (
+    100,
+    102,
+    104,
+    105,
+    107,
+)
+PLAN_UNKNOWN, PLAN_TF_ERROR, START_OUTSIDE_MAP, GOAL_OUTSIDE_MAP, START_OCCUPIED, GOAL_OCCUPIED, NO_VALID_PATH = (
+    200,
+    202,
+    203,
+    204,
+    205,
+    206,
+    208,
+)
 
 
 @dataclass
 class NavigatorParams:
     """The navigator's parameters (units: m, rad, s)."""
-    robot_radius: float = 0.20          # footprint radius the map is inflated by
-    inflation_radius: float = 0.45      # where the inflation cost falls to 0
-    cost_weight: float = 3.0            # how much the planner avoids the inflated band
-    max_speed: float = 0.22             # [m/s] (TurtleBot3 Waffle: 0.26)
-    max_turn: float = 1.2               # [rad/s] (TurtleBot3 Waffle: 1.82)
-    lookahead: float = 0.25             # pure-pursuit look-ahead distance
+
+    robot_radius: float = 0.20  # footprint radius the map is inflated by
+    inflation_radius: float = 0.45  # where the inflation cost falls to 0
+    cost_weight: float = 3.0  # how much the planner avoids the inflated band
+    max_speed: float = 0.22  # [m/s] (TurtleBot3 Waffle: 0.26)
+    max_turn: float = 1.2  # [rad/s] (TurtleBot3 Waffle: 1.82)
+    lookahead: float = 0.25  # pure-pursuit look-ahead distance
     controller_frequency: float = 20.0  # [Hz] at most (Nav2's default); a control step runs on
     #                                     the odometry's transform on /tf: 15 Hz on a 30 Hz one
     # The goal checker. Nav2's defaults are 0.25 m / 0.25 rad; the mission's goals are
@@ -99,27 +113,27 @@ class NavigatorParams:
     xy_goal_tolerance: float = 0.04
     yaw_goal_tolerance: float = 0.035
     # obstacles on /scan
-    collision_radius: float = 0.17      # a beam this close to the path ahead is in the way
-    collision_lookahead: float = 0.45   # [m] of path ahead that is checked
-    collision_min_points: int = 2       # beams needed to call it an obstacle
-    mapped_distance: float = 0.08       # a beam ending this close to a mapped obstacle is it
-    obstacle_wait: float = 1.0          # [s] stand still before planning around it
-    max_recoveries: int = 3             # replans around obstacles and back-ups per goal
-    self_box: tuple = (-0.23, 0.10, 0.18)   # x_min, x_max, |y| max in base_footprint:
+    collision_radius: float = 0.17  # a beam this close to the path ahead is in the way
+    collision_lookahead: float = 0.45  # [m] of path ahead that is checked
+    collision_min_points: int = 2  # beams needed to call it an obstacle
+    mapped_distance: float = 0.08  # a beam ending this close to a mapped obstacle is it
+    obstacle_wait: float = 1.0  # [s] stand still before planning around it
+    max_recoveries: int = 3  # replans around obstacles and back-ups per goal
+    self_box: tuple = (-0.23, 0.10, 0.18)  # x_min, x_max, |y| max in base_footprint:
     #                                     beams ending there hit the robot or what it holds
     # obstacles the depth camera sees below the scan (empty topic: none)
     depth_topic: str = "/camera/depth/image_raw"
     camera_info_topic: str = "/camera/camera_info"
-    depth_period: float = 0.5           # [s] between the depth images taken (0: every one)
+    depth_period: float = 0.5  # [s] between the depth images taken (0: every one)
     depth: DepthObstacleParams = field(default_factory=DepthObstacleParams)
-    backup_distance: float = 0.15       # start inside the inflation: back up this far
-    escape_distance: float = 0.3        # or else leave it through a free cell this near [m]
+    backup_distance: float = 0.15  # start inside the inflation: back up this far
+    escape_distance: float = 0.3  # or else leave it through a free cell this near [m]
     backup_speed: float = 0.08
     # patience
-    tf_timeout: float = 5.0             # [s] without map -> base_footprint: abort
-    progress_radius: float = 0.1        # move this far ...
-    progress_time: float = 12.0         # ... within this long, or abort
-    time_allowance: float = 20.0        # [s] plus 3 x the path's length at max_speed
+    tf_timeout: float = 5.0  # [s] without map -> base_footprint: abort
+    progress_radius: float = 0.1  # move this far ...
+    progress_time: float = 12.0  # ... within this long, or abort
+    time_allowance: float = 20.0  # [s] plus 3 x the path's length at max_speed
     feedback_period: float = 0.2
 
 
@@ -148,10 +162,10 @@ def cloud_points(msg: PointCloud2) -> np.ndarray:
     if "x" not in offs or "y" not in offs or msg.point_step <= 0:
         return np.zeros((0, 2))
     n = msg.width * msg.height
-    raw = np.frombuffer(bytes(msg.data), np.uint8)[:n * msg.point_step].reshape(n, msg.point_step)
+    raw = np.frombuffer(bytes(msg.data), np.uint8)[: n * msg.point_step].reshape(n, msg.point_step)
     dt = np.dtype(">f4" if msg.is_bigendian else "<f4")
-    x = raw[:, offs["x"]:offs["x"] + 4].copy().view(dt).ravel()
-    y = raw[:, offs["y"]:offs["y"] + 4].copy().view(dt).ravel()
+    x = raw[:, offs["x"] : offs["x"] + 4].copy().view(dt).ravel()
+    y = raw[:, offs["y"] : offs["y"] + 4].copy().view(dt).ravel()
     return np.column_stack([x, y]).astype(float)
 
 
@@ -198,7 +212,7 @@ def path_ahead(path, seg: int, here, length: float) -> list:
     t = max(0.0, min(1.0, ((here[0] - ax) * dx + (here[1] - ay) * dy) / L2))
     out = [tuple(here), (ax + t * dx, ay + t * dy)]
     left = length
-    for p in path[seg + 1:]:
+    for p in path[seg + 1 :]:
         d = math.dist(out[-1], p)
         if d >= left:
             f = left / d if d > 0 else 0.0
@@ -229,28 +243,29 @@ class _Goal:
 
     def __init__(self, handle, pose, now: float) -> None:
         self.handle = handle
-        self.goal = pose                    # (x, y, yaw), map frame
+        self.goal = pose  # (x, y, yaw), map frame
         self.started = now
-        self.phase = "plan"                 # plan, follow, turn, backup
+        self.phase = "plan"  # plan, follow, turn, backup
         self.path: list = []
         self.seg = 0
         self.deadline = math.inf
         self.recoveries = 0
         self.backups = 0
-        self.marks = np.zeros((0, 2))       # unmapped scan points planned around
-        self.pose: Pose | None = None       # the newest map -> base_footprint
-        self.progress: tuple[Pose, float] | None = None   # (pose, time) the progress is measured from
+        self.marks = np.zeros((0, 2))  # unmapped scan points planned around
+        self.pose: Pose | None = None  # the newest map -> base_footprint
+        self.progress: tuple[Pose, float] | None = None  # (pose, time) the progress is measured from
         self.blocked_since: float | None = None
         self.blocked_at: tuple[float, float] | None = None
-        self.checked: tuple[int, int] | None = None   # (scan, path) the obstacle check last ran on
-        self.obstacle = np.zeros((0, 2))    # ... and what it found
+        self.checked: tuple[int, int] | None = None  # (scan, path) the obstacle check last ran on
+        self.obstacle = np.zeros((0, 2))  # ... and what it found
         self.backup_from: Pose | None = None
         self.feedback_at = -math.inf
-        self.ticked = -math.inf             # when the last control step ran
+        self.ticked = -math.inf  # when the last control step ran
 
 
 class _Stats(TypedDict):
     """The goals' counts and the last abort's reason (navigator_status)."""
+
     goals: int
     succeeded: int
     aborted: int
@@ -270,25 +285,32 @@ class Navigator(SubSystem):
         for key, value in (params or {}).items():
             if key not in {f.name for f in fields(p)}:
                 raise ValueError(f"unknown navigator parameter {key!r}")
-            if key == "depth" and isinstance(value, dict):     # from a configuration file
+            if key == "depth" and isinstance(value, dict):  # from a configuration file
                 value = DepthObstacleParams(**value)
             setattr(p, key, value)
         bus = self.runtime.bus
         self.tf = TfListener(bus, on_tf=self._on_tf)
         self._cmd = bus.publisher(BASE_COMMAND, TwistStamped)
         self._grid: OccupancyGrid | None = None
-        self._map_key: tuple[int, int, float, float, float, int] | None = None   # size, resolution, origin, data
+        self._map_key: tuple[int, int, float, float, float, int] | None = None  # size, resolution, origin, data
         self._perceived = np.zeros((0, 2))
-        self._planners: dict = {}           # marks key -> GridPlanner
+        self._planners: dict = {}  # marks key -> GridPlanner
         self._goal: _Goal | None = None
-        self._scan_pts: np.ndarray | None = None   # the newest scan's beams, map frame
-        self._scan_seq = 0                          # scans (and depth images) received
-        self._depth_pts = np.zeros((0, 2))          # the newest depth image's obstacles, map frame
-        self._depth_subs: list = []                 # the depth camera's, while a goal runs
+        self._scan_pts: np.ndarray | None = None  # the newest scan's beams, map frame
+        self._scan_seq = 0  # scans (and depth images) received
+        self._depth_pts = np.zeros((0, 2))  # the newest depth image's obstacles, map frame
+        self._depth_subs: list = []  # the depth camera's, while a goal runs
         self._camera_info: CameraInfo | None = None
         self.last_path: BasePath | None = None
-        self.stats: _Stats = {"goals": 0, "succeeded": 0, "aborted": 0, "canceled": 0, "recoveries": 0,
-                              "obstacle_stops": 0, "last_error": ""}
+        self.stats: _Stats = {
+            "goals": 0,
+            "succeeded": 0,
+            "aborted": 0,
+            "canceled": 0,
+            "recoveries": 0,
+            "obstacle_stops": 0,
+            "last_error": "",
+        }
         self._subs = [
             bus.subscribe("/map", OccupancyGridMsg, self._on_map, "latched"),
             bus.subscribe("/scan", LaserScan, self._on_scan, "sensor"),
@@ -313,15 +335,24 @@ class Navigator(SubSystem):
         canceled, recoveries (replans around obstacles, back-ups), stops for obstacles
         on the scan, the last abort's reason, and the running goal [x, y, yaw] (or None)."""
         g = self._goal
-        return {**self.stats, "goal": list(g.goal) if g is not None else None,
-                "phase": g.phase if g is not None else None}
+        return {
+            **self.stats,
+            "goal": list(g.goal) if g is not None else None,
+            "phase": g.phase if g is not None else None,
+        }
 
     # -- inputs ------------------------------------------------------------------------
     def _on_map(self, msg: OccupancyGridMsg) -> None:
         info = msg.info
         data = np.asarray(msg.data, dtype=np.int8)
-        key = (info.width, info.height, info.resolution, info.origin.position.x,
-               info.origin.position.y, hash(data.tobytes()))
+        key = (
+            info.width,
+            info.height,
+            info.resolution,
+            info.origin.position.x,
+            info.origin.position.y,
+            hash(data.tobytes()),
+        )
         if key != self._map_key:
             self._map_key = key
             self._grid = OccupancyGrid.from_msg(msg)
@@ -381,7 +412,8 @@ class Navigator(SubSystem):
             bus = self.runtime.bus
             self._depth_subs = [
                 bus.subscribe(self.params.camera_info_topic, CameraInfo, self._on_camera_info, "sensor"),
-                bus.subscribe(self.params.depth_topic, Image, self._on_depth, "sensor")]
+                bus.subscribe(self.params.depth_topic, Image, self._on_depth, "sensor"),
+            ]
         elif not on and self._depth_subs:
             for sub in self._depth_subs:
                 sub.close()
@@ -401,7 +433,7 @@ class Navigator(SubSystem):
         if info is None or msg.encoding != "32FC1" or self._goal is None:
             return
         dt = np.dtype(">f4" if msg.is_bigendian else "<f4")
-        raw = np.frombuffer(bytes(msg.data), np.uint8).reshape(msg.height, msg.step)[:, :msg.width * 4]
+        raw = np.frombuffer(bytes(msg.data), np.uint8).reshape(msg.height, msg.step)[:, : msg.width * 4]
         depth = raw.copy().view(dt).reshape(msg.height, msg.width)
         poses = self._sensor_poses(msg.header, msg.header.frame_id or info.header.frame_id)
         if poses is None:
@@ -431,7 +463,7 @@ class Navigator(SubSystem):
         planner = self._planners.get(key)
         if planner is None:
             grid = self._grid
-            assert grid is not None             # callers plan only once a map has come
+            assert grid is not None  # callers plan only once a map has come
             pts = self._perceived if extra is None else np.vstack([self._perceived, extra])
             if len(pts):
                 data = grid.data.copy()
@@ -441,8 +473,9 @@ class Navigator(SubSystem):
                 data[rows[inside], cols[inside]] = 100
                 grid = OccupancyGrid(data, grid.resolution, grid.origin)
             p = self.params
-            planner = GridPlanner(inflate(grid, p.robot_radius, inflation_radius=p.inflation_radius),
-                                  cost_weight=p.cost_weight)
+            planner = GridPlanner(
+                inflate(grid, p.robot_radius, inflation_radius=p.inflation_radius), cost_weight=p.cost_weight
+            )
             if len(self._planners) > 8:
                 self._planners.clear()
             self._planners[key] = planner
@@ -457,7 +490,7 @@ class Navigator(SubSystem):
 
     def _plan(self, g: _Goal) -> None:
         p = self.params
-        assert g.pose is not None               # _tick has set it
+        assert g.pose is not None  # _tick has set it
         planner = self._planner(g.marks)
         path = planner.plan(g.pose[:2], g.goal[:2])
         if path.failure is FailureReason.START_INVALID and "outside" not in path.message:
@@ -492,9 +525,13 @@ class Navigator(SubSystem):
         elif path.failure is FailureReason.GOAL_INVALID:
             self._abort(g, GOAL_OUTSIDE_MAP if "outside" in why else GOAL_OCCUPIED, f"no path: {why}")
         elif len(g.marks):
-            assert g.blocked_at is not None     # marks are made where the robot was blocked
-            self._abort(g, NO_VALID_PATH, f"no path around an obstacle that is not on the map, "
-                                          f"near ({g.blocked_at[0]:.2f}, {g.blocked_at[1]:.2f}): {why}")
+            assert g.blocked_at is not None  # marks are made where the robot was blocked
+            self._abort(
+                g,
+                NO_VALID_PATH,
+                f"no path around an obstacle that is not on the map, "
+                f"near ({g.blocked_at[0]:.2f}, {g.blocked_at[1]:.2f}): {why}",
+            )
         elif path.failure is FailureReason.NO_PATH:
             self._abort(g, NO_VALID_PATH, why)
         else:
@@ -511,8 +548,11 @@ class Navigator(SubSystem):
         dx, dy = pts[:, 0] - x, pts[:, 1] - y
         fwd, side = c * dx + s * dy, -s * dx + c * dy
         x0 = self.params.self_box[0]
-        behind = (fwd < x0 + 0.02) & (fwd > x0 - self.params.backup_distance - 0.05) \
+        behind = (
+            (fwd < x0 + 0.02)
+            & (fwd > x0 - self.params.backup_distance - 0.05)
             & (np.abs(side) < self.params.collision_radius)
+        )
         return not behind.any()
 
     # -- goals -------------------------------------------------------------------------
@@ -587,7 +627,7 @@ class Navigator(SubSystem):
     # -- control -----------------------------------------------------------------------
     def _tick(self) -> None:
         g = self._goal
-        assert g is not None                    # _on_tf ticks only while a goal runs
+        assert g is not None  # _on_tf ticks only while a goal runs
         p = self.params
         now = self.runtime.now()
         try:
@@ -615,7 +655,7 @@ class Navigator(SubSystem):
             self._feedback(g, now)
 
     def _backup(self, g: _Goal, now: float) -> None:
-        assert g.pose is not None               # _tick has set it
+        assert g.pose is not None  # _tick has set it
         try:
             odom = self.tf.pose(ODOM_FRAME, BASE_FRAME)
         except TransformError:
@@ -632,7 +672,7 @@ class Navigator(SubSystem):
 
     def _follow(self, g: _Goal, now: float) -> None:
         p = self.params
-        assert g.pose is not None and g.progress is not None   # _tick's, and _plan's with the path
+        assert g.pose is not None and g.progress is not None  # _tick's, and _plan's with the path
         x, y, yaw = g.pose
         gx, gy = g.goal[:2]
         dist_goal = math.hypot(gx - x, gy - y)
@@ -642,15 +682,17 @@ class Navigator(SubSystem):
             self._turn(g, now)
             return
         if now > g.deadline:
-            self._abort(g, CONTROLLER_TIMED_OUT,
-                        f"timed out {dist_goal:.2f} m from ({gx:.2f}, {gy:.2f})")
+            self._abort(g, CONTROLLER_TIMED_OUT, f"timed out {dist_goal:.2f} m from ({gx:.2f}, {gy:.2f})")
             return
         ref, t_ref = g.progress
         if math.hypot(x - ref[0], y - ref[1]) >= p.progress_radius:
             g.progress = (g.pose, now)
         elif now - t_ref > p.progress_time and g.blocked_since is None:
-            self._abort(g, FAILED_TO_MAKE_PROGRESS,
-                        f"no progress for {p.progress_time:g} s, {dist_goal:.2f} m from ({gx:.2f}, {gy:.2f})")
+            self._abort(
+                g,
+                FAILED_TO_MAKE_PROGRESS,
+                f"no progress for {p.progress_time:g} s, {dist_goal:.2f} m from ({gx:.2f}, {gy:.2f})",
+            )
             return
         g.seg, (tx, ty) = lookahead_point(g.path, g.seg, (x, y), p.lookahead)
         if self._blocked(g, now):
@@ -668,7 +710,7 @@ class Navigator(SubSystem):
         plans around it once it has stayed there for obstacle_wait."""
         p = self.params
         key = (self._scan_seq, id(g.path))
-        if g.checked != key:                # once a scan: the robot moves 4 cm meanwhile
+        if g.checked != key:  # once a scan: the robot moves 4 cm meanwhile
             g.checked, g.obstacle = key, self._obstacle_points(g)
         pts = g.obstacle
         if len(pts) < p.collision_min_points:
@@ -687,9 +729,12 @@ class Navigator(SubSystem):
         cx, cy = pts.mean(axis=0)
         g.blocked_at = (float(cx), float(cy))
         if g.recoveries >= p.max_recoveries:
-            self._abort(g, PATIENCE_EXCEEDED,
-                        f"blocked by an obstacle that is not on the map, near "
-                        f"({g.blocked_at[0]:.2f}, {g.blocked_at[1]:.2f}), after {g.recoveries} recoveries")
+            self._abort(
+                g,
+                PATIENCE_EXCEEDED,
+                f"blocked by an obstacle that is not on the map, near "
+                f"({g.blocked_at[0]:.2f}, {g.blocked_at[1]:.2f}), after {g.recoveries} recoveries",
+            )
             return True
         g.recoveries += 1
         self.stats["recoveries"] += 1
@@ -708,7 +753,7 @@ class Navigator(SubSystem):
             pts = np.vstack([pts, self._depth_pts])
         if not len(pts):
             return np.zeros((0, 2))
-        assert g.pose is not None               # _tick has set it
+        assert g.pose is not None  # _tick has set it
         x, y, _ = g.pose
         return pts[np.hypot(pts[:, 0] - x, pts[:, 1] - y) < radius]
 
@@ -733,7 +778,7 @@ class Navigator(SubSystem):
         near = self._near(g, p.collision_lookahead + p.collision_radius)
         if len(near) < p.collision_min_points:
             return near[:0]
-        assert g.pose is not None               # _tick has set it
+        assert g.pose is not None  # _tick has set it
         line = path_ahead(g.path, g.seg, g.pose[:2], p.collision_lookahead)
         hits = near[distance_to_polyline(near, line) < p.collision_radius]
         if len(hits) < p.collision_min_points:
@@ -742,7 +787,7 @@ class Navigator(SubSystem):
 
     def _turn(self, g: _Goal, now: float) -> None:
         p = self.params
-        assert g.pose is not None               # _tick has set it
+        assert g.pose is not None  # _tick has set it
         err = _wrap(g.goal[2] - g.pose[2])
         if abs(err) < p.yaw_goal_tolerance:
             self._succeed(g)
@@ -755,7 +800,7 @@ class Navigator(SubSystem):
 
     def _feedback(self, g: _Goal, now: float) -> None:
         fb = NavigateToPose.Feedback()
-        assert g.pose is not None               # _tick has set it
+        assert g.pose is not None  # _tick has set it
         x, y, yaw = g.pose
         fb.current_pose.header.frame_id = GLOBAL_FRAME
         to_stamp(now, fb.current_pose.header.stamp)
@@ -772,7 +817,6 @@ class Navigator(SubSystem):
         fb.estimated_time_remaining = _duration(remaining / self.params.max_speed)
         fb.number_of_recoveries = int(g.recoveries)
         g.handle.publish_feedback(fb)
-
 
 
 def plan_out_of(planner: GridPlanner, start, goal, escape_distance: float) -> BasePath | None:
@@ -803,10 +847,12 @@ def plan_out_of(planner: GridPlanner, start, goal, escape_distance: float) -> Ba
             continue
         rest = planner.plan(via, goal)
         if rest.ok:
-            log.info("start (%.2f, %.2f) is inside the inflation: leaving through (%.2f, %.2f)",
-                     start[0], start[1], *via)
-            return replace(rest, waypoints=((float(start[0]), float(start[1])),) + rest.waypoints,
-                           length=rest.length + float(d[i]))
+            log.info(
+                "start (%.2f, %.2f) is inside the inflation: leaving through (%.2f, %.2f)", start[0], start[1], *via
+            )
+            return replace(
+                rest, waypoints=((float(start[0]), float(start[1])),) + rest.waypoints, length=rest.length + float(d[i])
+            )
     return None
 
 
@@ -820,5 +866,4 @@ def _never_closer(planner: GridPlanner, a, b) -> bool:
     return bool(clear[0] > 0 and clear.min() >= min(clear[0], planner.costmap.robot_radius) - 1e-6)
 
 
-__all__ = ["ACTION", "PERCEIVED", "Navigator", "NavigatorParams", "cloud_points", "lookahead_point",
-           "plan_out_of"]
+__all__ = ["ACTION", "PERCEIVED", "Navigator", "NavigatorParams", "cloud_points", "lookahead_point", "plan_out_of"]

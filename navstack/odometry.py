@@ -1,5 +1,6 @@
 """Odometry as the navstack nodes keep it: a short history of (time, pose) read from
 ``/odom``, interpolated at a scan's stamp, and the message fields they need."""
+
 from __future__ import annotations
 
 import bisect
@@ -37,7 +38,7 @@ class OdomHistory:
     """The latest ``maxlen`` odometry poses (x, y, yaw) by stamp."""
 
     def __init__(self, maxlen: int = 200) -> None:
-        self.entries: deque = deque(maxlen=maxlen)   # (t, (x, y, yaw))
+        self.entries: deque = deque(maxlen=maxlen)  # (t, (x, y, yaw))
 
     def __len__(self) -> int:
         return len(self.entries)

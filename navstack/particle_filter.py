@@ -20,6 +20,7 @@
 
 All randomness comes from one ``numpy.random.Generator`` (``seed``).
 """
+
 from __future__ import annotations
 
 import math
@@ -27,7 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy import ndimage
-from scipy.special import ndtri   # the normal quantile (scipy.stats costs ~1.5 s to import)
+from scipy.special import ndtri  # the normal quantile (scipy.stats costs ~1.5 s to import)
 
 from .likelihood_field import LaserModelParams, LikelihoodField
 from .map_io import OccupancyMap
@@ -48,39 +49,39 @@ def wrap1(a: float) -> float:
 class FilterParams:
     min_particles: int = 500
     max_particles: int = 2000
-    kld_err: float = 0.05            # pf_err
-    kld_z: float = 0.99              # pf_z, a probability (its normal quantile is used)
+    kld_err: float = 0.05  # pf_err
+    kld_z: float = 0.99  # pf_z, a probability (its normal quantile is used)
     # TB3's nav2 config has 0.2 each (noise std 45 % of the motion); 0.05 (22 %) still
     # covers 2 % odometry errors with room and halves the worst error (bench_localisation)
-    alpha1: float = 0.05             # rotation noise from rotation
-    alpha2: float = 0.05             # rotation noise from translation
-    alpha3: float = 0.05             # translation noise from translation
-    alpha4: float = 0.05             # translation noise from rotation
+    alpha1: float = 0.05  # rotation noise from rotation
+    alpha2: float = 0.05  # rotation noise from translation
+    alpha3: float = 0.05  # translation noise from translation
+    alpha4: float = 0.05  # translation noise from rotation
     # where the odometry's heading is a gyro's (GyroOdometry: its bias taken off at each
     # stop, its scale within a few per cent), its turns are good to a few per cent and
     # driving straight hardly turns it: the rotation noises are these instead. The wheels'
     # 0.05 spread the headings by 13 degrees per metre, which on open floor, where the
     # lidar sees nothing to correct them, soon leaves the filter lost
-    gyro_alpha1: float = 0.005       # rotation noise from rotation (7 %)
-    gyro_alpha2: float = 0.001       # rotation noise from translation (1.8 deg per metre)
-    alpha_slow: float = 0.0          # recovery_alpha_slow (0: no random particles)
-    alpha_fast: float = 0.0          # recovery_alpha_fast
-    bin_size: tuple = (0.5, 0.5, math.radians(10))   # KLD and cluster bins (x, y, yaw)
-    free_clearance: float = 0.0      # random/uniform particles only where the map is this far from obstacles [m]
+    gyro_alpha1: float = 0.005  # rotation noise from rotation (7 %)
+    gyro_alpha2: float = 0.001  # rotation noise from translation (1.8 deg per metre)
+    alpha_slow: float = 0.0  # recovery_alpha_slow (0: no random particles)
+    alpha_fast: float = 0.0  # recovery_alpha_fast
+    bin_size: tuple = (0.5, 0.5, math.radians(10))  # KLD and cluster bins (x, y, yaw)
+    free_clearance: float = 0.0  # random/uniform particles only where the map is this far from obstacles [m]
     # scan-informed global localisation
-    search_spacing: float = 0.2      # candidate positions [m]
-    search_headings: int = 48        # candidate headings over a turn
+    search_spacing: float = 0.2  # candidate positions [m]
+    search_headings: int = 48  # candidate headings over a turn
     search_beams: int = 30
-    search_sigma: float = 0.15       # likelihood field sigma for the coarse search [m]
-    search_keep: int = 400           # best candidates seeded
-    search_uniform: float = 0.1      # share of seeded particles drawn uniformly instead
+    search_sigma: float = 0.15  # likelihood field sigma for the coarse search [m]
+    search_keep: int = 400  # best candidates seeded
+    search_uniform: float = 0.1  # share of seeded particles drawn uniformly instead
 
 
 @dataclass
 class Estimate:
-    pose: np.ndarray                 # (x, y, yaw) [m, m, rad]
-    cov: np.ndarray                  # 3x3
-    weight: float                    # share of the weight in the chosen cluster
+    pose: np.ndarray  # (x, y, yaw) [m, m, rad]
+    cov: np.ndarray  # 3x3
+    weight: float  # share of the weight in the chosen cluster
     clusters: int
 
     @property
@@ -95,10 +96,15 @@ class Estimate:
 class ParticleFilter:
     """Particles (N, 3) and their normalised weights over an :class:`OccupancyMap`."""
 
-    field: LikelihoodField           # made by set_map (from the laser model of the one before)
+    field: LikelihoodField  # made by set_map (from the laser model of the one before)
 
-    def __init__(self, occ_map: OccupancyMap, params: FilterParams | None = None,
-                 laser: LaserModelParams | None = None, seed: int | None = None):
+    def __init__(
+        self,
+        occ_map: OccupancyMap,
+        params: FilterParams | None = None,
+        laser: LaserModelParams | None = None,
+        seed: int | None = None,
+    ):
         self.params = params or FilterParams()
         self.rng = np.random.default_rng(seed)
         self._z = float(ndtri(self.params.kld_z))
@@ -122,8 +128,9 @@ class ParticleFilter:
         if len(self._free_xy) == 0:
             raise ValueError("the map has no free cell")
         # bin index bounds, from the map's corners
-        cx, cy = occ_map.to_world(np.array([0, occ_map.width, 0, occ_map.width]),
-                                  np.array([0, 0, occ_map.height, occ_map.height]))
+        cx, cy = occ_map.to_world(
+            np.array([0, occ_map.width, 0, occ_map.width]), np.array([0, 0, occ_map.height, occ_map.height])
+        )
         bx, by = self.params.bin_size[:2]
         self._bin_lo = (math.floor(cx.min() / bx) - 1, math.floor(cy.min() / by) - 1)
         self._bin_hi = (math.floor(cx.max() / bx) + 1, math.floor(cy.max() / by) + 1)
@@ -170,23 +177,22 @@ class ParticleFilter:
         c, s = np.cos(yaws)[:, None], np.sin(yaws)[:, None]
         bx = (c * beam_xy[None, :, 0] - s * beam_xy[None, :, 1]).astype(np.float32)  # (H, K)
         by = (s * beam_xy[None, :, 0] + c * beam_xy[None, :, 1]).astype(np.float32)
-        two_s2 = 2 * p.search_sigma ** 2
+        two_s2 = 2 * p.search_sigma**2
         lp = self.field.params
         floor = lp.z_rand / range_max
         scores = np.empty((len(x), h), dtype=np.float32)
         xf, yf = x.astype(np.float32), y.astype(np.float32)
         chunk = max(1, 400_000 // max(1, h * len(beam_xy)))
         for i in range(0, len(x), chunk):
-            ex = xf[i:i + chunk, None, None] + bx[None]
-            ey = yf[i:i + chunk, None, None] + by[None]
+            ex = xf[i : i + chunk, None, None] + bx[None]
+            ey = yf[i : i + chunk, None, None] + by[None]
             d = self.field.distance_at(ex, ey)
             pz = lp.z_hit * np.exp(-(d * d) / two_s2) + floor
-            scores[i:i + chunk] = np.log(pz).sum(axis=2)
+            scores[i : i + chunk] = np.log(pz).sum(axis=2)
         poses = np.column_stack([np.repeat(x, h), np.repeat(y, h), np.tile(yaws, len(x))])
         return poses, scores.ravel()
 
-    def global_localisation_informed(self, beam_xy: np.ndarray, range_max: float,
-                                     keep_share: float = 0.0) -> None:
+    def global_localisation_informed(self, beam_xy: np.ndarray, range_max: float, keep_share: float = 0.0) -> None:
         """Seed max_particles round the best poses of :meth:`global_search` (and a share
         uniformly), so that a kidnapped robot finds itself with one scan's evidence.
         ``keep_share`` of them are instead drawn from the current particles, so that a
@@ -200,9 +206,12 @@ class ParticleFilter:
         old = self.particles[self.rng.choice(len(self.particles), size=n_old, p=self.weights)] if n_old else None
         n_uni = int(round(p.search_uniform * n))
         pick = best[self.rng.integers(keep, size=n - n_uni - n_old)]
-        jitter = np.column_stack([
-            self.rng.normal(0, p.search_spacing / 2, size=(len(pick), 2)),
-            self.rng.normal(0, math.pi / p.search_headings, size=len(pick))])
+        jitter = np.column_stack(
+            [
+                self.rng.normal(0, p.search_spacing / 2, size=(len(pick), 2)),
+                self.rng.normal(0, math.pi / p.search_headings, size=len(pick)),
+            ]
+        )
         seeded = poses[pick] + jitter
         seeded[:, 2] = wrap(seeded[:, 2])
         parts = [seeded, self.uniform_poses(n_uni)] + ([old] if old is not None else [])
@@ -224,8 +233,7 @@ class ParticleFilter:
         pose[2] = wrap1(pose[2])
         return pose
 
-    def best_places(self, beam_xy: np.ndarray, range_max: float, k: int, near: float,
-                    near_yaw: float) -> np.ndarray:
+    def best_places(self, beam_xy: np.ndarray, range_max: float, k: int, near: float, near_yaw: float) -> np.ndarray:
         """Up to ``k`` poses (k, 3) where the beams fit the map best, at least ``near`` [m]
         or ``near_yaw`` [rad] apart: the best of :meth:`global_search`'s candidates, each
         refined (:meth:`refine`)."""
@@ -235,8 +243,9 @@ class ParticleFilter:
         while len(picked) < k and np.isfinite(scores).any():
             q = poses[int(np.argmax(scores))]
             picked.append(q)
-            same = (np.hypot(poses[:, 0] - q[0], poses[:, 1] - q[1]) <= near) \
-                & (np.abs(wrap(poses[:, 2] - q[2])) <= near_yaw)
+            same = (np.hypot(poses[:, 0] - q[0], poses[:, 1] - q[1]) <= near) & (
+                np.abs(wrap(poses[:, 2] - q[2])) <= near_yaw
+            )
             scores[same] = -np.inf
         return np.array([self.refine(q, beam_xy, range_max) for q in picked]).reshape(-1, 3)
 
@@ -257,9 +266,9 @@ class ParticleFilter:
         rot2 = wrap1(wrap1(new[2] - old[2]) - rot1)
         r1n = min(abs(rot1), abs(wrap1(rot1 - math.pi)))
         r2n = min(abs(rot2), abs(wrap1(rot2 - math.pi)))
-        sd_r1 = math.sqrt(alpha1 * r1n ** 2 + alpha2 * trans ** 2)
-        sd_t = math.sqrt(p.alpha3 * trans ** 2 + p.alpha4 * (r1n ** 2 + r2n ** 2))
-        sd_r2 = math.sqrt(alpha1 * r2n ** 2 + alpha2 * trans ** 2)
+        sd_r1 = math.sqrt(alpha1 * r1n**2 + alpha2 * trans**2)
+        sd_t = math.sqrt(p.alpha3 * trans**2 + p.alpha4 * (r1n**2 + r2n**2))
+        sd_r2 = math.sqrt(alpha1 * r2n**2 + alpha2 * trans**2)
         n = len(self.particles)
         noise = self.rng.standard_normal((n, 3))
         r1 = rot1 - sd_r1 * noise[:, 0]
@@ -297,7 +306,7 @@ class ParticleFilter:
         return max(0.0, 1.0 - self.w_fast / self.w_slow)
 
     def effective_size(self) -> float:
-        return float(1.0 / np.sum(self.weights ** 2))
+        return float(1.0 / np.sum(self.weights**2))
 
     # -- resampling ---------------------------------------------------------------------------
     def _bins(self, particles: np.ndarray) -> np.ndarray:
@@ -333,14 +342,14 @@ class ParticleFilter:
         u = (self.rng.random() + np.arange(m)) / m
         idx = np.searchsorted(cum, u, side="right")
         idx = np.minimum(idx, len(cum) - 1)
-        self.rng.shuffle(idx)             # a random order, so that any prefix is a fair draw
+        self.rng.shuffle(idx)  # a random order, so that any prefix is a fair draw
         new = self.particles[idx]
         share = self.random_share
         if share > 0:
             rnd = self.rng.random(m) < share
             if rnd.any():
                 new[rnd] = self.uniform_poses(int(rnd.sum()))
-            self.w_slow = self.w_fast = 0.0   # as AMCL: no spiral into randomness
+            self.w_slow = self.w_fast = 0.0  # as AMCL: no spiral into randomness
         # KLD: the first count c that exceeds the limit for the bins the first c fill
         keys = self._keys(self._bins(new))
         _, first = np.unique(keys, return_index=True)
@@ -358,12 +367,15 @@ class ParticleFilter:
     def clusters(self) -> np.ndarray:
         """Cluster label (0..C-1) of every particle: connected occupied bins."""
         bins = self._bins(self.particles)
-        shape = (self._bin_hi[0] - self._bin_lo[0] + 1, self._bin_hi[1] - self._bin_lo[1] + 1,
-                 int(math.ceil(TWO_PI / self.params.bin_size[2])))
+        shape = (
+            self._bin_hi[0] - self._bin_lo[0] + 1,
+            self._bin_hi[1] - self._bin_lo[1] + 1,
+            int(math.ceil(TWO_PI / self.params.bin_size[2])),
+        )
         occ = np.zeros(shape, dtype=bool)
         occ[bins[:, 0], bins[:, 1], bins[:, 2]] = True
         lab, nlab = ndimage.label(occ, structure=np.ones((3, 3, 3), dtype=bool))
-        if nlab > 1:   # the heading wraps round: join clusters across the last and first bins
+        if nlab > 1:  # the heading wraps round: join clusters across the last and first bins
             parent = np.arange(nlab + 1)
 
             def find(a):
@@ -371,6 +383,7 @@ class ParticleFilter:
                     parent[a] = parent[parent[a]]
                     a = parent[a]
                 return a
+
             first, last = lab[:, :, 0], lab[:, :, -1]
             for di in (-1, 0, 1):
                 for dj in (-1, 0, 1):

@@ -9,6 +9,7 @@ units 1/m^2 and 1/rad^2). The error of an edge is ``z^-1 * (X_i^-1 * X_j)`` as a
 ``scipy.optimize.least_squares`` and an analytic sparse Jacobian (each edge touches six
 parameters), node 0 (or every node in ``fixed``) held still: it fixes the gauge.
 """
+
 from __future__ import annotations
 
 import math
@@ -36,14 +37,14 @@ def compose(a, b) -> tuple:
 class Edge:
     i: int
     j: int
-    z: tuple                  # X_i^-1 X_j measured (x [m], y [m], yaw [rad])
-    info: np.ndarray          # (3, 3) information matrix
-    kind: str = "odom"        # odom, match, loop: for bookkeeping only
+    z: tuple  # X_i^-1 X_j measured (x [m], y [m], yaw [rad])
+    info: np.ndarray  # (3, 3) information matrix
+    kind: str = "odom"  # odom, match, loop: for bookkeeping only
 
 
 @dataclass
 class OptimizeResult:
-    cost_before: float        # 0.5 * sum of squared whitened errors
+    cost_before: float  # 0.5 * sum of squared whitened errors
     cost_after: float
     iterations: int
     success: bool
@@ -107,8 +108,9 @@ class PoseGraph:
         et = np.remainder(xj[:, 2] - xi[:, 2] - Z[:, 2] + np.pi, 2 * np.pi) - np.pi
         return np.column_stack([ex, ey, et]), (ci, si, cz, sz, dx, dy)
 
-    def optimize(self, max_iterations: int = 50, loss: str = "linear", f_scale: float = 3.0,
-                 tol: float = 1e-8) -> OptimizeResult:
+    def optimize(
+        self, max_iterations: int = 50, loss: str = "linear", f_scale: float = 3.0, tol: float = 1e-8
+    ) -> OptimizeResult:
         """Minimise the whitened errors over the free nodes (in place).
 
         Args:
@@ -122,11 +124,11 @@ class PoseGraph:
             return OptimizeResult(0.0, 0.0, 0, True)
         free = np.array([k for k in range(n) if k not in self.fixed], dtype=np.int64)
         col = -np.ones(n, dtype=np.int64)
-        col[free] = np.arange(len(free))                  # node -> its block of 3 columns
+        col[free] = np.arange(len(free))  # node -> its block of 3 columns
         Ei = np.array([e.i for e in self.edges])
         Ej = np.array([e.j for e in self.edges])
         Z = np.array([e.z for e in self.edges])
-        W = self._whiteners()                              # (E, 3, 3)
+        W = self._whiteners()  # (E, 3, 3)
         X0 = self.poses
 
         def unpack(v):
@@ -140,16 +142,16 @@ class PoseGraph:
 
         # the Jacobian's sparsity: rows 3e..3e+2 against the 3 columns of node i and of j
         E = len(self.edges)
-        rows_blk = (3 * np.arange(E))[:, None, None] + np.arange(3)[None, :, None]   # (E, 3, 1)
+        rows_blk = (3 * np.arange(E))[:, None, None] + np.arange(3)[None, :, None]  # (E, 3, 1)
 
         def jac(v):
             X = unpack(v)
             _, (ci, si, cz, sz, dx, dy) = self._errors(X, Ei, Ej, Z)
             # d(u)/d(t_j) = R_i^T ; d(u)/d(t_i) = -R_i^T ; d(u)/d(yaw_i) = dR_i^T/dyaw (t_j - t_i)
-            Rz = np.stack([np.stack([cz, sz], -1), np.stack([-sz, cz], -1)], -2)    # R_z^T (E, 2, 2)
-            RiT = np.stack([np.stack([ci, si], -1), np.stack([-si, ci], -1)], -2)   # R_i^T
-            dRiT = np.column_stack([-si * dx + ci * dy, -ci * dx - si * dy])   # (E, 2)
-            Jt_j = Rz @ RiT                                               # (E, 2, 2)
+            Rz = np.stack([np.stack([cz, sz], -1), np.stack([-sz, cz], -1)], -2)  # R_z^T (E, 2, 2)
+            RiT = np.stack([np.stack([ci, si], -1), np.stack([-si, ci], -1)], -2)  # R_i^T
+            dRiT = np.column_stack([-si * dx + ci * dy, -ci * dx - si * dy])  # (E, 2)
+            Jt_j = Rz @ RiT  # (E, 2, 2)
             Ji = np.zeros((E, 3, 3))
             Jj = np.zeros((E, 3, 3))
             Ji[:, :2, :2] = -Jt_j
@@ -161,20 +163,32 @@ class PoseGraph:
             data, rr, cc = [], [], []
             for blk, nodes in ((Ji, Ei), (Jj, Ej)):
                 c = col[nodes]
-                ok = c >= 0                                               # fixed nodes: no columns
+                ok = c >= 0  # fixed nodes: no columns
                 data.append(blk[ok].ravel())
                 rr.append(np.broadcast_to(rows_blk[ok], (ok.sum(), 3, 3)).ravel())
                 cc.append((3 * c[ok][:, None, None] + np.arange(3)[None, None, :]).repeat(3, 1).ravel())
-            return sparse.csr_matrix((np.concatenate(data), (np.concatenate(rr), np.concatenate(cc))),
-                                     shape=(3 * E, 3 * len(free)))
+            return sparse.csr_matrix(
+                (np.concatenate(data), (np.concatenate(rr), np.concatenate(cc))), shape=(3 * E, 3 * len(free))
+            )
 
         v0 = X0[free].ravel()
         cost0 = 0.5 * float(np.sum(fun(v0) ** 2))
         if len(free) == 0:
             return OptimizeResult(cost0, cost0, 0, True)
-        sol = least_squares(fun, v0, jac=jac, method="trf", loss=loss, f_scale=f_scale,
-                            ftol=tol, xtol=tol, gtol=tol, max_nfev=max_iterations, x_scale="jac",
-                            tr_solver="lsmr")
+        sol = least_squares(
+            fun,
+            v0,
+            jac=jac,
+            method="trf",
+            loss=loss,
+            f_scale=f_scale,
+            ftol=tol,
+            xtol=tol,
+            gtol=tol,
+            max_nfev=max_iterations,
+            x_scale="jac",
+            tr_solver="lsmr",
+        )
         X = unpack(sol.x)
         X[:, 2] = np.remainder(X[:, 2] + np.pi, 2 * np.pi) - np.pi
         self._poses = [tuple(map(float, p)) for p in X]

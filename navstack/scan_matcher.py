@@ -21,6 +21,7 @@ second moment with weights ``exp((score - best) / score_scale)``), plus the latt
 quantisation. :func:`icp` refines a pose off the lattice against reference points
 (point-to-line, lines fitted to the reference's neighbours).
 """
+
 from __future__ import annotations
 
 import math
@@ -36,12 +37,10 @@ def transform(pose, points: np.ndarray) -> np.ndarray:
     """(K, 2) points in the frame of ``pose`` (x [m], y [m], yaw [rad]) -> parent frame."""
     c, s = math.cos(pose[2]), math.sin(pose[2])
     pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
-    return np.column_stack([pose[0] + c * pts[:, 0] - s * pts[:, 1],
-                            pose[1] + s * pts[:, 0] + c * pts[:, 1]])
+    return np.column_stack([pose[0] + c * pts[:, 0] - s * pts[:, 1], pose[1] + s * pts[:, 0] + c * pts[:, 1]])
 
 
-def scan_points(ranges, angles, range_max: float, range_min: float = 0.0,
-                sensor_offset=(0.0, 0.0, 0.0)) -> np.ndarray:
+def scan_points(ranges, angles, range_max: float, range_min: float = 0.0, sensor_offset=(0.0, 0.0, 0.0)) -> np.ndarray:
     """The returns of a scan as (K, 2) points [m] in the base frame (the sensor at
     ``sensor_offset`` (x, y, yaw) in it); beams without a return are dropped."""
     r = np.asarray(ranges, dtype=np.float64)
@@ -61,8 +60,9 @@ class LikelihoodMap:
     (value 0) so that a search window never indexes outside it.
     """
 
-    def __init__(self, occupied: np.ndarray, resolution: float, origin, sigma: float = 0.05,
-                 levels: int = 3, pad: int = 0):
+    def __init__(
+        self, occupied: np.ndarray, resolution: float, origin, sigma: float = 0.05, levels: int = 3, pad: int = 0
+    ):
         self.resolution = float(resolution)
         self.sigma = float(sigma)
         occ = np.pad(np.asarray(occupied, dtype=bool), pad)
@@ -75,13 +75,13 @@ class LikelihoodMap:
         # level h: max over the 2^h x 2^h block whose lower-left cell is this one
         self.pyramid = [self.value]
         for h in range(1, levels + 1):
-            k = 2 ** h
-            self.pyramid.append(ndimage.maximum_filter(self.value, size=k, origin=-(k // 2),
-                                                       mode="constant", cval=0.0))
+            k = 2**h
+            self.pyramid.append(ndimage.maximum_filter(self.value, size=k, origin=-(k // 2), mode="constant", cval=0.0))
 
     @classmethod
-    def from_points(cls, points: np.ndarray, resolution: float = 0.05, sigma: float = 0.05,
-                    margin: float = 1.0, levels: int = 3) -> LikelihoodMap:
+    def from_points(
+        cls, points: np.ndarray, resolution: float = 0.05, sigma: float = 0.05, margin: float = 1.0, levels: int = 3
+    ) -> LikelihoodMap:
         """From (N, 2) obstacle points [m] (a point marks its cell occupied), covering
         them plus ``margin`` [m]."""
         occ, lo = _raster(points, resolution, margin)
@@ -89,9 +89,16 @@ class LikelihoodMap:
         return cls(occ, resolution, (lo[0], lo[1]), sigma, levels)
 
     @classmethod
-    def from_density(cls, points: np.ndarray, resolution: float = 0.05, sigma: float = 0.05,
-                     margin: float = 1.0, levels: int = 3, floor: float = 1e-6,
-                     weights: np.ndarray | None = None) -> LikelihoodMap:
+    def from_density(
+        cls,
+        points: np.ndarray,
+        resolution: float = 0.05,
+        sigma: float = 0.05,
+        margin: float = 1.0,
+        levels: int = 3,
+        floor: float = 1e-6,
+        weights: np.ndarray | None = None,
+    ) -> LikelihoodMap:
         """From (N, 2) obstacle points [m] as a density: each point spread bilinearly over
         its four nearest cells (so a cell keeps where in it the points fell), blurred by a
         Gaussian of ``sigma`` [m], then divided by its local maximum (within 3 sigma; at
@@ -109,8 +116,9 @@ class LikelihoodMap:
         peak = np.maximum(ndimage.maximum_filter(dens, size=k, mode="constant"), floor)
         self.value = (dens / peak).astype(np.float32)
         self.pyramid = [self.value] + [
-            ndimage.maximum_filter(self.value, size=2 ** h, origin=-(2 ** h // 2), mode="constant", cval=0.0)
-            for h in range(1, levels + 1)]
+            ndimage.maximum_filter(self.value, size=2**h, origin=-(2**h // 2), mode="constant", cval=0.0)
+            for h in range(1, levels + 1)
+        ]
         return self
 
     @property
@@ -134,7 +142,7 @@ def _raster(points, resolution: float, margin: float, bilinear: bool = False, we
     pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
     lo = np.floor((pts.min(axis=0) - margin) / resolution) * resolution
     hi = pts.max(axis=0) + margin
-    w, h = (np.ceil((hi - lo) / resolution).astype(int) + 2)
+    w, h = np.ceil((hi - lo) / resolution).astype(int) + 2
     grid = np.zeros((h, w), dtype=np.float64)
     gx, gy = (pts[:, 0] - lo[0]) / resolution, (pts[:, 1] - lo[1]) / resolution
     if not bilinear:
@@ -150,8 +158,14 @@ def _raster(points, resolution: float, margin: float, bilinear: bool = False, we
     return grid, lo
 
 
-def refine(lmap: LikelihoodMap, points: np.ndarray, pose, iterations: int = 20, tol: float = 1e-5,
-           weights: np.ndarray | None = None):
+def refine(
+    lmap: LikelihoodMap,
+    points: np.ndarray,
+    pose,
+    iterations: int = 20,
+    tol: float = 1e-5,
+    weights: np.ndarray | None = None,
+):
     """Gauss-Newton on the bilinearly interpolated map (as Hector SLAM): the pose off the
     lattice that maximises the points' mean value, from ``pose`` (a step that lowers the
     score is halved). Use a map finer than the lattice (:meth:`LikelihoodMap.from_density`
@@ -190,7 +204,7 @@ def _value_and_jacobian(lmap: LikelihoodMap, pts: np.ndarray, x: np.ndarray, sw=
     h, w = m.shape
     c, s = math.cos(x[2]), math.sin(x[2])
     rx, ry = c * pts[:, 0] - s * pts[:, 1], s * pts[:, 0] + c * pts[:, 1]
-    gx = (x[0] + rx - lmap.origin[0]) / res - 0.5          # in cell-centre coordinates
+    gx = (x[0] + rx - lmap.origin[0]) / res - 0.5  # in cell-centre coordinates
     gy = (x[1] + ry - lmap.origin[1]) / res - 0.5
     c0, r0 = np.floor(gx).astype(np.int64), np.floor(gy).astype(np.int64)
     ok = (c0 >= 0) & (c0 < w - 1) & (r0 >= 0) & (r0 < h - 1)
@@ -211,19 +225,19 @@ def _value_and_jacobian(lmap: LikelihoodMap, pts: np.ndarray, x: np.ndarray, sw=
 # -- the matcher -----------------------------------------------------------------------------------
 @dataclass
 class MatchResult:
-    pose: tuple                 # the best pose (x [m], y [m], yaw [rad])
-    score: float                # its mean likelihood, 0..1
-    covariance: np.ndarray      # (3, 3) over x [m], y [m], yaw [rad]
-    evaluated: int = 0          # candidate blocks scored (the search's cost)
+    pose: tuple  # the best pose (x [m], y [m], yaw [rad])
+    score: float  # its mean likelihood, 0..1
+    covariance: np.ndarray  # (3, 3) over x [m], y [m], yaw [rad]
+    evaluated: int = 0  # candidate blocks scored (the search's cost)
 
 
 @dataclass
 class MatcherParams:
-    window_xy: float = 0.3          # search +- this around the prior [m]
-    window_yaw: float = math.radians(15)   # and +- this [rad]
-    yaw_step: float | None = None   # [rad]; None: the farthest point moves <= 1 cell
-    max_points: int = 360           # subsample the scan to at most this many points
-    score_scale: float = 0.02       # covariance weights exp((s - best) / score_scale)
+    window_xy: float = 0.3  # search +- this around the prior [m]
+    window_yaw: float = math.radians(15)  # and +- this [rad]
+    yaw_step: float | None = None  # [rad]; None: the farthest point moves <= 1 cell
+    max_points: int = 360  # subsample the scan to at most this many points
+    score_scale: float = 0.02  # covariance weights exp((s - best) / score_scale)
     cov_floor: tuple = field(default_factory=lambda: (0.01, 0.01, math.radians(0.5)))  # [m, m, rad] sigmas
 
 
@@ -233,8 +247,14 @@ class CorrelativeMatcher:
     def __init__(self, params: MatcherParams | None = None):
         self.params = params or MatcherParams()
 
-    def match(self, lmap: LikelihoodMap, points: np.ndarray, prior,
-              window_xy: float | None = None, window_yaw: float | None = None) -> MatchResult:
+    def match(
+        self,
+        lmap: LikelihoodMap,
+        points: np.ndarray,
+        prior,
+        window_xy: float | None = None,
+        window_yaw: float | None = None,
+    ) -> MatchResult:
         """The best pose of the base frame in ``lmap``'s frame for the (K, 2) base-frame
         ``points``, within the window around ``prior`` (x [m], y [m], yaw [rad])."""
         p = self.params
@@ -247,20 +267,20 @@ class CorrelativeMatcher:
             pts = pts[np.linspace(0, len(pts) - 1, p.max_points).astype(int)]
         res = lmap.resolution
         reach = float(np.hypot(pts[:, 0], pts[:, 1]).max())
-        dyaw = p.yaw_step or min(math.acos(max(-1.0, 1 - res ** 2 / (2 * max(reach, res) ** 2))), 0.1)
+        dyaw = p.yaw_step or min(math.acos(max(-1.0, 1 - res**2 / (2 * max(reach, res) ** 2))), 0.1)
         n_yaw = int(math.ceil(wyaw / dyaw))
         yaws = prior[2] + dyaw * np.arange(-n_yaw, n_yaw + 1)
         n_xy = int(math.ceil(wxy / res))
         H = lmap.levels
-        top = 2 ** H
+        top = 2**H
 
         # every yaw's points, in cells relative to the window's lower-left translation
         c, s = np.cos(yaws)[:, None], np.sin(yaws)[:, None]
         ox = prior[0] - n_xy * res - lmap.origin[0]
         oy = prior[1] - n_xy * res - lmap.origin[1]
-        px = np.floor((c * pts[:, 0] - s * pts[:, 1] + ox) / res).astype(np.int64)   # (Y, K)
+        px = np.floor((c * pts[:, 0] - s * pts[:, 1] + ox) / res).astype(np.int64)  # (Y, K)
         py = np.floor((s * pts[:, 0] + c * pts[:, 1] + oy) / res).astype(np.int64)
-        span = 2 * n_xy + 1                                   # translations per axis
+        span = 2 * n_xy + 1  # translations per axis
         evaluated = 0
 
         def bound(level, yi, tx, ty):
@@ -286,18 +306,18 @@ class CorrelativeMatcher:
         ub = bound(H, yi, tx, ty)
         # a first achievable score: greedy descent from the best top-level block
         i = int(np.argmax(ub))
-        gy, gx, gyy = yi[i:i + 1], tx[i:i + 1], ty[i:i + 1]
+        gy, gx, gyy = yi[i : i + 1], tx[i : i + 1], ty[i : i + 1]
         for level in range(H - 1, -1, -1):
-            gy, gx, gyy = children(gy, gx, gyy, 2 ** level)
+            gy, gx, gyy = children(gy, gx, gyy, 2**level)
             b = bound(level, gy, gx, gyy)
             j = int(np.argmax(b))
-            gy, gx, gyy = gy[j:j + 1], gx[j:j + 1], gyy[j:j + 1]
+            gy, gx, gyy = gy[j : j + 1], gx[j : j + 1], gyy[j : j + 1]
         best = float(b[j])
         best_c = (int(gy[0]), int(gx[0]), int(gyy[0]))
         # level-synchronous branch and bound
         for level in range(H - 1, -1, -1):
             keep = ub > best
-            yi, tx, ty = children(yi[keep], tx[keep], ty[keep], 2 ** level)
+            yi, tx, ty = children(yi[keep], tx[keep], ty[keep], 2**level)
             if len(yi) == 0:
                 break
             ub = bound(level, yi, tx, ty)
@@ -316,8 +336,7 @@ class CorrelativeMatcher:
         p = self.params
         d = np.array([-2, 0, 2])
         dx, dy, dt = (a.ravel() for a in np.meshgrid(d * res, d * res, d * dyaw, indexing="ij"))
-        scores = np.array([lmap.score((pose[0] + a, pose[1] + b, pose[2] + t), pts)
-                           for a, b, t in zip(dx, dy, dt)])
+        scores = np.array([lmap.score((pose[0] + a, pose[1] + b, pose[2] + t), pts) for a, b, t in zip(dx, dy, dt)])
         w = np.exp((scores - best) / p.score_scale)
         w /= w.sum()
         D = np.column_stack([dx, dy, dt])
@@ -327,8 +346,16 @@ class CorrelativeMatcher:
 
 
 # -- ICP -------------------------------------------------------------------------------------------
-def icp(reference: np.ndarray, points: np.ndarray, prior, iterations: int = 15,
-        max_dist: float = 0.2, neighbours: int = 6, tol: float = 1e-4, tree: cKDTree | None = None):
+def icp(
+    reference: np.ndarray,
+    points: np.ndarray,
+    prior,
+    iterations: int = 15,
+    max_dist: float = 0.2,
+    neighbours: int = 6,
+    tol: float = 1e-4,
+    tree: cKDTree | None = None,
+):
     """Point-to-line ICP: the pose (x [m], y [m], yaw [rad]) that puts the (K, 2)
     base-frame ``points`` onto the (N, 2) ``reference`` points, from ``prior``.
 
@@ -345,7 +372,7 @@ def icp(reference: np.ndarray, points: np.ndarray, prior, iterations: int = 15,
     _, nb = tree.query(ref, k=neighbours)
     q = ref[nb] - ref[nb].mean(axis=1, keepdims=True)
     cxx, cyy, cxy = (q[..., 0] ** 2).sum(1), (q[..., 1] ** 2).sum(1), (q[..., 0] * q[..., 1]).sum(1)
-    theta = 0.5 * np.arctan2(2 * cxy, cxx - cyy)               # the principal (line) direction
+    theta = 0.5 * np.arctan2(2 * cxy, cxx - cyy)  # the principal (line) direction
     normals = np.column_stack([-np.sin(theta), np.cos(theta)])
     centres = ref[nb].mean(axis=1)
     x = np.array(prior, dtype=np.float64)
@@ -368,7 +395,7 @@ def icp(reference: np.ndarray, points: np.ndarray, prior, iterations: int = 15,
         A = J.T @ (J * wt[:, None]) + 1e-9 * np.eye(3)
         step = -np.linalg.solve(A, J.T @ (wt * r))
         x = x + step
-        rms = float(np.sqrt(np.mean(r ** 2)))
+        rms = float(np.sqrt(np.mean(r**2)))
         if np.abs(step[:2]).max() < tol and abs(step[2]) < tol:
             break
     x[2] = math.remainder(x[2], 2 * math.pi)

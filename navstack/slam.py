@@ -45,6 +45,7 @@ TurtleBot3's LDS-01 ``base_scan`` is 0.15 m behind ``base_footprint``.
 
 Poses are (x [m], y [m], yaw [rad]); times [s].
 """
+
 from __future__ import annotations
 
 import math
@@ -58,67 +59,66 @@ from .log_odds import LogOddsGrid, LogOddsParams
 from .map_io import OccupancyMap
 from .odometry import as_pose
 from .pose_graph import PoseGraph, compose, relative
-from .scan_matcher import (CorrelativeMatcher, LikelihoodMap, MatcherParams, icp, refine, scan_points,
-                           transform)
+from .scan_matcher import CorrelativeMatcher, LikelihoodMap, MatcherParams, icp, refine, scan_points, transform
 
 IDENTITY = (0.0, 0.0, 0.0)
 
 
 @dataclass
 class SlamParams:
-    resolution: float = 0.05                  # map cells [m]
+    resolution: float = 0.05  # map cells [m]
     sensor_offset: tuple = (-0.15, 0.0, 0.0)  # the laser in the base frame (TB3 LDS-01)
-    initial_pose: tuple | None = None         # the first keyframe in the map; None: its odometry
-    keyframe_dist: float = 0.2                # [m]
+    initial_pose: tuple | None = None  # the first keyframe in the map; None: its odometry
+    keyframe_dist: float = 0.2  # [m]
     keyframe_angle: float = math.radians(15)  # [rad]
     # the front end
-    local_keyframes: int = 20                 # the local map: at most N keyframes' returns
-    match_window_xy: float = 0.25             # [m] around the odometry's prediction
+    local_keyframes: int = 20  # the local map: at most N keyframes' returns
+    match_window_xy: float = 0.25  # [m] around the odometry's prediction
     match_window_yaw: float = math.radians(10)
-    match_sigma: float = 0.05                 # the likelihood map's spread [m]
-    match_max_range: float = 3.0              # match only returns nearer than this [m]: near
+    match_sigma: float = 0.05  # the likelihood map's spread [m]
+    match_max_range: float = 3.0  # match only returns nearer than this [m]: near
     #   range_max, only the returns whose noise made them short survive (biased towards the laser)
-    min_match_score: float = 0.35             # below: trust the odometry
-    track_scans: bool = True                  # match every scan against the newest keyframe:
+    min_match_score: float = 0.35  # below: trust the odometry
+    track_scans: bool = True  # match every scan against the newest keyframe:
     #   the pose published between keyframes, and the next keyframe's guess, follow the laser,
     #   not the odometry (whose wheels slip, or spin while the robot is wedged against furniture)
-    track_window_xy: float = 0.1              # its search window around the last scan's pose
+    track_window_xy: float = 0.1  # its search window around the last scan's pose
     #                                           plus the odometry since [m]
     track_window_yaw: float = math.radians(1)  # (the gyro holds the heading over a scan)
-    track_max_sigma: float = 0.03             # a looser match (its covariance's widest) keeps
+    track_max_sigma: float = 0.03  # a looser match (its covariance's widest) keeps
     #                                           the odometry's [m]
-    slip_tolerance: float = 0.03              # a scan whose match is this far from the odometry's
+    slip_tolerance: float = 0.03  # a scan whose match is this far from the odometry's
     #   offset [m] goes into the map and the links' references at its match; else at the
     #   odometry's (matches are shrunk towards their reference by a per cent or two)
-    pair_edges: int = 3                       # link each keyframe to the N before it, each
+    pair_edges: int = 3  # link each keyframe to the N before it, each
     #                                           matched alone (0: one link, the local-map match)
-    pair_sigma: tuple = (0.03, math.radians(1.0))   # those links' sigma [m, rad]
-    near_links: int = 3                       # and to the N nearest keyframes of the local
-    near_link_radius: float = 0.3             # stretch within this [m] (a turn on the spot)
-    pair_all_scans: bool = True               # a link's reference: every scan of the older
+    pair_sigma: tuple = (0.03, math.radians(1.0))  # those links' sigma [m, rad]
+    near_links: int = 3  # and to the N nearest keyframes of the local
+    near_link_radius: float = 0.3  # stretch within this [m] (a turn on the spot)
+    pair_all_scans: bool = True  # a link's reference: every scan of the older
     #   keyframe (each at its odometry offset), not only its first: 3-5 noisy scans of the same
     #   walls average out, and the links' shrink and heading noise drop (bench/mapping_replay.py)
-    pair_match: str = "gauss_newton"          # the pair links' match: "gauss_newton" (on the
+    pair_match: str = "gauss_newton"  # the pair links' match: "gauss_newton" (on the
     #   keyframe's density map) or "icp_visible" (point-to-line ICP on the returns the
     #   keyframe's beams reach, by 3 sigma of the noise: the links shrink less, and six house
     #   replays' online error fell by a quarter, but in one live map build of four the loops
     #   stopped closing)
-    pair_scan_turn: float = math.radians(5)   # but only the scans turned at most this much from it
-    gyro_links: bool = True                   # link each keyframe's heading to the last's by the
+    pair_scan_turn: float = math.radians(5)  # but only the scans turned at most this much from it
+    gyro_links: bool = True  # link each keyframe's heading to the last's by the
     #   odometry's turn where that is the gyro's (Slam.add's ``gyro``; GyroOdometry takes the
     #   bias off at each stop)
     gyro_sigma: tuple = (math.radians(0.03), 0.005, math.radians(0.005))  # its sigma: floor [rad],
     #   per radian turned (what is left of the gyro's scale error once estimated), per second
     #   (its bias left after a stop) [rad/s]
-    gyro_scale_prior: float = 0.02            # the gyro's scale error before any turn [sigma]
-    optimize_every: int = 1                   # keyframes between two graph optimisations
+    gyro_scale_prior: float = 0.02  # the gyro's scale error before any turn [sigma]
+    optimize_every: int = 1  # keyframes between two graph optimisations
     #   when pair_edges > 0 (every one: the published pose is the newest keyframe's, which
     #   stands at its local-map match until the graph takes its links in)
-    refine: str = "gauss_newton"              # off the lattice: "gauss_newton" (on a fine density
+    refine: str = "gauss_newton"  # off the lattice: "gauss_newton" (on a fine density
     #                                           map of the local returns), "icp" or "none"
-    refine_resolution: float = 0.02           # that map's cells [m]
-    refine_sigma: float = 0.04                # and its blur [m]
-    range_noise: tuple = (0.01, 0.03)         # the laser's sigma: max(a [m], b * range); weighs
+    refine_resolution: float = 0.02  # that map's cells [m]
+    refine_sigma: float = 0.04  # and its blur [m]
+    range_noise: tuple = (0.01, 0.03)  # the laser's sigma: max(a [m], b * range); weighs
     #                                           the local map's returns by 1 / sigma^2
     # odometry edges: standard deviations per metre travelled / per radian turned, with floors
     # (loose: wheel odometry's errors are systematic - scale, heading drift - not white)
@@ -127,23 +127,23 @@ class SlamParams:
     odom_yaw_per_rad: float = 0.1
     odom_floor: tuple = (0.01, 0.01, math.radians(1.0))
     # loop closure
-    loop_min_travel: float = 4.0              # only keyframes this far back along the path [m]
-    loop_radius: float = 1.0                  # and this near in space [m]
-    loop_window_xy: float = 0.8               # search window [m]
+    loop_min_travel: float = 4.0  # only keyframes this far back along the path [m]
+    loop_radius: float = 1.0  # and this near in space [m]
+    loop_window_xy: float = 0.8  # search window [m]
     loop_window_yaw: float = math.radians(20)
-    loop_submap: int = 6                      # the old keyframe's submap: +- this many keyframes
-    loop_min_score: float = 0.55              # accept at this mean likelihood or more
-    loop_max_refine_shift: float = 0.1        # the refinement may not move the match more [m]
-    loop_cov_scale: float = 4.0               # loop edges' covariance x this (they are riskier)
-    loop_candidates: int = 2                  # old keyframes tried per keyframe
-    loop_cooldown: int = 3                    # keyframes between two closures
-    rebuild_shift: float = 0.025              # rebuild the grid once the graph moved a
+    loop_submap: int = 6  # the old keyframe's submap: +- this many keyframes
+    loop_min_score: float = 0.55  # accept at this mean likelihood or more
+    loop_max_refine_shift: float = 0.1  # the refinement may not move the match more [m]
+    loop_cov_scale: float = 4.0  # loop edges' covariance x this (they are riskier)
+    loop_candidates: int = 2  # old keyframes tried per keyframe
+    loop_cooldown: int = 3  # keyframes between two closures
+    rebuild_shift: float = 0.025  # rebuild the grid once the graph moved a
     #                                           keyframe this much [m] from where it was mapped
-    rebuild_period: float = 10.0              # [s] of scans between two rebuilds, map(fresh=False)
-    loop_gate_xy: tuple = (0.05, 0.02)        # a closure may move the keyframe by at most
-    loop_gate_yaw: tuple = (math.radians(2.0), math.radians(0.3))   # a + b * metres travelled since
+    rebuild_period: float = 10.0  # [s] of scans between two rebuilds, map(fresh=False)
+    loop_gate_xy: tuple = (0.05, 0.02)  # a closure may move the keyframe by at most
+    loop_gate_yaw: tuple = (math.radians(2.0), math.radians(0.3))  # a + b * metres travelled since
     # the map
-    map_all_scans: bool = True                # every scan, not only keyframes
+    map_all_scans: bool = True  # every scan, not only keyframes
     grid: LogOddsParams = field(default_factory=lambda: LogOddsParams(far_range=3.0, l_occ=0.55, l_free=-0.3))
     #   returns beyond 3 m (9 cm noise) count less; and it takes two returns to mark a cell
     #   (p 0.63 after one, 0.75 after two): a lone return that its noise put behind a wall
@@ -153,23 +153,23 @@ class SlamParams:
 @dataclass
 class Keyframe:
     t: float
-    odom: tuple                  # its odometry pose (odom frame)
-    points: np.ndarray           # (K, 2) returns in the base frame [m]
-    weights: np.ndarray          # (K,) their weight in a local map: 1 / range noise^2, relative
-    travel: float                # odometry path length from the start [m]
-    gyro: bool = False           # its odometry's heading is the gyro's
-    scans: list = field(default_factory=list)   # (relative pose to this keyframe, scan) to rebuild the map
-    density: LikelihoodMap | None = None         # of its returns, for pair edges (lazily, once complete)
-    pair_ref: np.ndarray | None = None          # its returns for pair_match "icp_visible"
-    pair_tree: cKDTree | None = None            # and their KD-tree (both lazily, once complete)
+    odom: tuple  # its odometry pose (odom frame)
+    points: np.ndarray  # (K, 2) returns in the base frame [m]
+    weights: np.ndarray  # (K,) their weight in a local map: 1 / range noise^2, relative
+    travel: float  # odometry path length from the start [m]
+    gyro: bool = False  # its odometry's heading is the gyro's
+    scans: list = field(default_factory=list)  # (relative pose to this keyframe, scan) to rebuild the map
+    density: LikelihoodMap | None = None  # of its returns, for pair edges (lazily, once complete)
+    pair_ref: np.ndarray | None = None  # its returns for pair_match "icp_visible"
+    pair_tree: cKDTree | None = None  # and their KD-tree (both lazily, once complete)
 
 
 @dataclass
 class _LocalMap:
-    key: tuple                   # (keyframes, graph version) it was built for
-    points: np.ndarray           # (N, 2) its returns in the map frame
-    coarse: LikelihoodMap        # for the correlative matcher
-    fine: LikelihoodMap | None   # the density map for the Gauss-Newton refinement
+    key: tuple  # (keyframes, graph version) it was built for
+    points: np.ndarray  # (N, 2) its returns in the map frame
+    coarse: LikelihoodMap  # for the correlative matcher
+    fine: LikelihoodMap | None  # the density map for the Gauss-Newton refinement
 
 
 @dataclass
@@ -196,27 +196,27 @@ class Slam:
         self.graph = PoseGraph()
         self.keyframes: list[Keyframe] = []
         self.grid = LogOddsGrid(p.grid)
-        self.matcher = CorrelativeMatcher(MatcherParams(window_xy=p.match_window_xy,
-                                                        window_yaw=p.match_window_yaw))
+        self.matcher = CorrelativeMatcher(MatcherParams(window_xy=p.match_window_xy, window_yaw=p.match_window_yaw))
         self.loop_closures = 0
         self.last_match_score = float("nan")
-        self._odom = IDENTITY            # the latest odometry pose
+        self._odom = IDENTITY  # the latest odometry pose
         self._travel = 0.0
-        self._dirty = False              # the grid predates the latest loop closure
-        self._integrated_at: list[tuple] = []   # per keyframe, the pose its scans were mapped at
+        self._dirty = False  # the grid predates the latest loop closure
+        self._integrated_at: list[tuple] = []  # per keyframe, the pose its scans were mapped at
         self._t = self._rebuilt_t = 0.0  # the latest scan's time, the last rebuild's [s]
         self._since_closure = 1 << 30
-        self._track_offset = IDENTITY    # the latest scan's pose from the newest keyframe
-        self._track_odom = IDENTITY      # and the odometry there
+        self._track_offset = IDENTITY  # the latest scan's pose from the newest keyframe
+        self._track_odom = IDENTITY  # and the odometry there
         self._local_map: _LocalMap | None = None
         self._kf_map: _LocalMap | None = None
-        self._graph_version = 0          # bumped whenever the graph moves its nodes
-        self._turns = [0.0, 0.0]         # the gyro's scale from the matches: sum g^2, sum (m - g) g
-        self._gyro = False               # the latest odometry's heading is the gyro's
+        self._graph_version = 0  # bumped whenever the graph moves its nodes
+        self._turns = [0.0, 0.0]  # the gyro's scale from the matches: sum g^2, sum (m - g) g
+        self._gyro = False  # the latest odometry's heading is the gyro's
 
     # -- input ---------------------------------------------------------------------------------
-    def add(self, odom_pose, ranges, angles, range_max: float, t: float = 0.0,
-            range_min: float = 0.0, gyro: bool = False) -> bool:
+    def add(
+        self, odom_pose, ranges, angles, range_max: float, t: float = 0.0, range_min: float = 0.0, gyro: bool = False
+    ) -> bool:
         """Take one scan and the odometry pose (x [m], y [m], yaw [rad], odom frame) at its
         time ``t`` [s]. ``ranges`` [m] and ``angles`` [rad, sensor frame] are the beams;
         inf or >= ``range_max`` is no return. ``gyro``: the odometry's heading is a gyro's
@@ -226,14 +226,19 @@ class Slam:
         self._t = float(t)
         self._gyro = bool(gyro)
         # copies: a row of a caller's larger array would keep all of it alive
-        scan = _Scan(np.array(ranges, dtype=np.float32), np.array(angles, dtype=np.float64),
-                     float(range_max), float(range_min), float(t))
+        scan = _Scan(
+            np.array(ranges, dtype=np.float32),
+            np.array(angles, dtype=np.float64),
+            float(range_max),
+            float(range_min),
+            float(t),
+        )
         if not self.keyframes:
             self._odom = self._track_odom = odom
             self._new_keyframe(t, odom, scan, p.initial_pose or odom)
             return True
         last = self.keyframes[-1]
-        offset = compose(self._track_offset, relative(self._track_odom, odom))   # the odometry's guess
+        offset = compose(self._track_offset, relative(self._track_odom, odom))  # the odometry's guess
         if p.track_scans:
             offset = self._track(offset, scan)
         self._travel += math.hypot(offset[0] - self._track_offset[0], offset[1] - self._track_offset[1])
@@ -292,7 +297,7 @@ class Slam:
         p = self.params
         pts = match_points(scan, p.match_max_range, p.sensor_offset)
         kf = Keyframe(t, odom, pts, self._weights(pts), self._travel, gyro=self._gyro, scans=[(IDENTITY, scan)])
-        if pose is not None:                         # the first keyframe
+        if pose is not None:  # the first keyframe
             self.graph.add_node(pose)
             self.keyframes.append(kf)
             self._integrated_at.append(tuple(pose))
@@ -304,7 +309,7 @@ class Slam:
         matched, cov = self._match_local(pts, predicted)
         self.graph.add_node(matched if matched is not None else predicted)
         self.keyframes.append(kf)
-        self._integrated_at.append(self.graph.pose(k))      # (its scan goes in below)
+        self._integrated_at.append(self.graph.pose(k))  # (its scan goes in below)
         # The chain's links: the keyframe matched alone against each of the few before it,
         # from the local map's pose (short baselines: a match against a long stretch of map
         # is pulled back towards where that map was seen from, a shrink of a few per cent);
@@ -312,7 +317,7 @@ class Slam:
         # against obstacles, and as an extra link it pulls every good match off by its drift)
         pairs = self._pair_matches(k, pts, matched) if matched is not None and p.pair_edges else []
         sx, syaw = p.pair_sigma
-        link_info = np.diag([1 / sx ** 2, 1 / sx ** 2, 1 / syaw ** 2])
+        link_info = np.diag([1 / sx**2, 1 / sx**2, 1 / syaw**2])
         for i, z in pairs:
             self.graph.add_edge(i, k, z, link_info, "pair")
         if pairs:
@@ -345,16 +350,16 @@ class Slam:
         z = relative(a.odom, b.odom)
         correction, scale_sigma = self.gyro_scale()
         floor, per_rad, per_s = p.gyro_sigma
-        sigma = math.sqrt(floor ** 2 + ((per_rad + scale_sigma) * z[2]) ** 2 + (per_s * (b.t - a.t)) ** 2)
+        sigma = math.sqrt(floor**2 + ((per_rad + scale_sigma) * z[2]) ** 2 + (per_s * (b.t - a.t)) ** 2)
         z = (z[0], z[1], z[2] * (1 + correction))
-        self.graph.add_edge(k - 1, k, z, np.diag([1e-6, 1e-6, 1 / sigma ** 2]), "gyro")
+        self.graph.add_edge(k - 1, k, z, np.diag([1e-6, 1e-6, 1 / sigma**2]), "gyro")
 
     def gyro_scale(self) -> tuple[float, float]:
         """The factor the odometry's turns are off by, as the scan matches see it (a
         turn's true size is the odometry's times 1 + this), and its sigma."""
         gg, mg = self._turns
-        match_sigma = self.params.pair_sigma[1] / 3             # a single match's, not the links' looser one
-        prior = (match_sigma / self.params.gyro_scale_prior) ** 2   # no turn yet: no correction
+        match_sigma = self.params.pair_sigma[1] / 3  # a single match's, not the links' looser one
+        prior = (match_sigma / self.params.gyro_scale_prior) ** 2  # no turn yet: no correction
         return mg / (gg + prior), match_sigma / math.sqrt(gg + prior)
 
     def _learn_gyro_scale(self, k: int, pairs) -> None:
@@ -395,7 +400,7 @@ class Slam:
             return offset
         ref = self._keyframe_map()
         res = self.matcher.match(ref.coarse, pts, offset, p.track_window_xy, p.track_window_yaw)
-        if res.score < p.min_match_score or np.linalg.eigvalsh(res.covariance[:2, :2])[-1] > p.track_max_sigma ** 2:
+        if res.score < p.min_match_score or np.linalg.eigvalsh(res.covariance[:2, :2])[-1] > p.track_max_sigma**2:
             return offset
         return self._refine_local(ref, pts, res.pose)
 
@@ -413,10 +418,12 @@ class Slam:
         if self._kf_map is None or self._kf_map.key != key:
             p = self.params
             kf = self.keyframes[-1]
-            fine = LikelihoodMap.from_density(kf.points, p.refine_resolution, p.refine_sigma, levels=0,
-                                              weights=kf.weights)
-            self._kf_map = _LocalMap(key, kf.points, LikelihoodMap.from_points(kf.points, p.resolution, p.match_sigma),
-                                     fine)
+            fine = LikelihoodMap.from_density(
+                kf.points, p.refine_resolution, p.refine_sigma, levels=0, weights=kf.weights
+            )
+            self._kf_map = _LocalMap(
+                key, kf.points, LikelihoodMap.from_points(kf.points, p.resolution, p.match_sigma), fine
+            )
         return self._kf_map
 
     def _refine_local(self, local: _LocalMap, pts: np.ndarray, pose) -> tuple:
@@ -424,7 +431,7 @@ class Slam:
         a refinement that leaves the lattice cell it started from is not trusted."""
         p = self.params
         if p.refine == "gauss_newton":
-            assert local.fine is not None   # the local maps have it whenever refine is "gauss_newton"
+            assert local.fine is not None  # the local maps have it whenever refine is "gauss_newton"
             refined = refine(local.fine, pts, pose)[0]
         elif p.refine == "icp":
             refined = self._refine(local.points, pts, pose)
@@ -441,8 +448,11 @@ class Slam:
             p = self.params
             local = self._local_keyframes()
             ref, weights = self._points_of(local), self._weights_of(local)
-            fine = (LikelihoodMap.from_density(ref, p.refine_resolution, p.refine_sigma, levels=0, weights=weights)
-                    if p.refine == "gauss_newton" else None)
+            fine = (
+                LikelihoodMap.from_density(ref, p.refine_resolution, p.refine_sigma, levels=0, weights=weights)
+                if p.refine == "gauss_newton"
+                else None
+            )
             self._local_map = _LocalMap(key, ref, LikelihoodMap.from_points(ref, p.resolution, p.match_sigma), fine)
         return self._local_map
 
@@ -468,7 +478,7 @@ class Slam:
         poses = self.graph.poses[cand]
         dist = np.hypot(poses[:, 0] - matched[0], poses[:, 1] - matched[1])
         near = cand[dist < p.near_link_radius]
-        near = near[np.argsort(dist[dist < p.near_link_radius])][:p.near_links]
+        near = near[np.argsort(dist[dist < p.near_link_radius])][: p.near_links]
         return self._matches_against([int(i) for i in near], pts, matched)
 
     def _matches_against(self, indices, pts: np.ndarray, matched) -> list[tuple[int, tuple]]:
@@ -484,8 +494,9 @@ class Slam:
             else:
                 if kf.density is None:
                     ref, w = self._pair_reference(i)
-                    kf.density = LikelihoodMap.from_density(ref, p.refine_resolution, p.refine_sigma,
-                                                            levels=0, weights=w)
+                    kf.density = LikelihoodMap.from_density(
+                        ref, p.refine_resolution, p.refine_sigma, levels=0, weights=w
+                    )
                 z = refine(kf.density, pts, z0)[0]
             if math.hypot(z[0] - z0[0], z[1] - z0[1]) < 2 * p.resolution:
                 out.append((i, z))
@@ -497,7 +508,7 @@ class Slam:
         reference never saw (round a corner, past furniture) would be pulled onto what it
         did see, which lies back towards it."""
         kf = self.keyframes[i]
-        if kf.pair_ref is None or kf.pair_tree is None:     # (both or neither)
+        if kf.pair_ref is None or kf.pair_tree is None:  # (both or neither)
             kf.pair_ref = self._pair_reference(i)[0]
             kf.pair_tree = cKDTree(kf.pair_ref)
         scan = kf.scans[0][1]
@@ -546,7 +557,7 @@ class Slam:
         n = len(self.keyframes)
         travel = np.fromiter((kf.travel for kf in self.keyframes), float, n)
         first = int(np.searchsorted(travel, self._travel - p.loop_min_travel, side="right"))
-        first = min(first, max(0, n - 2))             # at least the last two
+        first = min(first, max(0, n - 2))  # at least the last two
         if n - first <= p.local_keyframes:
             return list(range(first, n))
         picks = np.unique(np.round(np.linspace(first, n - 1, p.local_keyframes)).astype(int))
@@ -556,8 +567,7 @@ class Slam:
         """The lattice pose refined by the configured method."""
         p = self.params
         if p.refine == "gauss_newton":
-            fine = LikelihoodMap.from_density(ref, p.refine_resolution, p.refine_sigma, levels=0,
-                                              weights=weights)
+            fine = LikelihoodMap.from_density(ref, p.refine_resolution, p.refine_sigma, levels=0, weights=weights)
             return refine(fine, pts, pose)[0]
         if p.refine == "icp":
             refined, _, inliers = icp(ref, pts, pose)
@@ -570,7 +580,7 @@ class Slam:
         sx = max(p.odom_floor[0], p.odom_xy_per_m * d)
         sy = max(p.odom_floor[1], p.odom_xy_per_m * d)
         st = max(p.odom_floor[2], p.odom_yaw_per_m * d + p.odom_yaw_per_rad * turn)
-        return np.diag([1 / sx ** 2, 1 / sy ** 2, 1 / st ** 2])
+        return np.diag([1 / sx**2, 1 / sy**2, 1 / st**2])
 
     # -- loop closure --------------------------------------------------------------------------
     def _close_loop(self, k: int) -> bool:
@@ -594,7 +604,7 @@ class Slam:
             if len(tried) >= p.loop_candidates:
                 break
             if any(abs(int(j) - i) <= p.loop_submap for i in tried):
-                continue                                  # the same submap again
+                continue  # the same submap again
             tried.append(int(j))
             lo, hi = max(0, j - p.loop_submap), min(len(self.keyframes), j + p.loop_submap + 1)
             hi = min(hi, int(np.searchsorted(travel, kf.travel - p.loop_min_travel, side="right")))
@@ -610,8 +620,13 @@ class Slam:
                 continue
             if not self._plausible_correction(here, pose, kf.travel - travel[j]):
                 continue
-            self.graph.add_edge(int(j), k, relative(self.graph.pose(int(j)), pose),
-                                _information(p.loop_cov_scale * res.covariance), "loop")
+            self.graph.add_edge(
+                int(j),
+                k,
+                relative(self.graph.pose(int(j)), pose),
+                _information(p.loop_cov_scale * res.covariance),
+                "loop",
+            )
             self.graph.optimize(loss="cauchy", f_scale=3.0)
             self._graph_version += 1
             self.loop_closures += 1
@@ -626,8 +641,10 @@ class Slam:
         the wrong wall, however good its score."""
         p = self.params
         shift = relative(here, pose)
-        return (math.hypot(shift[0], shift[1]) <= p.loop_gate_xy[0] + p.loop_gate_xy[1] * travelled
-                and abs(shift[2]) <= p.loop_gate_yaw[0] + p.loop_gate_yaw[1] * travelled)
+        return (
+            math.hypot(shift[0], shift[1]) <= p.loop_gate_xy[0] + p.loop_gate_xy[1] * travelled
+            and abs(shift[2]) <= p.loop_gate_yaw[0] + p.loop_gate_yaw[1] * travelled
+        )
 
     def _map_moved(self) -> bool:
         """Whether some keyframe now stands more than ``rebuild_shift`` from where its scans
@@ -660,7 +677,7 @@ class Slam:
 
     def _integrate(self, base_pose, scan: _Scan) -> None:
         if self._dirty:
-            return                                # rebuilt from scratch on the next map()
+            return  # rebuilt from scratch on the next map()
         sensor = compose(base_pose, self.params.sensor_offset)
         self.grid.integrate(sensor, scan.ranges, scan.angles, scan.range_max, scan.range_min)
 
@@ -678,7 +695,7 @@ def match_points(scan: _Scan, max_range: float, sensor_offset) -> np.ndarray:
     near = np.where(valid, r, np.nan)
     sides = np.stack([np.roll(near, d) for d in (-2, -1, 1, 2)])
     with np.errstate(invalid="ignore"), warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)       # all four neighbours without a return
+        warnings.simplefilter("ignore", RuntimeWarning)  # all four neighbours without a return
         typical = np.nanmedian(sides, axis=0)
     keep = valid & (typical < max_range)
     return scan_points(np.where(keep, r, np.inf), scan.angles, scan.range_max, scan.range_min, sensor_offset)

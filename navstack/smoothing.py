@@ -15,6 +15,7 @@ global relocalisation) is taken at once: the smoother never holds on to a wrong 
 Axes are filtered independently (x and y in the map frame, yaw), which is enough for the
 small, isotropic corrections it is meant for.
 """
+
 from __future__ import annotations
 
 import math
@@ -26,14 +27,14 @@ from .odometry import Pose
 
 @dataclass
 class SmootherParams:
-    drift_per_m: float = 0.03        # [m/m] odometry position error per metre driven (1 sigma)
-    drift_per_rad: float = 0.01      # [m/rad] ... per radian turned
-    yaw_per_rad: float = 0.02        # [rad/rad] odometry heading error per radian turned
-    yaw_per_m: float = 0.01          # [rad/m] ... per metre driven
-    meas_xy: float = 0.02            # [m] the estimate's jitter (1 sigma)
-    meas_yaw: float = 0.01           # [rad]
-    reset_xy: float = 0.15           # [m] an innovation beyond this is taken at once
-    reset_yaw: float = 0.12          # [rad]
+    drift_per_m: float = 0.03  # [m/m] odometry position error per metre driven (1 sigma)
+    drift_per_rad: float = 0.01  # [m/rad] ... per radian turned
+    yaw_per_rad: float = 0.02  # [rad/rad] odometry heading error per radian turned
+    yaw_per_m: float = 0.01  # [rad/m] ... per metre driven
+    meas_xy: float = 0.02  # [m] the estimate's jitter (1 sigma)
+    meas_yaw: float = 0.01  # [rad]
+    reset_xy: float = 0.15  # [m] an innovation beyond this is taken at once
+    reset_yaw: float = 0.12  # [rad]
 
 
 class PoseSmoother:
@@ -41,7 +42,7 @@ class PoseSmoother:
 
     def __init__(self, params: SmootherParams | None = None) -> None:
         self.p = params or SmootherParams()
-        self.pose: Pose | None = None    # (x, y, yaw), map frame, at odometry pose self.odom
+        self.pose: Pose | None = None  # (x, y, yaw), map frame, at odometry pose self.odom
         self.odom: Pose | None = None
         self.var_xy = self.var_yaw = 0.0
         self.resets = 0
@@ -49,7 +50,7 @@ class PoseSmoother:
     def reset(self, pose, odom) -> None:
         """Take ``pose`` (map frame, at odometry pose ``odom``) as it is."""
         self.pose, self.odom = tuple(pose), tuple(odom)
-        self.var_xy, self.var_yaw = self.p.meas_xy ** 2, self.p.meas_yaw ** 2
+        self.var_xy, self.var_yaw = self.p.meas_xy**2, self.p.meas_yaw**2
 
     def update(self, estimate, odom) -> Pose:
         """Blend in ``estimate`` (map frame) taken at odometry pose ``odom``; returns the
@@ -58,7 +59,7 @@ class PoseSmoother:
         estimate, odom = tuple(float(v) for v in estimate), tuple(float(v) for v in odom)
         if self.pose is None:
             self.reset(estimate, odom)
-            return estimate              # reset took it as it is (the same tuple)
+            return estimate  # reset took it as it is (the same tuple)
         # predict: move the smoothed pose by the odometry's step (in the robot's frame)
         step = compose(inverse(self.odom), odom)
         pred = compose(self.pose, step)
@@ -72,10 +73,9 @@ class PoseSmoother:
             self.resets += 1
             self.reset(estimate, odom)
             return self.pose
-        k_xy = var_xy / (var_xy + p.meas_xy ** 2)
-        k_yaw = var_yaw / (var_yaw + p.meas_yaw ** 2)
-        self.pose = (pred[0] + k_xy * ex, pred[1] + k_xy * ey,
-                     math.remainder(pred[2] + k_yaw * eyaw, 2 * math.pi))
+        k_xy = var_xy / (var_xy + p.meas_xy**2)
+        k_yaw = var_yaw / (var_yaw + p.meas_yaw**2)
+        self.pose = (pred[0] + k_xy * ex, pred[1] + k_xy * ey, math.remainder(pred[2] + k_yaw * eyaw, 2 * math.pi))
         self.odom = odom
         self.var_xy, self.var_yaw = (1 - k_xy) * var_xy, (1 - k_yaw) * var_yaw
         return self.pose
@@ -102,13 +102,14 @@ class LocalHold:
     map -> odom (a global localisation converging), it does not hold.
     """
 
-    def __init__(self, radius: float = 0.75, max_turn: float = 0.6, still_speed: float = 0.01,
-                 still_turn: float = 0.03) -> None:
+    def __init__(
+        self, radius: float = 0.75, max_turn: float = 0.6, still_speed: float = 0.01, still_turn: float = 0.03
+    ) -> None:
         self.radius, self.max_turn = radius, max_turn
         self.still_speed, self.still_turn = still_speed, still_turn
-        self.anchor: tuple[float, float] | None = None   # odometry (x, y) where the robot last stood still
-        self.turned = 0.0                # [rad] turned since then, either way
-        self._last: tuple[float, Pose] | None = None      # (t, odometry pose) of the previous message
+        self.anchor: tuple[float, float] | None = None  # odometry (x, y) where the robot last stood still
+        self.turned = 0.0  # [rad] turned since then, either way
+        self._last: tuple[float, Pose] | None = None  # (t, odometry pose) of the previous message
 
     @property
     def holding(self) -> bool:
@@ -123,8 +124,10 @@ class LocalHold:
         turn = abs(math.remainder(odom[2] - last[1][2], 2 * math.pi))
         if self.anchor is not None:
             self.turned += turn
-            if math.hypot(odom[0] - self.anchor[0], odom[1] - self.anchor[1]) > self.radius \
-                    or self.turned > self.max_turn:
+            if (
+                math.hypot(odom[0] - self.anchor[0], odom[1] - self.anchor[1]) > self.radius
+                or self.turned > self.max_turn
+            ):
                 self.anchor = None
                 return True
             return False

@@ -18,6 +18,7 @@ Where the robot starts: the user says so on ``/initialpose`` (RViz's "2D Pose Es
 nobody has said so ``global_after`` seconds after the first scan, the localiser finds the
 robot on the whole map from its scans (so ``actorbt call goto ...`` works on its own).
 """
+
 from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any, TypeVar
@@ -58,14 +59,27 @@ class NavStack(SubSystem):
         mapper: keyword arguments of :class:`navstack.mapper.Mapper` (start_mapping)
     """
 
-    def __init__(self, localiser: dict | None = None, navigator: dict | None = None, seed: int = 0,
-                 initial_pose: tuple | None = None, global_after: float | None = GLOBAL_AFTER,
-                 mapper: dict | None = None) -> None:
+    def __init__(
+        self,
+        localiser: dict | None = None,
+        navigator: dict | None = None,
+        seed: int = 0,
+        initial_pose: tuple | None = None,
+        global_after: float | None = GLOBAL_AFTER,
+        mapper: dict | None = None,
+    ) -> None:
         super().__init__()
-        self.localiser = _add(self, "localiser", Localiser, params=localiser, seed=seed,
-                              initial_pose=initial_pose, global_after=global_after)
+        self.localiser = _add(
+            self,
+            "localiser",
+            Localiser,
+            params=localiser,
+            seed=seed,
+            initial_pose=initial_pose,
+            global_after=global_after,
+        )
         self.navigator = _add(self, "navigator", Navigator, params=navigator)
-        self.mapper: Mapper | None = None   # made by start_mapping
+        self.mapper: Mapper | None = None  # made by start_mapping
         self._mapper_args = dict(mapper or {})
 
     @actor
@@ -74,7 +88,8 @@ class NavStack(SubSystem):
         a given map: the mapper publishes /map and map -> odom from now on, starting from the
         pose the user gave (/initialpose) or the current estimate. For a world with no map
         server. Returns that start pose [x m, y m, yaw rad] (None: the origin)."""
-        from .mapper import Mapper   # here: the SLAM code is not needed by every run
+        from .mapper import Mapper  # here: the SLAM code is not needed by every run
+
         if self.mapper is not None:
             raise ActorbtError("the robot maps already (one mapping per run)")
         start = self.localiser.pause()
@@ -92,7 +107,7 @@ class NavStack(SubSystem):
         mapper = self._mapping()
         pose = mapper.stop()
         map_msg = mapper.map_msg()
-        assert map_msg is not None              # stop() raised unless a scan has started the map
+        assert map_msg is not None  # stop() raised unless a scan has started the map
         self.localiser.resume(tuple(pose), map_msg)
         return pose
 

@@ -11,6 +11,7 @@ A *world provider* is anything with ``map`` (an OccupancyMap), ``step() -> Sampl
 ``truth`` and ``teleport(pose)``; :class:`SyntheticWorld` is one; a simulator-backed
 provider can replace it in the benchmark.
 """
+
 from __future__ import annotations
 
 import math
@@ -27,27 +28,31 @@ from .odometry import Pose, as_pose
 
 @dataclass
 class Sample:
-    t: float                      # [s]
-    odom: tuple                   # odometry pose (x, y, yaw), odom frame
-    truth: tuple                  # true pose (x, y, yaw), map frame
-    scan: Scan | None = None      # a scan taken at this instant, if any
+    t: float  # [s]
+    odom: tuple  # odometry pose (x, y, yaw), odom frame
+    truth: tuple  # true pose (x, y, yaw), map frame
+    scan: Scan | None = None  # a scan taken at this instant, if any
 
 
 @dataclass
 class Boxes:
     """Oriented boxes as arrays: centres (B, 2), half sizes (B, 2), yaws (B,)."""
+
     centre: np.ndarray
     half: np.ndarray
     yaw: np.ndarray
 
     @classmethod
     def from_list(cls, boxes) -> Boxes:
-        a = np.asarray(boxes, float).reshape(-1, 5)          # cx, cy, sx, sy, yaw
+        a = np.asarray(boxes, float).reshape(-1, 5)  # cx, cy, sx, sy, yaw
         return cls(a[:, :2].copy(), a[:, 2:4] / 2, a[:, 4].copy())
 
     def __add__(self, other: Boxes) -> Boxes:
-        return Boxes(np.vstack([self.centre, other.centre]), np.vstack([self.half, other.half]),
-                     np.concatenate([self.yaw, other.yaw]))
+        return Boxes(
+            np.vstack([self.centre, other.centre]),
+            np.vstack([self.half, other.half]),
+            np.concatenate([self.yaw, other.yaw]),
+        )
 
     def __len__(self) -> int:
         return len(self.yaw)
@@ -58,8 +63,9 @@ class Boxes:
         dy = np.asarray(y)[:, None] - self.centre[None, :, 1]
         c, s = np.cos(self.yaw)[None], np.sin(self.yaw)[None]
         u, v = c * dx + s * dy, -s * dx + c * dy
-        return ((np.abs(u) <= self.half[None, :, 0] + margin)
-                & (np.abs(v) <= self.half[None, :, 1] + margin)).any(axis=1)
+        return ((np.abs(u) <= self.half[None, :, 0] + margin) & (np.abs(v) <= self.half[None, :, 1] + margin)).any(
+            axis=1
+        )
 
 
 def world_boxes(world_yaml: str | Path, scan_height: float = 0.132) -> Boxes:
@@ -71,8 +77,9 @@ def world_boxes(world_yaml: str | Path, scan_height: float = 0.132) -> Boxes:
     out = []
     if wh > scan_height:
         for x0, y0, x1, y1 in spec.get("walls", []):
-            out.append(((x0 + x1) / 2, (y0 + y1) / 2, math.hypot(x1 - x0, y1 - y0) + wt, wt,
-                        math.atan2(y1 - y0, x1 - x0)))
+            out.append(
+                ((x0 + x1) / 2, (y0 + y1) / 2, math.hypot(x1 - x0, y1 - y0) + wt, wt, math.atan2(y1 - y0, x1 - x0))
+            )
     items = list(spec.get("furniture", []))
     if "place_location" in spec:
         items.append(spec["place_location"])
@@ -91,8 +98,8 @@ def cast(boxes: Boxes, origin, angles: np.ndarray, max_range: float) -> np.ndarr
     dy = np.sin(angles)[:, None]
     c, s = np.cos(boxes.yaw)[None], np.sin(boxes.yaw)[None]
     px, py = ox - boxes.centre[None, :, 0], oy - boxes.centre[None, :, 1]
-    pu, pv = c * px + s * py, -s * px + c * py                 # origin in box frame
-    du, dv = c * dx + s * dy, -s * dx + c * dy                 # direction in box frame
+    pu, pv = c * px + s * py, -s * px + c * py  # origin in box frame
+    du, dv = c * dx + s * dy, -s * dx + c * dy  # direction in box frame
     hu, hv = boxes.half[None, :, 0], boxes.half[None, :, 1]
     with np.errstate(divide="ignore", invalid="ignore"):
         iu, iv = 1.0 / du, 1.0 / dv
@@ -102,7 +109,7 @@ def cast(boxes: Boxes, origin, angles: np.ndarray, max_range: float) -> np.ndarr
     tmax = np.minimum(np.maximum(t1u, t2u), np.maximum(t1v, t2v))
     tmin = np.nan_to_num(tmin, nan=-np.inf)
     tmax = np.nan_to_num(tmax, nan=-np.inf)
-    hit = (tmax >= np.maximum(tmin, 0.0)) & (tmin > 0)       # origin inside a box: no hit
+    hit = (tmax >= np.maximum(tmin, 0.0)) & (tmin > 0)  # origin inside a box: no hit
     t = np.where(hit, tmin, np.inf).min(axis=1)
     t[t > max_range] = np.inf
     return t
@@ -113,35 +120,63 @@ class LaserSpec:
     beams: int = 360
     range_min: float = 0.12
     range_max: float = 3.5
-    sigma_min: float = 0.01      # [m]
-    sigma_rel: float = 0.03      # of the range
-    dropout: float = 0.02        # share of beams without a return
-    pose: tuple = (-0.15, 0.0, 0.0)   # in the base frame (the robot's LDS sits at the back)
+    sigma_min: float = 0.01  # [m]
+    sigma_rel: float = 0.03  # of the range
+    dropout: float = 0.02  # share of beams without a return
+    pose: tuple = (-0.15, 0.0, 0.0)  # in the base frame (the robot's LDS sits at the back)
 
 
 @dataclass
 class OdomSpec:
-    scale: float = 0.02          # distance scale error (its sign is drawn per world)
-    turn_scale: float = 0.02     # turning scale error
-    drift: float = math.radians(0.5)   # heading drift [rad/s] while moving (sign drawn)
-    sigma_v: float = 0.005       # white noise on speed [m/s]
-    sigma_w: float = 0.01        # white noise on turn rate [rad/s]
+    scale: float = 0.02  # distance scale error (its sign is drawn per world)
+    turn_scale: float = 0.02  # turning scale error
+    drift: float = math.radians(0.5)  # heading drift [rad/s] while moving (sign drawn)
+    sigma_v: float = 0.005  # white noise on speed [m/s]
+    sigma_w: float = 0.01  # white noise on turn rate [rad/s]
 
 
 # a loop through the four rooms of sim/worlds/house.yaml, clear of its furniture
-HOUSE_TOUR = [(1.0, 1.0), (2.2, 1.6), (4.8, 1.6), (6.0, 2.0), (7.2, 2.2), (8.6, 2.8),
-              (8.0, 3.8), (8.0, 5.2), (7.5, 5.6), (5.6, 5.4), (4.8, 6.5), (3.3, 6.5),
-              (2.8, 5.3), (2.0, 5.0), (2.0, 3.8), (1.0, 3.0)]
+HOUSE_TOUR = [
+    (1.0, 1.0),
+    (2.2, 1.6),
+    (4.8, 1.6),
+    (6.0, 2.0),
+    (7.2, 2.2),
+    (8.6, 2.8),
+    (8.0, 3.8),
+    (8.0, 5.2),
+    (7.5, 5.6),
+    (5.6, 5.4),
+    (4.8, 6.5),
+    (3.3, 6.5),
+    (2.8, 5.3),
+    (2.0, 5.0),
+    (2.0, 3.8),
+    (1.0, 3.0),
+]
 
 
 class SyntheticWorld:
     """The robot drives the waypoint loop; ``step()`` advances by ``dt`` and returns the
     odometry, the truth and (every ``scan_period``) a scan."""
 
-    def __init__(self, occ_map: OccupancyMap, boxes: Boxes, tour=HOUSE_TOUR, *, seed: int = 0,
-                 start: int | None = None, reverse: bool | None = None, unmapped: int = 8,
-                 laser: LaserSpec | None = None, odom: OdomSpec | None = None,
-                 dt: float = 0.05, scan_period: float = 0.2, speed: float = 0.22, turn: float = 1.2):
+    def __init__(
+        self,
+        occ_map: OccupancyMap,
+        boxes: Boxes,
+        tour=HOUSE_TOUR,
+        *,
+        seed: int = 0,
+        start: int | None = None,
+        reverse: bool | None = None,
+        unmapped: int = 8,
+        laser: LaserSpec | None = None,
+        odom: OdomSpec | None = None,
+        dt: float = 0.05,
+        scan_period: float = 0.2,
+        speed: float = 0.22,
+        turn: float = 1.2,
+    ):
         self.map = occ_map
         self.rng = rng = np.random.default_rng(seed)
         self.laser = laser or LaserSpec()
@@ -166,13 +201,13 @@ class SyntheticWorld:
         self.unmapped = self._unmapped_boxes(boxes, unmapped)
         self.boxes = boxes + self.unmapped if len(self.unmapped) else boxes
         self.angles = np.arange(self.laser.beams) * (2 * math.pi / self.laser.beams)
-        self.distance = 0.0            # travelled [m]
+        self.distance = 0.0  # travelled [m]
 
     def _unmapped_boxes(self, mapped: Boxes, n: int) -> Boxes:
         """n small boxes on free floor, 0.35 m clear of the tour and 0.1 m of the furniture."""
         free_x, free_y = self.map.cell_centres(self.map.free())
         tour = np.asarray(self.tour + [self.tour[0]])
-        out: list[tuple[float, float, float, float, float]] = []   # cx, cy, sx, sy, yaw
+        out: list[tuple[float, float, float, float, float]] = []  # cx, cy, sx, sy, yaw
         for _ in range(200 * max(n, 1)):
             if len(out) >= n:
                 break
@@ -209,8 +244,10 @@ class SyntheticWorld:
             f = self.rng.uniform(0.1, 0.7)
             px, py = ax + f * (bx - ax), ay + f * (by - ay)
             yaw = math.atan2(by - ay, bx - ax)
-            if math.hypot(px - x, py - y) >= min_dist and \
-                    abs((yaw - th + math.pi) % (2 * math.pi) - math.pi) >= min_turn:
+            if (
+                math.hypot(px - x, py - y) >= min_dist
+                and abs((yaw - th + math.pi) % (2 * math.pi) - math.pi) >= min_turn
+            ):
                 return (px, py, yaw), (i + 1) % n
         raise RuntimeError("no kidnap pose satisfies the distance and turn")
 
@@ -234,8 +271,11 @@ class SyntheticWorld:
         wo = w * self._k_w + ((self._drift + self.rng.normal(0, o.sigma_w)) if moving else 0.0)
         ox, oy, oth = self.odom
         mid = oth + wo * dt / 2
-        self.odom = (ox + vo * dt * math.cos(mid), oy + vo * dt * math.sin(mid),
-                     (oth + wo * dt + math.pi) % (2 * math.pi) - math.pi)
+        self.odom = (
+            ox + vo * dt * math.cos(mid),
+            oy + vo * dt * math.sin(mid),
+            (oth + wo * dt + math.pi) % (2 * math.pi) - math.pi,
+        )
         self.t += dt
         scan = None
         if self.t + 1e-9 >= self._next_scan:
@@ -275,6 +315,6 @@ class SyntheticWorld:
 def _dist_to_polyline(x: float, y: float, pts: np.ndarray) -> float:
     a, b = pts[:-1], pts[1:]
     ab = b - a
-    t = np.clip(((x - a[:, 0]) * ab[:, 0] + (y - a[:, 1]) * ab[:, 1]) / np.maximum((ab ** 2).sum(1), 1e-12), 0, 1)
+    t = np.clip(((x - a[:, 0]) * ab[:, 0] + (y - a[:, 1]) * ab[:, 1]) / np.maximum((ab**2).sum(1), 1e-12), 0, 1)
     px, py = a[:, 0] + t * ab[:, 0], a[:, 1] + t * ab[:, 1]
     return float(np.min(np.hypot(px - x, py - y)))

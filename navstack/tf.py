@@ -1,5 +1,6 @@
 """navstack's share of tf: the listener (:class:`planning.tf_listener.TfListener`, base
 edges only) and the messages the localiser sends (map -> odom as a planar transform)."""
+
 from __future__ import annotations
 
 import math

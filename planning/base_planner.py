@@ -109,9 +109,8 @@ class GridPlanner:
             weights += [wv, wv]
         n = h * w
         from scipy.sparse import csr_matrix  # here, not at import: scipy is slow to import
-        return csr_matrix(
-            (np.concatenate(weights), (np.concatenate(srcs), np.concatenate(dsts))), shape=(n, n)
-        )
+
+        return csr_matrix((np.concatenate(weights), (np.concatenate(srcs), np.concatenate(dsts))), shape=(n, n))
 
     # ---------------------------------------------------------------- helpers
     def _check_end(self, xy: Sequence[float], what: str) -> tuple[tuple[int, int] | None, str]:
@@ -198,6 +197,7 @@ class GridPlanner:
         w = grid.shape[1]
         s_i, g_i = s_rc[0] * w + s_rc[1], g_rc[0] * w + g_rc[1]
         from scipy.sparse.csgraph import dijkstra
+
         dist, pred = dijkstra(self._graph, directed=True, indices=s_i, return_predecessors=True)
         if not math.isfinite(dist[g_i]):
             return fail(

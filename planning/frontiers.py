@@ -7,6 +7,7 @@ reached through free space from the robot); the chosen frontier is the one with 
 shortest path there, discounted for its size, so that the robot finishes a room before
 it drives off to a small gap far away (Yamauchi's nearest-frontier rule, weighted).
 """
+
 from __future__ import annotations
 
 import math
@@ -21,14 +22,23 @@ from .grid import Costmap
 __all__ = ["Frontier", "frontiers", "next_frontier", "path_distances"]
 
 #: 8-connected steps (row, col, length in cells)
-_STEPS = [(-1, 0, 1.0), (1, 0, 1.0), (0, -1, 1.0), (0, 1, 1.0),
-          (-1, -1, math.sqrt(2)), (-1, 1, math.sqrt(2)), (1, -1, math.sqrt(2)), (1, 1, math.sqrt(2))]
+_STEPS = [
+    (-1, 0, 1.0),
+    (1, 0, 1.0),
+    (0, -1, 1.0),
+    (0, 1, 1.0),
+    (-1, -1, math.sqrt(2)),
+    (-1, 1, math.sqrt(2)),
+    (1, -1, math.sqrt(2)),
+    (1, 1, math.sqrt(2)),
+]
 
 
 @dataclass(frozen=True)
 class Frontier:
     """One frontier: its size [cells], its middle (x, y) [m], the goal (x, y, yaw) to drive
     to and the path length there [m] (inf when no reachable cell is near it)."""
+
     size: int
     middle: tuple[float, float]
     goal: tuple[float, float, float] | None
@@ -67,8 +77,14 @@ def path_distances(costmap: Costmap, start: tuple[float, float]) -> np.ndarray:
     return dist
 
 
-def frontiers(costmap: Costmap, start: tuple[float, float], *, min_size: float = 0.3,
-              goal_radius: float = 1.0, min_unknown: float = 0.5) -> list[Frontier]:
+def frontiers(
+    costmap: Costmap,
+    start: tuple[float, float],
+    *,
+    min_size: float = 0.3,
+    goal_radius: float = 1.0,
+    min_unknown: float = 0.5,
+) -> list[Frontier]:
     """Every frontier of ``costmap``'s grid at least ``min_size`` [m] long, nearest first.
 
     Args:
@@ -81,6 +97,7 @@ def frontiers(costmap: Costmap, start: tuple[float, float], *, min_size: float =
             laser cannot see into it from anywhere, and there is nothing there to map
     """
     from scipy import ndimage
+
     if not (min_size >= 0 and goal_radius > 0 and min_unknown >= 0):
         raise InvalidInputError("min_size and min_unknown must be >= 0 and goal_radius > 0 m")
     g = costmap.grid
@@ -90,7 +107,7 @@ def frontiers(costmap: Costmap, start: tuple[float, float], *, min_size: float =
     # the unknown worth exploring: pockets of it that are big, or open to the map's edge
     pockets, n_pockets = ndimage.label(unknown, structure=np.ones((3, 3), bool))
     if n_pockets:
-        area = ndimage.sum_labels(unknown, pockets, index=np.arange(1, n_pockets + 1)) * g.resolution ** 2
+        area = ndimage.sum_labels(unknown, pockets, index=np.arange(1, n_pockets + 1)) * g.resolution**2
         edge = np.unique(np.concatenate([pockets[0], pockets[-1], pockets[:, 0], pockets[:, -1]]))
         worth = area >= min_unknown
         worth[edge[edge > 0] - 1] = True
@@ -102,7 +119,7 @@ def frontiers(costmap: Costmap, start: tuple[float, float], *, min_size: float =
         return []
     dist = path_distances(costmap, start)
     reach_rows, reach_cols = np.nonzero(np.isfinite(dist))
-    reach_x, reach_y = g.center_of(reach_rows, reach_cols)   # arrays, elementwise
+    reach_x, reach_y = g.center_of(reach_rows, reach_cols)  # arrays, elementwise
     sizes = ndimage.sum_labels(cells, labels, index=np.arange(1, n + 1))
     out = []
     for k in range(n):
@@ -130,8 +147,15 @@ def frontiers(costmap: Costmap, start: tuple[float, float], *, min_size: float =
     return out
 
 
-def next_frontier(costmap: Costmap, start: tuple[float, float], *, avoid: list | tuple = (),
-                  avoid_radius: float = 0.5, size_weight: float = 0.02, **kwargs) -> Frontier | None:
+def next_frontier(
+    costmap: Costmap,
+    start: tuple[float, float],
+    *,
+    avoid: list | tuple = (),
+    avoid_radius: float = 0.5,
+    size_weight: float = 0.02,
+    **kwargs,
+) -> Frontier | None:
     """The frontier to explore next: reachable, not near a point of ``avoid`` (goals that
     failed before), with the smallest path length minus ``size_weight`` [m per cell] times
     its size. None when the map has no reachable frontier left: the exploration is done."""

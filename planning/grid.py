@@ -80,9 +80,7 @@ class OccupancyGrid:
     @overload
     def center_of(self, row: np.ndarray, col: np.ndarray) -> tuple[np.ndarray, np.ndarray]: ...
 
-    def center_of(
-        self, row: int | np.ndarray, col: int | np.ndarray
-    ) -> tuple[float | np.ndarray, float | np.ndarray]:
+    def center_of(self, row: int | np.ndarray, col: int | np.ndarray) -> tuple[float | np.ndarray, float | np.ndarray]:
         """Map position (x, y) [m] of a cell centre (of each cell, elementwise, for arrays)."""
         return (
             self.origin[0] + (col + 0.5) * self.resolution,
@@ -173,6 +171,7 @@ def inflate(
         # centre-to-centre distance minus half a cell (conservative for the
         # footprint, which must not overlap the obstacle cell).
         from scipy import ndimage  # here, not at import: scipy costs ~1 s of every start-up
+
         dist = ndimage.distance_transform_edt(~obstacle) * grid.resolution
         clearance = np.maximum(dist - 0.5 * grid.resolution, 0.0)
         clearance[obstacle] = 0.0

@@ -213,8 +213,7 @@ class ArmKinematics:
         movable = [j for j in chain if j.movable]
         if tuple(j.name for j in movable) != names:
             raise ModelError(
-                f"movable joints from {root!r} to {tip!r} are {[j.name for j in movable]}, "
-                f"expected {list(names)}"
+                f"movable joints from {root!r} to {tip!r} are {[j.name for j in movable]}, expected {list(names)}"
             )
         for j in movable:
             if j.type == "prismatic":
@@ -397,7 +396,9 @@ class ArmKinematics:
         yaw_options: list[tuple[float, float, bool]] = []  # (psi, radial reach R, reversed)
         if rho < abs(pl.lateral) - _TOL:
             return IKResult(
-                target, (), FailureReason.UNREACHABLE,
+                target,
+                (),
+                FailureReason.UNREACHABLE,
                 f"{target} is {rho:.4f} m from the joint1 axis, closer than the arm's "
                 f"lateral offset {abs(pl.lateral):.4f} m",
             )
@@ -412,7 +413,9 @@ class ArmKinematics:
 
         if heading not in ("outward", "inward", "any"):
             return IKResult(
-                target, (), FailureReason.INVALID_INPUT,
+                target,
+                (),
+                FailureReason.INVALID_INPUT,
                 f"heading must be 'outward', 'inward' or 'any', got {heading!r}",
             )
         # The tool x axis lies in the arm plane at the in-plane angle -phi from the
@@ -423,9 +426,7 @@ class ArmKinematics:
         (l1, b1), (l2, b2), (l3, b3) = pl.links
         solutions: list[IKSolution] = []
         reasons: list[str] = []
-        for (psi, r, rev), (tool_angle, along) in (
-            (y, t) for y in yaw_options for t in in_plane
-        ):
+        for (psi, r, rev), (tool_angle, along) in ((y, t) for y in yaw_options for t in in_plane):
             outward = along != rev  # the reach points at the target unless reversed
             if vertical:
                 outward = True
@@ -442,13 +443,12 @@ class ArmKinematics:
             cos_delta = (dist2 - l1 * l1 - l2 * l2) / (2.0 * l1 * l2)
             if abs(cos_delta) > 1.0 + 1e-9:
                 reasons.append(
-                    f"wrist {math.sqrt(dist2):.4f} m from the shoulder, reach is "
-                    f"{abs(l1 - l2):.4f}..{l1 + l2:.4f} m"
+                    f"wrist {math.sqrt(dist2):.4f} m from the shoulder, reach is {abs(l1 - l2):.4f}..{l1 + l2:.4f} m"
                 )
                 continue
             cos_delta = min(1.0, max(-1.0, cos_delta))
             base_delta = math.acos(cos_delta)
-            for delta in ((base_delta, -base_delta) if base_delta > 1e-12 else (0.0,)):
+            for delta in (base_delta, -base_delta) if base_delta > 1e-12 else (0.0,):
                 th1 = math.atan2(wz, wx) - math.atan2(l2 * math.sin(delta), l1 + l2 * math.cos(delta))
                 th2 = th1 + delta
                 u2 = b1 - th1

@@ -196,9 +196,7 @@ def _random_shortcut(
     return path
 
 
-def _simplify(
-    reduced: list[np.ndarray], valid: SegmentCheck, attempts: int, deadline: float
-) -> list[np.ndarray]:
+def _simplify(reduced: list[np.ndarray], valid: SegmentCheck, attempts: int, deadline: float) -> list[np.ndarray]:
     path = _greedy_shortcut(reduced, valid)
     path = _random_shortcut(path, valid, np.random.default_rng(0), attempts, deadline)
     return _greedy_shortcut(path, valid)
@@ -266,8 +264,11 @@ def _plan(
     remaining = timeout - (time.perf_counter() - t0)
     if remaining <= 0:
         return _fail(
-            t0, FailureReason.TIMEOUT, f"no time left for {planner} after the checks ({timeout} s budget)",
-            planner, start,
+            t0,
+            FailureReason.TIMEOUT,
+            f"no time left for {planner} after the checks ({timeout} s budget)",
+            planner,
+            start,
         )
     status = ss.solve(remaining)
     if not ss.haveExactSolutionPath():
@@ -275,10 +276,12 @@ def _plan(
         timed_out = "timeout" in text.lower() or "approximate" in text.lower()
         reason = FailureReason.TIMEOUT if timed_out else FailureReason.NO_PATH
         return _fail(
-            t0, reason,
+            t0,
+            reason,
             f"{planner} found no collision-free path in {remaining:.3f} s ({text}) "
             f"from {np.round(start, 3).tolist()} to {len(goals)} goal state(s)",
-            planner, start,
+            planner,
+            start,
         )
     solution = ss.getSolutionPath()
     raw = [np.array([st[0], st[1], st[2], st[3]]) for st in solution.getStates()]
@@ -312,9 +315,11 @@ def _plan(
             break
     else:
         return _fail(
-            t0, FailureReason.RECHECK_FAILED,
+            t0,
+            FailureReason.RECHECK_FAILED,
             f"{planner} returned a path that collides when re-checked every {recheck_resolution} rad",
-            planner, start,
+            planner,
+            start,
         )
     return MotionPlan(
         path=_tuple_path(path),
@@ -402,13 +407,23 @@ def plan_joint_motion(
     report = scene.check(qg)
     if not report.valid:
         return _fail(
-            t0, FailureReason.GOAL_INVALID, f"goal {np.round(qg, 4).tolist()} is invalid: {report.describe()}",
-            planner, q0,
+            t0,
+            FailureReason.GOAL_INVALID,
+            f"goal {np.round(qg, 4).tolist()} is invalid: {report.describe()}",
+            planner,
+            q0,
         )
     return _plan(
-        q0, [qg], scene,
-        planner=planner, timeout=timeout, resolution=resolution, recheck_resolution=recheck_resolution,
-        simplify=simplify, try_straight=try_straight, t0=t0,
+        q0,
+        [qg],
+        scene,
+        planner=planner,
+        timeout=timeout,
+        resolution=resolution,
+        recheck_resolution=recheck_resolution,
+        simplify=simplify,
+        try_straight=try_straight,
+        t0=t0,
     )
 
 
@@ -459,12 +474,21 @@ def plan_pose_motion(
             problems.append(f"elbow {sol.elbow}: {report.describe()}")
     if not goals:
         return _fail(
-            t0, FailureReason.GOAL_INVALID,
+            t0,
+            FailureReason.GOAL_INVALID,
             f"every IK solution for {pose} is in collision: " + "; ".join(problems),
-            planner, q0,
+            planner,
+            q0,
         )
     return _plan(
-        q0, goals, scene,
-        planner=planner, timeout=timeout, resolution=resolution, recheck_resolution=recheck_resolution,
-        simplify=simplify, try_straight=try_straight, t0=t0,
+        q0,
+        goals,
+        scene,
+        planner=planner,
+        timeout=timeout,
+        resolution=resolution,
+        recheck_resolution=recheck_resolution,
+        simplify=simplify,
+        try_straight=try_straight,
+        t0=t0,
     )

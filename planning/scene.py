@@ -347,9 +347,7 @@ class PlanningScene:
         orientation: Sequence[float] = (0.0, 0.0, 0.0, 1.0),
     ) -> Obstacle:
         """Add (or replace) a box of full extents ``size`` [m] centred at ``position`` [m]."""
-        return self._add(
-            Obstacle(name, "box", _vec(size, 3, "size"), _vec3(position, "position"), _quat(orientation))
-        )
+        return self._add(Obstacle(name, "box", _vec(size, 3, "size"), _vec3(position, "position"), _quat(orientation)))
 
     def add_cylinder(
         self,

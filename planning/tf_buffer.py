@@ -10,6 +10,7 @@ plain-Python half; who subscribes the topics is the caller's business.
 Frames follow REP 105: ``map`` → ``odom`` (the localiser) → ``base_footprint`` (odometry)
 → ``base_link`` → sensors and arm links (the robot description).
 """
+
 from __future__ import annotations
 
 import bisect
@@ -33,10 +34,13 @@ def quaternion_matrix(x: float, y: float, z: float, w: float) -> np.ndarray:
     """Rotation (3, 3) of a quaternion (normalised first)."""
     n = math.sqrt(x * x + y * y + z * z + w * w) or 1.0
     x, y, z, w = x / n, y / n, z / n, w / n
-    return np.array([
-        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+        ]
+    )
 
 
 def matrix_quaternion(R: np.ndarray) -> tuple[float, float, float, float]:
@@ -123,8 +127,10 @@ class _Edge:
             if len(times) == 1 and abs(t - times[0]) < 1e-9:
                 return self.values[0]
             when = "after the latest" if t > times[-1] else "before the oldest"
-            raise TransformError(f"{self.parent} -> {child} at t={t:.3f} s is {when} transform "
-                                 f"(known from {times[0]:.3f} to {times[-1]:.3f} s)")
+            raise TransformError(
+                f"{self.parent} -> {child} at t={t:.3f} s is {when} transform "
+                f"(known from {times[0]:.3f} to {times[-1]:.3f} s)"
+            )
         i = bisect.bisect_left(times, t)
         if times[i] == t:
             return self.values[i]
@@ -136,7 +142,7 @@ class TransformBuffer:
     """Frames joined by transforms; see the module docstring."""
 
     def __init__(self) -> None:
-        self._edges: dict[str, _Edge] = {}   # child -> its edge from the parent
+        self._edges: dict[str, _Edge] = {}  # child -> its edge from the parent
 
     # -- feeding ---------------------------------------------------------------------
     def set(self, parent: str, child: str, T: np.ndarray, t: float = 0.0, static: bool = False) -> None:
@@ -152,12 +158,16 @@ class TransformBuffer:
         for ts in getattr(msg, "transforms", [msg]):
             tr, q = ts.transform.translation, ts.transform.rotation
             stamp = ts.header.stamp
-            self.set(ts.header.frame_id, ts.child_frame_id,
-                     transform_matrix((tr.x, tr.y, tr.z), (q.x, q.y, q.z, q.w)),
-                     stamp.sec + stamp.nanosec * 1e-9, static)
+            self.set(
+                ts.header.frame_id,
+                ts.child_frame_id,
+                transform_matrix((tr.x, tr.y, tr.z), (q.x, q.y, q.z, q.w)),
+                stamp.sec + stamp.nanosec * 1e-9,
+                static,
+            )
 
     # -- asking ----------------------------------------------------------------------
-    def frames(self) -> builtins.set[str]:    # builtins: the class's own set() shadows the type here
+    def frames(self) -> builtins.set[str]:  # builtins: the class's own set() shadows the type here
         return set(self._edges) | {e.parent for e in self._edges.values()}
 
     def can_transform(self, target: str, source: str, t: float | None = None) -> bool:
@@ -175,8 +185,9 @@ class TransformBuffer:
         up_target = self._to_root(target, t)
         common = next((f for f in up_source if f in up_target), None)
         if common is None:
-            raise TransformError(f"{target} and {source} are not connected "
-                                 f"(known frames: {', '.join(sorted(self.frames())) or 'none'})")
+            raise TransformError(
+                f"{target} and {source} are not connected (known frames: {', '.join(sorted(self.frames())) or 'none'})"
+            )
         return invert(up_target[common]) @ up_source[common]
 
     def _to_root(self, frame: str, t: float | None) -> dict[str, np.ndarray]:

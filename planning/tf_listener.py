@@ -8,6 +8,7 @@ the base driver on a robot) sends odom -> base_footprint and every joint of the 
 dynamic edges whose child is in ``children`` are kept (every static edge is): parsing the
 arm's joints 30 times a second would cost more than all the rest.
 """
+
 from __future__ import annotations
 
 from typing import Any, Callable, Iterable
@@ -34,13 +35,16 @@ class TfListener:
         on_tf: called with each /tf message, after the buffer has it
     """
 
-    def __init__(self, bus: Any, children: Iterable[str] | None = BASE_CHILDREN,
-                 on_tf: Callable[[Any], None] | None = None) -> None:
+    def __init__(
+        self, bus: Any, children: Iterable[str] | None = BASE_CHILDREN, on_tf: Callable[[Any], None] | None = None
+    ) -> None:
         self.buffer = TransformBuffer()
         self._keep = None if children is None else frozenset(children)
         self._on_tf_cb = on_tf
-        self._subs = [bus.subscribe(TF, TFMessage, self._on_tf, 100),
-                      bus.subscribe(TF_STATIC, TFMessage, self._on_static, "latched")]
+        self._subs = [
+            bus.subscribe(TF, TFMessage, self._on_tf, 100),
+            bus.subscribe(TF_STATIC, TFMessage, self._on_static, "latched"),
+        ]
 
     def close(self) -> None:
         for s in self._subs:

@@ -49,9 +49,7 @@ class JointLimits:
         for name in ("velocity", "acceleration", "jerk"):
             values = getattr(self, name)
             if len(values) != n or n == 0:
-                raise InvalidInputError(
-                    f"JointLimits.{name} has {len(values)} values, velocity has {n}"
-                )
+                raise InvalidInputError(f"JointLimits.{name} has {len(values)} values, velocity has {n}")
             if not all(math.isfinite(v) and v > 0 for v in values):
                 raise InvalidInputError(f"JointLimits.{name} must be finite and > 0, got {values}")
             object.__setattr__(self, name, tuple(float(v) for v in values))

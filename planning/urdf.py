@@ -90,9 +90,7 @@ class UrdfRobot:
         try:
             return self.joints[name]
         except KeyError:
-            raise ModelError(
-                f"{self.path.name}: no joint {name!r}; joints are {sorted(self.joints)}"
-            ) from None
+            raise ModelError(f"{self.path.name}: no joint {name!r}; joints are {sorted(self.joints)}") from None
 
     def parent_joint(self, link: str) -> UrdfJoint | None:
         """The joint whose child is ``link``; None for the root link."""
@@ -105,9 +103,7 @@ class UrdfRobot:
         """Joints from ``root`` down to ``tip``, in order from the root."""
         for link in (root, tip):
             if link not in self.links:
-                raise ModelError(
-                    f"{self.path.name}: no link {link!r}; links are {sorted(self.links)}"
-                )
+                raise ModelError(f"{self.path.name}: no link {link!r}; links are {sorted(self.links)}")
         chain: list[UrdfJoint] = []
         link = tip
         while link != root:

@@ -7,6 +7,7 @@ free cells within ``view_range`` along unobstructed grid rays, then a greedy set
 (the classic art-gallery heuristic) until ``coverage`` of the reachable floor is seen,
 ordered as a nearest-neighbour tour from the start.
 """
+
 from __future__ import annotations
 
 import math
@@ -19,12 +20,13 @@ from .grid import Costmap
 
 __all__ = ["viewpoints"]
 
-RAYS = 90               # directions cast from each candidate (4 degrees apart)
+RAYS = 90  # directions cast from each candidate (4 degrees apart)
 
 
 def _reachable(costmap: Costmap, start: tuple[float, float]) -> np.ndarray:
     """Cells the robot centre can reach from ``start`` (the nearest free cell to it)."""
     from scipy import ndimage
+
     free = ~costmap.lethal
     labels, n = ndimage.label(free)
     if n == 0:
@@ -55,9 +57,17 @@ def _visible(see_through: np.ndarray, r0: int, c0: int, steps: int) -> np.ndarra
     return np.unique(rr[seen] * w + cc[seen])
 
 
-def viewpoints(costmap: Costmap, start: tuple[float, float], *, view_range: float = 2.5,
-               spacing: float = 0.5, coverage: float = 0.9, min_gain: float = 0.01,
-               max_views: int = 30, seen_from: Sequence[tuple[float, float]] = ()) -> list[tuple[float, float]]:
+def viewpoints(
+    costmap: Costmap,
+    start: tuple[float, float],
+    *,
+    view_range: float = 2.5,
+    spacing: float = 0.5,
+    coverage: float = 0.9,
+    min_gain: float = 0.01,
+    max_views: int = 30,
+    seen_from: Sequence[tuple[float, float]] = (),
+) -> list[tuple[float, float]]:
     """Places (x, y) [m] from which the reachable floor of ``costmap`` is seen.
 
     Args:

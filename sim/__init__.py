@@ -10,6 +10,7 @@ Helpers for the CLI: write_map(world, seed, out_pgm), snapshot(world, seed, out_
 The names below are imported on first use (PEP 562), so ``import sim.cli`` (what
 ``actorbt --help`` does to list the ``sim`` commands) loads neither pybullet nor numpy.
 """
+
 from __future__ import annotations
 
 import importlib
@@ -23,8 +24,13 @@ if TYPE_CHECKING:
 __all__ = ["SimWorld", "start_world", "WorldError", "WorldSpec", "list_worlds", "load_world", "write_map", "snapshot"]
 
 #: name -> the submodule that defines it
-_LAZY = {"SimWorld": "simworld", "WorldError": "world_spec", "WorldSpec": "world_spec",
-         "list_worlds": "description", "load_world": "description"}
+_LAZY = {
+    "SimWorld": "simworld",
+    "WorldError": "world_spec",
+    "WorldSpec": "world_spec",
+    "list_worlds": "description",
+    "load_world": "description",
+}
 
 
 def __getattr__(name: str) -> Any:
@@ -50,13 +56,14 @@ def write_map(world="house", seed=0, out_pgm="map.pgm", resolution=0.05, height=
     return write_pgm_yaml(build_grid(load_world(world, seed, locations), resolution, height), out_pgm)
 
 
-def snapshot(world="house", seed=0, out_png="world.png", camera=False, camera_size=(640, 480),
-             locations=None):
+def snapshot(world="house", seed=0, out_png="world.png", camera=False, camera_size=(640, 480), locations=None):
     """Top view PNG of the world; with camera=True also <out>_camera.png (RGB | depth).
     Returns the list of files written."""
     from .topview import snapshot as _snapshot
+
     if locations is not None:
         from .description import load_world
+
         world = load_world(world, seed, locations)
 
     return _snapshot(world, seed, out_png, camera=camera, camera_size=camera_size)

@@ -14,6 +14,7 @@ Gripper (``gripper_action_controller``): the one place that maps the real
 OpenManipulator-X's gripper position onto the simulated fingers, see
 :func:`gripper_opening`.
 """
+
 from __future__ import annotations
 
 import bisect
@@ -54,7 +55,7 @@ class ArmTrajectory:
                 raise TrajectoryError("time_from_start must increase from point to point")
             row = [pos.get(n, self.pos[-1][i]) for i, n in enumerate(self.names)]
             vrow = [vel.get(n, 0.0) for n in self.names] if vel is not None else [0.0] * len(self.names)
-            if t == 0.0:      # a point at t=0 replaces the start
+            if t == 0.0:  # a point at t=0 replaces the start
                 self.pos[0], self.vel[0] = row, vrow
                 have_vel[0] = vel is not None
                 continue
@@ -106,16 +107,18 @@ def stop_trajectory(joint_names, now, positions, velocities, deceleration):
     if duration < 1e-3:
         return ArmTrajectory(joint_names, now, positions, [])
     end = {n: p + v * duration / 2 for n, p, v in zip(joint_names, positions, velocities)}
-    return ArmTrajectory(joint_names, now, positions, [(duration, end, {n: 0.0 for n in joint_names})],
-                         start_velocities=velocities)
+    return ArmTrajectory(
+        joint_names, now, positions, [(duration, end, {n: 0.0 for n in joint_names})], start_velocities=velocities
+    )
 
 
 def duration_to_sec(d) -> float:
     return float(d.sec) + float(d.nanosec) * 1e-9
 
 
-def trajectory_from_msg(msg, arm_names, now, start_positions, start_velocities=None, *,
-                        allow_partial=False, stamp_offset=0.0):
+def trajectory_from_msg(
+    msg, arm_names, now, start_positions, start_velocities=None, *, allow_partial=False, stamp_offset=0.0
+):
     """Build an ArmTrajectory from a trajectory_msgs/JointTrajectory, or raise
     :class:`TrajectoryError` for what joint_trajectory_controller refuses: no joint
     names, a joint named twice or not the arm's, only some of the arm's joints (unless
@@ -130,12 +133,16 @@ def trajectory_from_msg(msg, arm_names, now, start_positions, start_velocities=N
         raise TrajectoryError(f"joints named twice on incoming trajectory: {names}", INVALID_JOINTS)
     unknown = [n for n in names if n not in arm_names]
     if unknown:
-        raise TrajectoryError(f"incoming joints {unknown} are not the controller's "
-                              f"(arm joints: {list(arm_names)})", INVALID_JOINTS)
+        raise TrajectoryError(
+            f"incoming joints {unknown} are not the controller's (arm joints: {list(arm_names)})", INVALID_JOINTS
+        )
     if not allow_partial and len(names) != len(arm_names):
         missing = [n for n in arm_names if n not in names]
-        raise TrajectoryError(f"the trajectory leaves out joints {missing}; this controller "
-                              "takes all of its joints (allow_partial_joints_goal false)", INVALID_JOINTS)
+        raise TrajectoryError(
+            f"the trajectory leaves out joints {missing}; this controller "
+            "takes all of its joints (allow_partial_joints_goal false)",
+            INVALID_JOINTS,
+        )
     if not msg.points:
         raise TrajectoryError("empty trajectory: no points")
     pts = []
@@ -151,9 +158,11 @@ def trajectory_from_msg(msg, arm_names, now, start_positions, start_velocities=N
                 raise TrajectoryError(f"point {i}: {n} {field} for {len(names)} joints")
         t = duration_to_sec(pt.time_from_start)
         if t < 0.0 or (t <= last_t):
-            raise TrajectoryError(f"time_from_start of point {i} ({t:g} s) does not increase "
-                                  f"from the point before ({last_t:g} s)" if i else
-                                  f"time_from_start of point 0 is negative ({t:g} s)")
+            raise TrajectoryError(
+                f"time_from_start of point {i} ({t:g} s) does not increase from the point before ({last_t:g} s)"
+                if i
+                else f"time_from_start of point 0 is negative ({t:g} s)"
+            )
         last_t = t
         vel = dict(zip(names, pt.velocities)) if len(pt.velocities) else None
         pts.append((t, dict(zip(names, pt.positions)), vel))
@@ -161,11 +170,13 @@ def trajectory_from_msg(msg, arm_names, now, start_positions, start_velocities=N
     if any(v != 0.0 for v in last.velocities):
         raise TrajectoryError("the velocity of the last trajectory point is not zero")
     stamp = float(msg.header.stamp.sec) + float(msg.header.stamp.nanosec) * 1e-9
-    stamped = stamp > 0.0              # a zero stamp means "start now"
+    stamped = stamp > 0.0  # a zero stamp means "start now"
     stamp -= stamp_offset
     if stamped and stamp + last_t < now:
-        raise TrajectoryError(f"the trajectory (header stamp {stamp + stamp_offset:.3f} s) ended "
-                              f"{now - stamp - last_t:.3f} s ago", OLD_HEADER_TIMESTAMP)
+        raise TrajectoryError(
+            f"the trajectory (header stamp {stamp + stamp_offset:.3f} s) ended {now - stamp - last_t:.3f} s ago",
+            OLD_HEADER_TIMESTAMP,
+        )
     start = stamp if stamped and stamp > now else now
     return ArmTrajectory(arm_names, start, start_positions, pts, start_velocities)
 

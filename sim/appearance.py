@@ -11,6 +11,7 @@ Everything is off by default: house and open_floor render exactly as they always
   model), plus dropouts (NaN) at depth edges and, ever less often, on surfaces seen at
   grazing angles, and a few random ones; drawn from a stream seeded by the world seed.
 """
+
 from __future__ import annotations
 
 import math
@@ -23,6 +24,7 @@ import numpy as np
 class ColorJitter:
     """Per object: hue turned by up to ``hue`` (fraction of the colour circle), saturation
     and brightness scaled by up to ``saturation`` and ``value``."""
+
     hue: float = 0.015
     saturation: float = 0.10
     value: float = 0.12
@@ -32,6 +34,7 @@ class ColorJitter:
 class LightingRange:
     """What a seed draws the lighting from: the light's elevation [deg] and azimuth (any),
     the brightness gain, the per-channel white-balance spread and the ambient lift."""
+
     elevation: tuple[float, float] = (25.0, 80.0)
     brightness: tuple[float, float] = (0.75, 1.15)
     tint: float = 0.08
@@ -43,6 +46,7 @@ class DepthNoise:
     """sigma(z) = a + b (z - z0)^2 [m]; ``dropout``: the chance a pixel on a depth edge
     returns nothing, falling linearly to 0 for surfaces seen ``grazing_deg`` off facing the
     camera; ``speckle``: the chance any pixel returns nothing."""
+
     a: float = 0.0012
     b: float = 0.0019
     z0: float = 0.4
@@ -54,6 +58,7 @@ class DepthNoise:
 @dataclass(frozen=True)
 class Appearance:
     """What a world draws beyond plain colours. All off: the default."""
+
     labels: bool = False
     lighting: LightingRange | None = None
     color_jitter: ColorJitter | None = None
@@ -69,6 +74,7 @@ class Lighting:
     """One seed's lighting: ``direction`` (towards the light, world frame) for the renderer;
     ``gain`` (r, g, b) and ``ambient`` applied to the colour image: out = in * gain +
     ambient * 255."""
+
     direction: tuple[float, float, float]
     gain: tuple[float, float, float]
     ambient: float = 0.0
@@ -80,7 +86,7 @@ class Lighting:
         direction = (math.cos(el) * math.cos(az), math.cos(el) * math.sin(az), math.sin(el))
         bright = rng.uniform(*r.brightness)
         tint = rng.uniform(-r.tint, r.tint, 3)
-        tint -= tint.mean()                 # white balance: shifts between channels
+        tint -= tint.mean()  # white balance: shifts between channels
         gr, gg, gb = (float(bright * (1 + t)) for t in tint)
         return cls(direction, (gr, gg, gb), float(rng.uniform(*r.ambient)))
 
@@ -103,7 +109,7 @@ def noisy_depth(depth: np.ndarray, rng: np.random.Generator, model: DepthNoise, 
     gx = np.fmax(np.abs(zp[1:-1, 2:] - zp[1:-1, 1:-1]), np.abs(zp[1:-1, 1:-1] - zp[1:-1, :-2]))
     gy = np.fmax(np.abs(zp[2:, 1:-1] - zp[1:-1, 1:-1]), np.abs(zp[1:-1, 1:-1] - zp[:-2, 1:-1]))
     slope = np.fmax(gx, gy) * fx / np.maximum(zv, 1e-3)
-    slope = np.where(np.isfinite(slope), slope, np.inf)       # next to a hole: an edge
+    slope = np.where(np.isfinite(slope), slope, np.inf)  # next to a hole: an edge
     # the chance of a dropout grows from 0 at grazing_deg to ``dropout`` at 90 deg (edges)
     angle = np.degrees(np.arctan(slope))
     g = model.grazing_deg

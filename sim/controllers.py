@@ -44,6 +44,7 @@ position above the closed end) is told apart from closing on nothing (reached_go
 -0.010). A new goal preempts the running one (canceled, empty result); a cancel holds the
 fingers where they are.
 """
+
 from __future__ import annotations
 
 import logging
@@ -56,9 +57,16 @@ from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 from bt_engine.bus.actions import ServerGoal
 from bt_engine.errors import ActorbtError
 
-from .actuators import (ArmTrajectory, TrajectoryError, duration_to_sec,
-                        gripper_opening, gripper_position, gripper_speed, stop_trajectory,
-                        trajectory_from_msg)
+from .actuators import (
+    ArmTrajectory,
+    TrajectoryError,
+    duration_to_sec,
+    gripper_opening,
+    gripper_position,
+    gripper_speed,
+    stop_trajectory,
+    trajectory_from_msg,
+)
 from .robot import ARM, GRIPPER_FORCE, JOINT_STATE_NAMES
 
 log = logging.getLogger("sim.controllers")
@@ -102,11 +110,11 @@ class GripperControllerConfig:
     OpenManipulator-X's stroke, which would call a half-open gripper open) and
     ``stall_timeout`` (1 s there)."""
 
-    goal_tolerance: float = 0.0003           # [m] of position (about 1 mm of opening here)
+    goal_tolerance: float = 0.0003  # [m] of position (about 1 mm of opening here)
     stall_velocity_threshold: float = 0.001  # [m/s] of position
-    stall_timeout: float = 0.5               # [s]
+    stall_timeout: float = 0.5  # [s]
     allow_stalling: bool = False
-    action_monitor_rate: float = 20.0        # feedback [Hz]
+    action_monitor_rate: float = 20.0  # feedback [Hz]
 
 
 def _stamp(t: float) -> Time:
@@ -140,7 +148,7 @@ class _ArmGoal:
     path_position: list[float]
     goal_time: float
     ticks: int = 0
-    number: int = 0       # 1 for the first goal this controller took
+    number: int = 0  # 1 for the first goal this controller took
 
 
 class ArmController:
@@ -150,7 +158,7 @@ class ArmController:
         self.sim = sim
         self.config = config or ArmControllerConfig()
         self.active: _ArmGoal | None = None
-        self.goals = 0                        # goals taken so far
+        self.goals = 0  # goals taken so far
         #: goal numbers to abort half way (a fault injected by ``actorbt robot --fault``)
         self.abort_goals: set[int] = set()
         self._feedback_every = max(1, round(1.0 / (sim.dt * self.config.action_monitor_rate)))
@@ -160,7 +168,7 @@ class ArmController:
     def close(self):
         self.sub.close()
         if self.server is not None:
-            self.server.close()           # aborts a running goal
+            self.server.close()  # aborts a running goal
         self.active = None
 
     # ---------------------------------------------------------------- commands
@@ -174,9 +182,15 @@ class ArmController:
 
     def _build(self, msg, now):
         pos, vel = self._start_state(now)
-        return trajectory_from_msg(msg, ARM, now, pos, vel,
-                                   allow_partial=self.config.allow_partial_joints_goal,
-                                   stamp_offset=self.sim.stamp_offset)
+        return trajectory_from_msg(
+            msg,
+            ARM,
+            now,
+            pos,
+            vel,
+            allow_partial=self.config.allow_partial_joints_goal,
+            stamp_offset=self.sim.stamp_offset,
+        )
 
     def on_trajectory(self, msg: JointTrajectory) -> bool:
         """A trajectory on the topic: replaces the running one (and preempts a goal)."""
@@ -194,8 +208,9 @@ class ArmController:
         req = goal.request
         now = self.sim.now()
         if req.multi_dof_trajectory.joint_names or req.multi_dof_trajectory.points:
-            goal.abort(ArmResult(error_code=ArmResult.INVALID_GOAL,
-                                 error_string="multi-DOF trajectories are not supported"))
+            goal.abort(
+                ArmResult(error_code=ArmResult.INVALID_GOAL, error_string="multi-DOF trajectories are not supported")
+            )
             return
         try:
             traj = self._build(req.trajectory, now)
@@ -214,8 +229,10 @@ class ArmController:
         goal_pos, goal_vel = [c.goal_position_tolerance] * n, [c.stopped_velocity_tolerance] * n
         path_pos = [c.path_position_tolerance] * n
         try:
-            for tolerances, pos_row, vel_row in ((req.goal_tolerance, goal_pos, goal_vel),
-                                                 (req.path_tolerance, path_pos, None)):
+            for tolerances, pos_row, vel_row in (
+                (req.goal_tolerance, goal_pos, goal_vel),
+                (req.path_tolerance, path_pos, None),
+            ):
                 for tol in tolerances:
                     if tol.name not in ARM:
                         raise ValueError(f"tolerance for an unknown joint {tol.name!r}")
@@ -250,8 +267,9 @@ class ArmController:
             return
         self.active = None
         self._stop(self.sim.now())
-        active.handle.canceled(ArmResult(error_code=ArmResult.SUCCESSFUL,
-                                         error_string="canceled: the arm decelerates to rest"))
+        active.handle.canceled(
+            ArmResult(error_code=ArmResult.SUCCESSFUL, error_string="canceled: the arm decelerates to rest")
+        )
 
     # ---------------------------------------------------------------- monitoring
     def update(self, now: float, joint_states=None) -> None:
@@ -274,38 +292,55 @@ class ArmController:
             g.handle.publish_feedback(fb)
         g.ticks += 1
         if g.number in self.abort_goals and now >= (g.traj.t0 + g.traj.end_time) / 2:
-            log.warning("%s: goal %d aborted half way (a fault injected on the robot side)",
-                        ARM_ACTION, g.number)
+            log.warning("%s: goal %d aborted half way (a fault injected on the robot side)", ARM_ACTION, g.number)
             self.active = None
             self._stop(now)
-            g.handle.abort(ArmResult(error_code=ArmResult.PATH_TOLERANCE_VIOLATED,
-                                     error_string="Aborted due to path tolerance violation "
-                                     "(a fault injected on the robot side)"))
+            g.handle.abort(
+                ArmResult(
+                    error_code=ArmResult.PATH_TOLERANCE_VIOLATED,
+                    error_string="Aborted due to path tolerance violation (a fault injected on the robot side)",
+                )
+            )
             return
         if now < g.traj.end_time:
-            bad = [f"{n} {abs(e):.3f} rad (tolerance {t:g})" for n, e, t in zip(ARM, error, g.path_position)
-                   if t > 0 and abs(e) > t]
+            bad = [
+                f"{n} {abs(e):.3f} rad (tolerance {t:g})"
+                for n, e, t in zip(ARM, error, g.path_position)
+                if t > 0 and abs(e) > t
+            ]
             if bad:
                 self.active = None
                 self._stop(now)
-                g.handle.abort(ArmResult(error_code=ArmResult.PATH_TOLERANCE_VIOLATED,
-                                         error_string="Aborted due to path tolerance violation: "
-                                         + ", ".join(bad)))
+                g.handle.abort(
+                    ArmResult(
+                        error_code=ArmResult.PATH_TOLERANCE_VIOLATED,
+                        error_string="Aborted due to path tolerance violation: " + ", ".join(bad),
+                    )
+                )
             return
-        bad = [f"{n} {abs(e):.4f} rad off (tolerance {t:g})"
-               for n, e, t in zip(ARM, error, g.goal_position) if t > 0 and abs(e) > t]
-        bad += [f"{n} still moving at {abs(w):.4f} rad/s (tolerance {t:g})"
-                for n, w, t in zip(ARM, actual_vel, g.goal_velocity) if t > 0 and abs(w) > t]
+        bad = [
+            f"{n} {abs(e):.4f} rad off (tolerance {t:g})"
+            for n, e, t in zip(ARM, error, g.goal_position)
+            if t > 0 and abs(e) > t
+        ]
+        bad += [
+            f"{n} still moving at {abs(w):.4f} rad/s (tolerance {t:g})"
+            for n, w, t in zip(ARM, actual_vel, g.goal_velocity)
+            if t > 0 and abs(w) > t
+        ]
         if not bad:
             self.active = None
-            g.handle.succeed(ArmResult(error_code=ArmResult.SUCCESSFUL,
-                                       error_string="Goal successfully reached!"))
+            g.handle.succeed(ArmResult(error_code=ArmResult.SUCCESSFUL, error_string="Goal successfully reached!"))
         elif g.goal_time > 0 and now - g.traj.end_time > g.goal_time:
-            self.active = None       # the last point stays commanded: the arm holds there
+            self.active = None  # the last point stays commanded: the arm holds there
             late = now - g.traj.end_time - g.goal_time
-            g.handle.abort(ArmResult(error_code=ArmResult.GOAL_TOLERANCE_VIOLATED,
-                                     error_string=f"Aborted due to goal_time_tolerance exceeding by "
-                                     f"{late:.3f} seconds: " + ", ".join(bad)))
+            g.handle.abort(
+                ArmResult(
+                    error_code=ArmResult.GOAL_TOLERANCE_VIOLATED,
+                    error_string=f"Aborted due to goal_time_tolerance exceeding by "
+                    f"{late:.3f} seconds: " + ", ".join(bad),
+                )
+            )
 
 
 def _resolve(default: float, value: float) -> float:
@@ -324,7 +359,7 @@ class _GripperGoal:
     handle: ServerGoal
     position: float
     last_movement: float
-    anchor: float            # the position when the fingers last counted as moving
+    anchor: float  # the position when the fingers last counted as moving
     ticks: int = field(default=0)
 
 
@@ -365,7 +400,7 @@ class GripperController:
         if self.active is active:
             self.active = None
             position, _, _ = self.state()
-            self.sim.set_gripper(gripper_opening(position))      # hold where they are
+            self.sim.set_gripper(gripper_opening(position))  # hold where they are
         active.handle.canceled(GripperResult())
 
     def update(self, now: float, joint_states=None) -> None:

@@ -39,6 +39,7 @@ Worlds with varied poses and looks (house_hard) add::
       color_jitter: {hue: 0.015, saturation: 0.1, value: 0.12}
       depth_noise: {a: 0.0012, b: 0.0019, z0: 0.4, dropout: 0.7, grazing_deg: 80, speckle: 0.001}
 """
+
 from __future__ import annotations
 
 import math
@@ -60,9 +61,9 @@ from .varied import Placer
 from .world_spec import POSE_KINDS, Box, Distractors, PlacedObject, PoseMix, WorldError, WorldSpec
 
 WORLDS_DIR = Path(__file__).resolve().parent / "worlds"
-ROBOT_RADIUS = 0.26     # circle around base_footprint that covers the Waffle Pi chassis
-DOOR_CLEARANCE = 0.6    # random objects keep this far from wall ends (doorways, corners)
-OTHERS = "others"       # an objects entry for one of every registered category not listed
+ROBOT_RADIUS = 0.26  # circle around base_footprint that covers the Waffle Pi chassis
+DOOR_CLEARANCE = 0.6  # random objects keep this far from wall ends (doorways, corners)
+OTHERS = "others"  # an objects entry for one of every registered category not listed
 
 
 def _rgba(ctx, node, default):
@@ -86,8 +87,7 @@ def _box(ctx, node, what, default_rgba, default_name, tables=False):
     sx, sy, sz = ctx.vec(m["size"][1], 3, f"{what}.size", positive=True)
     yaw = ctx.num(m["yaw"][1], f"{what}.yaw") if "yaw" in m else 0.0
     support = _bool(ctx, m["support"][1], f"{what}.support") if "support" in m else False
-    return Box(name, cx, cy, sx, sy, sz, yaw, _rgba(ctx, m.get("color", (None, None))[1], default_rgba),
-               support)
+    return Box(name, cx, cy, sx, sy, sz, yaw, _rgba(ctx, m.get("color", (None, None))[1], default_rgba), support)
 
 
 def _bool(ctx, node, what):
@@ -138,19 +138,39 @@ def _appearance(ctx, node) -> Appearance:
     if "labels" in m:
         kw["labels"] = _bool(ctx, m["labels"][1], "appearance.labels")
     if "lighting" in m:
-        kw["lighting"] = _switch(ctx, m["lighting"][1], "appearance.lighting", LightingRange,
-                                 {"elevation": "range", "brightness": "range", "tint": "fraction",
-                                  "ambient": "frange"})
+        kw["lighting"] = _switch(
+            ctx,
+            m["lighting"][1],
+            "appearance.lighting",
+            LightingRange,
+            {"elevation": "range", "brightness": "range", "tint": "fraction", "ambient": "frange"},
+        )
         el = kw["lighting"].elevation if kw["lighting"] else (0, 90)
         if not (0 < el[0] and el[1] <= 90):
             raise ctx.err(m["lighting"][1], f"appearance.lighting.elevation must be within 0..90 deg, got {list(el)}")
     if "color_jitter" in m:
-        kw["color_jitter"] = _switch(ctx, m["color_jitter"][1], "appearance.color_jitter", ColorJitter,
-                                     {"hue": "fraction", "saturation": "fraction", "value": "fraction"})
+        kw["color_jitter"] = _switch(
+            ctx,
+            m["color_jitter"][1],
+            "appearance.color_jitter",
+            ColorJitter,
+            {"hue": "fraction", "saturation": "fraction", "value": "fraction"},
+        )
     if "depth_noise" in m:
-        kw["depth_noise"] = _switch(ctx, m["depth_noise"][1], "appearance.depth_noise", DepthNoise,
-                                    {"a": "nonneg", "b": "nonneg", "z0": "nonneg", "dropout": "fraction",
-                                     "grazing_deg": "nonneg", "speckle": "fraction"})
+        kw["depth_noise"] = _switch(
+            ctx,
+            m["depth_noise"][1],
+            "appearance.depth_noise",
+            DepthNoise,
+            {
+                "a": "nonneg",
+                "b": "nonneg",
+                "z0": "nonneg",
+                "dropout": "fraction",
+                "grazing_deg": "nonneg",
+                "speckle": "fraction",
+            },
+        )
     return Appearance(**kw)
 
 
@@ -174,8 +194,12 @@ def _poses(ctx, node) -> PoseMix:
         on_tables = v
     if "settle_steps" in m:
         settle_steps = ctx.int_(m["settle_steps"][1], "poses.settle_steps", minimum=0)
-    return PoseMix(weights=tuple((k, weights.get(k, 0.0)) for k in POSE_KINDS), tilt_deg=tilt_deg,
-                   on_tables=on_tables, settle_steps=settle_steps)
+    return PoseMix(
+        weights=tuple((k, weights.get(k, 0.0)) for k in POSE_KINDS),
+        tilt_deg=tilt_deg,
+        on_tables=on_tables,
+        settle_steps=settle_steps,
+    )
 
 
 def _distractors(ctx, node) -> Distractors:
@@ -201,8 +225,9 @@ def _distractors(ctx, node) -> Distractors:
                 raise ctx.err(kn, f"distractors.kinds: unknown distractor '{k}' (one of: {', '.join(DECOYS)})")
             named.append(k)
         if not named:
-            raise ctx.err(m["kinds"][1], "distractors.kinds must name at least one distractor "
-                                         f"(one of: {', '.join(DECOYS)})")
+            raise ctx.err(
+                m["kinds"][1], f"distractors.kinds must name at least one distractor (one of: {', '.join(DECOYS)})"
+            )
         kinds = tuple(named)
     if "on_tables" in m:
         v = ctx.num(m["on_tables"][1], "distractors.on_tables", nonneg=True)
@@ -221,9 +246,27 @@ def parse_world(text: str, path: str = "<string>", seed: int = 0) -> WorldSpec:
     """Parse and validate a world description, then place its objects from ``seed``."""
     root, ctx = compose_yaml(text, path, "empty world description")
     top = ctx.mapping(root, "world")
-    ctx.keys(top, {"name", "bounds", "wall", "walls", "rooms", "furniture", "place_location",
-                   "robot", "objects", "placement", "description",
-                   "search_locations", "poses", "appearance", "distractors"}, "world")
+    ctx.keys(
+        top,
+        {
+            "name",
+            "bounds",
+            "wall",
+            "walls",
+            "rooms",
+            "furniture",
+            "place_location",
+            "robot",
+            "objects",
+            "placement",
+            "description",
+            "search_locations",
+            "poses",
+            "appearance",
+            "distractors",
+        },
+        "world",
+    )
     if "bounds" not in top:
         raise ctx.err(root, "world: missing 'bounds' [xmin, ymin, xmax, ymax]")
     name = ctx.str_(top["name"][1], "name") if "name" in top else Path(path).stem
@@ -248,8 +291,18 @@ def parse_world(text: str, path: str = "<string>", seed: int = 0) -> WorldSpec:
         if length <= 0:
             raise ctx.err(wn, f"walls[{i}]: zero-length wall")
         # extend by half a thickness at both ends so corners close
-        spec.walls.append(Box(f"wall_{i}", (x0 + x1) / 2, (y0 + y1) / 2, length + wall_t, wall_t,
-                              wall_h, math.atan2(y1 - y0, x1 - x0), WALL_RGBA))
+        spec.walls.append(
+            Box(
+                f"wall_{i}",
+                (x0 + x1) / 2,
+                (y0 + y1) / 2,
+                length + wall_t,
+                wall_t,
+                wall_h,
+                math.atan2(y1 - y0, x1 - x0),
+                WALL_RGBA,
+            )
+        )
 
     if "rooms" in top:
         for rname, (knode, rnode) in ctx.mapping(top["rooms"][1], "rooms").items():
@@ -263,8 +316,9 @@ def parse_world(text: str, path: str = "<string>", seed: int = 0) -> WorldSpec:
     names = [f.name for f in spec.furniture]
     for i, fn in enumerate(ctx.seq(top["furniture"][1], "furniture") if "furniture" in top else []):
         if spec.furniture[i].support and names.count(names[i]) > 1:
-            raise ctx.err(fn, f"furniture[{i}]: a table (support: true) needs a name of its own; "
-                                 f"'{names[i]}' is taken twice")
+            raise ctx.err(
+                fn, f"furniture[{i}]: a table (support: true) needs a name of its own; '{names[i]}' is taken twice"
+            )
 
     if "appearance" in top:
         spec.appearance = _appearance(ctx, top["appearance"][1])
@@ -274,8 +328,10 @@ def parse_world(text: str, path: str = "<string>", seed: int = 0) -> WorldSpec:
         spec.poses = _poses(ctx, top["poses"][1])
     distractors = _distractors(ctx, top["distractors"][1]) if "distractors" in top else None
     if distractors is not None and spec.poses is None:
-        raise ctx.err(top["distractors"][0], "distractors: needs a 'poses' block in the world "
-                                             "(distractors are placed as objects with varied poses are)")
+        raise ctx.err(
+            top["distractors"][0],
+            "distractors: needs a 'poses' block in the world (distractors are placed as objects with varied poses are)",
+        )
     tables = [f.name for f in spec.furniture if f.support]
 
     if "place_location" in top:
@@ -287,8 +343,9 @@ def parse_world(text: str, path: str = "<string>", seed: int = 0) -> WorldSpec:
         if "start" in rm:
             spec.robot_start = ctx.vec(rm["start"][1], 3, "robot.start")
 
-    for i, ln in enumerate(ctx.seq(top["search_locations"][1], "search_locations")
-                           if "search_locations" in top else []):
+    for i, ln in enumerate(
+        ctx.seq(top["search_locations"][1], "search_locations") if "search_locations" in top else []
+    ):
         x, y = ctx.vec(ln, 2, f"search_locations[{i}]")
         if not (bounds[0] <= x <= bounds[2] and bounds[1] <= y <= bounds[3]):
             raise ctx.err(ln, f"search_locations[{i}]: ({x:g}, {y:g}) is outside the bounds {list(bounds)}")
@@ -307,12 +364,11 @@ def parse_world(text: str, path: str = "<string>", seed: int = 0) -> WorldSpec:
     sx, sy, _ = spec.robot_start
     for ob in spec.obstacles:
         if ob.distance(sx, sy) < ROBOT_RADIUS:
-            raise ctx.err(top["robot"][1] if "robot" in top else root,
-                          f"robot.start ({sx}, {sy}) overlaps '{ob.name}'")
+            raise ctx.err(top["robot"][1] if "robot" in top else root, f"robot.start ({sx}, {sy}) overlaps '{ob.name}'")
 
-    entries = []   # (node, category, name, room, pose or None)
-    wanted = {}    # name -> (pose kind, support) asked for (None: drawn)
-    others = []    # (node, count, room) of "every category not listed" entries
+    entries = []  # (node, category, name, room, pose or None)
+    wanted = {}  # name -> (pose kind, support) asked for (None: drawn)
+    others = []  # (node, count, room) of "every category not listed" entries
     counters: dict[str, int] = {}
     for i, on in enumerate(ctx.seq(top["objects"][1], "objects") if "objects" in top else []):
         what = f"objects[{i}]"
@@ -323,8 +379,11 @@ def parse_world(text: str, path: str = "<string>", seed: int = 0) -> WorldSpec:
         cnode = om["category"][1]
         cat = ctx.str_(cnode, f"{what}.category")
         if cat not in CATEGORIES and cat != OTHERS:
-            raise ctx.err(cnode, f"{what}: unknown category '{cat}' (one of: {', '.join(CATEGORIES)}; "
-                                 f"or {OTHERS}: every category not listed)")
+            raise ctx.err(
+                cnode,
+                f"{what}: unknown category '{cat}' (one of: {', '.join(CATEGORIES)}; "
+                f"or {OTHERS}: every category not listed)",
+            )
         count = ctx.int_(om["count"][1], f"{what}.count", minimum=1) if "count" in om else 1
         room = None
         if "room" in om:
@@ -347,11 +406,15 @@ def parse_world(text: str, path: str = "<string>", seed: int = 0) -> WorldSpec:
             snode = om["support"][1]
             sup = ctx.str_(snode, f"{what}.support")
             if sup != "floor" and sup not in tables:
-                raise ctx.err(snode, f"{what}.support: expected 'floor' or a table (furniture with "
-                                     f"'support: true': {', '.join(tables) or 'none'}), got '{sup}'")
+                raise ctx.err(
+                    snode,
+                    f"{what}.support: expected 'floor' or a table (furniture with "
+                    f"'support: true': {', '.join(tables) or 'none'}), got '{sup}'",
+                )
             if sup != "floor" and kind not in (None, "upright"):
-                raise ctx.err(snode, f"{what}: objects on a table stand upright (pose_kind "
-                                     f"'{kind}' needs support: floor)")
+                raise ctx.err(
+                    snode, f"{what}: objects on a table stand upright (pose_kind '{kind}' needs support: floor)"
+                )
             if sup != "floor" and room is not None:
                 x0, y0, x1, y1 = spec.rooms[room]
                 t = next(f for f in spec.furniture if f.name == sup)
@@ -374,7 +437,7 @@ def parse_world(text: str, path: str = "<string>", seed: int = 0) -> WorldSpec:
             entries.append((on, cat, oname, room, pose))
             wanted[oname] = (kind, sup)
     listed = {e[1] for e in entries}
-    room_rng = np.random.default_rng([seed, 7])     # apart from the placement stream
+    room_rng = np.random.default_rng([seed, 7])  # apart from the placement stream
     for on, count, room, kind, sup in others:
         for cat in registry.names():
             if cat in listed:
@@ -403,13 +466,16 @@ def _place_varied(ctx, spec, entries, wanted, seed, clearance, tries, distractor
     """Placement in a world with ``poses``: see sim/varied.py."""
     placer = Placer(spec, clearance, tries, spec.poses, seed, ROBOT_RADIUS, DOOR_CLEARANCE)
     out = {}
-    for node, cat, name, room, pose in entries:      # fixed poses first: upright, on the floor
+    for node, cat, name, room, pose in entries:  # fixed poses first: upright, on the floor
         if pose is None:
             continue
         r = CATEGORIES[cat].radius
         if not placer.floor_free(pose[0], pose[1], r, 0.0, doorways=False):
-            raise ctx.err(node, f"object '{name}': pose ({pose[0]}, {pose[1]}) collides with a wall, "
-                                f"furniture, the robot start or another object")
+            raise ctx.err(
+                node,
+                f"object '{name}': pose ({pose[0]}, {pose[1]}) collides with a wall, "
+                f"furniture, the robot start or another object",
+            )
         placer.placed.append((pose[0], pose[1], r))
         out[name] = PlacedObject(name, cat, pose[0], pose[1], pose[2])
     for node, cat, name, room, pose in entries:
@@ -420,16 +486,21 @@ def _place_varied(ctx, spec, entries, wanted, seed, clearance, tries, distractor
         if got is None:
             where = f"room '{room}'" if room else "the world"
             how = f"{kind or 'any'} pose on {sup or 'the floor or a table'}"
-            raise ctx.err(node, f"cannot place object '{name}' ({cat}) in {where} ({how}) after {tries} "
-                                f"tries: no free spot {clearance} m clear of walls, furniture, the robot "
-                                f"start and the objects already placed, with room for the robot to reach "
-                                f"it; lower 'count' or 'placement.clearance', or enlarge the area")
+            raise ctx.err(
+                node,
+                f"cannot place object '{name}' ({cat}) in {where} ({how}) after {tries} "
+                f"tries: no free spot {clearance} m clear of walls, furniture, the robot "
+                f"start and the objects already placed, with room for the robot to reach "
+                f"it; lower 'count' or 'placement.clearance', or enlarge the area",
+            )
         out[name] = got
     objects = [out[e[2]] for e in entries]
     if spec.appearance.color_jitter is not None:
         j, rng = spec.appearance.color_jitter, np.random.default_rng([seed, 29])
-        objects = [replace(o, rgba=jitter_rgba(CATEGORIES[o.category].rgba, rng, j.hue, j.value,
-                                               j.saturation)) for o in objects]
+        objects = [
+            replace(o, rgba=jitter_rgba(CATEGORIES[o.category].rgba, rng, j.hue, j.value, j.saturation))
+            for o in objects
+        ]
     if distractors is not None:
         objects += placer.distractors(distractors, seed, {o.name for o in objects})
     spec.objects = objects
@@ -437,7 +508,7 @@ def _place_varied(ctx, spec, entries, wanted, seed, clearance, tries, distractor
 
 def _place_objects(ctx, spec, entries, seed, clearance, tries):
     rng = np.random.default_rng(seed)
-    placed: list[tuple[float, float, float]] = []     # x, y, footprint radius
+    placed: list[tuple[float, float, float]] = []  # x, y, footprint radius
     statics = spec.obstacles
     rx, ry, _ = spec.robot_start
     # wall ends: doorways are the gaps between them; keep random objects out of doorways
@@ -471,8 +542,11 @@ def _place_objects(ctx, spec, entries, seed, clearance, tries):
         if not (x0 + r <= pose[0] <= x1 - r and y0 + r <= pose[1] <= y1 - r):
             raise ctx.err(node, f"object '{name}': pose ({pose[0]}, {pose[1]}) is outside bounds {spec.bounds}")
         if not free(pose[0], pose[1], r, 0.0):
-            raise ctx.err(node, f"object '{name}': pose ({pose[0]}, {pose[1]}) collides with a wall, "
-                                f"furniture, the robot start or another object")
+            raise ctx.err(
+                node,
+                f"object '{name}': pose ({pose[0]}, {pose[1]}) collides with a wall, "
+                f"furniture, the robot start or another object",
+            )
         placed.append((pose[0], pose[1], r))
     out = {}
     for node, cat, name, room, pose in entries:
@@ -493,11 +567,14 @@ def _place_objects(ctx, spec, entries, seed, clearance, tries):
                     break
         if found is None:
             where = f"room '{room}' {tuple(area)}" if room else f"bounds {tuple(area)}"
-            raise ctx.err(node, f"cannot place object '{name}' ({cat}) in {where}: no free floor "
-                                f"space after {tries} tries (needs {clearance} m clearance from walls, "
-                                f"furniture, the robot start and the {len(placed)} objects already "
-                                f"placed, and {DOOR_CLEARANCE} m from doorways and wall ends); lower 'count' or "
-                                f"'placement.clearance', or enlarge the area")
+            raise ctx.err(
+                node,
+                f"cannot place object '{name}' ({cat}) in {where}: no free floor "
+                f"space after {tries} tries (needs {clearance} m clearance from walls, "
+                f"furniture, the robot start and the {len(placed)} objects already "
+                f"placed, and {DOOR_CLEARANCE} m from doorways and wall ends); lower 'count' or "
+                f"'placement.clearance', or enlarge the area",
+            )
         yaw = float(rng.uniform(-math.pi, math.pi))
         placed.append((found[0], found[1], r))
         out[name] = PlacedObject(name, cat, float(found[0]), float(found[1]), yaw)
@@ -519,8 +596,9 @@ def world_path(world: str | Path) -> Path:
     return cand
 
 
-def load_world(world: str | Path | WorldSpec = "house", seed: int = 0,
-               locations: str | Path | None = None) -> WorldSpec:
+def load_world(
+    world: str | Path | WorldSpec = "house", seed: int = 0, locations: str | Path | None = None
+) -> WorldSpec:
     """Load a world by name or path (a WorldSpec passes through unchanged). A YAML file
     that is a map_server map (``image:``, ``resolution:``...) is built into a world by
     :mod:`sim.map_world`, with the named places of ``locations`` (a YAML file)."""
@@ -531,9 +609,11 @@ def load_world(world: str | Path | WorldSpec = "house", seed: int = 0,
     if is_map_yaml(text):
         return build_map_world(p, seed, locations)
     if locations is not None:
-        raise WorldError(f"{locations}: a locations file goes with a world built from a map_server "
-                         f"map (--world map.yaml); {p} is a world description, which lists its own "
-                         "robot start, place_location and search_locations")
+        raise WorldError(
+            f"{locations}: a locations file goes with a world built from a map_server "
+            f"map (--world map.yaml); {p} is a world description, which lists its own "
+            "robot start, place_location and search_locations"
+        )
     return parse_world(text, str(p), seed)
 
 

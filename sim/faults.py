@@ -14,6 +14,7 @@
 
 Losses are drawn from the world seed's own stream, so a fault run can be repeated.
 """
+
 from __future__ import annotations
 
 import random
@@ -29,6 +30,7 @@ class FaultError(ActorbtError, ValueError):
 @dataclass
 class Faults:
     """What to break, and when (seconds on the runtime clock from the start)."""
+
     scan_drop: float = 0.0
     scan_delay: float = 0.0
     camera_drop: float = 0.0
@@ -38,19 +40,34 @@ class Faults:
     restart_for: float = 3.0
 
     def any(self) -> bool:
-        return bool(self.scan_drop or self.scan_delay or self.camera_drop or self.camera_delay
-                    or self.arm_abort or self.restart is not None)
+        return bool(
+            self.scan_drop
+            or self.scan_delay
+            or self.camera_drop
+            or self.camera_delay
+            or self.arm_abort
+            or self.restart is not None
+        )
 
     def describe(self) -> str:
-        parts = [f"{name.replace('_', '-')}={value}" for name, value in vars(self).items()
-                 if value not in (0.0, None, set()) and name != "restart_for"]
+        parts = [
+            f"{name.replace('_', '-')}={value}"
+            for name, value in vars(self).items()
+            if value not in (0.0, None, set()) and name != "restart_for"
+        ]
         if self.restart is not None:
             parts.append(f"restart-for={self.restart_for}")
         return ", ".join(parts) or "none"
 
 
-_NUMBERS = {"scan-drop": (0.0, 1.0), "camera-drop": (0.0, 1.0), "scan-delay": (0.0, 10.0),
-            "camera-delay": (0.0, 10.0), "restart": (0.0, 1e9), "restart-for": (0.0, 600.0)}
+_NUMBERS = {
+    "scan-drop": (0.0, 1.0),
+    "camera-drop": (0.0, 1.0),
+    "scan-delay": (0.0, 10.0),
+    "camera-delay": (0.0, 10.0),
+    "restart": (0.0, 1e9),
+    "restart-for": (0.0, 600.0),
+}
 
 
 def parse_faults(items: list[str] | None) -> Faults:

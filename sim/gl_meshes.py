@@ -12,6 +12,7 @@ of sim/textures.py get their texture from pybullet's ``changeVisualShape`` inste
 pybullet does not report back: their OBJ names the PNG in its first comment line (see
 :func:`texture_for_mesh`).
 """
+
 from __future__ import annotations
 
 import functools
@@ -31,15 +32,17 @@ SPHERE_SEGMENTS = 24
 
 
 def _tri(pos, nrm, uv):
-    return (np.ascontiguousarray(pos, np.float32), np.ascontiguousarray(nrm, np.float32),
-            np.ascontiguousarray(uv, np.float32))
+    return (
+        np.ascontiguousarray(pos, np.float32),
+        np.ascontiguousarray(nrm, np.float32),
+        np.ascontiguousarray(uv, np.float32),
+    )
 
 
 def _quads(corners, normals, uvs):
     """Quads [q, 4, 3] (counter-clockwise from outside) -> triangles (0 1 2, 0 2 3)."""
     order = [0, 1, 2, 0, 2, 3]
-    return (corners[:, order].reshape(-1, 3), normals[:, order].reshape(-1, 3),
-            uvs[:, order].reshape(-1, 2))
+    return (corners[:, order].reshape(-1, 3), normals[:, order].reshape(-1, 3), uvs[:, order].reshape(-1, 2))
 
 
 def box(half) -> tuple:
@@ -47,9 +50,14 @@ def box(half) -> tuple:
     hx, hy, hz = (float(h) for h in half)
     faces = []
     # (normal, the face's u axis, its v axis): corners centre +- u +- v
-    for normal, u_axis, v_axis in (((1, 0, 0), (0, 1, 0), (0, 0, 1)), ((-1, 0, 0), (0, -1, 0), (0, 0, 1)),
-                                   ((0, 1, 0), (-1, 0, 0), (0, 0, 1)), ((0, -1, 0), (1, 0, 0), (0, 0, 1)),
-                                   ((0, 0, 1), (1, 0, 0), (0, 1, 0)), ((0, 0, -1), (-1, 0, 0), (0, 1, 0))):
+    for normal, u_axis, v_axis in (
+        ((1, 0, 0), (0, 1, 0), (0, 0, 1)),
+        ((-1, 0, 0), (0, -1, 0), (0, 0, 1)),
+        ((0, 1, 0), (-1, 0, 0), (0, 0, 1)),
+        ((0, -1, 0), (1, 0, 0), (0, 0, 1)),
+        ((0, 0, 1), (1, 0, 0), (0, 1, 0)),
+        ((0, 0, -1), (-1, 0, 0), (0, 1, 0)),
+    ):
         faces.append((np.array(normal, float), np.array(u_axis, float), np.array(v_axis, float)))
     h = np.array([hx, hy, hz])
     corners, normals, uvs = [], [], []
@@ -96,9 +104,17 @@ def _revolve(profile, segments=SEGMENTS):
 def cylinder(length: float, radius: float, segments=SEGMENTS) -> tuple:
     """A cylinder along z, centred, with flat caps."""
     h = length / 2
-    return _revolve([(0.0, -h, 0, -1, 0.0), (radius, -h, 0, -1, 0.0),
-                     (radius, -h, 1, 0, 0.0), (radius, h, 1, 0, 1.0),
-                     (radius, h, 0, 1, 1.0), (0.0, h, 0, 1, 1.0)], segments)
+    return _revolve(
+        [
+            (0.0, -h, 0, -1, 0.0),
+            (radius, -h, 0, -1, 0.0),
+            (radius, -h, 1, 0, 0.0),
+            (radius, h, 1, 0, 1.0),
+            (radius, h, 0, 1, 1.0),
+            (0.0, h, 0, 1, 1.0),
+        ],
+        segments,
+    )
 
 
 def sphere(radius: float, segments=SPHERE_SEGMENTS, z_offset=0.0, lo=-90.0, hi=90.0) -> tuple:
@@ -115,8 +131,11 @@ def sphere(radius: float, segments=SPHERE_SEGMENTS, z_offset=0.0, lo=-90.0, hi=9
 def capsule(length: float, radius: float, segments=SEGMENTS) -> tuple:
     """A cylinder of ``length`` between two half spheres, along z."""
     h = length / 2
-    parts = [sphere(radius, segments, -h, -90, 0), cylinder_side(length, radius, segments),
-             sphere(radius, segments, h, 0, 90)]
+    parts = [
+        sphere(radius, segments, -h, -90, 0),
+        cylinder_side(length, radius, segments),
+        sphere(radius, segments, h, 0, 90),
+    ]
     return tuple(np.concatenate([p[i] for p in parts]) for i in range(3))
 
 
@@ -190,9 +209,13 @@ def _load_obj(path: Path):
                 ti = int(ids[1]) if len(ids) > 1 and ids[1] else 0
                 ni = int(ids[2]) if len(ids) > 2 and ids[2] else 0
                 # 1-based; negative counts back from the latest
-                corners.append((vi - 1 if vi > 0 else len(vs) + vi,
-                                (ti - 1 if ti > 0 else len(vts) + ti) if ti else -1,
-                                (ni - 1 if ni > 0 else len(vns) + ni) if ni else -1))
+                corners.append(
+                    (
+                        vi - 1 if vi > 0 else len(vs) + vi,
+                        (ti - 1 if ti > 0 else len(vts) + ti) if ti else -1,
+                        (ni - 1 if ni > 0 else len(vns) + ni) if ni else -1,
+                    )
+                )
             for k in range(1, len(corners) - 1):
                 for corner in (corners[0], corners[k], corners[k + 1]):
                     tri_v.append(corner[0])
@@ -209,7 +232,7 @@ def _load_obj(path: Path):
     pos = V[np.asarray(tri_v)]
     t_idx, n_idx = np.asarray(tri_t), np.asarray(tri_n)
     if vts:
-        T = np.vstack([np.asarray(vts, np.float64), [[0.0, 0.0]]])    # -1: the zero row
+        T = np.vstack([np.asarray(vts, np.float64), [[0.0, 0.0]]])  # -1: the zero row
         uv = T[t_idx]
     else:
         uv = np.zeros((len(pos), 2))
@@ -229,12 +252,17 @@ def _load_stl(path: Path):
     if len(data) >= 84:
         n = struct.unpack_from("<I", data, 80)[0]
         if 84 + 50 * n == len(data):
-            rec = np.frombuffer(data, np.dtype([("n", "<f4", 3), ("v", "<f4", (3, 3)), ("a", "<u2")]),
-                                count=n, offset=84)
+            rec = np.frombuffer(
+                data, np.dtype([("n", "<f4", 3), ("v", "<f4", (3, 3)), ("a", "<u2")]), count=n, offset=84
+            )
             pos = rec["v"].reshape(-1, 3).astype(np.float64)
-    if pos is None:      # ASCII
-        pos = np.array([[float(x) for x in m.groups()] for m in
-                        re.finditer(r"vertex\s+(\S+)\s+(\S+)\s+(\S+)", data.decode(errors="replace"))])
+    if pos is None:  # ASCII
+        pos = np.array(
+            [
+                [float(x) for x in m.groups()]
+                for m in re.finditer(r"vertex\s+(\S+)\s+(\S+)\s+(\S+)", data.decode(errors="replace"))
+            ]
+        )
         pos = pos.reshape(-1, 3)[: len(pos) // 3 * 3]
     return pos, _flat_normals(pos), np.zeros((len(pos), 2)), None
 
@@ -262,7 +290,7 @@ def mesh_file(path: str, scale) -> tuple:
     # normals transform with the inverse scale (then normalise)
     n = nrm / np.where(s == 0, 1.0, s)
     n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-30)
-    if np.prod(s) < 0:      # a mirroring scale turns the winding: turn it back
+    if np.prod(s) < 0:  # a mirroring scale turns the winding: turn it back
         order = np.arange(len(pos)).reshape(-1, 3)[:, ::-1].ravel()
         pos, n, uv = pos[order], n[order], uv[order]
     return pos.astype(np.float32), n.astype(np.float32), uv, tex
@@ -291,10 +319,12 @@ def texture_for_mesh(path: str) -> str | None:
 def _image(path: str, mtime: float) -> np.ndarray:
     try:
         from PIL import Image
+
         with Image.open(path) as im:
             return np.asarray(im.convert("RGBA"), np.uint8).copy()
     except ImportError:
         import cv2
+
         img = cv2.imread(path, cv2.IMREAD_UNCHANGED)
         if img is None:
             raise OSError(f"cannot read {path}") from None

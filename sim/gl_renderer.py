@@ -28,6 +28,7 @@ Depth comes back as the OpenGL depth buffer of the same projection matrix, so
 The context belongs to the thread that made it; each call makes it current and releases it,
 so one renderer may be used from any one thread at a time.
 """
+
 from __future__ import annotations
 
 import logging
@@ -151,7 +152,7 @@ def create_context():
             kw["libgl"] = egl
     try:
         ctx = moderngl.create_standalone_context(require=330, backend="egl", **kw)
-    except Exception as e:       # glcontext raises plain Exceptions
+    except Exception as e:  # glcontext raises plain Exceptions
         raise GLUnavailable(f"no EGL OpenGL 3.3 context: {e}") from None
     return ctx
 
@@ -177,6 +178,7 @@ def available() -> bool:
 class _Shape:
     """One visual shape, its triangles in the frame whose pose is read each frame (a
     base's inertial frame, a link's link frame)."""
+
     body: int
     link: int
     pos: np.ndarray
@@ -189,6 +191,7 @@ class _Shape:
 @dataclass
 class _Batch:
     """The triangles of one texture: ``runs`` [k, 3] = (link slot, first vertex, count)."""
+
     texture: str | None
     transparent: bool
     vbo: object
@@ -252,10 +255,10 @@ class GLRenderer:
         self.ctx = ctx if ctx is not None else create_context()
         self._own_ctx = ctx is None
         self._textures_by_id: dict[tuple, str] = {}
-        self._bodies: dict[int, dict] = {}        # body -> static, visuals, inertial, shapes
+        self._bodies: dict[int, dict] = {}  # body -> static, visuals, inertial, shapes
         self._dirty = True
         self._batches: list[_Batch] = []
-        self._slots: list[tuple[int, int]] = []   # (body, link) of each row of u_xf
+        self._slots: list[tuple[int, int]] = []  # (body, link) of each row of u_xf
         self._fbo = None
         self._fbo_parts = ()
         self._fbo_size = None
@@ -299,13 +302,12 @@ class GLRenderer:
         for b in ids:
             info = known.get(b)
             if info is not None and info["static"] and not changed_set:
-                continue          # fixed bodies: read again when the set of bodies changes
+                continue  # fixed bodies: read again when the set of bodies changes
             visuals = p.getVisualShapeData(b, physicsClientId=cid)
             if info is None or info["visuals"] != visuals:
                 nj = p.getNumJoints(b, physicsClientId=cid)
                 dyn = p.getDynamicsInfo(b, -1, physicsClientId=cid)
-                info = known[b] = {"static": nj == 0 and dyn[0] == 0, "visuals": visuals,
-                                   "inertial": (dyn[3], dyn[4])}
+                info = known[b] = {"static": nj == 0 and dyn[0] == 0, "visuals": visuals, "inertial": (dyn[3], dyn[4])}
                 info["shapes"] = [s for s in (self._shape(v, info) for v in visuals) if s is not None]
                 self._dirty = True
         if self._dirty or changed_set:
@@ -360,27 +362,40 @@ class GLRenderer:
             group.sort(key=lambda s: slot_of[(s.body, s.link)])
             n = sum(len(s.pos) for s in group)
             data = np.empty((n, _STRIDE), np.float32)
-            runs: list[list[int]] = []            # [slot, first, count]
+            runs: list[list[int]] = []  # [slot, first, count]
             k = 0
             for s in group:
                 m, slot = len(s.pos), slot_of[(s.body, s.link)]
-                data[k:k + m, 0:3] = s.pos
-                data[k:k + m, 3:6] = s.normal
-                data[k:k + m, 6:8] = s.uv
-                data[k:k + m, 8:12] = s.rgba
-                data[k:k + m, 12] = slot
-                data[k:k + m, 13] = 0.0 if self._bodies[s.body]["static"] else SPECULAR
-                data[k:k + m, 14] = s.body + 1
+                data[k : k + m, 0:3] = s.pos
+                data[k : k + m, 3:6] = s.normal
+                data[k : k + m, 6:8] = s.uv
+                data[k : k + m, 8:12] = s.rgba
+                data[k : k + m, 12] = slot
+                data[k : k + m, 13] = 0.0 if self._bodies[s.body]["static"] else SPECULAR
+                data[k : k + m, 14] = s.body + 1
                 if runs and runs[-1][0] == slot:
                     runs[-1][2] += m
                 else:
                     runs.append([slot, k, m])
                 k += m
             vbo = ctx.buffer(data.tobytes())
-            vao = ctx.vertex_array(self._prog, [(vbo, "3f 3f 2f 4f 1f 1f 1f", "in_pos", "in_normal", "in_uv",
-                                                 "in_color", "in_slot", "in_spec", "in_body")])
-            self._batches.append(_Batch(tex or None, transparent, vbo, vao,
-                                        np.array(runs, np.int64).reshape(-1, 3)))
+            vao = ctx.vertex_array(
+                self._prog,
+                [
+                    (
+                        vbo,
+                        "3f 3f 2f 4f 1f 1f 1f",
+                        "in_pos",
+                        "in_normal",
+                        "in_uv",
+                        "in_color",
+                        "in_slot",
+                        "in_spec",
+                        "in_body",
+                    )
+                ],
+            )
+            self._batches.append(_Batch(tex or None, transparent, vbo, vao, np.array(runs, np.int64).reshape(-1, 3)))
         if self._xf is not None:
             self._xf.release()
         self._xf = ctx.texture((3, max(1, len(self._slots))), 4, dtype="f4")
@@ -406,10 +421,11 @@ class GLRenderer:
                     bp, bq = p.getBasePositionAndOrientation(b, physicsClientId=cid)
                     pos[i], quat[i] = bp, bq
             if links:
-                states = p.getLinkStates(b, [link for _, link in links], computeForwardKinematics=1,
-                                         physicsClientId=cid)
+                states = p.getLinkStates(
+                    b, [link for _, link in links], computeForwardKinematics=1, physicsClientId=cid
+                )
                 for (i, _), st in zip(links, states):
-                    pos[i], quat[i] = st[4], st[5]      # the URDF link frame
+                    pos[i], quat[i] = st[4], st[5]  # the URDF link frame
         R = _quat_matrix(quat)
         xf = self._xf_data
         xf[:, :, :3] = R
@@ -440,7 +456,7 @@ class GLRenderer:
         if tex is None:
             try:
                 img = gl_meshes.image(path)
-            except Exception as e:     # a broken file: draw the colour alone
+            except Exception as e:  # a broken file: draw the colour alone
                 log.warning("GL renderer: texture %s unreadable (%s); colour only", path, e)
                 tex = self._white
             else:
@@ -455,8 +471,16 @@ class GLRenderer:
     def _visible(self, R, t, clip):
         """Link slots whose bounding sphere meets the view frustum (``clip``: P V, row-major)."""
         c = np.einsum("nij,nj->ni", R, self._centre) + t
-        planes = np.stack([clip[3] + clip[0], clip[3] - clip[0], clip[3] + clip[1],
-                           clip[3] - clip[1], clip[3] + clip[2], clip[3] - clip[2]])
+        planes = np.stack(
+            [
+                clip[3] + clip[0],
+                clip[3] - clip[0],
+                clip[3] + clip[1],
+                clip[3] - clip[1],
+                clip[3] + clip[2],
+                clip[3] - clip[2],
+            ]
+        )
         norm = np.linalg.norm(planes[:, :3], axis=1)
         dist = c @ planes[:, :3].T + planes[:, 3]
         return (dist >= -self._radius[:, None] * norm).all(axis=1)
@@ -468,9 +492,9 @@ class GLRenderer:
             t0 = time.perf_counter()
             self._sync_bodies()
             R, t = self._update_poses()
-            V = np.asarray(view, np.float32).reshape(4, 4)       # column-major, as GL takes it
+            V = np.asarray(view, np.float32).reshape(4, 4)  # column-major, as GL takes it
             Pj = np.asarray(projection, np.float32).reshape(4, 4)
-            Vm = V.T.astype(np.float64)                          # row-major world -> eye
+            Vm = V.T.astype(np.float64)  # row-major world -> eye
             visible = self._visible(R, t, Pj.T.astype(np.float64) @ Vm)
             t1 = time.perf_counter()
             ctx = self.ctx
@@ -509,13 +533,13 @@ class GLRenderer:
             ctx.disable(ctx.BLEND)
             t2 = time.perf_counter()
             rgb = np.frombuffer(fbo.read(components=3, attachment=0), np.uint8).reshape(height, width, 3)
-            depth = np.frombuffer(fbo.read(components=1, attachment=-1, dtype="f4"),
-                                  np.float32).reshape(height, width)
+            depth = np.frombuffer(fbo.read(components=1, attachment=-1, dtype="f4"), np.float32).reshape(height, width)
             # GL's rows run bottom-up
             out = [np.ascontiguousarray(rgb[::-1]), np.ascontiguousarray(depth[::-1])]
             if segmentation:
-                ids = np.frombuffer(fbo.read(components=1, attachment=1, dtype="f4"),
-                                    np.float32).reshape(height, width)[::-1]
+                ids = np.frombuffer(fbo.read(components=1, attachment=1, dtype="f4"), np.float32).reshape(
+                    height, width
+                )[::-1]
                 # where nothing was drawn the depth buffer keeps its clear value
                 out.append(np.where(out[1] >= 1.0, -1, np.rint(ids).astype(np.int32) - 1))
             t3 = time.perf_counter()

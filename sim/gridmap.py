@@ -4,6 +4,7 @@ Cells covered by walls, furniture or the place location are occupied (100). Free
 the robot's start cell reaches by 4-connected flood fill are free (0); everything else
 (outside the house, inside closed furniture) is unknown (-1), as a SLAM map would be.
 """
+
 from __future__ import annotations
 
 import array
@@ -24,9 +25,9 @@ RESOLUTION = 0.05
 
 @dataclass
 class GridMap:
-    data: np.ndarray        # int8 [rows=y, cols=x], row 0 at origin y (OccupancyGrid order)
+    data: np.ndarray  # int8 [rows=y, cols=x], row 0 at origin y (OccupancyGrid order)
     resolution: float
-    origin: tuple           # (x, y) of the lower-left corner of cell (0, 0)
+    origin: tuple  # (x, y) of the lower-left corner of cell (0, 0)
 
     @property
     def width(self):
@@ -37,8 +38,9 @@ class GridMap:
         return self.data.shape[0]
 
     def cell(self, x, y):
-        return int(math.floor((y - self.origin[1]) / self.resolution)), \
-            int(math.floor((x - self.origin[0]) / self.resolution))
+        return int(math.floor((y - self.origin[1]) / self.resolution)), int(
+            math.floor((x - self.origin[0]) / self.resolution)
+        )
 
     def value_at(self, x, y):
         r, c = self.cell(x, y)
@@ -66,11 +68,12 @@ def build_grid(spec: WorldSpec, resolution: float = RESOLUTION, height: float | 
         c, s = math.cos(ob.yaw), math.sin(ob.yaw)
         dx, dy = X - ob.x, Y - ob.y
         u, v = c * dx + s * dy, -s * dx + c * dy
-        ext = half_cell * (abs(c) + abs(s))    # a cell's half-extent along the box's axes
+        ext = half_cell * (abs(c) + abs(s))  # a cell's half-extent along the box's axes
         occ |= (np.abs(u) <= ob.sx / 2 + ext - 1e-9) & (np.abs(v) <= ob.sy / 2 + ext - 1e-9)
     if height is not None:
         from .objects import CATEGORIES
-        for o in spec.objects:      # standing objects as discs (a lidar sees the bottle)
+
+        for o in spec.objects:  # standing objects as discs (a lidar sees the bottle)
             cat = CATEGORIES[o.category]
             if cat.height >= height:
                 occ |= np.hypot(X - o.x, Y - o.y) <= cat.radius + half_cell
@@ -133,7 +136,8 @@ def write_pgm_yaml(gm: GridMap, out_pgm: str | Path) -> tuple[Path, Path]:
         f"origin: [{gm.origin[0]:.6g}, {gm.origin[1]:.6g}, 0.0]\n"
         f"negate: 0\n"
         f"occupied_thresh: 0.65\n"
-        f"free_thresh: 0.196\n")   # as ROS map_saver: 205 (p = 0.196) reads back as unknown
+        f"free_thresh: 0.196\n"
+    )  # as ROS map_saver: 205 (p = 0.196) reads back as unknown
     return out_pgm, out_yaml
 
 
@@ -146,14 +150,15 @@ def read_pgm_yaml(path_yaml: str | Path) -> GridMap:
 # map_server maps: YAML (checked with file:line:column) + PGM (P5/P2, 8 or 16 bit) or PNG
 
 MAP_KEYS = {"image", "resolution", "origin", "negate", "occupied_thresh", "free_thresh", "mode"}
-OCCUPIED_MIN = 65   # cells >= this are obstacles (nav2's costmap default, 0.65)
-FREE_MAX = 19       # cells <= this are free (map_saver's 0.196)
+OCCUPIED_MIN = 65  # cells >= this are obstacles (nav2's costmap default, 0.65)
+FREE_MAX = 19  # cells <= this are free (map_saver's 0.196)
 
 
 @dataclass
 class MapFile:
     """A map_server map as read: the grid in OccupancyGrid values (-1 unknown, 0..100), the
     YAML's path and the mode. ``occupied`` / ``free`` classify the cells for a world."""
+
     grid: GridMap
     path: Path
     mode: str
@@ -171,6 +176,7 @@ def is_map_yaml(text: str) -> bool:
     """Whether a YAML text is a map_server map (a mapping with 'image' and 'resolution')
     rather than a world description. Broken YAML is not a map (the world parser reports it)."""
     import yaml
+
     try:
         root = yaml.compose(text)
     except yaml.YAMLError:
@@ -189,7 +195,8 @@ def _image_pixels(path: Path, where: str):
         raise WorldError(f"{where}: cannot read the image {path}: {e.strerror or e}") from None
     if is_pgm(raw):
         return read_pgm(raw, str(path), WorldError), None
-    import cv2                      # PNG, BMP...: as map_server (SDL_image) reads them
+    import cv2  # PNG, BMP...: as map_server (SDL_image) reads them
+
     img = cv2.imdecode(np.frombuffer(raw, np.uint8), cv2.IMREAD_UNCHANGED)
     if img is None:
         raise WorldError(f"{where}: cannot decode the image {path}")
@@ -198,7 +205,7 @@ def _image_pixels(path: Path, where: str):
     if img.ndim == 2:
         return img, None
     alpha = img[..., 3] if img.shape[2] == 4 else None
-    return img[..., :3].mean(axis=2), alpha   # map_server averages the colour channels
+    return img[..., :3].mean(axis=2), alpha  # map_server averages the colour channels
 
 
 def read_map(path_yaml: str | Path) -> MapFile:
@@ -224,8 +231,10 @@ def read_map(path_yaml: str | Path) -> MapFile:
     onode = top["origin"][1]
     origin = ctx.vec(onode, 3, "origin")
     if abs(origin[2]) > 1e-9:
-        raise ctx.err(onode, f"origin: yaw {origin[2]:g} rad is not supported (only "
-                             "axis-aligned maps, yaw 0); rotate the image instead")
+        raise ctx.err(
+            onode,
+            f"origin: yaw {origin[2]:g} rad is not supported (only axis-aligned maps, yaw 0); rotate the image instead",
+        )
     negate = ctx.int_(top["negate"][1], "negate") if "negate" in top else 0
     if negate not in (0, 1):
         raise ctx.err(top["negate"][1], f"negate must be 0 or 1, got {negate}")
@@ -238,21 +247,21 @@ def read_map(path_yaml: str | Path) -> MapFile:
         raise ctx.err(top["mode"][1], f"mode: unknown '{mode}' (trinary, scale or raw)")
     img_where = f"{path_yaml}:{img_node.start_mark.line + 1}:{img_node.start_mark.column + 1}"
     light, alpha = _image_pixels(image, img_where)
-    light = np.flipud(light)          # the image's top row is the map's last row (max y)
+    light = np.flipud(light)  # the image's top row is the map's last row (max y)
     alpha = np.flipud(alpha) if alpha is not None else None
     data = np.full(light.shape, -1, dtype=np.int8)
-    if mode == "raw":                 # the pixel value is the cell value (255 -> -1)
+    if mode == "raw":  # the pixel value is the cell value (255 -> -1)
         v = np.rint(light * 255).astype(np.int64)
         data[v <= 100] = v[v <= 100]
     else:
-        p = light if negate else 1.0 - light      # occupancy probability
+        p = light if negate else 1.0 - light  # occupancy probability
         data[p > occ_t] = 100
         data[p < free_t] = 0
         if mode == "scale":
             band = (p >= free_t) & (p <= occ_t)
             data[band] = np.rint(99 * (p[band] - free_t) / (occ_t - free_t)).astype(np.int8)
             if alpha is not None:
-                data[alpha < 1.0] = -1    # transparent pixels are unknown in scale mode
+                data[alpha < 1.0] = -1  # transparent pixels are unknown in scale mode
     return MapFile(GridMap(data, res, (origin[0], origin[1])), path_yaml, mode)
 
 
@@ -260,8 +269,9 @@ def lidar_height() -> float:
     """Height of the lidar's beam above the floor [m]: the ``base_scan`` frame's z in
     ``base_footprint``, summed along the URDF's fixed joints (0.132 m for the Waffle Pi)."""
     import xml.etree.ElementTree as ET
+
     urdf = Path(__file__).resolve().parent / "models" / "mobile_manipulator.urdf"
-    parent_of: dict[str, tuple[str, float]] = {}    # link -> (its parent link, its z there)
+    parent_of: dict[str, tuple[str, float]] = {}  # link -> (its parent link, its z there)
     for j in ET.parse(urdf).getroot().iter("joint"):
         o = j.find("origin")
         z = float(o.get("xyz", "0 0 0").split()[2]) if o is not None else 0.0

@@ -9,6 +9,7 @@ noise and a scale-factor error, all drawn from the world seed), so the heading i
 drifts as a real one does. The wheel odometry (``/odom``) does not use it:
 ``diff_drive_controller`` computes the heading from the wheels alone.
 """
+
 from __future__ import annotations
 
 import math
@@ -18,7 +19,7 @@ import numpy as np
 from .odometry import OdomNoise
 
 IMU_FRAME = "imu_link"
-GRAVITY = 9.80665   # [m/s^2]
+GRAVITY = 9.80665  # [m/s^2]
 
 
 def episode_rng(seed: int) -> np.random.Generator:
@@ -37,13 +38,13 @@ class Gyro:
     def __init__(self, noise: OdomNoise, rng: np.random.Generator):
         self.noise = n = noise
         self.rng = rng
-        e = rng.normal(0.0, 1.0, 2)          # drawn once per episode
+        e = rng.normal(0.0, 1.0, 2)  # drawn once per episode
         self.scale = 1.0 + n.gyro_scale * e[0]
         self.bias = n.gyro_bias * e[1]
-        self.yaw = 0.0                        # the board's heading (its own start is 0)
+        self.yaw = 0.0  # the board's heading (its own start is 0)
         self.rate = 0.0
         self.accel = 0.0
-        self._true_yaw: float | None = None   # None: the next update() takes it as the reference
+        self._true_yaw: float | None = None  # None: the next update() takes it as the reference
         self._speed = 0.0
 
     def reset(self) -> None:
@@ -58,8 +59,7 @@ class Gyro:
             return
         n, sq = self.noise, math.sqrt(dt)
         e = self.rng.standard_normal(2)
-        dth = (_wrap(true_yaw - self._true_yaw) * self.scale + self.bias * dt
-               + n.gyro_noise * sq * float(e[0]))
+        dth = _wrap(true_yaw - self._true_yaw) * self.scale + self.bias * dt + n.gyro_noise * sq * float(e[0])
         self.bias += n.gyro_bias_walk * sq * float(e[1])
         self.yaw = _wrap(self.yaw + dth)
         self.rate = dth / dt
@@ -69,4 +69,4 @@ class Gyro:
     def rate_variance(self) -> float:
         """[(rad/s)^2] of one rate reading: the bias and the white noise."""
         n = self.noise
-        return n.gyro_bias ** 2 + n.gyro_noise ** 2
+        return n.gyro_bias**2 + n.gyro_noise**2

@@ -1,6 +1,7 @@
 """The pose estimate a user gives the localiser (RViz's "2D Pose Estimate" on
 ``/initialpose``), which the simulator gives in the user's place: it knows where the
 robot starts."""
+
 from __future__ import annotations
 
 import math
@@ -11,8 +12,9 @@ from geometry_msgs.msg import PoseWithCovarianceStamped
 INITIAL_STD_XY, INITIAL_STD_YAW = 0.05, 0.03
 
 
-def initial_pose_msg(pose, std_xy: float = INITIAL_STD_XY,
-                     std_yaw: float = INITIAL_STD_YAW) -> PoseWithCovarianceStamped:
+def initial_pose_msg(
+    pose, std_xy: float = INITIAL_STD_XY, std_yaw: float = INITIAL_STD_YAW
+) -> PoseWithCovarianceStamped:
     """/initialpose at ``pose`` (x, y, yaw), map frame, with the user's uncertainty."""
     x, y, yaw = pose
     msg = PoseWithCovarianceStamped()
@@ -20,7 +22,7 @@ def initial_pose_msg(pose, std_xy: float = INITIAL_STD_XY,
     msg.pose.pose.position.x, msg.pose.pose.position.y = float(x), float(y)
     msg.pose.pose.orientation.z, msg.pose.pose.orientation.w = math.sin(yaw / 2), math.cos(yaw / 2)
     cov = [0.0] * 36
-    cov[0] = cov[7] = std_xy ** 2
-    cov[35] = std_yaw ** 2
+    cov[0] = cov[7] = std_xy**2
+    cov[35] = std_yaw**2
     msg.pose.covariance = cov
     return msg

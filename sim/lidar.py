@@ -12,6 +12,7 @@ Ranges follow REP 117: ``+inf`` where nothing is within ``range_max``; a hit clo
 ``range_min`` is ``-inf`` (too close to measure). Noise is Gaussian with a standard
 deviation of ``max(sigma_min, sigma_rel * range)``, from the world seed's own stream.
 """
+
 from __future__ import annotations
 
 import math
@@ -33,12 +34,13 @@ def episode_rng(seed: int) -> np.random.Generator:
 @dataclass(frozen=True)
 class LidarModel:
     """LDS-01 (ROBOTIS HLS-LFCD2) defaults: 360 beams at 1 degree, 0.12-3.5 m, 5 Hz."""
+
     beams: int = 360
     range_min: float = 0.12
     range_max: float = 3.5
     rate_hz: float = 5.0
-    sigma_min: float = 0.01        # m
-    sigma_rel: float = 0.03        # of the range
+    sigma_min: float = 0.01  # m
+    sigma_rel: float = 0.03  # of the range
 
     @property
     def angle_min(self) -> float:
@@ -67,17 +69,16 @@ class Lidar:
     ``noise=False`` gives exact ranges (tests); the noise stream is ``rng``.
     """
 
-    def __init__(self, cid: int, model: LidarModel, rng: np.random.Generator, ray_mask: int = -1,
-                 noise: bool = True):
+    def __init__(self, cid: int, model: LidarModel, rng: np.random.Generator, ray_mask: int = -1, noise: bool = True):
         self.cid = cid
         self.model = model
         self.rng = rng
         self.ray_mask = ray_mask
         self.noise = noise
         a = model.angles()
-        self._dirs = np.stack([np.cos(a), np.sin(a), np.zeros_like(a)], axis=1)   # in base_scan
+        self._dirs = np.stack([np.cos(a), np.sin(a), np.zeros_like(a)], axis=1)  # in base_scan
         self.scans = 0
-        self.seconds = 0.0          # wall time spent casting (for benchmarks)
+        self.seconds = 0.0  # wall time spent casting (for benchmarks)
 
     def scan(self, pos, orn) -> np.ndarray:
         """One scan from the base_scan frame's world pose (position, quaternion xyzw)."""
@@ -87,8 +88,7 @@ class Lidar:
         world_dirs = self._dirs @ R.T
         start = np.broadcast_to(np.asarray(pos, dtype=float), world_dirs.shape)
         end = start + m.range_max * world_dirs
-        hits = p.rayTestBatch(start.tolist(), end.tolist(), collisionFilterMask=self.ray_mask,
-                              physicsClientId=self.cid)
+        hits = p.rayTestBatch(start.tolist(), end.tolist(), collisionFilterMask=self.ray_mask, physicsClientId=self.cid)
         frac = np.fromiter((h[2] if h[0] >= 0 else np.inf for h in hits), dtype=float, count=m.beams)
         ranges = frac * m.range_max
         if self.noise:
@@ -96,7 +96,7 @@ class Lidar:
             e = self.rng.standard_normal(m.beams)
             hit = np.isfinite(ranges)
             ranges[hit] += np.maximum(m.sigma_min, m.sigma_rel * ranges[hit]) * e[hit]
-            ranges[hit & (ranges > m.range_max)] = np.inf    # pushed out of range by the noise
+            ranges[hit & (ranges > m.range_max)] = np.inf  # pushed out of range by the noise
         ranges[ranges < m.range_min] = -np.inf
         self.scans += 1
         self.seconds += time.perf_counter() - t0

@@ -20,6 +20,7 @@ all from one seed:
 The result is trinary (100 / 0 / -1) at the source's resolution. :class:`MapFrame` takes
 places in the source's frame to the new map's frame (for a locations file).
 """
+
 from __future__ import annotations
 
 import math
@@ -30,21 +31,21 @@ import numpy as np
 
 from .gridmap import GridMap
 
-LIDAR_RANGE = 3.5       # [m] the LDS-01's
-LIDAR_MIN = 0.12        # [m]
+LIDAR_RANGE = 3.5  # [m] the LDS-01's
+LIDAR_MIN = 0.12  # [m]
 BEAMS = 360
-POSE_STEP = 0.3         # [m] between two scans along the drive
+POSE_STEP = 0.3  # [m] between two scans along the drive
 DRIVE_CLEARANCE = 0.25  # [m] the drive keeps this far from obstacles
-RANGE_NOISE = 0.015     # range noise per metre (sigma)
-SEEN_NEAR_DRIVE = 0.5   # [m] no unknown patch this close to the drive (the lidar saw it all)
+RANGE_NOISE = 0.015  # range noise per metre (sigma)
+SEEN_NEAR_DRIVE = 0.5  # [m] no unknown patch this close to the drive (the lidar saw it all)
 
 
 @dataclass(frozen=True)
 class MapFrame:
     """The SLAM map's frame in the source's: ``p_map = R(rotation) (p - pivot)``."""
 
-    rotation: float       # [rad]
-    pivot: tuple          # (x, y) [m] in the source frame: the map's (0, 0)
+    rotation: float  # [rad]
+    pivot: tuple  # (x, y) [m] in the source frame: the map's (0, 0)
 
     def to_map(self, x, y, theta=0.0):
         """(x, y, theta) in the source frame -> in the map frame."""
@@ -65,19 +66,26 @@ class SlamMap:
 
     grid: GridMap
     frame: MapFrame
-    gaps: list = field(default_factory=list)       # 1-cell gaps in walls
-    speckles: list = field(default_factory=list)   # occupied noise in the floor
-    patches: list = field(default_factory=list)    # unknown patches in the floor (centre cells)
-    drive: list = field(default_factory=list)      # (x, y) map frame: where the scans were taken
+    gaps: list = field(default_factory=list)  # 1-cell gaps in walls
+    speckles: list = field(default_factory=list)  # occupied noise in the floor
+    patches: list = field(default_factory=list)  # unknown patches in the floor (centre cells)
+    drive: list = field(default_factory=list)  # (x, y) map frame: where the scans were taken
 
 
 def _wrap(a):
     return (a + math.pi) % (2 * math.pi) - math.pi
 
 
-def slam_like(src: GridMap, drive, seed: int = 0, rotation: float = math.radians(3.0),
-              gap_rate: float = 0.02, speckle_rate: float = 0.003, bump_rate: float = 0.03,
-              patch_per_m2: float = 0.15) -> SlamMap:
+def slam_like(
+    src: GridMap,
+    drive,
+    seed: int = 0,
+    rotation: float = math.radians(3.0),
+    gap_rate: float = 0.02,
+    speckle_rate: float = 0.003,
+    bump_rate: float = 0.03,
+    patch_per_m2: float = 0.15,
+) -> SlamMap:
     """``src`` (100 occupied, 0 free, -1 unknown) as a SLAM map made while driving through
     ``drive`` ((x, y) in ``src``'s frame, in order; the first is the map's origin), turned
     by ``rotation`` [rad]. Rates: the share of wall cells made gaps / bumps, of floor cells
@@ -96,7 +104,7 @@ def slam_like(src: GridMap, drive, seed: int = 0, rotation: float = math.radians
     ys = src.origin[1] + np.array([rows.min(), rows.max() + 1]) * res
     corners = [frame.to_map(x, y)[:2] for x in xs for y in ys]
     mx, my = zip(*corners)
-    margin = 0.6 + float(rng.uniform(0.0, res))          # off the source's cell lattice
+    margin = 0.6 + float(rng.uniform(0.0, res))  # off the source's cell lattice
     origin = (round(min(mx) - margin, 4), round(min(my) - margin, 4))
     w = int(math.ceil((max(mx) - min(mx) + 2 * margin) / res))
     h = int(math.ceil((max(my) - min(my) + 2 * margin) / res))
@@ -117,10 +125,11 @@ def slam_like(src: GridMap, drive, seed: int = 0, rotation: float = math.radians
     free = (passes > 0) & ~occ
     out = SlamMap(GridMap(np.full((h, w), -1, np.int8), res, origin), frame, drive=path)
 
-    def nbr(mask, dr, dc):      # mask shifted: nbr(m, 0, 1)[r, c] = m[r, c + 1]
+    def nbr(mask, dr, dc):  # mask shifted: nbr(m, 0, 1)[r, c] = m[r, c + 1]
         o = np.zeros_like(mask)
-        o[max(-dr, 0):h - max(dr, 0), max(-dc, 0):w - max(dc, 0)] = \
-            mask[max(dr, 0):h - max(-dr, 0), max(dc, 0):w - max(-dc, 0)]
+        o[max(-dr, 0) : h - max(dr, 0), max(-dc, 0) : w - max(dc, 0)] = mask[
+            max(dr, 0) : h - max(-dr, 0), max(dc, 0) : w - max(-dc, 0)
+        ]
         return o
 
     # beams that overshoot a thin wall leave a second cell of hits behind it: of two
@@ -129,8 +138,8 @@ def slam_like(src: GridMap, drive, seed: int = 0, rotation: float = math.radians
     for dr, dc in ((0, 1), (1, 0)):
         pair = occ & nbr(occ, dr, dc) & nbr(free, -dr, -dc) & nbr(free, 2 * dr, 2 * dc)
         other = nbr(hits, dr, dc)
-        weaker = pair & (hits < other)                 # this cell goes
-        stronger = pair & (hits >= other)              # the next one goes
+        weaker = pair & (hits < other)  # this cell goes
+        stronger = pair & (hits >= other)  # the next one goes
         drop = weaker | nbr(stronger, -dr, -dc)
         occ &= ~drop
         free |= drop
@@ -138,24 +147,34 @@ def slam_like(src: GridMap, drive, seed: int = 0, rotation: float = math.radians
     face = occ & (nbr(free, 0, 1) | nbr(free, 0, -1) | nbr(free, 1, 0) | nbr(free, -1, 0))
     # ragged faces: a cell of floor next to the face becomes wall
     for r, c in np.argwhere(face & (rng.random((h, w)) < bump_rate)):
-        opts = [(r + dr, c + dc) for dr, dc in ((0, 1), (0, -1), (1, 0), (-1, 0))
-                if 0 <= r + dr < h and 0 <= c + dc < w and free[r + dr, c + dc]]
+        opts = [
+            (r + dr, c + dc)
+            for dr, dc in ((0, 1), (0, -1), (1, 0), (-1, 0))
+            if 0 <= r + dr < h and 0 <= c + dc < w and free[r + dr, c + dc]
+        ]
         if opts:
             rr, cc = opts[rng.integers(len(opts))]
             occ[rr, cc], free[rr, cc] = True, False
     # 1-cell gaps, four cells apart at least; through an outer wall some rays leak out
     taken = np.zeros((h, w), bool)
     for r, c in rng.permutation(np.argwhere(face & (rng.random((h, w)) < gap_rate))):
-        if taken[max(r - 4, 0):r + 5, max(c - 4, 0):c + 5].any() or not occ[r, c]:
+        if taken[max(r - 4, 0) : r + 5, max(c - 4, 0) : c + 5].any() or not occ[r, c]:
             continue
         taken[r, c] = True
         occ[r, c], free[r, c] = False, True
         out.gaps.append((int(r), int(c)))
         for dr, dc in ((0, 1), (0, -1), (1, 0), (-1, 0)):
-            if 0 <= r - dr < h and 0 <= c - dc < w and 0 <= r + dr < h and 0 <= c + dc < w \
-                    and free[r - dr, c - dc] and not free[r + dr, c + dc] and not occ[r + dr, c + dc] \
-                    and rng.random() < 0.5:
-                n = int(rng.integers(4, 20))         # 0.2 .. 1 m of free cells outside
+            if (
+                0 <= r - dr < h
+                and 0 <= c - dc < w
+                and 0 <= r + dr < h
+                and 0 <= c + dc < w
+                and free[r - dr, c - dc]
+                and not free[r + dr, c + dc]
+                and not occ[r + dr, c + dc]
+                and rng.random() < 0.5
+            ):
+                n = int(rng.integers(4, 20))  # 0.2 .. 1 m of free cells outside
                 for k in range(1, n + 1):
                     rr, cc = r + k * dr, c + k * dc
                     if not (0 <= rr < h and 0 <= cc < w) or occ[rr, cc]:
@@ -168,12 +187,12 @@ def slam_like(src: GridMap, drive, seed: int = 0, rotation: float = math.radians
     rad = int(round(SEEN_NEAR_DRIVE / res))
     for x, y in path:
         r, c = grid.cell(x, y)
-        near_drive[max(r - rad, 0):r + rad + 1, max(c - rad, 0):c + rad + 1] = True
-    floor_m2 = free.sum() * res ** 2
+        near_drive[max(r - rad, 0) : r + rad + 1, max(c - rad, 0) : c + rad + 1] = True
+    floor_m2 = free.sum() * res**2
     cand = np.argwhere(free & ~near_drive)
     for _ in range(int(rng.poisson(patch_per_m2 * floor_m2)) if cand.size else 0):
         r, c = cand[rng.integers(len(cand))]
-        a, b = rng.uniform(0.5, 4.0, 2)             # semi-axes [cells]: 0.05 .. 0.4 m across
+        a, b = rng.uniform(0.5, 4.0, 2)  # semi-axes [cells]: 0.05 .. 0.4 m across
         rr, cc = np.ogrid[-4:5, -4:5]
         blob = (rr / a) ** 2 + (cc / b) ** 2 <= 1.0
         if r < 4 or c < 4 or r + 5 > h or c + 5 > w:
@@ -197,8 +216,7 @@ def slam_like(src: GridMap, drive, seed: int = 0, rotation: float = math.radians
     return out
 
 
-def write_slam_like(src_yaml, out_pgm, places: dict, seed: int = 0,
-                    rotation: float = math.radians(3.0)) -> tuple:
+def write_slam_like(src_yaml, out_pgm, places: dict, seed: int = 0, rotation: float = math.radians(3.0)) -> tuple:
     """Read the map_server map ``src_yaml``, make it :func:`slam_like` with the drive
     through ``places`` (name -> (x, y[, theta]) in its frame, in order, the first where the
     drive starts) and write it as a trinary PGM + YAML at ``out_pgm``, and ``places`` in
@@ -221,15 +239,16 @@ def _thin_walls(data: np.ndarray, rng) -> np.ndarray:
     """``data`` with its walls two cells thick between floor cells thinned to one: per
     connected stretch of such wall, the cells of one face (chosen from ``rng``) become floor."""
     import cv2
+
     occ, free = data >= 65, data == 0
     out = data.copy()
     h, w = data.shape
     for axis in (0, 1):
         o, f = (occ, free) if axis == 1 else (occ.T, free.T)
-        pair = np.zeros_like(o)        # pair[r, c]: o[r, c], o[r, c + 1], floor at c - 1 and c + 2
+        pair = np.zeros_like(o)  # pair[r, c]: o[r, c], o[r, c + 1], floor at c - 1 and c + 2
         pair[:, 1:-2] = o[:, 1:-2] & o[:, 2:-1] & f[:, :-3] & f[:, 3:]
         n, labels = cv2.connectedComponents(pair.astype(np.uint8), connectivity=8)
-        far = rng.random(n) < 0.5      # per stretch: the cell at c + 1 goes, else the one at c
+        far = rng.random(n) < 0.5  # per stretch: the cell at c + 1 goes, else the one at c
         rr, cc = np.nonzero(pair)
         cc = cc + far[labels[rr, cc]]
         if axis == 0:
@@ -242,6 +261,7 @@ def _drive_path(grid: GridMap, pts) -> list[tuple[float, float]]:
     """Poses every POSE_STEP along shortest ways (DRIVE_CLEARANCE from obstacles, 8-connected)
     joining ``pts`` in order; a place the drive cannot reach is scanned from where it is."""
     import cv2
+
     free = grid.data == 0
     d = cv2.distanceTransform(free.astype(np.uint8), cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
     ok = free & (d * grid.resolution >= DRIVE_CLEARANCE)
@@ -276,7 +296,7 @@ def _drive_path(grid: GridMap, pts) -> list[tuple[float, float]]:
             k = prev[divmod(int(k), w)]
         way.reverse()
         step = max(1, int(round(POSE_STEP / grid.resolution)))
-        out.extend(xy(r, c) for r, c in way[step - 1:-1:step])
+        out.extend(xy(r, c) for r, c in way[step - 1 : -1 : step])
     return out
 
 

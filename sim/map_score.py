@@ -12,6 +12,7 @@ the best few are refined at full resolution, then polished continuously). Then
 
 All lengths in metres, angles in radians (degrees only where printed).
 """
+
 from __future__ import annotations
 
 import math
@@ -21,19 +22,20 @@ import numpy as np
 
 from .gridmap import OCCUPIED_MIN, GridMap
 
-TOLERANCE = 0.10        # [m] a cell counts as matched within this distance
-COARSE_RES = 0.20       # [m] the first search's cell size
+TOLERANCE = 0.10  # [m] a cell counts as matched within this distance
+COARSE_RES = 0.20  # [m] the first search's cell size
 COARSE_YAW = math.radians(2.0)
-CANDIDATES = 8          # coarse peaks refined at full resolution
+CANDIDATES = 8  # coarse peaks refined at full resolution
 
 
 @dataclass
 class Alignment:
     """The built map's frame in the truth's frame: p_truth = R(yaw) p_built + (x, y)."""
+
     x: float
     y: float
     yaw: float
-    overlap: float      # mean similarity of the built occupied cells (1: all on true ones)
+    overlap: float  # mean similarity of the built occupied cells (1: all on true ones)
 
     def apply(self, pts: np.ndarray) -> np.ndarray:
         c, s = math.cos(self.yaw), math.sin(self.yaw)
@@ -49,8 +51,8 @@ class MapScore:
     precision: float
     recall: float
     alignment: Alignment
-    built_occupied: int     # cells
-    true_faces: int         # cells
+    built_occupied: int  # cells
+    true_faces: int  # cells
     tolerance: float
 
     def as_dict(self) -> dict:
@@ -59,11 +61,11 @@ class MapScore:
         return d
 
 
-def truth_grid(world, seed: int = 0, height: float | None = None, locations=None,
-               resolution: float = 0.05) -> GridMap:
+def truth_grid(world, seed: int = 0, height: float | None = None, locations=None, resolution: float = 0.05) -> GridMap:
     """The simulator's occupancy of ``world`` sliced at ``height`` [m] (default: the lidar's)."""
     from .description import load_world
     from .gridmap import build_grid, lidar_height
+
     spec = load_world(world, seed, locations)
     return build_grid(spec, resolution, lidar_height() if height is None else height)
 
@@ -72,13 +74,13 @@ def occupied_points(gm: GridMap, mask: np.ndarray | None = None) -> np.ndarray:
     """Centres [m] (N x 2) of the occupied cells (value >= 65) of ``gm``, or of ``mask``."""
     m = gm.data >= OCCUPIED_MIN if mask is None else mask
     r, c = np.nonzero(m)
-    return np.column_stack([gm.origin[0] + (c + 0.5) * gm.resolution,
-                            gm.origin[1] + (r + 0.5) * gm.resolution])
+    return np.column_stack([gm.origin[0] + (c + 0.5) * gm.resolution, gm.origin[1] + (r + 0.5) * gm.resolution])
 
 
 def visible_faces(gm: GridMap) -> np.ndarray:
     """True occupied cells next to (8-neighbour) a free cell: what a lidar can see."""
     import cv2
+
     occ, free = gm.data == 100, gm.data == 0
     near_free = cv2.dilate(free.astype(np.uint8), np.ones((3, 3), np.uint8)).astype(bool)
     return occ & near_free
@@ -90,6 +92,7 @@ class DistanceField:
 
     def __init__(self, mask: np.ndarray, res: float, origin, cap: float = 1.0):
         import cv2
+
         pad = int(math.ceil(cap / res))
         m = np.pad(mask.astype(bool), pad)
         if m.any():
@@ -109,8 +112,9 @@ class DistanceField:
         c0, r0 = u.astype(int), v.astype(int)
         fu, fv = u - c0, v - r0
         d = self.d
-        out = ((d[r0, c0] * (1 - fu) + d[r0, c0 + 1] * fu) * (1 - fv)
-               + (d[r0 + 1, c0] * (1 - fu) + d[r0 + 1, c0 + 1] * fu) * fv)
+        out = (d[r0, c0] * (1 - fu) + d[r0, c0 + 1] * fu) * (1 - fv) + (
+            d[r0 + 1, c0] * (1 - fu) + d[r0 + 1, c0 + 1] * fu
+        ) * fv
         return np.where(inside, out, self.cap)
 
 
@@ -120,12 +124,13 @@ def _coarse(mask: np.ndarray, f: int) -> np.ndarray:
     H, W = -(-h // f), -(-w // f)
     m = np.zeros((H * f, W * f), bool)
     m[:h, :w] = mask
-    return np.asarray(m.reshape(H, f, W, f).any(axis=(1, 3)))   # an array (numpy's stubs allow a scalar)
+    return np.asarray(m.reshape(H, f, W, f).any(axis=(1, 3)))  # an array (numpy's stubs allow a scalar)
 
 
 def _similarity(mask: np.ndarray, res: float, sigma: float) -> np.ndarray:
     """exp(-d²/2σ²) of the distance d to ``mask``'s cells: 1 on them, falling off around."""
     import cv2
+
     if not mask.any():
         return np.zeros(mask.shape)
     d = cv2.distanceTransform((~mask).astype(np.uint8), cv2.DIST_L2, cv2.DIST_MASK_PRECISE) * res
@@ -143,8 +148,7 @@ def _correlate(sim: np.ndarray, origin, res: float, pts: np.ndarray, yaw: float)
     hb, wb = idx[:, 1].max() + 1, idx[:, 0].max() + 1
     hs, ws = sim.shape
     shape = (hs + hb, ws + wb)
-    b = np.bincount(idx[:, 1] * shape[1] + idx[:, 0], minlength=shape[0] * shape[1]
-                    ).reshape(shape).astype(float)
+    b = np.bincount(idx[:, 1] * shape[1] + idx[:, 0], minlength=shape[0] * shape[1]).reshape(shape).astype(float)
     a = np.zeros(shape)
     a[:hs, :ws] = sim
     # C[k] = sum_n B[n] S[n + k]: the built cell n lands on truth cell n + k
@@ -196,10 +200,12 @@ def align(built: np.ndarray, truth_occ: np.ndarray, res: float, origin) -> Align
         corr, t0, hb, wb = _correlate(csim, origin, cres, built, yaw)
         cands += _peaks(corr, t0, cres, hb, wb, float(yaw), 2)
     cands.sort(reverse=True)
-    chosen: list[tuple[float, float, float, float]] = []    # (score, x, y, yaw)
-    for cand in cands:      # the best few, distinct in yaw or place
-        if all(abs(_wrap(cand[3] - o[3])) > math.radians(5) or math.hypot(cand[1] - o[1], cand[2] - o[2]) > 0.5
-               for o in chosen):
+    chosen: list[tuple[float, float, float, float]] = []  # (score, x, y, yaw)
+    for cand in cands:  # the best few, distinct in yaw or place
+        if all(
+            abs(_wrap(cand[3] - o[3])) > math.radians(5) or math.hypot(cand[1] - o[1], cand[2] - o[2]) > 0.5
+            for o in chosen
+        ):
             chosen.append(cand)
         if len(chosen) == CANDIDATES:
             break
@@ -208,7 +214,7 @@ def align(built: np.ndarray, truth_occ: np.ndarray, res: float, origin) -> Align
     refined = []
     for _, x, y, yaw in chosen:
         fine = []
-        for dyaw in np.arange(-1.5, 1.51, 0.5):    # the coarse step is 2°; the polish does the rest
+        for dyaw in np.arange(-1.5, 1.51, 0.5):  # the coarse step is 2°; the polish does the rest
             yy = yaw + math.radians(dyaw)
             corr, t0, hb, wb = _correlate(fsim, origin, res, built, yy)
             fine += _peaks(corr, t0, res, hb, wb, yy, 1, window=((x, y), 2 * cres))
@@ -234,13 +240,13 @@ def _polish(a: Alignment, pts, field: DistanceField, res: float) -> Alignment:
     def overlap(x, y, yaw):
         d = field(Alignment(x, y, yaw, 0).apply(pts))
         return float(np.mean(np.exp(-0.5 * (d / sigma) ** 2)))
+
     x, y, yaw = a.x, a.y, a.yaw
     best = overlap(x, y, yaw)
     step, ystep = res / 2, math.radians(0.25)
     while step > res / 40:
         moved = False
-        for dx, dy, dw in ((step, 0, 0), (-step, 0, 0), (0, step, 0), (0, -step, 0),
-                           (0, 0, ystep), (0, 0, -ystep)):
+        for dx, dy, dw in ((step, 0, 0), (-step, 0, 0), (0, step, 0), (0, -step, 0), (0, 0, ystep), (0, 0, -ystep)):
             v = overlap(x + dx, y + dy, yaw + dw)
             if v > best + 1e-12:
                 best, x, y, yaw, moved = v, x + dx, y + dy, yaw + dw, True
@@ -250,8 +256,9 @@ def _polish(a: Alignment, pts, field: DistanceField, res: float) -> Alignment:
     return Alignment(x, y, _wrap(yaw), best)
 
 
-def score_maps(built: GridMap, truth: GridMap, tolerance: float = TOLERANCE,
-               alignment: Alignment | None = None) -> MapScore:
+def score_maps(
+    built: GridMap, truth: GridMap, tolerance: float = TOLERANCE, alignment: Alignment | None = None
+) -> MapScore:
     """Align ``built`` to ``truth`` (unless ``alignment`` is given) and score it."""
     pts = occupied_points(built)
     truth_occ = truth.data == 100
@@ -272,7 +279,7 @@ def overlay_image(built: GridMap, truth: GridMap, score: MapScore, scale: int = 
     (aligned) green where within the tolerance of a true one, red where not; the true wall
     faces no built cell came near, blue. ``scale`` pixels per cell."""
     h, w = truth.data.shape
-    img = np.full((h, w, 3), 205, np.uint8)                       # unknown: grey
+    img = np.full((h, w, 3), 205, np.uint8)  # unknown: grey
     img[truth.data == 0] = 255
     img[truth.data == 100] = 150
     res, (ox, oy) = truth.resolution, truth.origin
@@ -289,5 +296,5 @@ def overlay_image(built: GridMap, truth: GridMap, score: MapScore, scale: int = 
         r = np.floor((sel[:, 1] - oy) / res).astype(int)
         ok = (r >= 0) & (r < h) & (c >= 0) & (c < w)
         img[r[ok], c[ok]] = rgb
-    img = img[::-1]                                                # row 0 is the lowest y
+    img = img[::-1]  # row 0 is the lowest y
     return np.repeat(np.repeat(img, scale, axis=0), scale, axis=1)

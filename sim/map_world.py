@@ -19,6 +19,7 @@ map's origin, the place location a free spot near the start, and the search loca
 spread reachable spots. The objects (one of every registered category and a box distractor) are placed from
 the seed at reachable spots within :data:`NEAR_LOCATION` of a search location.
 """
+
 from __future__ import annotations
 
 import math
@@ -33,18 +34,18 @@ from .marked_yaml import compose_yaml
 from .objects import CATEGORIES
 from .world_spec import Box, PlacedObject, WorldError, WorldSpec
 
-WALL_HEIGHT = 0.6           # [m] as sim/worlds/house.yaml's walls
+WALL_HEIGHT = 0.6  # [m] as sim/worlds/house.yaml's walls
 WALL_RGBA = (0.82, 0.80, 0.74, 1.0)
-PALLET = (0.6, 0.4, 0.12)   # [m] place location size, as house.yaml's pallet
+PALLET = (0.6, 0.4, 0.12)  # [m] place location size, as house.yaml's pallet
 PALLET_RGBA = (0.76, 0.60, 0.35, 1.0)
-REACH_RADIUS = 0.25         # [m] the robot's centre needs this clearance (navstack plans with 0.20)
-OBJECT_CLEARANCE = 0.30     # [m] objects keep this far from walls, the pallet, the start, each other
-PASSAGE = 0.15              # [m] an object leaves at least twice this of the robot's way free
-NEAR_LOCATION = 1.5         # [m] objects lie at most this far from a search location
-SPECKLE_CELLS = 2           # occupied blobs this small with floor all round are lidar noise
-HOLE_AREA = 0.05            # [m^2] unknown holes in the floor up to this size are floor
-FIRST_OBJECTS = ("can", "bottle", "box")   # placed first, in this order (older seeds keep
-                                           # their layout); then one of every other category
+REACH_RADIUS = 0.25  # [m] the robot's centre needs this clearance (navstack plans with 0.20)
+OBJECT_CLEARANCE = 0.30  # [m] objects keep this far from walls, the pallet, the start, each other
+PASSAGE = 0.15  # [m] an object leaves at least twice this of the robot's way free
+NEAR_LOCATION = 1.5  # [m] objects lie at most this far from a search location
+SPECKLE_CELLS = 2  # occupied blobs this small with floor all round are lidar noise
+HOLE_AREA = 0.05  # [m^2] unknown holes in the floor up to this size are floor
+FIRST_OBJECTS = ("can", "bottle", "box")  # placed first, in this order (older seeds keep
+# their layout); then one of every other category
 START_NAMES, PLACE_NAMES = ("start", "home"), ("place", "pallet", "drop")
 
 
@@ -59,29 +60,42 @@ def build_map_world(path: str | Path, seed: int = 0, locations: str | Path | Non
     mf = read_map(path)
     res = mf.grid.resolution
     occ, free, (r0, c0) = _crop(mf.occupied, mf.free)
-    pad = 2                         # unknown cells all round: the map edge is outside
+    pad = 2  # unknown cells all round: the map edge is outside
     occ, free = np.pad(occ, pad), np.pad(free, pad)
     ox = mf.grid.origin[0] + (c0 - pad) * res
     oy = mf.grid.origin[1] + (r0 - pad) * res
     occ, free = clean(occ, free, res)
     if not free.any():
         raise WorldError(f"{path}: the map has no free space (no cell lighter than free_thresh)")
-    walls = occ | (~occ & ~free & _dilate(free))   # the free/unknown boundary is a wall too
+    walls = occ | (~occ & ~free & _dilate(free))  # the free/unknown boundary is a wall too
     g = _Grid(free, walls, res, (ox, oy))
     h, w = free.shape
     bounds = (ox, oy, ox + w * res, oy + h * res)
     spec = WorldSpec(name=Path(path).stem, source=str(path), bounds=bounds, seed=seed)
-    spec.walls = [Box(f"wall_{i}", ox + (c + cw / 2) * res, oy + (r + rh / 2) * res, cw * res, rh * res,
-                      WALL_HEIGHT, 0.0, WALL_RGBA)
-                  for i, (r, c, rh, cw) in enumerate(merge_rectangles(walls))]
+    spec.walls = [
+        Box(
+            f"wall_{i}",
+            ox + (c + cw / 2) * res,
+            oy + (r + rh / 2) * res,
+            cw * res,
+            rh * res,
+            WALL_HEIGHT,
+            0.0,
+            WALL_RGBA,
+        )
+        for i, (r, c, rh, cw) in enumerate(merge_rectangles(walls))
+    ]
     named = read_locations(locations) if locations is not None else {}
     _check_locations(named, g, locations)
     start = _pick(named, START_NAMES)
     if start is not None:
         x, y, yaw, node, ctx = start
         if g.clearance_at(x, y) < REACH_RADIUS:
-            raise ctx.err(node, f"start ({x:g}, {y:g}) is {max(g.clearance_at(x, y), 0):.2f} m from a "
-                                f"wall; the robot needs {REACH_RADIUS} m")
+            raise ctx.err(
+                node,
+                f"start ({x:g}, {y:g}) is {max(g.clearance_at(x, y), 0):.2f} m from a "
+                f"wall; the robot needs {REACH_RADIUS} m",
+            )
         spec.robot_start = (x, y, yaw)
     else:
         spec.robot_start = _in(path, g.auto_start)
@@ -93,9 +107,12 @@ def build_map_world(path: str | Path, seed: int = 0, locations: str | Path | Non
     for x, y, _, node, ctx in searched:
         snapped = g.snap(reach, x, y, 0.5)
         if snapped is None:
-            raise ctx.err(node, f"location ({x:g}, {y:g}) cannot be reached from the start "
-                                f"{spec.robot_start[:2]} (no spot with {REACH_RADIUS} m clearance "
-                                "within 0.5 m of it connects to the start)")
+            raise ctx.err(
+                node,
+                f"location ({x:g}, {y:g}) cannot be reached from the start "
+                f"{spec.robot_start[:2]} (no spot with {REACH_RADIUS} m clearance "
+                "within 0.5 m of it connects to the start)",
+            )
         spec.search_locations.append(snapped)
     if not searched:
         spec.search_locations = g.spread(reach, spec.robot_start[:2])
@@ -116,6 +133,7 @@ def _in(path, fn, *args):
 # ---------------------------------------------------------------------------------------
 # the grid: cleanup, walls, boxes
 
+
 def _crop(occ: np.ndarray, free: np.ndarray):
     """Both masks cropped to the known cells' bounding box (SLAM maps are mostly unknown),
     and the crop's first (row, col)."""
@@ -130,12 +148,14 @@ def _crop(occ: np.ndarray, free: np.ndarray):
 def _dilate(mask: np.ndarray, radius: int = 1) -> np.ndarray:
     """8-neighbourhood dilation by ``radius`` cells."""
     import cv2
+
     k = np.ones((2 * radius + 1, 2 * radius + 1), np.uint8)
     return cv2.dilate(mask.astype(np.uint8), k).astype(bool)
 
 
 def _components(mask: np.ndarray, connectivity: int = 8):
     import cv2
+
     n, labels, stats, _ = cv2.connectedComponentsWithStats(mask.astype(np.uint8), connectivity=connectivity)
     return n, labels, stats
 
@@ -154,18 +174,18 @@ def clean(occ: np.ndarray, free: np.ndarray, res: float):
     unknown = ~occ & ~free
     n, labels, stats = _components(unknown, 4)
     h, w = occ.shape
-    hole_cells = HOLE_AREA / res ** 2
+    hole_cells = HOLE_AREA / res**2
     for i in range(1, n):
         x, y, bw, bh, area = stats[i]
         if x == 0 or y == 0 or x + bw == w or y + bh == h:
-            continue                    # reaches the map's edge: outside
+            continue  # reaches the map's edge: outside
         sl = (slice(max(y - 1, 0), y + bh + 1), slice(max(x - 1, 0), x + bw + 1))
         blob = labels[sl] == i
         ring = _dilate(blob) & ~blob
         if not free[sl][ring].any():
-            occ[sl][blob] = True        # enclosed by obstacles: solid
+            occ[sl][blob] = True  # enclosed by obstacles: solid
         elif area <= hole_cells:
-            free[sl][blob] = True       # a small gap in the floor's coverage
+            free[sl][blob] = True  # a small gap in the floor's coverage
     return occ, free
 
 
@@ -187,18 +207,18 @@ def merge_rectangles(mask: np.ndarray) -> list[tuple[int, int, int, int]]:
             run = rem[r, c:]
             cw = int(np.argmin(run)) if not run.all() else run.size
             rh = 1
-            while r + rh < h and rem[r + rh, c:c + cw].all():
+            while r + rh < h and rem[r + rh, c : c + cw].all():
                 rh += 1
             cands.append((rh * cw, rh, cw))
             # down, then right
             col = rem[r:, c]
             rh2 = int(np.argmin(col)) if not col.all() else col.size
             cw2 = 1
-            while c + cw2 < w and rem[r:r + rh2, c + cw2].all():
+            while c + cw2 < w and rem[r : r + rh2, c + cw2].all():
                 cw2 += 1
             cands.append((rh2 * cw2, rh2, cw2))
             _, rh, cw = max(cands)
-            rem[r:r + rh, c:c + cw] = False
+            rem[r : r + rh, c : c + cw] = False
             out.append((r, c, rh, cw))
     return out
 
@@ -208,6 +228,7 @@ class _Grid:
 
     def __init__(self, free, walls, res, origin):
         import cv2
+
         self.free, self.walls, self.res, self.origin = free, walls, res, origin
         d = cv2.distanceTransform(free.astype(np.uint8), cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
         # centre-to-centre distance to the nearest non-free cell, less half a cell: to its edge
@@ -265,8 +286,8 @@ class _Grid:
         """A few reachable spots far apart (farthest-point sampling from the start, at least
         two, spaced by the region's size up to 2.5 m), in the open (clearance >= 0.7 m
         where there is such)."""
-        spacing = min(2.5, max(1.0, math.sqrt(reach.sum() * self.res ** 2 / 6)))
-        for need in (0.7, 0.5, 0.4, 0.0):   # views from the open, not from corners
+        spacing = min(2.5, max(1.0, math.sqrt(reach.sum() * self.res**2 / 6)))
+        for need in (0.7, 0.5, 0.4, 0.0):  # views from the open, not from corners
             rr, cc = np.nonzero(reach & (self.clear >= need))
             if rr.size >= 10:
                 break
@@ -296,7 +317,8 @@ class _Grid:
 
         def parts(mask):
             _, _, stats = _components(mask, 8)
-            return int((stats[1:, 4] * self.res ** 2 >= 0.1).sum())
+            return int((stats[1:, 4] * self.res**2 >= 0.1).sum())
+
         return parts(reach[sl] & ~blocked[sl]) > parts(reach[sl])
 
     def line_of_sight(self, a, b) -> bool:
@@ -311,6 +333,7 @@ class _Grid:
 
 # ---------------------------------------------------------------------------------------
 # locations
+
 
 def read_locations(path: str | Path) -> dict:
     """``name -> (x, y, yaw, node, ctx)`` from a locations YAML (``name: [x, y, theta]`` or
@@ -340,8 +363,7 @@ def write_locations(path: str | Path, named: dict) -> Path:
     (x, y) or (x, y, theta) [m, rad]. Returns the path."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text("".join(f"{name}: [{', '.join(f'{float(v):.4f}' for v in xy)}]\n"
-                            for name, xy in named.items()))
+    path.write_text("".join(f"{name}: [{', '.join(f'{float(v):.4f}' for v in xy)}]\n" for name, xy in named.items()))
     return path
 
 
@@ -371,8 +393,9 @@ def _place_box(g: _Grid, reach, start, place) -> Box:
         rr, cc = np.nonzero(g.walls | ~g.free)
         px, py = g.xy(rr, cc)
         if (box.distance(px, py) < g.res * 0.71).any():
-            raise ctx.err(node, f"place location ({x:g}, {y:g}): the pallet ({sx} x {sy} m) overlaps a "
-                                "wall or unknown space")
+            raise ctx.err(
+                node, f"place location ({x:g}, {y:g}): the pallet ({sx} x {sy} m) overlaps a wall or unknown space"
+            )
         if g.snap(reach, x, y, 0.8) is None:
             raise ctx.err(node, f"place location ({x:g}, {y:g}) cannot be reached from the start")
         return box
@@ -381,15 +404,16 @@ def _place_box(g: _Grid, reach, start, place) -> Box:
     d = np.hypot(xs - start[0], ys - start[1])
     cl = g.clear[rr, cc]
     xs_all, ys_all = g.xy(*np.indices(reach.shape))
-    for need in (0.8, 0.6, 0.45):     # room to go round it; less if the map is cramped
+    for need in (0.8, 0.6, 0.45):  # room to go round it; less if the map is cramped
         ok = (cl >= need) & (d >= 1.0)
         if ok.any():
             for i in np.flatnonzero(ok)[np.argsort(np.abs(d[ok] - 1.5))][:50]:
                 box = Box("pallet", float(xs[i]), float(ys[i]), sx, sy, sz, 0.0, PALLET_RGBA)
                 if not g.splits(reach, box.distance(xs_all, ys_all) < REACH_RADIUS + PASSAGE):
                     return box
-    raise WorldError("no open floor near the start for the place location; "
-                     "name one in the locations file ('place: [x, y, theta]')")
+    raise WorldError(
+        "no open floor near the start for the place location; name one in the locations file ('place: [x, y, theta]')"
+    )
 
 
 def _place_objects(g: _Grid, reach, spec: WorldSpec, rng) -> list[PlacedObject]:
@@ -412,7 +436,7 @@ def _place_objects(g: _Grid, reach, spec: WorldSpec, rng) -> list[PlacedObject]:
         for px, py, pr in placed:
             ok &= np.hypot(xs - px, ys - py) >= r + pr + OBJECT_CLEARANCE
         found = None
-        for j in range(len(order)):        # this object's location first, then the others
+        for j in range(len(order)):  # this object's location first, then the others
             lx, ly = order[(k + j) % len(order)]
             near = np.flatnonzero(ok & (np.hypot(xs - lx, ys - ly) <= NEAR_LOCATION))
             for i in rng.permutation(near)[:200]:
@@ -423,8 +447,10 @@ def _place_objects(g: _Grid, reach, spec: WorldSpec, rng) -> list[PlacedObject]:
             if found:
                 break
         if found is None:
-            raise WorldError(f"{spec.source}: cannot place the {cat}: no reachable spot with "
-                             f"{OBJECT_CLEARANCE} m clearance within {NEAR_LOCATION} m of a search location")
+            raise WorldError(
+                f"{spec.source}: cannot place the {cat}: no reachable spot with "
+                f"{OBJECT_CLEARANCE} m clearance within {NEAR_LOCATION} m of a search location"
+            )
         placed.append((found[0], found[1], r))
         out.append(PlacedObject(f"{cat}_1", cat, found[0], found[1], float(rng.uniform(-math.pi, math.pi))))
     return out

@@ -1,6 +1,7 @@
 """YAML read with its marks: the node graph (``yaml.compose``) rather than plain values, so
 every error names file:line:column. World descriptions, map YAML and locations files are
 read this way."""
+
 from __future__ import annotations
 
 import math

@@ -23,6 +23,7 @@ With the defaults, raw odometry is off by 2.2 % of the distance on average after
 (an L-shaped drive, 40 seeds; 4.5 % at the 90th percentile, 5.8 % at worst):
 tests/test_sim_sensors.py drives it.
 """
+
 from __future__ import annotations
 
 import math
@@ -38,16 +39,17 @@ HEADINGS = ("imu", "wheels")
 @dataclass(frozen=True)
 class OdomNoise:
     """The odometry error model (see the module docstring). Units: m, rad, s."""
-    wheel_noise: float = 0.003          # m per sqrt(m) travelled, per wheel (random walk)
-    radius_bias: float = 0.0            # both wheels' radius this much too long (0.002 = 0.2 %)
-    wheel_scale: float = 0.02           # sigma of both wheels' common scale error, drawn once
-    wheel_mismatch: float = 0.001       # sigma of the right wheel's scale relative to the left
-    heading: str = "wheels"             # "wheels" (diff_drive_controller) or "imu" (the gyro)
-    gyro_bias: float = math.radians(0.05)        # sigma of the initial bias [rad/s]
+
+    wheel_noise: float = 0.003  # m per sqrt(m) travelled, per wheel (random walk)
+    radius_bias: float = 0.0  # both wheels' radius this much too long (0.002 = 0.2 %)
+    wheel_scale: float = 0.02  # sigma of both wheels' common scale error, drawn once
+    wheel_mismatch: float = 0.001  # sigma of the right wheel's scale relative to the left
+    heading: str = "wheels"  # "wheels" (diff_drive_controller) or "imu" (the gyro)
+    gyro_bias: float = math.radians(0.05)  # sigma of the initial bias [rad/s]
     gyro_bias_walk: float = math.radians(0.005)  # bias random walk [rad/s / sqrt(s)]
-    gyro_noise: float = math.radians(0.01)       # angle random walk [rad / sqrt(s)]
-    gyro_scale: float = 0.01            # sigma of the gyro's scale-factor error, drawn once
-    encoder_ticks: int = 4096           # encoder ticks per wheel turn (0: exact angles)
+    gyro_noise: float = math.radians(0.01)  # angle random walk [rad / sqrt(s)]
+    gyro_scale: float = 0.01  # sigma of the gyro's scale-factor error, drawn once
+    encoder_ticks: int = 4096  # encoder ticks per wheel turn (0: exact angles)
 
     def __post_init__(self):
         if self.heading not in HEADINGS:
@@ -81,7 +83,7 @@ class WheelOdometry:
     def __init__(self, noise: OdomNoise, rng: np.random.Generator):
         self.noise = n = noise
         self.rng = rng
-        e = rng.normal(0.0, 1.0, 4)        # drawn once per episode, in a fixed order
+        e = rng.normal(0.0, 1.0, 4)  # drawn once per episode, in a fixed order
         common, mismatch = n.wheel_scale * e[0], n.wheel_mismatch * e[1]
         self.scale_left = 1.0 + n.radius_bias + common - mismatch / 2
         self.scale_right = 1.0 + n.radius_bias + common + mismatch / 2
@@ -90,7 +92,7 @@ class WheelOdometry:
         self.x = self.y = self.yaw = 0.0
         self.v = self.w = 0.0
         self.distance = self.turned = self.t = 0.0
-        self._last: tuple[float, float] | None = None      # the wheel readings of the last step
+        self._last: tuple[float, float] | None = None  # the wheel readings of the last step
         self._last_yaw: float | None = None
         self._noisy = n.wheel_noise > 0 or n.gyro_noise > 0 or n.gyro_bias_walk > 0
 
@@ -151,17 +153,20 @@ class WheelOdometry:
         if n.heading == "wheels":
             per_m = n.wheel_mismatch / WHEEL_SEPARATION
             d = self.distance
-            return (per_m * d) ** 2 + 2 * n.wheel_noise ** 2 * d / WHEEL_SEPARATION ** 2
-        return ((n.gyro_bias * t) ** 2 + n.gyro_bias_walk ** 2 * t ** 3 / 3 + n.gyro_noise ** 2 * t
-                + (n.gyro_scale * self.turned) ** 2)
+            return (per_m * d) ** 2 + 2 * n.wheel_noise**2 * d / WHEEL_SEPARATION**2
+        return (
+            (n.gyro_bias * t) ** 2
+            + n.gyro_bias_walk**2 * t**3 / 3
+            + n.gyro_noise**2 * t
+            + (n.gyro_scale * self.turned) ** 2
+        )
 
     def pose_covariance(self) -> list[float]:
         """Dead reckoning's growing uncertainty: distance scale and heading error mapped to
         x/y (isotropic), the yaw variance; z, roll and pitch are not estimated (1e6)."""
         n, d = self.noise, self.distance
         var_yaw = 1e-6 + self.heading_variance()
-        var_xy = (1e-6 + (n.wheel_scale * d) ** 2 + n.wheel_noise ** 2 * d / 2
-                  + var_yaw * d * d / 3)
+        var_xy = 1e-6 + (n.wheel_scale * d) ** 2 + n.wheel_noise**2 * d / 2 + var_yaw * d * d / 3
         cov = [0.0] * 36
         cov[0] = cov[7] = var_xy
         cov[14] = cov[21] = cov[28] = 1e6
@@ -173,7 +178,7 @@ class WheelOdometry:
         n = self.noise
         cov = [0.0] * 36
         cov[0] = 1e-4 + (n.wheel_scale * self.v) ** 2
-        cov[7] = 1e-6                       # no sideways slip in a differential drive
+        cov[7] = 1e-6  # no sideways slip in a differential drive
         cov[14] = cov[21] = cov[28] = 1e6
-        cov[35] = 1e-4 + (n.gyro_scale * self.w) ** 2 + n.gyro_bias ** 2
+        cov[35] = 1e-4 + (n.gyro_scale * self.w) ** 2 + n.gyro_bias**2
         return cov

@@ -5,6 +5,7 @@ otherwise.
 ``ACTORBT_SIM_RENDERER=gl|egl|tiny`` asks for one (it falls back as above when that one
 cannot run); ``ACTORBT_SIM_NO_EGL=1`` means ``tiny`` (no EGL at all).
 """
+
 from __future__ import annotations
 
 import contextlib
@@ -82,11 +83,11 @@ class Renderer:
         self.plugin = -1
         self.gl: GLRenderer | None = None
         self.why_not_egl = "not requested"
-        self._sizes_seen: set[tuple[int, int]] = set()     # (width, height) rendered so far
+        self._sizes_seen: set[tuple[int, int]] = set()  # (width, height) rendered so far
         wanted = prefer or requested_renderer()
         if wanted is not None and wanted not in RENDERERS:
             raise ValueError(f"renderer {wanted!r}: one of {', '.join(RENDERERS)}")
-        order = list(RENDERERS[RENDERERS.index(wanted):]) if wanted else list(RENDERERS)
+        order = list(RENDERERS[RENDERERS.index(wanted) :]) if wanted else list(RENDERERS)
         if not prefer_egl and "egl" in order:
             order.remove("egl")
         reasons = []
@@ -111,21 +112,22 @@ class Renderer:
             log.info("camera renderer: %s%s", self.name, f" ({self.why})" if self.why else "")
 
     def _try_gl(self) -> str:
-        """"" when the GL renderer runs here (it draws a frame to prove it), else why not."""
+        """ "" when the GL renderer runs here (it draws a frame to prove it), else why not."""
         try:
             from .gl_renderer import GLRenderer
+
             gl = GLRenderer(self.cid)
-        except Exception as e:          # no moderngl, no EGL, no OpenGL 3.3
+        except Exception as e:  # no moderngl, no EGL, no OpenGL 3.3
             return str(e) or type(e).__name__
         try:
             view = p.computeViewMatrix([0, 0, 1], [1, 0, 1], [0, 0, 1])
             proj = p.computeProjectionMatrixFOV(60, 1.0, 0.05, 10.0)
             rgb, depth = gl.render(4, 4, view, proj)
             ok = rgb.shape == (4, 4, 3) and depth.shape == (4, 4)
-        except Exception as e:          # pragma: no cover - depends on the machine
+        except Exception as e:  # pragma: no cover - depends on the machine
             gl.close()
             return f"GL render failed: {e}"
-        if not ok:                      # pragma: no cover
+        if not ok:  # pragma: no cover
             gl.close()
             return "GL render returned nothing"
         self.gl, self.name = gl, "gl"
@@ -147,10 +149,14 @@ class Renderer:
         try:
             with _quiet_stdout():
                 w, h, rgb, _, _ = p.getCameraImage(
-                    4, 4, renderer=p.ER_BULLET_HARDWARE_OPENGL, flags=p.ER_NO_SEGMENTATION_MASK,
-                    physicsClientId=self.cid)
+                    4,
+                    4,
+                    renderer=p.ER_BULLET_HARDWARE_OPENGL,
+                    flags=p.ER_NO_SEGMENTATION_MASK,
+                    physicsClientId=self.cid,
+                )
             ok = (w, h) == (4, 4) and np.asarray(rgb).size == 64
-        except Exception as e:   # pragma: no cover - depends on the machine
+        except Exception as e:  # pragma: no cover - depends on the machine
             ok, self.why_not_egl = False, f"EGL render failed: {e}"
         if not ok:
             self.close()
@@ -174,13 +180,21 @@ class Renderer:
                 self.name = "tiny"
                 self.why = "gl failed while rendering"
         renderer = p.ER_BULLET_HARDWARE_OPENGL if self.name == "egl" else p.ER_TINY_RENDERER
-        first = (width, height) not in self._sizes_seen     # the plugin chats on a new size
+        first = (width, height) not in self._sizes_seen  # the plugin chats on a new size
         self._sizes_seen.add((width, height))
         light = {} if light_direction is None else {"lightDirection": list(light_direction)}
         with _quiet_stdout() if first and self.name == "egl" else contextlib.nullcontext():
             _, _, rgba, depth, _ = p.getCameraImage(
-                width, height, view, projection, renderer=renderer,
-                flags=p.ER_NO_SEGMENTATION_MASK, shadow=0, physicsClientId=self.cid, **light)
+                width,
+                height,
+                view,
+                projection,
+                renderer=renderer,
+                flags=p.ER_NO_SEGMENTATION_MASK,
+                shadow=0,
+                physicsClientId=self.cid,
+                **light,
+            )
         rgba = np.asarray(rgba, dtype=np.uint8).reshape(height, width, 4)
         depth = np.asarray(depth, dtype=np.float32).reshape(height, width)
         return np.ascontiguousarray(rgba[:, :, :3]), depth
@@ -190,7 +204,7 @@ class Renderer:
         if gl is not None:
             try:
                 gl.close()
-            except Exception:            # pragma: no cover - a context already gone
+            except Exception:  # pragma: no cover - a context already gone
                 log.debug("closing the GL renderer", exc_info=True)
 
     def close(self):
@@ -225,7 +239,7 @@ class GLThread:
             fn, args, kwargs, box, done = item
             try:
                 box.append((True, fn(*args, **kwargs)))
-            except BaseException as e:     # handed to the caller
+            except BaseException as e:  # handed to the caller
                 box.append((False, e))
             done.set()
 

@@ -5,6 +5,7 @@ Worlds with varied poses (``poses:``) start objects lying or leaning (``PlacedOb
 true}`` give a labelled category a textured mesh as its visual (sim/textures.py);
 distractors from pybullet_data are loaded from their URDFs.
 """
+
 from __future__ import annotations
 
 import colorsys
@@ -20,7 +21,7 @@ from .world_spec import Box, PlacedObject, WorldSpec
 
 FLOOR_RGBA = (0.93, 0.91, 0.86, 1.0)
 FLOOR_FRICTION = 1.0
-ROLLING_FRICTION = 0.002     # worlds with varied poses (lying bodies stay put)
+ROLLING_FRICTION = 0.002  # worlds with varied poses (lying bodies stay put)
 
 
 def _shift_like(src, dst, colour):
@@ -46,8 +47,9 @@ def _static_boxes(cid, boxes: list[Box]) -> list[int]:
     for b in boxes:
         half = [b.sx / 2, b.sy / 2, b.sz / 2]
         col = p.createCollisionShape(p.GEOM_BOX, halfExtents=half, physicsClientId=cid)
-        vis = p.createVisualShape(p.GEOM_BOX, halfExtents=half, rgbaColor=list(b.rgba),
-                                  specularColor=[0.05, 0.05, 0.05], physicsClientId=cid)
+        vis = p.createVisualShape(
+            p.GEOM_BOX, halfExtents=half, rgbaColor=list(b.rgba), specularColor=[0.05, 0.05, 0.05], physicsClientId=cid
+        )
         body = p.createMultiBody(0.0, col, vis, [b.x, b.y, b.sz / 2], _quat_yaw(b.yaw), physicsClientId=cid)
         p.changeDynamics(body, -1, lateralFriction=0.6, physicsClientId=cid)
         out.append(body)
@@ -64,8 +66,7 @@ class Scene:
         half = [(x1 - x0) / 2 + 1.0, (y1 - y0) / 2 + 1.0, 0.05]
         col = p.createCollisionShape(p.GEOM_BOX, halfExtents=half, physicsClientId=cid)
         vis = p.createVisualShape(p.GEOM_BOX, halfExtents=half, rgbaColor=FLOOR_RGBA, physicsClientId=cid)
-        self.floor = p.createMultiBody(0.0, col, vis, [(x0 + x1) / 2, (y0 + y1) / 2, -0.05],
-                                       physicsClientId=cid)
+        self.floor = p.createMultiBody(0.0, col, vis, [(x0 + x1) / 2, (y0 + y1) / 2, -0.05], physicsClientId=cid)
         p.changeDynamics(self.floor, -1, lateralFriction=FLOOR_FRICTION, physicsClientId=cid)
         p.changeVisualShape(self.floor, -1, specularColor=[0, 0, 0], physicsClientId=cid)
         statics = list(spec.walls) + list(spec.furniture)
@@ -134,17 +135,30 @@ class Scene:
         z = cat.height / 2 + 1e-4 if obj.z is None else obj.z
         orn = _quat_yaw(obj.yaw) if obj.quat is None else list(obj.quat)
         # createMultiBody's position is the link frame's (the inertial frame is offset)
-        body = p.createMultiBody(cat.mass, col, vis, [obj.x, obj.y, z], orn,
-                                 baseInertialFramePosition=[0, 0, com_z], physicsClientId=cid)
+        body = p.createMultiBody(
+            cat.mass, col, vis, [obj.x, obj.y, z], orn, baseInertialFramePosition=[0, 0, com_z], physicsClientId=cid
+        )
         if texture is not None:
             p.changeVisualShape(body, -1, textureUniqueId=texture, rgbaColor=[1, 1, 1, 1], physicsClientId=cid)
         if self.spec.poses is None:
-            p.changeDynamics(body, -1, lateralFriction=cat.friction, spinningFriction=0.001,
-                             rollingFriction=0.0001, physicsClientId=cid)
+            p.changeDynamics(
+                body,
+                -1,
+                lateralFriction=cat.friction,
+                spinningFriction=0.001,
+                rollingFriction=0.0001,
+                physicsClientId=cid,
+            )
         else:
             # lying bodies must not roll away: a little rolling resistance, as on a rug
-            p.changeDynamics(body, -1, lateralFriction=cat.friction, spinningFriction=0.002,
-                             rollingFriction=ROLLING_FRICTION, physicsClientId=cid)
+            p.changeDynamics(
+                body,
+                -1,
+                lateralFriction=cat.friction,
+                spinningFriction=0.002,
+                rollingFriction=ROLLING_FRICTION,
+                physicsClientId=cid,
+            )
         return body
 
     def _labelled_visual(self, obj, cat, rgba):
@@ -152,17 +166,26 @@ class Scene:
         from . import textures
 
         label = cat.label
-        if obj.rgba is not None and label is not None:      # jittered: the label too
-            label = replace(label, rgba=_shift_like(cat.rgba, obj.rgba, label.rgba),
-                             print_rgba=_shift_like(cat.rgba, obj.rgba, label.print_rgba))
+        if obj.rgba is not None and label is not None:  # jittered: the label too
+            label = replace(
+                label,
+                rgba=_shift_like(cat.rgba, obj.rgba, label.rgba),
+                print_rgba=_shift_like(cat.rgba, obj.rgba, label.print_rgba),
+            )
         img = textures.label_texture(rgba, label, cat.height, cat.name)
         path = str(textures.texture_file(img))
         tex = self._textures.get(path)
         if tex is None:
             tex = self._textures[path] = p.loadTexture(path, physicsClientId=self.cid)
         mesh = str(textures.shape_obj(cat.shape, tag=f"{obj.name} {Path(path).name}"))
-        vis = p.createVisualShape(p.GEOM_MESH, fileName=mesh, meshScale=[1, 1, 1], rgbaColor=[1, 1, 1, 1],
-                                  specularColor=[0.2, 0.2, 0.2], physicsClientId=self.cid)
+        vis = p.createVisualShape(
+            p.GEOM_MESH,
+            fileName=mesh,
+            meshScale=[1, 1, 1],
+            rgbaColor=[1, 1, 1, 1],
+            specularColor=[0.2, 0.2, 0.2],
+            physicsClientId=self.cid,
+        )
         return vis, tex
 
     def _add_urdf(self, obj, model) -> int:
@@ -177,14 +200,24 @@ class Scene:
         base = (obj.z - model.height / 2) if obj.z is not None else 0.0
         pos, _ = p.getBasePositionAndOrientation(body, physicsClientId=cid)
         # centre its bounding box on (x, y), its bottom 0.1 mm above its support
-        p.resetBasePositionAndOrientation(body, [pos[0] + obj.x - (lo[0] + hi[0]) / 2,
-                                                 pos[1] + obj.y - (lo[1] + hi[1]) / 2,
-                                                 pos[2] - lo[2] + base + 1e-4], orn, physicsClientId=cid)
+        p.resetBasePositionAndOrientation(
+            body,
+            [pos[0] + obj.x - (lo[0] + hi[0]) / 2, pos[1] + obj.y - (lo[1] + hi[1]) / 2, pos[2] - lo[2] + base + 1e-4],
+            orn,
+            physicsClientId=cid,
+        )
         rgba = list(obj.rgba) if obj.rgba is not None else list(model.rgba)
         for link in range(-1, p.getNumJoints(body, physicsClientId=cid)):
             p.changeVisualShape(body, link, rgbaColor=rgba, specularColor=[0.1, 0.1, 0.1], physicsClientId=cid)
-            p.changeDynamics(body, link, mass=model.mass, lateralFriction=model.friction, spinningFriction=0.002,
-                             rollingFriction=ROLLING_FRICTION, physicsClientId=cid)
+            p.changeDynamics(
+                body,
+                link,
+                mass=model.mass,
+                lateralFriction=model.friction,
+                spinningFriction=0.002,
+                rollingFriction=ROLLING_FRICTION,
+                physicsClientId=cid,
+            )
         return body
 
     def settle(self, steps: int, still: float = 2e-3) -> int:

@@ -1,5 +1,6 @@
 """Sensor models: the RGB-D camera's geometry here; wheel odometry in sim/odometry.py and
 the LDS-01 lidar in sim/lidar.py (both re-exported)."""
+
 from __future__ import annotations
 
 import math
@@ -19,12 +20,13 @@ __all__ = ["CameraModel", "Lidar", "LidarModel", "OdomNoise", "WheelOdometry"]
 class CameraModel:
     """Pinhole RGB-D camera on camera_optical_frame (z forward, x right, y down).
     Defaults follow a RealSense D435 colour stream: 69.4 deg horizontal field of view."""
+
     width: int = 320
     height: int = 240
     hfov_deg: float = 69.4
-    near: float = 0.05          # render clip plane
+    near: float = 0.05  # render clip plane
     far: float = 10.0
-    min_range: float = 0.10     # depth outside [min_range, max_range] -> NaN (no return)
+    min_range: float = 0.10  # depth outside [min_range, max_range] -> NaN (no return)
     max_range: float = 8.0
 
     @property

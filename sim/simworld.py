@@ -1,5 +1,6 @@
 """SimWorld: one pybullet world (own DIRECT client), stepped by a periodic timer on the
 runtime clock, speaking ROS topics on the runtime's bus (see sim/topics.py)."""
+
 from __future__ import annotations
 
 import functools
@@ -93,9 +94,11 @@ def _on_hub(fn):
     """With a runtime, only the hub thread touches this world's pybullet client (and its EGL
     context, which is bound to the thread that made it): calls from other threads (tests,
     the CLI) are handed to the hub and wait for the result."""
+
     @functools.wraps(fn)
     def wrapper(self, *args, **kwargs):
         return self._on_hub_call(fn, self, *args, **kwargs)
+
     return wrapper
 
 
@@ -133,16 +136,34 @@ class SimWorld:
     #: the bus endpoints while started (set on the hub by start()), else None
     topics: SimTopics | None
 
-    def __init__(self, runtime=None, world: str | WorldSpec = "house", seed: int = 0, gui: bool = False,
-                 *, physics_hz: int = PHYSICS_HZ, still_hand_physics_hz: int | None | Literal["env"] = "env",
-                 control_hz: int = 60, publish_hz: float = 30.0,
-                 camera_hz: float = 5.0, camera_size=(320, 240), odom_noise: OdomNoise | None = None,
-                 prefer_egl: bool = True, camera: bool = True, cmd_vel_timeout: float = CMD_VEL_TIMEOUT,
-                 map_resolution: float = RESOLUTION, lidar: LidarModel | None = None,
-                 lidar_noise: bool = True, debug_ground_truth: bool | None = None,
-                 locations=None, initial_pose: bool = True, faults=None,
-                 solver_iterations: int = SOLVER_ITERATIONS, solver_residual: float | None = SOLVER_RESIDUAL,
-                 holding_solver_iterations: int = HOLDING_SOLVER_ITERATIONS):
+    def __init__(
+        self,
+        runtime=None,
+        world: str | WorldSpec = "house",
+        seed: int = 0,
+        gui: bool = False,
+        *,
+        physics_hz: int = PHYSICS_HZ,
+        still_hand_physics_hz: int | None | Literal["env"] = "env",
+        control_hz: int = 60,
+        publish_hz: float = 30.0,
+        camera_hz: float = 5.0,
+        camera_size=(320, 240),
+        odom_noise: OdomNoise | None = None,
+        prefer_egl: bool = True,
+        camera: bool = True,
+        cmd_vel_timeout: float = CMD_VEL_TIMEOUT,
+        map_resolution: float = RESOLUTION,
+        lidar: LidarModel | None = None,
+        lidar_noise: bool = True,
+        debug_ground_truth: bool | None = None,
+        locations=None,
+        initial_pose: bool = True,
+        faults=None,
+        solver_iterations: int = SOLVER_ITERATIONS,
+        solver_residual: float | None = SOLVER_RESIDUAL,
+        holding_solver_iterations: int = HOLDING_SOLVER_ITERATIONS,
+    ):
         if still_hand_physics_hz == "env":
             still_hand_physics_hz = _still_hand_hz()
         still_hz = physics_hz if still_hand_physics_hz is None else still_hand_physics_hz
@@ -165,10 +186,10 @@ class SimWorld:
         self.camera_hz = camera_hz
         self.cmd_vel_timeout = cmd_vel_timeout
         self.give_initial_pose = initial_pose
-        self.faults = faults             # a sim.faults.Faults: what the robot side breaks
+        self.faults = faults  # a sim.faults.Faults: what the robot side breaks
         self.prefer_egl = prefer_egl
         self.gui = False
-        self.cid: int | None = None      # the pybullet client; None once closed
+        self.cid: int | None = None  # the pybullet client; None once closed
         self._gui_requested = gui
         self._camera_enabled = camera
         self._camera_size = camera_size
@@ -193,10 +214,11 @@ class SimWorld:
         if rt is None:
             return fn(*args, **kwargs)
         from bt_engine.errors import RuntimeClosedError
+
         try:
             return rt.run_on_hub(fn, *args, **kwargs)
         except RuntimeClosedError:
-            return fn(*args, **kwargs)       # the hub is gone: nothing else touches the client
+            return fn(*args, **kwargs)  # the hub is gone: nothing else touches the client
 
     def _build(self):
         if self._gui_requested:
@@ -213,33 +235,39 @@ class SimWorld:
         p.resetSimulation(physicsClientId=cid)
         p.setGravity(0, 0, -9.81, physicsClientId=cid)
         residual = {} if self.solver_residual is None else {"solverResidualThreshold": self.solver_residual}
-        p.setPhysicsEngineParameter(fixedTimeStep=self.dt, numSubSteps=self.substeps,
-                                    numSolverIterations=self.solver_iterations,
-                                    deterministicOverlappingPairs=1, **residual,
-                                    physicsClientId=cid)
+        p.setPhysicsEngineParameter(
+            fixedTimeStep=self.dt,
+            numSubSteps=self.substeps,
+            numSolverIterations=self.solver_iterations,
+            deterministicOverlappingPairs=1,
+            **residual,
+            physicsClientId=cid,
+        )
         if self.gui:
             p.configureDebugVisualizer(p.COV_ENABLE_GUI, 0, physicsClientId=cid)
         # the EGL plugin only sees visual shapes created after it loads: load it first
-        self._renderer: Renderer | None = (Renderer(cid, prefer_egl=self.prefer_egl and not self.gui)
-                                           if self._camera_enabled else None)
+        self._renderer: Renderer | None = (
+            Renderer(cid, prefer_egl=self.prefer_egl and not self.gui) if self._camera_enabled else None
+        )
         self.scene = Scene(cid, self.spec)
         # varied poses: the objects come to rest before the robot is there and time starts
         self.settle_steps = self.scene.settle(self.spec.settle_steps) if self.spec.settle_steps else 0
         self.robot = Robot(cid, self.spec.robot_start)
         self.odometry = WheelOdometry(self._odom_noise or OdomNoise(), odometry_rng(self.seed))
         self.gyro = Gyro(self._odom_noise or OdomNoise(), gyro_rng(self.seed))
-        self.lidar = Lidar(cid, self.lidar_model, lidar_rng(self.seed),
-                           ray_mask=~ROBOT_COLLISION_GROUP, noise=self._lidar_noise)
+        self.lidar = Lidar(
+            cid, self.lidar_model, lidar_rng(self.seed), ray_mask=~ROBOT_COLLISION_GROUP, noise=self._lidar_noise
+        )
         self.camera = CameraModel(*self._camera_size)
         # the depth camera's noise: a stream of its own from the world seed
         self._depth_rng = np.random.default_rng([self.seed, 43])
         self.grid = build_grid(self.spec, self._map_resolution)
-        self.t = 0.0                 # simulated seconds since construction
-        self._t_offset = 0.0         # runtime clock - self.t (set by start())
-        self.stamp_offset = 0.0      # ROS time - runtime clock (set by start() on ROS 2)
+        self.t = 0.0  # simulated seconds since construction
+        self._t_offset = 0.0  # runtime clock - self.t (set by start())
+        self.stamp_offset = 0.0  # ROS time - runtime clock (set by start() on ROS 2)
         self.ticks = 0
         self._traj = None
-        self._hand_moved_at = 0.0    # self.t when the arm or a finger last moved
+        self._hand_moved_at = 0.0  # self.t when the arm or a finger last moved
         self._substeps_now = self.substeps
         self._iterations_now = self.solver_iterations
         self._last_cmd_vel = -math.inf
@@ -264,11 +292,10 @@ class SimWorld:
 
         rt = self.runtime
         self._t_offset = rt.now() - self.t
-        if rt.bus.name == "ros":         # stamps in ROS time: the wall clock's epoch time
+        if rt.bus.name == "ros":  # stamps in ROS time: the wall clock's epoch time
             self.stamp_offset = time.time() - rt.now()
         self.topics = SimTopics(self, rt)
-        self._timers = [rt.call_every(self.dt, self._tick),
-                        rt.call_every(1.0 / self.camera_hz, self._camera_tick)]
+        self._timers = [rt.call_every(self.dt, self._tick), rt.call_every(1.0 / self.camera_hz, self._camera_tick)]
 
     def drivers_down(self):
         """Hub code: the robot's drivers stop (a robot-side process that died): its topics,
@@ -281,6 +308,7 @@ class SimWorld:
     def drivers_up(self):
         """Hub code: the drivers start again, with no memory of goals or subscribers."""
         from .topics import SimTopics
+
         if self.topics is None:
             self.topics = SimTopics(self, self.runtime)
 
@@ -348,7 +376,7 @@ class SimWorld:
             pos, vel = self._traj.sample(t_next + self._t_offset)
             self.robot.set_arm(pos, vel)
         self.robot.apply(self.dt)
-        follows_hand = self.still_hand_substeps != self.substeps   # else one rate: no watching
+        follows_hand = self.still_hand_substeps != self.substeps  # else one rate: no watching
         if follows_hand:
             self._choose_substeps()
         p.stepSimulation(physicsClientId=self.cid)
@@ -384,8 +412,9 @@ class SimWorld:
         """Contact-rich work (the arm or the gripper moving or holding, or what they touched
         settling) at the full physics rate; the rest at the still hand's rate."""
         traj = self._traj
-        moving = (self.t - self._hand_moved_at < HAND_SETTLE
-                  or (traj is not None and self.t + self._t_offset < traj.end_time + HAND_SETTLE))
+        moving = self.t - self._hand_moved_at < HAND_SETTLE or (
+            traj is not None and self.t + self._t_offset < traj.end_time + HAND_SETTLE
+        )
         n = self.substeps if moving else self.still_hand_substeps
         if n != self._substeps_now:
             p.setPhysicsEngineParameter(numSubSteps=n, physicsClientId=self.cid)
@@ -555,7 +584,7 @@ class SimWorld:
 
     @property
     def renderer_name(self) -> str:
-        """"egl" or "tiny"."""
+        """ "egl" or "tiny"."""
         return self.renderer.name
 
     @_on_hub
@@ -568,8 +597,13 @@ class SimWorld:
         pos, orn = self.robot.link_pose("camera_optical_frame")
         cam = self.camera
         look = self.spec.lighting
-        rgb, buf = self.renderer.render(cam.width, cam.height, cam.view(pos, orn), cam.projection(),
-                                        light_direction=None if look is None else look.direction)
+        rgb, buf = self.renderer.render(
+            cam.width,
+            cam.height,
+            cam.view(pos, orn),
+            cam.projection(),
+            light_direction=None if look is None else look.direction,
+        )
         depth = cam.linearize(buf)
         if look is not None:
             rgb = look.apply(rgb)

@@ -10,6 +10,7 @@ there. ``u`` runs once around the body.
 Files go to a cache folder (``ACTORBT_SIM_CACHE`` or the temp folder), named by a hash of
 their content, so the same texture or mesh is written once.
 """
+
 from __future__ import annotations
 
 import colorsys
@@ -22,10 +23,10 @@ from pathlib import Path
 
 import numpy as np
 
-SIDE_V = 0.90        # the side wall spans v 0..SIDE_V
-CAP_V = 0.95         # caps and shoulders sample the texture here (body colour)
+SIDE_V = 0.90  # the side wall spans v 0..SIDE_V
+CAP_V = 0.95  # caps and shoulders sample the texture here (body colour)
 TEX_W, TEX_H = 256, 256
-SEGMENTS = 48        # facets around a body of revolution
+SEGMENTS = 48  # facets around a body of revolution
 
 
 def cache_dir() -> Path:
@@ -54,8 +55,7 @@ def png_bytes(img: np.ndarray) -> bytes:
         return len(data).to_bytes(4, "big") + c + zlib.crc32(c).to_bytes(4, "big")
 
     head = w.to_bytes(4, "big") + h.to_bytes(4, "big") + bytes([8, 2, 0, 0, 0])
-    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", head) + chunk(b"IDAT", zlib.compress(raw, 6))
-            + chunk(b"IEND", b""))
+    return b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", head) + chunk(b"IDAT", zlib.compress(raw, 6)) + chunk(b"IEND", b"")
 
 
 def _u8(rgba) -> np.ndarray:
@@ -68,7 +68,7 @@ def print_mask(width: int, height: int, coverage: float, key: str) -> np.ndarray
     if coverage <= 0 or width < 1 or height < 1:
         return np.zeros((height, width), bool)
     rng = np.random.default_rng(zlib.crc32(key.encode()))
-    score = rng.uniform(0.0, 0.05, (height, width))       # breaks ties
+    score = rng.uniform(0.0, 0.05, (height, width))  # breaks ties
     # lettering: rows of glyph cells separated by gaps
     line_h = max(3, height // 6)
     glyph_w = max(2, line_h // 2)
@@ -77,8 +77,8 @@ def print_mask(width: int, height: int, coverage: float, key: str) -> np.ndarray
         while x < width:
             w = int(rng.integers(max(1, glyph_w // 2), glyph_w + 1))
             if rng.random() < 0.8:
-                score[top:top + line_h, x:x + w] += rng.uniform(0.3, 0.6)
-            x += w + max(1, glyph_w // 3) + (glyph_w if rng.random() < 0.15 else 0)   # spaces
+                score[top : top + line_h, x : x + w] += rng.uniform(0.3, 0.6)
+            x += w + max(1, glyph_w // 3) + (glyph_w if rng.random() < 0.15 else 0)  # spaces
     # a logo: a bold ellipse, about a third of the print
     yy, xx = np.mgrid[0:height, 0:width]
     area = max(coverage / 3, 0.02) * width * height
@@ -101,6 +101,7 @@ def label_texture(body_rgba, label, height: float, key: str) -> np.ndarray:
         # image row 0 is the top of the texture (v = 1)
         def row(v):
             return int(round((1.0 - v) * TEX_H))
+
         r0 = row(SIDE_V * min(label.top, height) / height)
         r1 = row(SIDE_V * label.bottom / height)
         if r1 > r0:
@@ -115,9 +116,9 @@ def texture_file(img: np.ndarray) -> Path:
 
 
 # ----------------------------------------------------------------------------- meshes
-Vec3 = tuple[float, float, float]     # a vertex or a normal
+Vec3 = tuple[float, float, float]  # a vertex or a normal
 UV = tuple[float, float]
-Corner = tuple[int, int, int]         # a face corner: (vertex, uv, normal) indices from 0
+Corner = tuple[int, int, int]  # a face corner: (vertex, uv, normal) indices from 0
 
 
 def _obj_text(vs: list[Vec3], vts: list[UV], vns: list[Vec3], faces: list[list[Corner]], tag: str = "") -> bytes:
@@ -189,8 +190,14 @@ def revolution_obj(sections, segments: int = SEGMENTS, tag: str = "") -> Path:
             vts.append((j / segments, SIDE_V * top / height))
         for j in range(segments):
             k = (j + 1) % segments
-            faces.append([(lo + j, vt0 + 2 * j, ring_n + j), (lo + k, vt0 + 2 * (j + 1), ring_n + k),
-                          (hi + k, vt0 + 2 * (j + 1) + 1, ring_n + k), (hi + j, vt0 + 2 * j + 1, ring_n + j)])
+            faces.append(
+                [
+                    (lo + j, vt0 + 2 * j, ring_n + j),
+                    (lo + k, vt0 + 2 * (j + 1), ring_n + k),
+                    (hi + k, vt0 + 2 * (j + 1) + 1, ring_n + k),
+                    (hi + j, vt0 + 2 * j + 1, ring_n + j),
+                ]
+            )
         bottom, prev_r = top, r
     disc(sections[-1][1], 0.0, z0 + height, up)
     return _write_once(_obj_text(vs, vts, vns, faces, tag), ".obj")
@@ -200,7 +207,7 @@ def box_obj(sx: float, sy: float, sz: float, tag: str = "") -> Path:
     """OBJ of a box, its frame at its centre; the texture's u wraps once around the four
     sides (as on a body of revolution), top and bottom sample the body colour."""
     hx, hy, hz = sx / 2, sy / 2, sz / 2
-    corners = [(hx, -hy), (hx, hy), (-hx, hy), (-hx, -hy)]   # counter-clockwise from +x
+    corners = [(hx, -hy), (hx, hy), (-hx, hy), (-hx, -hy)]  # counter-clockwise from +x
     perim = 2 * (sx + sy)
     vs: list[Vec3] = []
     vts: list[UV] = []

@@ -43,6 +43,7 @@ RViz's "2D Pose Estimate") with the pose the robot stands at once it has come to
 (``SETTLED`` s), to each new subscriber while it has not driven yet
 (``SimWorld(initial_pose=False)``: never).
 """
+
 from __future__ import annotations
 
 import array
@@ -75,7 +76,7 @@ INITIAL_POSE = "/initialpose"
 USER_TOPICS = (INITIAL_POSE,)
 TF = "/tf"
 TF_STATIC = "/tf_static"
-LATCHED_QOS = "latched"   # reliable, transient local, keep last 1 (robot_state_publisher's /tf_static)
+LATCHED_QOS = "latched"  # reliable, transient local, keep last 1 (robot_state_publisher's /tf_static)
 SCAN = "/scan"
 SENSOR_QOS = "sensor"  # best effort, keep last 5 (rclpy's qos_profile_sensor_data), as the LDS driver
 GROUND_TRUTH = "/ground_truth/pose"
@@ -124,16 +125,17 @@ class SimTopics:
         self.pub_rgb = bus.publisher(COLOR, Image)
         self.pub_depth = bus.publisher(DEPTH, Image)
         self.pub_info = bus.publisher(CAMERA_INFO, CameraInfo)
-        self.pub_map = bus.publisher(MAP, OccupancyGrid, LATCHED_QOS)   # map_server latches it
+        self.pub_map = bus.publisher(MAP, OccupancyGrid, LATCHED_QOS)  # map_server latches it
         self.pub_tf = bus.publisher(TF, TFMessage)
         self.pub_tf_static = bus.publisher(TF_STATIC, TFMessage, LATCHED_QOS)
         faults = sim.faults
-        if faults is not None:                    # actorbt robot --fault: a real robot's losses
+        if faults is not None:  # actorbt robot --fault: a real robot's losses
             rng = random.Random(sim.seed * 1009 + 17)
             self.pub_scan = faulty(self.pub_scan, rt, faults.scan_drop, faults.scan_delay, rng)
             self.pub_rgb, self.pub_depth, self.pub_info = (
                 faulty(p, rt, faults.camera_drop, faults.camera_delay, rng)
-                for p in (self.pub_rgb, self.pub_depth, self.pub_info))
+                for p in (self.pub_rgb, self.pub_depth, self.pub_info)
+            )
         self.pub_initial = bus.publisher(INITIAL_POSE, PoseWithCovarianceStamped) if sim.give_initial_pose else None
         self.subs = [bus.subscribe(CMD_VEL, TwistStamped, self._on_cmd_vel)]
         self.arm = ArmController(sim, bus)
@@ -152,9 +154,20 @@ class SimTopics:
         self.subs = []
         self.arm.close()
         self.gripper.close()
-        close_publishers(self.pub_odom, self.pub_imu, self.pub_scan, self.pub_gt, self.pub_js,
-                         self.pub_rgb, self.pub_depth, self.pub_info, self.pub_map, self.pub_tf,
-                         self.pub_tf_static, self.pub_initial)
+        close_publishers(
+            self.pub_odom,
+            self.pub_imu,
+            self.pub_scan,
+            self.pub_gt,
+            self.pub_js,
+            self.pub_rgb,
+            self.pub_depth,
+            self.pub_info,
+            self.pub_map,
+            self.pub_tf,
+            self.pub_tf_static,
+            self.pub_initial,
+        )
 
     # ---------------- actuators ----------------
     def _on_cmd_vel(self, msg: TwistStamped):
@@ -163,8 +176,9 @@ class SimTopics:
         sent = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
         timeout = self.sim.cmd_vel_timeout
         if sent and timeout > 0 and self.sim.ros_time() - sent > timeout:
-            log.warning("ignored %s stamped %.3f s ago (cmd_vel_timeout %g s)", CMD_VEL,
-                        self.sim.ros_time() - sent, timeout)
+            log.warning(
+                "ignored %s stamped %.3f s ago (cmd_vel_timeout %g s)", CMD_VEL, self.sim.ros_time() - sent, timeout
+            )
             return
         self.sim.apply_cmd_vel(msg.twist.linear.x, msg.twist.angular.z)
 
@@ -192,7 +206,7 @@ class SimTopics:
                 st = st or sim.robot.joint_states()
                 self.pub_tf.publish(self.tf_msg(now, st))
         n = count(TF_STATIC)
-        if n > self._static_subs:       # latched: a new subscriber gets the tree at once
+        if n > self._static_subs:  # latched: a new subscriber gets the tree at once
             self.pub_tf_static.publish(self.tf_static_msg(now))
         self._static_subs = n
         if self._ticks % sim.scan_every == 0 and count(SCAN):
@@ -226,7 +240,7 @@ class SimTopics:
 
     def odom_msg(self, now) -> Odometry:
         o = self.sim.odometry
-        tf = odom_transform(o)           # the same edge /tf will carry
+        tf = odom_transform(o)  # the same edge /tf will carry
         msg = Odometry()
         msg.header.stamp = stamp(self.sim.ros_time(now))
         msg.header.frame_id = tf.parent
@@ -273,10 +287,10 @@ class SimTopics:
         msg.header.stamp = stamp(self.sim.ros_time(now))
         msg.header.frame_id = SCAN_FRAME
         msg.angle_min, msg.angle_max, msg.angle_increment = m.angle_min, m.angle_max, m.angle_increment
-        msg.time_increment = 0.0          # every beam at the same instant (one ray cast)
+        msg.time_increment = 0.0  # every beam at the same instant (one ray cast)
         msg.scan_time = m.scan_time
         msg.range_min, msg.range_max = m.range_min, m.range_max
-        msg.ranges = ranges               # float32 array
+        msg.ranges = ranges  # float32 array
         return msg
 
     def ground_truth_msg(self, now) -> PoseStamped:

@@ -14,6 +14,7 @@ standoff; a leaning object has that free floor on its room side; a lying one alo
 end of its axis. The base (base_footprint to its front bumper: ``CHASSIS_FRONT``) never
 needs to drive under or onto a table.
 """
+
 from __future__ import annotations
 
 import math
@@ -27,12 +28,12 @@ from .objects import CATEGORIES, DECOYS
 from .textures import jitter_rgba
 from .world_spec import Distractors, PlacedObject, PoseMix
 
-CHASSIS_FRONT = 0.076     # base_footprint to the front of the chassis [m]
+CHASSIS_FRONT = 0.076  # base_footprint to the front of the chassis [m]
 CHASSIS_REAR = 0.205
 CHASSIS_HALF_WIDTH = 0.153
 DEFAULT_REACH, DEFAULT_STANDOFF = 0.27, 0.12
-MAX_TILT_DEG = 55.0       # beyond this a "tilted" object is laid down instead
-LEAN_GAP = 0.002          # between a leaning object and its support at placement [m]
+MAX_TILT_DEG = 55.0  # beyond this a "tilted" object is laid down instead
+LEAN_GAP = 0.002  # between a leaning object and its support at placement [m]
 
 
 # ----------------------------------------------------------------------------- geometry
@@ -87,7 +88,7 @@ def part_points(model, n: int = 48) -> np.ndarray:
         elif part[0] == "box":
             (sx, sy, sz), zc = part[1], part[2]
             pts += [(u * sx / 2, v * sy / 2, zc + w * sz / 2) for u in (-1, 1) for v in (-1, 1) for w in (-1, 1)]
-        else:   # sphere
+        else:  # sphere
             _, r, zc = part
             pts += [(r * u, r * v, zc + r * w) for u, v, w in np.eye(3).tolist() + (-np.eye(3)).tolist()]
     return np.array(pts, float)
@@ -124,13 +125,14 @@ def lying_rotations(model) -> list[np.ndarray]:
 class Lean:
     """A model tilted by ``theta`` towards +x (its own yaw ``phi`` first), in a frame whose
     support face is the plane x = 0 and whose floor is z = 0."""
+
     theta: float
     phi: float
-    R: np.ndarray          # object -> lean frame rotation
-    x: float               # frame position (x < 0: in front of the face)
+    R: np.ndarray  # object -> lean frame rotation
+    x: float  # frame position (x < 0: in front of the face)
     z: float
-    contact_z: float       # height of its highest point against the face
-    reach: float           # largest horizontal distance of its outline from its frame
+    contact_z: float  # height of its highest point against the face
+    reach: float  # largest horizontal distance of its outline from its frame
 
 
 def lean(model, theta: float, phi: float) -> Lean | None:
@@ -173,7 +175,7 @@ def _facing_yaw(cat_name: str, heading: float, u: float) -> float:
     if plan is None or not plan.sides:
         return u
     side = plan.sides[int((u + math.pi) / (2 * math.pi) * len(plan.sides)) % len(plan.sides)]
-    jitter = 0.5 * plan.tolerance * math.sin(3.0 * u)       # spread, from the same draw
+    jitter = 0.5 * plan.tolerance * math.sin(3.0 * u)  # spread, from the same draw
     flip = math.pi if u > 0 and not plan.one_way else 0.0
     return math.remainder(heading - side + flip + jitter, 2 * math.pi)
 
@@ -195,14 +197,14 @@ class Placer:
     def __init__(self, spec, clearance, tries, mix: PoseMix, seed, robot_radius, door_clearance):
         self.spec, self.clearance, self.tries, self.mix = spec, clearance, tries, mix
         self.R, self.door = robot_radius, door_clearance
-        self.rng = np.random.default_rng(seed)                 # positions
-        self.pose_rng = np.random.default_rng([seed, 21])      # kinds, supports, tilts
+        self.rng = np.random.default_rng(seed)  # positions
+        self.pose_rng = np.random.default_rng([seed, 21])  # kinds, supports, tilts
         self.statics = spec.obstacles
         self.leanable = [b for b in list(spec.walls) + list(spec.furniture)]
         self.tables = [f for f in spec.furniture if getattr(f, "support", False)]
-        self.placed: list[tuple[float, float, float]] = []      # floor footprints (x, y, r)
+        self.placed: list[tuple[float, float, float]] = []  # floor footprints (x, y, r)
         self.on_table: dict[str, list] = {t.name: [] for t in self.tables}
-        self.keepout: list[tuple[float, float, float]] = []     # robot spots kept free
+        self.keepout: list[tuple[float, float, float]] = []  # robot spots kept free
         self.ends = []
         for w in spec.walls:
             c, s = math.cos(w.yaw), math.sin(w.yaw)
@@ -286,7 +288,7 @@ class Placer:
             got = self._tilted(name, cat, model, room, lo + u_tilt * (hi - lo), u_phi)
             if got is not None:
                 return got
-            kind = "lying"      # nothing to lean on here: lie down instead
+            kind = "lying"  # nothing to lean on here: lie down instead
         if kind == "lying":
             rots = lying_rotations(model)
             return self._lying(name, cat, model, room, rots[int(u_lie * len(rots)) % len(rots)])
@@ -323,7 +325,7 @@ class Placer:
         table = next(t for t in self.tables if t.name == table_name)
         r = model.radius
         reach, standoff = _grasp_reach(cat, "upright")
-        faces = []      # (outward normal angle, half length along the edge, half depth)
+        faces = []  # (outward normal angle, half length along the edge, half depth)
         for k, (hl, hd) in enumerate(((table.sy / 2, table.sx / 2), (table.sx / 2, table.sy / 2)) * 2):
             faces.append((table.yaw + k * math.pi / 2, hl, hd))
         for _ in range(self.tries):
@@ -339,14 +341,15 @@ class Placer:
                 continue
             if any(math.hypot(ox - qx, oy - qy) < r + qr + 0.06 for qx, qy, qr in self.on_table[table.name]):
                 continue
-            heading = ang + math.pi        # the base faces the table
+            heading = ang + math.pi  # the base faces the table
             if not self.base_fits(ox, oy, heading, reach, standoff):
                 continue
             self.on_table[table.name].append((ox, oy, r))
             self.keep(ox, oy, heading, reach, standoff)
             yaw = _facing_yaw(cat, heading, float(self.rng.uniform(-math.pi, math.pi)))
-            return PlacedObject(name, cat, ox, oy, yaw, z=table.sz + model.height / 2 + 1e-4,
-                                pose_kind="upright", support=table.name)
+            return PlacedObject(
+                name, cat, ox, oy, yaw, z=table.sz + model.height / 2 + 1e-4, pose_kind="upright", support=table.name
+            )
         return None
 
     def _tilted(self, name, cat, model, room, theta_deg, u_phi):
@@ -354,7 +357,7 @@ class Placer:
         phis = [0.0] if is_round(model) else [0.0, math.pi / 2]
         phi = phis[int(u_phi * len(phis)) % len(phis)]
         if is_round(model):
-            phi = u_phi * 2 * math.pi          # turned about its own axis: any way
+            phi = u_phi * 2 * math.pi  # turned about its own axis: any way
         ln = stable_lean(model, theta_deg, phi)
         if ln is None and not is_round(model):
             ln = stable_lean(model, theta_deg, phis[1 - phis.index(phi)] if len(phis) > 1 else phi)
@@ -362,7 +365,7 @@ class Placer:
             return None
         reach, standoff = _grasp_reach(cat, "tilted")
         area = self.spec.rooms[room] if room else self.spec.bounds
-        faces = []      # (box, face centre x, y, outward normal angle, usable half length)
+        faces = []  # (box, face centre x, y, outward normal angle, usable half length)
         for b in self.leanable:
             if b.sz < ln.contact_z + 0.01 or b is self.spec.place:
                 continue
@@ -382,7 +385,7 @@ class Placer:
             b, fx, fy, ang, use = faces[int(self.rng.choice(len(faces), p=weights))]
             t = float(self.rng.uniform(-use, use))
             nx, ny = math.cos(ang), math.sin(ang)
-            d = -ln.x                          # frame distance in front of the face
+            d = -ln.x  # frame distance in front of the face
             ox, oy = fx + nx * d - ny * t, fy + ny * d + nx * t
             if not (area[0] <= ox <= area[2] and area[1] <= oy <= area[3]):
                 continue
@@ -393,12 +396,21 @@ class Placer:
             heading = ang + math.pi
             if not self.base_fits(ox, oy, heading, reach, standoff):
                 continue
-            psi = ang + math.pi                 # lean frame +x: towards the face
+            psi = ang + math.pi  # lean frame +x: towards the face
             R = rot_z(psi) @ ln.R
             self.placed.append((ox, oy, ln.reach))
             self.keep(ox, oy, heading, reach, standoff)
-            return PlacedObject(name, cat, ox, oy, float(math.atan2(math.sin(psi), math.cos(psi))),
-                                z=ln.z, quat=quat_of(R), pose_kind="tilted", support=b.name)
+            return PlacedObject(
+                name,
+                cat,
+                ox,
+                oy,
+                float(math.atan2(math.sin(psi), math.cos(psi))),
+                z=ln.z,
+                quat=quat_of(R),
+                pose_kind="tilted",
+                support=b.name,
+            )
         return None
 
     def _lying(self, name, cat, model, room, R0):
@@ -408,7 +420,7 @@ class Placer:
         r = float(np.hypot(pts[:, 0], pts[:, 1]).max())
         reach, standoff = _grasp_reach(cat, "lying")
         yaw = float(self.rng.uniform(-math.pi, math.pi))
-        axis = R0 @ np.array([0.0, 0.0, 1.0])            # the lying body's axis, before yaw
+        axis = R0 @ np.array([0.0, 0.0, 1.0])  # the lying body's axis, before yaw
         ax_yaw = yaw + math.atan2(axis[1], axis[0])
 
         def approachable(x, y):
@@ -453,7 +465,7 @@ class Placer:
             if got is None:
                 found = self._floor_spot(room, model.radius, self.clearance)
                 if found is None:
-                    continue            # a crowded room: one distractor fewer
+                    continue  # a crowded room: one distractor fewer
                 self.placed.append((found[0], found[1], model.radius))
                 got = PlacedObject(name, kind, found[0], found[1], float(self.rng.uniform(-math.pi, math.pi)))
             taken.add(name)
@@ -464,7 +476,7 @@ class Placer:
 
         r = model.radius
         c, s = math.cos(table.yaw), math.sin(table.yaw)
-        half_u, half_v = table.sx / 2 - r - 0.02, table.sy / 2 - r - 0.02   # where the decoy's centre may go
+        half_u, half_v = table.sx / 2 - r - 0.02, table.sy / 2 - r - 0.02  # where the decoy's centre may go
         for _ in range(50):
             u = float(self.rng.uniform(-half_u, half_u)) if table.sx > 2 * r + 0.04 else None
             v = float(self.rng.uniform(-half_v, half_v)) if table.sy > 2 * r + 0.04 else None
@@ -474,11 +486,19 @@ class Placer:
             if any(math.hypot(ox - qx, oy - qy) < r + qr + 0.06 for qx, qy, qr in self.on_table[table.name]):
                 continue
             self.on_table[table.name].append((ox, oy, r))
-            return PlacedObject(name, kind, ox, oy, float(self.rng.uniform(-math.pi, math.pi)),
-                                z=table.sz + model.height / 2 + 1e-4, support=table.name)
+            return PlacedObject(
+                name,
+                kind,
+                ox,
+                oy,
+                float(self.rng.uniform(-math.pi, math.pi)),
+                z=table.sz + model.height / 2 + 1e-4,
+                support=table.name,
+            )
         return None
 
 
 def _with(obj, **kw):
     from dataclasses import replace
+
     return replace(obj, **kw)

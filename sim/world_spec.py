@@ -3,6 +3,7 @@ the world, its static boxes, the objects' start poses, the ``poses:`` mix and th
 ``distractors:``. Kept apart from the reader so that the modules it uses (gridmap,
 map_world, varied) can build worlds without importing it back.
 """
+
 from __future__ import annotations
 
 import math
@@ -26,6 +27,7 @@ class WorldError(ActorbtError, ValueError):
 @dataclass(frozen=True)
 class Box:
     """A static box: centre (x, y) on the floor, size (sx, sy, sz), yaw."""
+
     name: str
     x: float
     y: float
@@ -34,7 +36,7 @@ class Box:
     sz: float
     yaw: float = 0.0
     rgba: tuple = (0.8, 0.8, 0.8, 1.0)
-    support: bool = False     # a low table objects may stand on (worlds with ``poses``)
+    support: bool = False  # a low table objects may stand on (worlds with ``poses``)
 
     def distance(self, px, py):
         """Distance from point(s) to the box footprint (0 inside)."""
@@ -61,6 +63,7 @@ class PlacedObject:
     standing on the floor), ``quat`` (x, y, z, w; None: upright at ``yaw``), ``pose_kind``
     (upright, lying, tilted), ``support`` (floor, or the furniture it stands on or leans
     against) and ``rgba`` (None: the model's colour)."""
+
     name: str
     category: str
     x: float
@@ -76,10 +79,11 @@ class PlacedObject:
 @dataclass(frozen=True)
 class PoseMix:
     """``poses:`` of a world description."""
+
     weights: tuple[tuple[str, float], ...] = (("upright", 0.5), ("lying", 0.3), ("tilted", 0.2))
     tilt_deg: tuple[float, float] = (15.0, 35.0)
-    on_tables: float = 0.4       # chance an upright object in a room with a table stands on it
-    settle_steps: int = 300      # physics steps at world creation (before the robot's loop)
+    on_tables: float = 0.4  # chance an upright object in a room with a table stands on it
+    settle_steps: int = 300  # physics steps at world creation (before the robot's loop)
 
     def fraction(self, kind: str) -> float:
         total = sum(w for _, w in self.weights)
@@ -98,6 +102,7 @@ class PoseMix:
 @dataclass(frozen=True)
 class Distractors:
     """``distractors:`` of a world description."""
+
     count: tuple[int, int] = (4, 7)
     kinds: tuple[str, ...] = tuple(DECOYS)
     on_tables: float = 0.3
@@ -108,17 +113,17 @@ class WorldSpec:
     name: str
     source: str
     bounds: tuple
-    walls: list = field(default_factory=list)        # [Box]
-    rooms: dict = field(default_factory=dict)        # name -> (xmin, ymin, xmax, ymax)
-    furniture: list = field(default_factory=list)    # [Box]
+    walls: list = field(default_factory=list)  # [Box]
+    rooms: dict = field(default_factory=dict)  # name -> (xmin, ymin, xmax, ymax)
+    furniture: list = field(default_factory=list)  # [Box]
     place: Box | None = None
     robot_start: tuple = (0.0, 0.0, 0.0)
-    objects: list = field(default_factory=list)      # [PlacedObject]
-    search_locations: list = field(default_factory=list)   # [(x, y)]; empty: from the map
+    objects: list = field(default_factory=list)  # [PlacedObject]
+    search_locations: list = field(default_factory=list)  # [(x, y)]; empty: from the map
     seed: int = 0
-    appearance: Appearance = field(default_factory=Appearance)   # all off: plain colours
-    lighting: Lighting | None = None     # this seed's lighting (appearance.lighting)
-    poses: PoseMix | None = None         # varied poses (None: every object upright on the floor)
+    appearance: Appearance = field(default_factory=Appearance)  # all off: plain colours
+    lighting: Lighting | None = None  # this seed's lighting (appearance.lighting)
+    poses: PoseMix | None = None  # varied poses (None: every object upright on the floor)
 
     @property
     def settle_steps(self) -> int:

@@ -1,5 +1,6 @@
 """Shared fixtures: a virtual-clock runtime per test, and a way to run code as an actor.
 Before the session, Fast DDS shared-memory segments left by killed processes are removed."""
+
 from __future__ import annotations
 
 import fcntl
@@ -70,7 +71,7 @@ def remove_stale_dds_segments(shm: str = "/dev/shm") -> list[str]:
             try:
                 fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
             except OSError:
-                continue                          # a live participant holds it
+                continue  # a live participant holds it
             finally:
                 os.close(fd)
         for path in (segment, lock):
@@ -99,7 +100,7 @@ def _long_run(nodeid: str) -> bool:
 
 
 def pytest_collection_modifyitems(items) -> None:
-    items.sort(key=lambda item: not _long_run(item.nodeid))    # stable: the rest keep their order
+    items.sort(key=lambda item: not _long_run(item.nodeid))  # stable: the rest keep their order
 
 
 def pytest_xdist_auto_num_workers(config) -> int:
@@ -153,13 +154,17 @@ def place_robot(sim, start: tuple) -> None:
     from common.quiet_pybullet import pybullet as p
 
     def place():
-        p.resetBasePositionAndOrientation(sim.robot.body, [start[0], start[1], 0.0],
-                                          p.getQuaternionFromEuler([0, 0, start[2]]),
-                                          physicsClientId=sim.cid)
+        p.resetBasePositionAndOrientation(
+            sim.robot.body,
+            [start[0], start[1], 0.0],
+            p.getQuaternionFromEuler([0, 0, start[2]]),
+            physicsClientId=sim.cid,
+        )
         p.resetBaseVelocity(sim.robot.body, [0, 0, 0], [0, 0, 0], physicsClientId=sim.cid)
         js = sim.robot.joint_states()[0]
         sim.odometry.reset(js[0], js[1], start[2])
         sim.gyro.reset()
+
     sim._on_hub_call(place)
     sim.spec.robot_start = start
 

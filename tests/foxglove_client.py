@@ -6,6 +6,7 @@ text frames (``serverInfo``, ``advertise``; ``subscribe``/``unsubscribe`` sent m
 as a client must) and the binary frames the server sends (opcode byte 1: message data
 ``subscription id u32, log time u64, payload``; 2: the server's time ``u64``).
 """
+
 from __future__ import annotations
 
 import base64
@@ -23,14 +24,18 @@ class FoxgloveClient:
     def __init__(self, port: int, host: str = "127.0.0.1", timeout: float = 10.0) -> None:
         self.sock = socket.create_connection((host, port), timeout=timeout)
         key = base64.b64encode(os.urandom(16)).decode()
-        self.sock.sendall((f"GET / HTTP/1.1\r\nHost: {host}:{port}\r\nUpgrade: websocket\r\n"
-                           f"Connection: Upgrade\r\nSec-WebSocket-Key: {key}\r\n"
-                           f"Sec-WebSocket-Version: 13\r\nSec-WebSocket-Protocol: {PROTOCOL}\r\n\r\n").encode())
+        self.sock.sendall(
+            (
+                f"GET / HTTP/1.1\r\nHost: {host}:{port}\r\nUpgrade: websocket\r\n"
+                f"Connection: Upgrade\r\nSec-WebSocket-Key: {key}\r\n"
+                f"Sec-WebSocket-Version: 13\r\nSec-WebSocket-Protocol: {PROTOCOL}\r\n\r\n"
+            ).encode()
+        )
         head = b""
         while b"\r\n\r\n" not in head:
             head += self._read(1)
         self.response = head.decode()
-        self.channels: dict[str, dict] = {}   # topic -> advertised channel
+        self.channels: dict[str, dict] = {}  # topic -> advertised channel
         self.server_info: dict | None = None
 
     def close(self) -> None:

@@ -1,5 +1,6 @@
 """An episode's runtime with its robot localised where it stands, for tests that drive the
 actors by hand (approach, pick, carry) instead of running a tree."""
+
 from __future__ import annotations
 
 import contextlib

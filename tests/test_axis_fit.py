@@ -1,4 +1,5 @@
 """actors/axis_fit.py: the axis of a cylinder in any pose from the surface points seen."""
+
 import math
 
 import numpy as np
@@ -17,15 +18,21 @@ def _seen_cylinder(point, direction, radius=0.033, length=0.12, noise=0.0, seed=
     a /= np.linalg.norm(a)
     u, v = axis_fit._basis(a)
     to_camera = CAMERA - np.asarray(point, float)
-    ang0 = math.atan2(to_camera @ v, to_camera @ u)     # the normal facing the camera
+    ang0 = math.atan2(to_camera @ v, to_camera @ u)  # the normal facing the camera
     ang = ang0 + np.linspace(-1.3, 1.3, 40)
     s = np.linspace(0.0, length, 50)
-    grid = (np.asarray(point, float) + s[:, None, None] * a
-            + radius * (np.cos(ang)[None, :, None] * u + np.sin(ang)[None, :, None] * v))
+    grid = (
+        np.asarray(point, float)
+        + s[:, None, None] * a
+        + radius * (np.cos(ang)[None, :, None] * u + np.sin(ang)[None, :, None] * v)
+    )
     if cap:
         rr = np.linspace(0.0, radius, 12)
-        disc = (np.asarray(point, float) + length * a
-                + rr[:, None, None] * (np.cos(ang)[None, :, None] * u + np.sin(ang)[None, :, None] * v))
+        disc = (
+            np.asarray(point, float)
+            + length * a
+            + rr[:, None, None] * (np.cos(ang)[None, :, None] * u + np.sin(ang)[None, :, None] * v)
+        )
         grid = np.concatenate([grid, disc[::-1]], axis=0)
     if noise:
         grid = grid + np.random.default_rng(seed).normal(0, noise, grid.shape)

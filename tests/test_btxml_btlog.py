@@ -19,20 +19,22 @@ TRACES = sorted((REPO / "tests" / "replays").glob("*.jsonl"))
 def read_btlog(data: bytes) -> tuple[ET.Element, int, list[tuple[int, int, int]]]:
     """Header, XML, first timestamp and 9-byte records of a FileLogger2 file."""
     magic = b"BTCPP4-FileLogger2"
-    assert data[:len(magic)] == magic
+    assert data[: len(magic)] == magic
     i = len(magic)
     assert data[i] == 1  # protocol
     i += 1
     (size,) = struct.unpack_from("<i", data, i)
     i += 4
-    xml = ET.fromstring(data[i:i + size].decode("utf-8"))
+    xml = ET.fromstring(data[i : i + size].decode("utf-8"))
     i += size
     (first,) = struct.unpack_from("<q", data, i)
     i += 8
     body = data[i:]
     assert len(body) % 9 == 0
-    records = [(int.from_bytes(body[j:j + 6], "little"), *struct.unpack_from("<HB", body, j + 6))
-               for j in range(0, len(body), 9)]
+    records = [
+        (int.from_bytes(body[j : j + 6], "little"), *struct.unpack_from("<HB", body, j + 6))
+        for j in range(0, len(body), 9)
+    ]
     return xml, first, records
 
 
@@ -75,8 +77,12 @@ def test_subtree_instances_follow_their_calls(tmp_path: Path, monkeypatch) -> No
     xml, _, records = read_btlog(out.read_bytes())
     trees = xml.findall("BehaviorTree")
     assert [(t.get("ID"), t.get("_fullpath")) for t in trees] == [
-        ("bt_pick_place", ""), ("bt_search", "search"), ("bt_catch", "catch"), ("bt_carry", "carry"),
-        ("reset", "return home")]
+        ("bt_pick_place", ""),
+        ("bt_search", "search"),
+        ("bt_catch", "catch"),
+        ("bt_carry", "carry"),
+        ("reset", "return home"),
+    ]
     call = xml.find(".//SubTree[@ID='bt_search']")
     assert call.get("_fullpath") == "search"
     search = trees[1]
@@ -86,11 +92,14 @@ def test_subtree_instances_follow_their_calls(tmp_path: Path, monkeypatch) -> No
     assert int(watch.get("_uid")) == int(call.get("_uid")) + 3  # numbered right after the SubTree node
 
 
-@pytest.mark.parametrize("content, message", [
-    (b"\x00\xffBTCPP4-FileLogger2", "not a trace"),
-    (b'{"type": "header", "format": "other"}\n', "not an actorbt trace"),
-    (b"not json\n", "not JSON"),
-])
+@pytest.mark.parametrize(
+    "content, message",
+    [
+        (b"\x00\xffBTCPP4-FileLogger2", "not a trace"),
+        (b'{"type": "header", "format": "other"}\n', "not an actorbt trace"),
+        (b"not json\n", "not JSON"),
+    ],
+)
 def test_bad_input_is_one_line(tmp_path: Path, capsys, content: bytes, message: str) -> None:
     trace = tmp_path / "t.jsonl"
     trace.write_bytes(content)
@@ -104,8 +113,9 @@ def test_a_trace_of_a_changed_tree_says_which_node(tmp_path: Path, capsys) -> No
     text = (REPO / "trees" / "demo_patrol.yaml").read_text().replace("name: arrived", "name: got there")
     (tmp_path / "trees" / "demo_patrol.yaml").write_text(text)
     trace = REPO / "tests" / "replays" / "demo_patrol.jsonl"
-    assert main(["xml", "btlog", str(trace), "--trees", str(tmp_path / "trees"),
-                 "--out", str(tmp_path / "x.btlog")]) == 2
+    assert (
+        main(["xml", "btlog", str(trace), "--trees", str(tmp_path / "trees"), "--out", str(tmp_path / "x.btlog")]) == 2
+    )
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "has no node 'patrol/arrived'" in err, err
     assert main(["xml", "btlog", str(tmp_path / "missing.jsonl"), "--out", str(tmp_path / "x.btlog")]) == 2

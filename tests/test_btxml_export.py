@@ -29,8 +29,18 @@ PROJECT_TREES = sorted(p.stem for p in (REPO / "trees").glob("*.yaml"))
 
 #: BehaviorTree.CPP 4's built-in nodes: kind and ports (src/bt_factory.cpp and the nodes' providedPorts)
 BUILTIN = {
-    **{n: ("Control", set()) for n in ("Sequence", "Fallback", "ReactiveSequence", "ReactiveFallback",
-                                       "SequenceWithMemory", "IfThenElse", "WhileDoElse")},
+    **{
+        n: ("Control", set())
+        for n in (
+            "Sequence",
+            "Fallback",
+            "ReactiveSequence",
+            "ReactiveFallback",
+            "SequenceWithMemory",
+            "IfThenElse",
+            "WhileDoElse",
+        )
+    },
     "Parallel": ("Control", {"success_count", "failure_count"}),
     **{n: ("Decorator", set()) for n in ("Inverter", "ForceSuccess", "ForceFailure", "KeepRunningUntilFailure")},
     "RetryUntilSuccessful": ("Decorator", {"num_attempts"}),
@@ -46,15 +56,32 @@ BUILTIN = {
     "AlwaysSuccess": ("Action", set()),
     "AlwaysFailure": ("Action", set()),
 }
-RESERVED = {"_skipIf", "_successIf", "_failureIf", "_while", "_onSuccess", "_onFailure", "_onHalted", "_post",
-            "_autoremap", "_uid", "_fullpath", "name", "ID"}
+RESERVED = {
+    "_skipIf",
+    "_successIf",
+    "_failureIf",
+    "_while",
+    "_onSuccess",
+    "_onFailure",
+    "_onHalted",
+    "_post",
+    "_autoremap",
+    "_uid",
+    "_fullpath",
+    "name",
+    "ID",
+}
 UNSIGNED = {"msec", "delay_msec"}
 
 
 def allowed_port_name(name: str) -> bool:
     """BT.CPP's IsAllowedPortName: a letter first, no forbidden characters, not reserved."""
-    return bool(name) and name[0].isalpha() and not any(c in name for c in " \t\n\"'&<>{}[]()/\\,;:*=?|!@#$%^~`") \
+    return (
+        bool(name)
+        and name[0].isalpha()
+        and not any(c in name for c in " \t\n\"'&<>{}[]()/\\,;:*=?|!@#$%^~`")
         and name not in RESERVED
+    )
 
 
 def bt_cpp_v4_problems(text: str) -> list[str]:
@@ -62,8 +89,9 @@ def bt_cpp_v4_problems(text: str) -> list[str]:
     root = ET.fromstring(text)
     bad: list[str] = []
     if root.tag != "root" or root.get("BTCPP_format") != "4":
-        return [f"document element <{root.tag} BTCPP_format={root.get('BTCPP_format')}>, expected <root "
-                "BTCPP_format=\"4\">"]
+        return [
+            f'document element <{root.tag} BTCPP_format={root.get("BTCPP_format")}>, expected <root BTCPP_format="4">'
+        ]
     trees = {t.get("ID"): t for t in root.findall("BehaviorTree")}
     if root.get("main_tree_to_execute") not in trees:
         bad.append(f"main_tree_to_execute={root.get('main_tree_to_execute')!r} names no <BehaviorTree>")
@@ -126,8 +154,14 @@ def node_problems(el: ET.Element, declared: dict, trees: dict) -> list[str]:
     out = [f"<{tag}> has attribute {a!r}, not a port of its model" for a in attrs if a not in ports]
     out += [f"<{tag} {a}={v!r}>: not an unsigned number" for a, v in attrs.items() if a in UNSIGNED and not v.isdigit()]
     n = len(el)
-    if kind == "Control" and n < 1 or kind == "Decorator" and n != 1 or kind in ("Action", "Condition", "SubTree") \
-            and n:
+    if (
+        kind == "Control"
+        and n < 1
+        or kind == "Decorator"
+        and n != 1
+        or kind in ("Action", "Condition", "SubTree")
+        and n
+    ):
         out.append(f"<{tag}> ({kind}) has {n} children")
     if tag in ("IfThenElse", "WhileDoElse") and n not in (2, 3):
         out.append(f"<{tag}> has {n} children, expected 2 or 3")
@@ -150,8 +184,10 @@ def round_trip(library: TreeLibrary, name: str, tmp_path: Path, resolve: Any) ->
     for tree, mission in missions.items():
         back.add(parse_mission(dump_mission(mission), f"{tree}.yaml"))
     back.check()  # the imported missions validate against the same catalog
-    diffs = {tree: mission_differences(library[tree], back[tree], lambda a: library.resolve(a).signature)
-             for tree in missions}
+    diffs = {
+        tree: mission_differences(library[tree], back[tree], lambda a: library.resolve(a).signature)
+        for tree in missions
+    }
     return text, {t: d for t, d in diffs.items() if d}
 
 
@@ -180,8 +216,13 @@ def test_the_node_model_comes_from_the_catalog(project: TreeLibrary, tmp_path: P
     text, _ = round_trip(project, "bt_pick_place", tmp_path, project.resolver)
     root = ET.fromstring(text)
     assert root.get("main_tree_to_execute") == "bt_pick_place"
-    assert [t.get("ID") for t in root.findall("BehaviorTree")] == ["bt_pick_place", "bt_search", "bt_catch",
-                                                                    "bt_carry", "reset"]
+    assert [t.get("ID") for t in root.findall("BehaviorTree")] == [
+        "bt_pick_place",
+        "bt_search",
+        "bt_catch",
+        "bt_carry",
+        "reset",
+    ]
     model = {e.get("ID"): e for e in root.find("TreeNodesModel")}
     goto = {p.get("name"): p for p in model["goto"]}
     assert model["goto"].tag == "Action"
@@ -195,8 +236,13 @@ def test_the_node_model_comes_from_the_catalog(project: TreeLibrary, tmp_path: P
     assert search["result"].get("type") == "actorbt::outputs"
     assert model["bt_search"].find("description").text.startswith("Drive through the search locations")
     call = root.find(".//SubTree[@ID='bt_search']")
-    assert call.attrib == {"ID": "bt_search", "name": "search", "category": "{category}",
-                           "locations": "{locations}", "result": "{search}"}
+    assert call.attrib == {
+        "ID": "bt_search",
+        "name": "search",
+        "category": "{category}",
+        "locations": "{locations}",
+        "result": "{search}",
+    }
 
 
 # ---------------------------------------------------------------- every control node
@@ -347,11 +393,38 @@ def test_every_control_node_round_trips(parts: Any, tmp_path: Path) -> None:
     root = ET.fromstring(text)
     tags = {e.tag for e in root.find("BehaviorTree").iter()}
     # the built-ins where BT.CPP has one, Nav2's and actorbt's own nodes elsewhere
-    assert {"ReactiveSequence", "Fallback", "ReactiveFallback", "Parallel", "SequenceWithMemory", "IfThenElse",
-            "WhileDoElse", "RetryUntilSuccessful", "Repeat", "Timeout", "RunOnce", "Inverter", "ForceSuccess",
-            "ForceFailure", "SetBlackboard", "Script", "ScriptCondition", "Sleep", "SubTree", "PipelineSequence",
-            "RecoveryNode", "RateController", "SingleTrigger", "ActorbtCheck", "ActorbtSet", "ActorbtWait",
-            "ActorbtTimeout", "ActorbtParallel", "ActorbtRunOnce", "ActorbtBehaviour"} <= tags
+    assert {
+        "ReactiveSequence",
+        "Fallback",
+        "ReactiveFallback",
+        "Parallel",
+        "SequenceWithMemory",
+        "IfThenElse",
+        "WhileDoElse",
+        "RetryUntilSuccessful",
+        "Repeat",
+        "Timeout",
+        "RunOnce",
+        "Inverter",
+        "ForceSuccess",
+        "ForceFailure",
+        "SetBlackboard",
+        "Script",
+        "ScriptCondition",
+        "Sleep",
+        "SubTree",
+        "PipelineSequence",
+        "RecoveryNode",
+        "RateController",
+        "SingleTrigger",
+        "ActorbtCheck",
+        "ActorbtSet",
+        "ActorbtWait",
+        "ActorbtTimeout",
+        "ActorbtParallel",
+        "ActorbtRunOnce",
+        "ActorbtBehaviour",
+    } <= tags
     model = {e.get("ID"): e.tag for e in root.find("TreeNodesModel")}
     # a leaf's kind is how the tree uses it: echo is called with do: first, so its model
     # says Action and its condition: use names the kind in the long form
@@ -363,12 +436,17 @@ def test_values_are_plain_where_plain_text_reads_back(parts: Any, tmp_path: Path
     library = hand_written(parts, SUB, CONTROLS)
     root = ET.fromstring(export_tree("controls", library, parts.resolve))
     call = root.find(".//move[@name='call']")
-    assert call.attrib == {"name": "call", "x": "1", "y": "{where.y}", "label": 'json:"{{literal}}"',
-                           "result": "{out1}"}
+    assert call.attrib == {
+        "name": "call",
+        "x": "1",
+        "y": "{where.y}",
+        "label": 'json:"{{literal}}"',
+        "result": "{out1}",
+    }
     assert root.find(".//move[@label='42']") is not None  # a string port: "42" reads back as text
     assert root.find(".//echo[@value='true']").get("items") == 'json:["x"]'
     assert root.find(".//echo[@value='json:\"json:not\"']") is not None  # text that looks like json:
-    assert root.find(".//ScriptCondition[@code=\"n > 1 && t <= 2.0 || !flag\"]") is not None
+    assert root.find('.//ScriptCondition[@code="n > 1 && t <= 2.0 || !flag"]') is not None
     assert root.find(".//Script").get("code") == "a := 1; b := 'x'; c := n; d := -2.5; e := false"
     assert root.find(".//Timeout").get("msec") == "2500"
 
@@ -412,10 +490,13 @@ def test_xml_export_writes_a_file_that_imports_back(config: str, tmp_path: Path,
     assert (tmp_path / "back" / "demo_patrol.yaml").is_file()
 
 
-@pytest.mark.parametrize("argv, message", [
-    (["demo_patrl"], "unknown tree 'demo_patrl' (did you mean 'demo_patrol'?)"),
-    (["broken"], "unknown actor"),
-])
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["demo_patrl"], "unknown tree 'demo_patrl' (did you mean 'demo_patrol'?)"),
+        (["broken"], "unknown actor"),
+    ],
+)
 def test_xml_export_errors_are_one_line(config: str, tmp_path: Path, capsys, argv: list[str], message: str) -> None:
     assert main(["--config", config, "xml", "export", *argv, "--out", str(tmp_path / "x.xml")]) == 2
     err = capsys.readouterr().err.strip()

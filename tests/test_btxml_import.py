@@ -93,7 +93,7 @@ def test_nav2_navigator_runs_replanning_and_recovering(rt: Runtime, tmp_path: Pa
     result = rt.call("NavigateWithReplanning", goal={"x": 2.0, "y": 1.0})
     assert result == {"path": [[0.0, 0.0], [2.0, 1.0]]}
     assert nav.calls[:3] == ["plan", "clear global_costmap", "plan"]  # planning failed once, recovered
-    assert nav.calls.count("plan") >= 3                               # replanned at 1 Hz while following
+    assert nav.calls.count("plan") >= 3  # replanned at 1 Hz while following
     assert "spin" not in nav.calls
     assert rt.stats() == {"transactions": 0, "tasks": 0}
 
@@ -114,9 +114,11 @@ def test_nav2_recovery_subtree_runs_to_its_end_under_its_reactive_guard(rt: Runt
 
 def test_a_long_form_condition_is_a_condition_leaf(tmp_path: Path) -> None:
     xml = tmp_path / "guard.xml"
-    xml.write_text('<root BTCPP_format="4"><BehaviorTree ID="Guard"><ReactiveSequence>'
-                   '<Condition ID="BatteryOk"/><Action ID="Patrol"/>'
-                   '</ReactiveSequence></BehaviorTree></root>')
+    xml.write_text(
+        '<root BTCPP_format="4"><BehaviorTree ID="Guard"><ReactiveSequence>'
+        '<Condition ID="BatteryOk"/><Action ID="Patrol"/>'
+        "</ReactiveSequence></BehaviorTree></root>"
+    )
     [path] = write_missions(import_files([xml], None), tmp_path / "out", "guard.xml")
     text = path.read_text()
     assert "condition: BatteryOk" in text and "do: Patrol" in text
@@ -153,16 +155,16 @@ class TutorialActors(SubSystem):
 def test_tutorial_trees_convert_subtree_ports_scripts_and_conditions(tmp_path: Path) -> None:
     convert(tmp_path, "tutorial.xml")
     main = read_mission(tmp_path / "MainTree.yaml")
-    assert main.inputs == ()                                   # it writes every key it reads first
+    assert main.inputs == ()  # it writes every key it reads first
     door = read_mission(tmp_path / "DoorClosed.yaml")
     assert [(i.name, i.required) for i in door.inputs] == [("door", False)]
     assert [o.name for o in door.outputs] == ["door", "tries"]
     report = read_mission(tmp_path / "Report.yaml")
     assert [(i.name, i.required) for i in report.inputs] == [("target", True), ("door_open", True)]
     text = (tmp_path / "MainTree.yaml").read_text()
-    assert "check: door_open and reported == \"yes\"" in text   # && translated
-    assert "check: not door_open" in text                        # _skipIf="!door_open"
-    assert "{_DoorClosed_out1.tries}" in text                    # tries="{attempts}" written back
+    assert 'check: door_open and reported == "yes"' in text  # && translated
+    assert "check: not door_open" in text  # _skipIf="!door_open"
+    assert "{_DoorClosed_out1.tries}" in text  # tries="{attempts}" written back
     assert "{do: Report, with: {target: '{target}', door_open: '{door_open}'}" in text  # _autoremap
 
 
@@ -171,12 +173,18 @@ def test_tutorial_trees_run(rt: Runtime, tmp_path: Path) -> None:
     tut = rt.add_subsystem("tutorial", TutorialActors)
     TreeHost(rt).load_folder(tmp_path)
     result = rt.call("MainTree")
-    assert result == {"door_open": True, "attempts": 5, "greeting": "hello", "target": "kitchen",
-                      "arrived": True, "reported": "yes"}
-    assert tut.opened == 3                                   # RetryUntilSuccessful num_attempts="3"
+    assert result == {
+        "door_open": True,
+        "attempts": 5,
+        "greeting": "hello",
+        "target": "kitchen",
+        "arrived": True,
+        "reported": "yes",
+    }
+    assert tut.opened == 3  # RetryUntilSuccessful num_attempts="3"
     assert tut.said[:4] == ["move to kitchen", "kitchen", "again", "again"]
     assert sorted(tut.said[4:6]) == ["a", "b"] and tut.said[6:] == ["done"]
-    assert rt.now() == pytest.approx(1.5 + 1.0 + 0.5 + 0.25)    # pick lock, move, Sleep, Delay
+    assert rt.now() == pytest.approx(1.5 + 1.0 + 0.5 + 0.25)  # pick lock, move, Sleep, Delay
 
 
 # ---------------------------------------------------------------- pytwb

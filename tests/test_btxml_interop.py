@@ -12,8 +12,16 @@ from pathlib import Path
 import pytest
 
 from bt_xml import BtXmlError, Exporter, import_files, mission_differences, read_node_model, write_missions
-from bt_engine.trees import (STANDARD_BEHAVIOURS, PluginNode, TreeLibrary, check_files, node_plugins,
-                             parse_mission, read_mission, walk)
+from bt_engine.trees import (
+    STANDARD_BEHAVIOURS,
+    PluginNode,
+    TreeLibrary,
+    check_files,
+    node_plugins,
+    parse_mission,
+    read_mission,
+    walk,
+)
 from bt_tools.cli import unwritten_plugins
 from bt_xml._nodes import convert_literal
 
@@ -44,8 +52,14 @@ def test_nav2_controls_import_as_the_plugins(tmp_path: Path) -> None:
         for mission in import_files([tree], model).values():
             text = write_missions({mission["name"]: mission}, tmp_path / tree.stem, tree.name)[0]
             used |= {n.plugin for n in walk(read_mission(text).root) if isinstance(n, PluginNode)}
-    assert used == {"RoundRobin", "DistanceController", "SpeedController", "GoalUpdater", "GoalUpdatedController",
-                    "PathLongerOnApproach"}
+    assert used == {
+        "RoundRobin",
+        "DistanceController",
+        "SpeedController",
+        "GoalUpdater",
+        "GoalUpdatedController",
+        "PathLongerOnApproach",
+    }
 
 
 def test_a_model_declared_node_without_a_plugin_is_named_still_to_write(tmp_path: Path) -> None:
@@ -67,14 +81,17 @@ def test_a_model_port_without_a_default_is_optional(tmp_path: Path) -> None:
     assert repr(signature.parameters["start"].default) == "unset"
 
 
-@pytest.mark.parametrize("text, ctype, value", [
-    ("numeric_limits<double>::infinity()", "double", math.inf),      # Nav2 rolling's model writes this
-    ("-std::numeric_limits<double>::infinity()", "double", -math.inf),
-    ("std::numeric_limits<float>::max()", "double", sys.float_info.max),
-    ("std::numeric_limits<int>::max()", "int", 2 ** 31 - 1),
-    ("std::numeric_limits<uint16_t>::max()", "unsigned int", 2 ** 16 - 1),
-    ("inf", "double", math.inf),                                     # as std::stod reads it
-])
+@pytest.mark.parametrize(
+    "text, ctype, value",
+    [
+        ("numeric_limits<double>::infinity()", "double", math.inf),  # Nav2 rolling's model writes this
+        ("-std::numeric_limits<double>::infinity()", "double", -math.inf),
+        ("std::numeric_limits<float>::max()", "double", sys.float_info.max),
+        ("std::numeric_limits<int>::max()", "int", 2**31 - 1),
+        ("std::numeric_limits<uint16_t>::max()", "unsigned int", 2**16 - 1),
+        ("inf", "double", math.inf),  # as std::stod reads it
+    ],
+)
 def test_a_model_default_may_be_a_cpp_numeric_limit(text: str, ctype: str, value: float) -> None:
     assert convert_literal(text, ctype) == value
 
@@ -84,8 +101,11 @@ def test_a_model_default_of_the_wrong_type_is_located(tmp_path: Path) -> None:
       <Action ID="Drive">
         <input_port name="speed" type="double" default="fast"/></Action></TreeNodesModel></root>""")
     model = read_node_model([tmp_path / "model.xml"])
-    with pytest.raises(BtXmlError, match=r"model.xml:3:9: the default of port 'speed' of node 'Drive': 'fast' is not "
-                                         r"a number"):
+    with pytest.raises(
+        BtXmlError,
+        match=r"model.xml:3:9: the default of port 'speed' of node 'Drive': 'fast' is not "
+        r"a number",
+    ):
         model["Drive"].signature()  # what checking a tree that calls Drive asks for
 
 
@@ -96,12 +116,14 @@ def test_the_actor_demo_imports_as_one_pytwb_workbench(tmp_path: Path) -> None:
     assert check_files(paths, library=TreeLibrary(None, STANDARD_BEHAVIOURS)) == []
     calls = {n.actor for n in walk(read_mission(tmp_path / "bt_pick.yaml").root) if hasattr(n, "actor")}
     assert {"bt_search", "bt_catch"} <= calls
-    assert {"bt_search", "test_catch"} <= {n.actor for n in walk(read_mission(tmp_path / "test_pp.yaml").root)
-                                           if hasattr(n, "actor")}
+    assert {"bt_search", "test_catch"} <= {
+        n.actor for n in walk(read_mission(tmp_path / "test_pp.yaml").root) if hasattr(n, "actor")
+    }
 
 
 def test_the_workbench_says_which_leaf_actors_are_missing(tmp_path: Path) -> None:
     from bt_engine.trees.testing import FakeResolver
+
     paths = write_missions(import_files([PYTWB], dialect="pytwb"), tmp_path, "pytwb_actor_demo")
     errors = check_files(paths, library=TreeLibrary(FakeResolver(), STANDARD_BEHAVIOURS))
     missing = {str(e).split("unknown actor '")[1].split("'")[0] for e in errors if "unknown actor" in str(e)}
@@ -133,6 +155,7 @@ def test_plugins_round_trip_through_xml(tmp_path: Path) -> None:
     library.add(parse_mission(PLUGGED, "plugged.yaml"))
     xml = tmp_path / "plugged.xml"
     from bt_xml import export_tree
+
     xml.write_text(export_tree("plugged", library))
     text = xml.read_text()
     assert '<Control ID="RoundRobin"' in text and '<Decorator ID="DistanceController"' in text

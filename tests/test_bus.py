@@ -1,4 +1,5 @@
 """The local bus: real ROS message classes, publisher and subscriber actors."""
+
 from __future__ import annotations
 
 import pytest
@@ -27,10 +28,12 @@ class Talker(SubSystem):
 
 def test_publisher_actor_and_subscriber_stream(rt):
     rt.add_subsystem("t", Talker)
+
     def body():
         rt.start("drive", 0.2, 5)
         with rt.run_actor_mode("motor_echo", "timed_iterator", 1.0) as it:
             return [m.linear.x for m in it]
+
     assert run_in_actor(rt, body) == [0.2] * 5
     assert rt.bus.subscription_count("/cmd_vel") == 0  # the stream unsubscribed on close
 
@@ -47,6 +50,7 @@ def test_stream_buffer_keeps_the_latest_values(rt):
                 pub.publish(m)
             rt.sleep(0.1)
             return [next(it).linear.x for _ in range(3)]
+
     assert run_in_actor(rt, body) == [3.0, 4.0, 5.0]  # depth 3: the oldest were dropped
 
 
@@ -81,13 +85,16 @@ def test_a_latched_topic_reaches_a_late_latched_subscriber_only(rt):
     pub.publish(String(data="house"))
 
     def body():
-        subs = [rt.bus.subscribe("/map_name", String, got["latched"].append, "latched"),
-                rt.bus.subscribe("/map_name", String, got["volatile"].append, 10)]
+        subs = [
+            rt.bus.subscribe("/map_name", String, got["latched"].append, "latched"),
+            rt.bus.subscribe("/map_name", String, got["volatile"].append, 10),
+        ]
         rt.sleep(0.1)
         pub.publish(String(data="flat"))
         rt.sleep(0.1)
         for s in subs:
             s.close()
+
     run_in_actor(rt, body)
     assert [m.data for m in got["latched"]] == ["house", "flat"]
     assert [m.data for m in got["volatile"]] == ["flat"]
@@ -101,5 +108,6 @@ def test_a_volatile_topic_keeps_nothing(rt):
         sub = rt.bus.subscribe("/chatter", String, got.append, "latched")
         rt.sleep(0.1)
         sub.close()
+
     run_in_actor(rt, body)
     assert got == []

@@ -1,6 +1,7 @@
 """Actions on the local bus (bt_engine.bus.actions): a server ends goals from the hub
 when it likes; the client actor gets the result, fails with the result on an abort,
 and its cancellation reaches the server."""
+
 from __future__ import annotations
 
 import pytest
@@ -26,13 +27,15 @@ class Echo(SubSystem):
         if goal.request.actor == "fail":
             goal.abort(CallActor.Result(success=False, error_msg="told to fail"))
             return
-        timer = self._rt.call_later(1.0, lambda: goal.succeed(
-            CallActor.Result(success=True, result_yaml=goal.request.actor)))
+        timer = self._rt.call_later(
+            1.0, lambda: goal.succeed(CallActor.Result(success=True, result_yaml=goal.request.actor))
+        )
 
         def stop() -> None:
             timer.cancel()
             self.cancelled.append(goal.request.actor)
             goal.canceled()
+
         goal.on_cancel(stop)
 
 
@@ -64,6 +67,7 @@ def test_cancelling_the_call_cancels_the_goal(rt):
         txn = rt.start("echo", actor="slow")
         rt.call_later(0.5, txn.cancel, "enough")
         return txn
+
     txn = rt.run_on_hub(begin)
     rt.call("sleep", 2.0)
     assert txn.state.name == "CANCELLED"
@@ -72,6 +76,7 @@ def test_cancelling_the_call_cancels_the_goal(rt):
 
 def test_timed_calls_stop_the_goal(rt):
     from bt_engine import ActorTimeout
+
     with pytest.raises(ActorTimeout):
         rt.call("echo", actor="late", timeout=0.5)
     rt.call("sleep", 1.0)
@@ -83,6 +88,7 @@ def test_no_server_is_a_clear_error():
         def __init__(self) -> None:
             super().__init__()
             self.register_action("go", CallActor, "/nobody")
+
     with Runtime(clock="virtual") as rt:
         rt.add_subsystem("lonely", Lonely)
         with pytest.raises(ActorError, match="/nobody.*nothing serves it on the local bus") as failed:
@@ -99,6 +105,7 @@ def test_nested_message_fields_can_be_given_as_mappings():
     from control_msgs.action import GripperCommand
 
     from bt_engine.bus.actions import build_message
+
     goal = build_message(GripperCommand.Goal, None, {"command": {"position": 0.01, "max_effort": 2.0}})
     assert goal.command.position == 0.01 and goal.command.max_effort == 2.0
     with pytest.raises(TypeError, match="has no field 'positon'"):

@@ -1,10 +1,10 @@
 """Every cell of the mode x kind matrix (docs/architecture.md, "The life of a call"), on the virtual clock."""
+
 from __future__ import annotations
 
 import pytest
 
-from bt_engine import (ActorTimeout, Failure, Runtime, SubSystem, Transaction, TxnState,
-                       actor)
+from bt_engine import ActorTimeout, Failure, Runtime, SubSystem, Transaction, TxnState, actor
 from tests.conftest import run_in_actor
 
 STEP = 0.1  # every kind produces one value per STEP seconds
@@ -40,6 +40,7 @@ class Kinds(SubSystem):
         def close() -> None:
             timer.cancel()
             self.set_value("closed", self.get_value("closed") + 1)
+
         return close
 
     @actor
@@ -88,6 +89,7 @@ def test_async_mode_calls_back_once(rt, kinds, name):
         assert isinstance(txn, Transaction)
         kinds.run_actor("sleep", 1.0)
         return txn
+
     txn = run_in_actor(rt, body)
     assert got == [(5, 1)]
     assert txn.state is TxnState.DONE
@@ -103,6 +105,7 @@ def test_multi_mode_calls_back_per_value_until_cancelled(rt, kinds, name):
         txn.cancel("enough")
         kinds.run_actor("sleep", 5 * STEP)
         return txn
+
     txn = run_in_actor(rt, body)
     assert got == [(2, 1), (2, 2), (2, 3)]
     assert txn.state is TxnState.CANCELLED
@@ -121,6 +124,7 @@ def test_iterator_mode_yields_repeated_values_and_closes(rt, kinds, name):
                 if len(out) == 3:
                     break
         return out
+
     assert run_in_actor(rt, body) == [(4, 1), (4, 2), (4, 3)]
     if name in STREAMS:
         assert _closed(kinds) == 1
@@ -134,6 +138,7 @@ def test_timed_iterator_ends_at_the_deadline(rt, kinds, name):
         with kinds.run_actor_mode(name, "timed_iterator", 3.5 * STEP, 1) as it:
             values = list(it)
         return values, rt.now() - t0
+
     values, elapsed = run_in_actor(rt, body)
     assert values == [(1, 1), (1, 2), (1, 3)]
     assert elapsed == pytest.approx(3.5 * STEP)
@@ -162,8 +167,7 @@ def test_keyword_api(rt, kinds, name):
 
 def test_run_actor_async_is_async_mode(rt, kinds):
     got = []
-    run_in_actor(rt, lambda: (kinds.run_actor_async("sync_kind", got.append, 9),
-                              kinds.run_actor("sleep", 1)))
+    run_in_actor(rt, lambda: (kinds.run_actor_async("sync_kind", got.append, 9), kinds.run_actor("sleep", 1)))
     assert got == [(9, 1)]
 
 
@@ -172,6 +176,7 @@ def test_failure_reaches_async_callback(rt):
         @actor
         def boom(self):
             raise ValueError("bad value")
+
     rt.add_subsystem("b", Bad)
     got = []
     run_in_actor(rt, lambda: (rt.start("boom", on_done=got.append), rt.sleep(0.1)))

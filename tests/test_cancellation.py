@@ -1,11 +1,12 @@
 """Cancellation at every blocking primitive, and nothing left behind afterwards."""
+
 from __future__ import annotations
 
 import threading
 
 import pytest
 
-from bt_engine import (ActorCancelled, Cancelled, Runtime, Signal, SubSystem, TxnState, actor)
+from bt_engine import ActorCancelled, Cancelled, Runtime, Signal, SubSystem, TxnState, actor
 from tests.conftest import run_in_actor, started_since
 
 
@@ -45,6 +46,7 @@ class Blockers(SubSystem):
         def close():
             timer.cancel()
             self.get_value("closed").append("slow_async")
+
         return close
 
     @actor
@@ -119,6 +121,7 @@ def test_cancel_reaches_the_blocking_point_and_leaks_nothing(name):
         b.release.set()  # the offloaded worker may end; virtual time waits for it
         rt.sleep(0.001)
         return txn
+
     txn = run_in_actor(rt, body)
     assert b.get_value("seen") == PRIMITIVES[name]
     assert txn.state is TxnState.CANCELLED and txn.reason == "test says stop"
@@ -134,12 +137,14 @@ def test_cancel_reaches_the_blocking_point_and_leaks_nothing(name):
 
 def test_except_exception_does_not_swallow_cancelled(rt):
     b = rt.add_subsystem("b", Blockers)
+
     def body():
         txn = rt.start("catches_exception")
         rt.sleep(1)
         txn.cancel()
         rt.sleep(1)
         return txn
+
     txn = run_in_actor(rt, body)
     assert txn.state is TxnState.CANCELLED
     assert b.get_value("seen") == []
@@ -166,6 +171,7 @@ def test_cancelling_a_parent_cancels_children_first(rt):
             except Cancelled:
                 order.append(f"child {tag}")
                 raise
+
     rt.add_subsystem("t", Tree)
 
     def body():
@@ -174,6 +180,7 @@ def test_cancelling_a_parent_cancels_children_first(rt):
         assert len(txn.children) == 3  # two async children and its own sleep
         txn.cancel("stop all")
         rt.sleep(1)
+
     run_in_actor(rt, body)
     assert order == ["child a", "child b", "parent"]
     assert rt.stats() == {"transactions": 0, "tasks": 0}
@@ -197,6 +204,7 @@ def test_cancelled_child_gives_caller_actor_cancelled(rt):
         child.cancel("only the child")
         rt.sleep(1)
         return txn.result
+
     assert run_in_actor(rt, body) == "child cancelled: only the child"
 
 
@@ -206,6 +214,7 @@ def test_a_finished_parent_cancels_leftover_children(rt):
         def leaves_work_behind(self):
             self.run_actor_mode("sleep", "async", None, 100)
             return "done"
+
     rt.add_subsystem("s", S)
     assert rt.call("leaves_work_behind") == "done"
     rt.call("sleep", 1)
@@ -219,6 +228,7 @@ def test_ten_thousand_concurrent_transactions(rt):
         live = len(rt.transactions())
         rt.sleep(1.0)
         return live, all(t.state is TxnState.DONE for t in txns)
+
     live, all_done = run_in_actor(rt, body)
     assert live >= 10_000 and all_done
     assert rt.stats() == {"transactions": 0, "tasks": 0}

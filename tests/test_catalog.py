@@ -1,4 +1,5 @@
 """The catalog and its JSON-Schema export."""
+
 from __future__ import annotations
 
 import json
@@ -45,10 +46,14 @@ def test_json_schema_tools(rt):
     assert goto["description"] == "Drive to (x, y, theta) in the map frame."
     assert goto["parameters"] == {
         "type": "object",
-        "properties": {"x": {"type": "number"}, "y": {"type": "number"},
-                       "theta": {"type": "number", "default": 0.0},
-                       "frame": {"type": "string", "default": "map"}},
-        "required": ["x", "y"]}
+        "properties": {
+            "x": {"type": "number"},
+            "y": {"type": "number"},
+            "theta": {"type": "number", "default": 0.0},
+            "frame": {"type": "string", "default": "map"},
+        },
+        "required": ["x", "y"],
+    }
     watch = tools["nav.watch"]["parameters"]
     assert watch["properties"]["labels"] == {"type": "array", "items": {"type": "string"}}
     assert watch["properties"]["limit"]["anyOf"] == [{"type": "integer"}, {"type": "null"}]
@@ -138,21 +143,38 @@ def test_every_parameter_gets_description_type_unit_and_default(rt):
         "properties": {
             "x": {"type": "number", "description": "goal x [m]", "unit": "m"},
             "y": {"type": "number", "description": "goal y [m]", "unit": "m"},
-            "theta": {"type": "number", "description": "heading at the goal [rad]", "unit": "rad",
-                      "default": 0.0},  # no hint: the type of the default
+            "theta": {
+                "type": "number",
+                "description": "heading at the goal [rad]",
+                "unit": "rad",
+                "default": 0.0,
+            },  # no hint: the type of the default
             "frame": {"type": "string", "description": "the goal's frame", "default": "map"},
-            "timeout": {"anyOf": [{"type": "number"}, {"type": "null"}],
-                        "description": "give up after this long [s]", "unit": "s", "default": None}},
-        "required": ["x", "y"]}
-    assert goto["returns"] == {"type": "array", "items": {"type": "number"},
-                               "description": "the pose reached: x [m], y [m], yaw [rad]"}
+            "timeout": {
+                "anyOf": [{"type": "number"}, {"type": "null"}],
+                "description": "give up after this long [s]",
+                "unit": "s",
+                "default": None,
+            },
+        },
+        "required": ["x", "y"],
+    }
+    assert goto["returns"] == {
+        "type": "array",
+        "items": {"type": "number"},
+        "description": "the pose reached: x [m], y [m], yaw [rad]",
+    }
 
 
 def test_variadic_explicit_stream_and_class_typed_parameters(rt):
     tools = _tools(rt)
     q = tools["d.move_joint"]["parameters"]["properties"]["q"]
-    assert q == {"type": "array", "items": {"type": "number"}, "unit": "rad",
-                 "description": "joint positions [rad] (positional values, *q)"}
+    assert q == {
+        "type": "array",
+        "items": {"type": "number"},
+        "unit": "rad",
+        "description": "joint positions [rad] (positional values, *q)",
+    }
     stroll = tools["d.stroll"]["parameters"]["properties"]
     assert stroll["distance"]["description"] == "how far [m]"  # param_docs wins over the docstring
     assert stroll["speed"] == {"type": "number", "description": "top speed [m/s]", "unit": "m/s", "default": 0.1}
@@ -174,9 +196,12 @@ def test_doc_problems_names_undocumented_and_unknown_parameters(rt):
                 a: documented
                 c: a typo
             """
+
     rt.add_subsystem("s", Sloppy)
-    assert doc_problems(rt.resolve("s.f")) == ["s.f: parameter 'b' has no description",
-                                               "s.f: documents 'c', which is no parameter"]
+    assert doc_problems(rt.resolve("s.f")) == [
+        "s.f: parameter 'b' has no description",
+        "s.f: documents 'c', which is no parameter",
+    ]
     rt.add_subsystem("d", Documented)
     assert [p for r in rt.root.all_actors() if r.path.startswith("d.") for p in doc_problems(r)] == []
 
@@ -196,8 +221,10 @@ def test_text_lines_show_one_line_per_parameter(rt):
         "  timeout: give up after this long [s] (number or null, default None)",
         "Returns: the pose reached: x [m], y [m], yaw [rad] (array of number)",
     ]
-    assert text_lines(rt.resolve("d.move_joint").doc, tools["d.move_joint"])[-1] == \
-        "  *q: joint positions [rad] (array of number)"
+    assert (
+        text_lines(rt.resolve("d.move_joint").doc, tools["d.move_joint"])[-1]
+        == "  *q: joint positions [rad] (array of number)"
+    )
     assert text_lines("", tools["sleep"])[0] == "(no docstring)"
 
 
@@ -233,17 +260,27 @@ def test_tree_inputs_and_outputs_are_described(rt, tmp_path):
             "room": {"type": "string", "description": "where to go", "default": "kitchen"},
             "seconds": {"type": "number", "description": "how long to drive [s]", "unit": "s", "default": 2.0},
             "spot": {"type": "array", "description": "x, y in the map frame [m]", "unit": "m"},
-            "anything": {"description": "no type given"}},
-        "required": ["spot", "anything"]}
+            "anything": {"description": "no type given"},
+        },
+        "required": ["spot", "anything"],
+    }
     assert tool["returns"] == {
-        "type": "object", "description": "the outputs (null: not written in this run)",
-        "properties": {"photo": {"type": "object", "description": "what was seen"},
-                       "distance": {"type": "number", "description": "how far it drove [m]", "unit": "m"},
-                       "plain": {"type": "string"}}}
+        "type": "object",
+        "description": "the outputs (null: not written in this run)",
+        "properties": {
+            "photo": {"type": "object", "description": "what was seen"},
+            "distance": {"type": "number", "description": "how far it drove [m]", "unit": "m"},
+            "plain": {"type": "string"},
+        },
+    }
     lines = text_lines(rt.resolve("fetch").doc, tool)
     assert lines[1:3] == ["Inputs:", "  room: where to go (string, default 'kitchen')"]
-    assert lines[-4:] == ["Outputs:", "  photo: what was seen (object)",
-                          "  distance: how far it drove [m] (number)", "  plain (string)"]
+    assert lines[-4:] == [
+        "Outputs:",
+        "  photo: what was seen (object)",
+        "  distance: how far it drove [m] (number)",
+        "  plain (string)",
+    ]
 
 
 # -- the project's real configuration: what `actorbt catalog --json` shows ------------------

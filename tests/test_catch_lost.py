@@ -1,6 +1,7 @@
 """A failed grasp that leaves the object nowhere the look round sees (a slipping can rolls
 off) is not retried at the same sighting (actors/catch.py ``lost_at``): the retry fails at
 once, and the fetch searches afresh."""
+
 from __future__ import annotations
 
 import pytest

@@ -1,5 +1,6 @@
 """The approach keeps off the object it goes for, and lines up with it again when it is
 off the side the hand must come from (actors/catch_approach.py)."""
+
 from __future__ import annotations
 
 import math
@@ -14,19 +15,27 @@ from tests.conftest import place_robot
 from tests.localised_rig import localised_rig
 
 #: a bottle lying on the floor, as perception reports it: axis from base to top
-LYING = {"category": "bottle", "x": 8.84, "y": 7.28, "z": 0.0, "pose": "lying", "width": 0.07,
-         "yaw": -0.507, "axis_base": [8.754, 7.327, 0.035], "axis_dir": [0.874, -0.486, 0.0]}
+LYING = {
+    "category": "bottle",
+    "x": 8.84,
+    "y": 7.28,
+    "z": 0.0,
+    "pose": "lying",
+    "width": 0.07,
+    "yaw": -0.507,
+    "axis_base": [8.754, 7.327, 0.035],
+    "axis_dir": [0.874, -0.486, 0.0],
+}
 
 
 def test_a_lying_target_is_marked_along_its_axis_leaving_the_standoff_room():
     strategy = category("bottle").strategy
     plan = strategy.plan_for("lying", 0.07)
     yaw = math.atan2(-0.486, 0.874)
-    standoff = strategy.standoff_poses((8.0, 7.0), (LYING["x"], LYING["y"]), 0.0, yaw,
-                                       plan)[0]
+    standoff = strategy.standoff_poses((8.0, 7.0), (LYING["x"], LYING["y"]), 0.0, yaw, plan)[0]
     marks = target_marks(LYING, strategy.length, standoff[:2])
     assert len(marks) >= 5
-    for m in marks:     # none leaves the base less than its room at the standoff
+    for m in marks:  # none leaves the base less than its room at the standoff
         assert math.dist((m["x"], m["y"]), standoff[:2]) - m["radius"] >= STANDOFF_CLEARANCE - 1e-9
     # the far end (the neck) is marked: a way round to the standoff keeps off the body
     top = (8.754 + 0.874 * 0.305, 7.327 - 0.486 * 0.305)
@@ -46,18 +55,19 @@ def test_how_far_off_its_side_the_hand_may_come():
     assert lying.off_sides(0.3 + math.radians(5), 0.3) == pytest.approx(math.radians(5))
     # one way: from its base end only
     assert lying.off_sides(0.3 + math.pi, 0.3) == pytest.approx(math.pi)
-    assert bottle.upright.tolerance == math.pi                  # round: any side
+    assert bottle.upright.tolerance == math.pi  # round: any side
     assert bottle.upright.off_sides(1.0, None) == 0.0
     carton = category("carton").strategy
-    assert carton.upright.off_sides(math.pi + 0.1, 0.0) == pytest.approx(0.1)   # either face
+    assert carton.upright.off_sides(math.pi + 0.1, 0.0) == pytest.approx(0.1)  # either face
     assert math.degrees(carton.upright.tolerance) == pytest.approx(15.0)
 
 
 def _lay(sim, name, x, y, axis_yaw, radius):
     body = sim.scene.objects[name]
     dyn = p.getDynamicsInfo(body, -1, physicsClientId=sim.cid)
-    pos, orn = p.multiplyTransforms([x, y, radius + 1e-4], p.getQuaternionFromEuler([0, math.pi / 2, axis_yaw]),
-                                    dyn[3], dyn[4])
+    pos, orn = p.multiplyTransforms(
+        [x, y, radius + 1e-4], p.getQuaternionFromEuler([0, math.pi / 2, axis_yaw]), dyn[3], dyn[4]
+    )
     p.resetBasePositionAndOrientation(body, pos, orn, physicsClientId=sim.cid)
     p.resetBaseVelocity(body, [0, 0, 0], [0, 0, 0], physicsClientId=sim.cid)
 
@@ -87,4 +97,4 @@ def test_the_way_to_a_lying_bottle_does_not_push_it_and_the_pick_holds_it():
         assert moved < 0.03, f"the way to the standoff pushed the bottle {moved * 100:.0f} cm"
         held = rt.call("pick", target=close)
         assert held["category"] == "bottle" and 0.058 <= held["width"] <= 0.078
-        assert sim.object_pose(state["name"])[2] > 0.1          # lifted
+        assert sim.object_pose(state["name"])[2] > 0.1  # lifted

@@ -1,5 +1,6 @@
 """Putting a held object down (actors/catch_place.py: place, place_on), on a base that moves
 as told: what the place does when its way is blocked."""
+
 from __future__ import annotations
 
 import math
@@ -22,7 +23,7 @@ class _Base(SubSystem):
         self.pose = [6.0, 5.0, 0.0]
         self.blocked, self.short = blocked, short
         self.gotos, self.released_at = [], None
-        self.holding, self.openings = holding, []   # the fingers' opening on the object [m]
+        self.holding, self.openings = holding, []  # the fingers' opening on the object [m]
 
     @actor
     def get_pose(self) -> tuple:
@@ -109,7 +110,7 @@ def test_a_pallet_spot_whose_standoff_is_blocked_gives_way_to_the_next(rt):
     catch = rt.add_subsystem("catch", Catcher)
     _holding(catch)
     run_in_actor(rt, lambda: catch.place_on(7.0, 6.2, 0.6, 0.4, 0.12))
-    assert len(base.gotos) == 2 and base.gotos[0] != base.gotos[1]   # the next spot
+    assert len(base.gotos) == 2 and base.gotos[0] != base.gotos[1]  # the next spot
     assert catch.get_value("holding") is None
     assert catch.get_value("put_down") == [pytest.approx(base.released_at, abs=0.01)]
 
@@ -135,7 +136,6 @@ def test_the_fingers_first_open_just_past_the_object_as_they_hold_it_now(rt, now
     run_in_actor(rt, lambda: catch.place(7.0, 5.0, 0.12, 0.0))
     assert base.openings[0] == pytest.approx(first)
     assert base.openings[-1] == strategy_for("can").plan_for("upright").open_width
-
 
 
 class _Walled(_Base):
@@ -164,20 +164,23 @@ def test_a_standoff_a_little_short_of_room_moves_back_until_the_base_fits(rt):
     _holding(catch)
     run_in_actor(rt, lambda: catch.place_on(7.0, 6.2, 0.6, 0.4, 0.12))
     assert catch.get_value("holding") is None
-    assert len(base.gotos) == 1                              # the first spot, farther back
+    assert len(base.gotos) == 1  # the first spot, farther back
     gx, gy = base.gotos[0]
     assert _walled_clearance(gx, gy, None) >= 0.26
-    assert gy < 6.2 - 0.25 - 0.26 and abs(gx - 7.0) < 0.3    # south of it, the near side
+    assert gy < 6.2 - 0.25 - 0.26 and abs(gx - 7.0) < 0.3  # south of it, the near side
     rx, ry = base.released_at
-    assert abs(rx - 7.0) < 0.25 and 6.0 < ry < 6.2           # and put it on the pallet
+    assert abs(rx - 7.0) < 0.25 and 6.0 < ry < 6.2  # and put it on the pallet
 
 
 def test_with_no_side_roomy_enough_the_place_says_how_much_room_each_side_has(rt):
-    base = rt.add_subsystem("base", _Walled, ring=0.45)      # a pit too narrow for the base
+    base = rt.add_subsystem("base", _Walled, ring=0.45)  # a pit too narrow for the base
     catch = rt.add_subsystem("catch", Catcher)
     _holding(catch)
-    with pytest.raises(ActorError, match=r"no side .* has room for the base: it needs 0.26 m .* "
-                                         r"the most room on each side \(base facing 0 deg: 0.2\d m"):
+    with pytest.raises(
+        ActorError,
+        match=r"no side .* has room for the base: it needs 0.26 m .* "
+        r"the most room on each side \(base facing 0 deg: 0.2\d m",
+    ):
         run_in_actor(rt, lambda: catch.place_on(7.0, 6.2, 0.6, 0.4, 0.12))
     assert base.gotos == [] and catch.get_value("holding") is not None
 
@@ -191,6 +194,6 @@ def test_a_turned_surface_is_put_on_across_its_own_edges(rt):
     rx, ry = base.released_at
     c, s = math.cos(yaw), math.sin(yaw)
     u, v = c * (rx - 7.0) + s * (ry - 6.2), -s * (rx - 7.0) + c * (ry - 6.2)
-    assert abs(u) < 0.3 - 0.05 and abs(v) < 0.2 - 0.05        # well inside the turned pallet
+    assert abs(u) < 0.3 - 0.05 and abs(v) < 0.2 - 0.05  # well inside the turned pallet
     # the base faced the pallet square to one of its edges
     assert min(abs(math.remainder(base.pose[2] - yaw - k * math.pi / 2, 2 * math.pi)) for k in range(4)) < 1e-6

@@ -1,4 +1,5 @@
 """The actorbt command and its shell."""
+
 from __future__ import annotations
 
 import argparse
@@ -62,14 +63,19 @@ def test_bad_config_is_a_clear_error(tmp_path, capsys):
     assert "cannot import subsystem 'x'" in capsys.readouterr().err
 
 
-@pytest.mark.parametrize("section, says", [
-    ("robot: {body: {size: [0.3, 0.3]}}", "body: expected {size: [x, y, z] in metres"),
-    ("robot: {topics: [{name: camera, type: sensor_msgs/msg/Image}]}", "topics: expected {name: /topic"),
-    ("robot: {topics: [{name: /cam, type: sensor_msgs/msg/Image, qos: fast}]}", "unknown QoS 'fast'"),
-    ("robot: {topics: [{name: /info, type: sensor_msgs/msg/CameraInfo, compress: true}]}",
-     "only for a sensor_msgs/msg/Image"),
-    ("robot: {wheels: 2}", "expected a mapping with body and topics"),
-])
+@pytest.mark.parametrize(
+    "section, says",
+    [
+        ("robot: {body: {size: [0.3, 0.3]}}", "body: expected {size: [x, y, z] in metres"),
+        ("robot: {topics: [{name: camera, type: sensor_msgs/msg/Image}]}", "topics: expected {name: /topic"),
+        ("robot: {topics: [{name: /cam, type: sensor_msgs/msg/Image, qos: fast}]}", "unknown QoS 'fast'"),
+        (
+            "robot: {topics: [{name: /info, type: sensor_msgs/msg/CameraInfo, compress: true}]}",
+            "only for a sensor_msgs/msg/Image",
+        ),
+        ("robot: {wheels: 2}", "expected a mapping with body and topics"),
+    ],
+)
 def test_a_bad_robot_section_is_a_clear_error(tmp_path, section, says):
     cfg = tmp_path / "actorbt.yaml"
     cfg.write_text(section + "\n")
@@ -80,21 +86,23 @@ def test_a_bad_robot_section_is_a_clear_error(tmp_path, section, says):
 
 def test_the_robot_section_reaches_the_live_options(tmp_path):
     cfg = tmp_path / "actorbt.yaml"
-    cfg.write_text("robot:\n  body: {size: [0.2, 0.1, 0.3]}\n"
-                   "  topics: [{name: /cam, type: sensor_msgs/msg/Image, qos: sensor, compress: true}]\n")
+    cfg.write_text(
+        "robot:\n  body: {size: [0.2, 0.1, 0.3]}\n"
+        "  topics: [{name: /cam, type: sensor_msgs/msg/Image, qos: sensor, compress: true}]\n"
+    )
     options = LiveOptions.of(argparse.Namespace(bag="b"), load_config(cfg).robot)
     assert options.body == (0.2, 0.1, 0.3, 0.0)
     assert options.topics == (("/cam", "sensor_msgs/msg/Image", "sensor", True),)
-    assert LiveOptions.of(argparse.Namespace()).body is None     # no section: nothing drawn
+    assert LiveOptions.of(argparse.Namespace()).body is None  # no section: nothing drawn
 
 
 def test_shell_runs_actors_and_survives_bad_input():
     from actors.tutorial import Tutorial
+
     with Runtime() as rt:
         rt.add_subsystem("tutorial", Tutorial)
         out = io.StringIO()
-        script = io.StringIO("greet amy\nnope 1\ngreet 1 2 3\nhelp greet\ncount 2 0.5\n"
-                             "'unterminated\nlist gre\nquit\n")
+        script = io.StringIO("greet amy\nnope 1\ngreet 1 2 3\nhelp greet\ncount 2 0.5\n'unterminated\nlist gre\nquit\n")
         ActorShell(rt, stdin=script, stdout=out).cmdloop()
     text = out.getvalue()
     assert "'hello, amy'" in text
@@ -107,6 +115,7 @@ def test_shell_runs_actors_and_survives_bad_input():
 
 def test_shell_completes_actor_names():
     from actors.tutorial import Tutorial
+
     with Runtime() as rt:
         rt.add_subsystem("tutorial", Tutorial)
         sh = ActorShell(rt, stdin=io.StringIO(""), stdout=io.StringIO())
@@ -115,6 +124,7 @@ def test_shell_completes_actor_names():
 
 
 # -- call --stream and the shell's `stream` (issue [cli-dx] item 3) -------------------------
+
 
 def test_call_stream_prints_every_value(config, capsys):
     assert main(["--config", config, "call", "tutorial.count", "3", "--stream"]) == 0
@@ -166,6 +176,7 @@ def test_ctrl_c_ends_a_stream_cleanly():
         yield 1
         yield 2
         raise KeyboardInterrupt
+
     out = io.StringIO()
     assert print_stream(values(), out) == INTERRUPTED == 130
     assert out.getvalue() == "1\n2\n"
@@ -182,7 +193,9 @@ def test_ctrl_c_ends_a_stream_cleanly():
                     yield values()
                 finally:
                     closed.append((name, args, kwargs, timeout))
+
             return cm()
+
     out = io.StringIO()
     assert stream_actor(FakeRuntime(), "x", [1], {"k": 2}, out, as_json=True, timeout=4.0) == 130
     assert out.getvalue() == "1\n2\n"
@@ -193,10 +206,27 @@ def test_ctrl_c_on_a_real_stream_exits_130(config):
     import signal
     import subprocess
     import sys
+
     proc = subprocess.Popen(
-        [sys.executable, "-m", "bt_cli.main", "--config", config, "call", "tutorial.count",
-         "1000", "0.05", "--stream", "--clock", "wall"],
-        cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        [
+            sys.executable,
+            "-m",
+            "bt_cli.main",
+            "--config",
+            config,
+            "call",
+            "tutorial.count",
+            "1000",
+            "0.05",
+            "--stream",
+            "--clock",
+            "wall",
+        ],
+        cwd=REPO,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     try:
         assert proc.stdout.readline() == "0\n"
         proc.send_signal(signal.SIGINT)
@@ -210,6 +240,7 @@ def test_ctrl_c_on_a_real_stream_exits_130(config):
 
 def test_shell_stream_command(capsys):
     from actors.tutorial import Tutorial
+
     with Runtime() as rt:
         rt.add_subsystem("tutorial", Tutorial)
         sh = ActorShell(rt)
@@ -237,6 +268,7 @@ def test_shell_stream_command(capsys):
 
 def test_shell_completes_the_stream_command():
     from actors.tutorial import Tutorial
+
     with Runtime() as rt:
         rt.add_subsystem("tutorial", Tutorial)
         sh = ActorShell(rt, stdin=io.StringIO(""), stdout=io.StringIO())
@@ -253,7 +285,8 @@ def project_with_a_broken_tree(tmp_path):
     trees = tmp_path / "trees"
     trees.mkdir()
     (trees / "hello.yaml").write_text(
-        "name: hello\noutputs: [g]\nroot: {do: tutorial.greet, with: {name: ada}, out: g}\n")
+        "name: hello\noutputs: [g]\nroot: {do: tutorial.greet, with: {name: ada}, out: g}\n"
+    )
     (trees / "x.yaml").write_text("name: x\nroot:\n  sequence:\n    - do: nope\n")
     cfg = tmp_path / "actorbt.yaml"
     cfg.write_text("subsystems: {tutorial: actors.tutorial:Tutorial}\nworld: null\n")
@@ -294,6 +327,7 @@ def test_check_still_fails_on_any_broken_file(project_with_a_broken_tree, capsys
 def test_demo_and_eval_build_their_runtime_from_actorbt_yaml(project_with_a_broken_tree, capsys):
     from bt_cli.config import load_config
     from demo.episode import episode_app
+
     cfg = load_config(project_with_a_broken_tree)
     app = episode_app("open_floor", 3, config=cfg)
     assert app.cfg is cfg and app.world_spec() == {"name": "open_floor", "seed": 3}

@@ -1,5 +1,6 @@
 """`actorbt --help` and every command's: one name per thing, each flag explained in a
 full sentence."""
+
 from __future__ import annotations
 
 import argparse
@@ -43,8 +44,9 @@ def test_every_flag_is_explained_in_a_full_sentence(parser):
 
 
 def test_every_command_has_a_description(parser):
-    missing = [name for name, sub in commands(parser)
-               if not sub.description or not sub.description.rstrip().endswith(".")]
+    missing = [
+        name for name, sub in commands(parser) if not sub.description or not sub.description.rstrip().endswith(".")
+    ]
     assert missing == []
 
 
@@ -67,9 +69,10 @@ def test_the_old_ros_flag_says_what_replaced_it(argv, capsys):
 
 def test_the_bus_flag_picks_the_transport(tmp_path):
     from bt_cli.app import App
+
     cfg = tmp_path / "actorbt.yaml"
     cfg.write_text("transport: local\n")
     app = App(argparse.Namespace(bus="ros"), load_config(cfg))
     assert app._transport() is not None  # the ROS transport's factory
     app = App(argparse.Namespace(bus=None), load_config(cfg))
-    assert app._transport() is None      # the local bus
+    assert app._transport() is None  # the local bus

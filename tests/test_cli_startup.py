@@ -4,6 +4,7 @@
 The timing targets are in bench/bench_cli_startup.py; these tests only look at what a
 command imports, in a fresh interpreter.
 """
+
 from __future__ import annotations
 
 import json
@@ -27,8 +28,20 @@ REPO = Path(__file__).resolve().parents[1]
 BANNER = "pybullet build time"
 #: what engine-only commands must not load: the simulator (pybullet, sim's modules beyond
 #: the `sim` package and its command plugin), ROS, OpenCV, the robot's code and matplotlib
-HEAVY = ("pybullet", "rclpy", "cv2", "matplotlib", "sensor_msgs", "geometry_msgs", "nav_msgs",
-         "std_msgs", "trajectory_msgs", "actors", "planning", "scipy")
+HEAVY = (
+    "pybullet",
+    "rclpy",
+    "cv2",
+    "matplotlib",
+    "sensor_msgs",
+    "geometry_msgs",
+    "nav_msgs",
+    "std_msgs",
+    "trajectory_msgs",
+    "actors",
+    "planning",
+    "scipy",
+)
 
 # Runs main() in a fresh interpreter and prints the modules it loaded as the last line.
 PROBE = textwrap.dedent("""
@@ -45,11 +58,11 @@ PROBE = textwrap.dedent("""
 
 def loaded(cwd: Path, *args: str) -> set[str]:
     """The modules ``actorbt ARGS`` loads; fails when it fails or prints the banner."""
-    proc = subprocess.run([sys.executable, "-c", PROBE, *args], cwd=cwd, capture_output=True,
-                          text=True, timeout=120)
+    proc = subprocess.run([sys.executable, "-c", PROBE, *args], cwd=cwd, capture_output=True, text=True, timeout=120)
     assert BANNER not in proc.stdout + proc.stderr, (
         f"actorbt {' '.join(args)} imported pybullet (or rebuilt the actor index: was a source "
-        "file edited while the test ran?)")
+        "file edited while the test ran?)"
+    )
     result = json.loads(proc.stdout.strip().splitlines()[-1])
     assert result["rc"] == 0, proc.stderr
     return set(result["modules"])
@@ -68,11 +81,20 @@ def robot_project(tmp_path_factory: pytest.TempPathFactory) -> Path:
     its actor index built once (that run imports and constructs the robot)."""
     folder = tmp_path_factory.mktemp("project")
     cfg = load_config(REPO / "actorbt.yaml")
-    (folder / "actorbt.yaml").write_text(json.dumps({
-        "subsystems": cfg.subsystems, "trees": str(cfg.trees_dir()), "world": cfg.world,
-        "simulator": cfg.simulator, "plugins": cfg.plugins}))
-    subprocess.run([sys.executable, "-m", "bt_cli.main", "check"], cwd=folder, check=True,
-                   capture_output=True, timeout=300)
+    (folder / "actorbt.yaml").write_text(
+        json.dumps(
+            {
+                "subsystems": cfg.subsystems,
+                "trees": str(cfg.trees_dir()),
+                "world": cfg.world,
+                "simulator": cfg.simulator,
+                "plugins": cfg.plugins,
+            }
+        )
+    )
+    subprocess.run(
+        [sys.executable, "-m", "bt_cli.main", "check"], cwd=folder, check=True, capture_output=True, timeout=300
+    )
     assert (folder / ".actorbt" / "actors.json").is_file()
     return folder
 
@@ -89,12 +111,15 @@ def test_check_reads_the_actor_index(robot_project: Path) -> None:
     assert heavy(loaded(robot_project, "check", *files)) == []
 
 
-@pytest.mark.parametrize("args", [
-    ["list"],
-    ["catalog", "--json"],
-    ["show", "bt_pick_place"],
-    ["replay", str(REPO / "tests" / "replays" / "demo_patrol.jsonl"), "--trees", str(REPO / "trees")],
-])
+@pytest.mark.parametrize(
+    "args",
+    [
+        ["list"],
+        ["catalog", "--json"],
+        ["show", "bt_pick_place"],
+        ["replay", str(REPO / "tests" / "replays" / "demo_patrol.jsonl"), "--trees", str(REPO / "trees")],
+    ],
+)
 def test_engine_only_commands_load_no_robot_code(robot_project: Path, args: list[str]) -> None:
     assert heavy(loaded(robot_project, *args)) == []
 
@@ -149,7 +174,7 @@ class Robot(SubSystem):
         self.add_subsystem("base", Base)
 '''
 
-MISSION = '''
+MISSION = """
 name: probe
 root:
   sequence:
@@ -167,7 +192,7 @@ root:
     - do: robot.arm.stop
       with: {hard: 1}
     - do: gotoo
-'''
+"""
 
 
 @pytest.fixture
@@ -182,6 +207,7 @@ def project(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[Path]:
 
 def app_for(project: Path) -> App:
     import argparse
+
     return App(argparse.Namespace(config=str(project / "actorbt.yaml")))
 
 
@@ -231,9 +257,9 @@ def test_index_is_rebuilt_when_its_sources_or_subsystems_change(project: Path) -
 
 
 # -- --config is read by argparse before the full parser exists --------------------------
-def test_plugins_come_from_the_config_option_in_either_spelling(tmp_path: Path,
-                                                                capsys: pytest.CaptureFixture) -> None:
+def test_plugins_come_from_the_config_option_in_either_spelling(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
     from bt_cli.main import main
+
     cfg = tmp_path / "actorbt.yaml"
     cfg.write_text("subsystems: {}\ntrees: null\nplugins: [sim.cli]\n")
     for option in (["--config", str(cfg)], [f"--config={cfg}"]):
@@ -247,6 +273,7 @@ def test_plugins_come_from_the_config_option_in_either_spelling(tmp_path: Path,
 
 def test_a_missing_or_broken_config_is_one_line(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
     from bt_cli.main import main
+
     assert main(["--config", str(tmp_path / "nope.yaml"), "list"]) == 2
     err = capsys.readouterr().err
     assert err == f"actorbt: error: cannot read {tmp_path / 'nope.yaml'}: No such file or directory\n"

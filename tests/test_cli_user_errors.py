@@ -1,5 +1,6 @@
 """Every file a user writes (mission, world, configuration, recording) that is wrong gives
 one located line on stderr and exit status 2, never a traceback."""
+
 from __future__ import annotations
 
 import json
@@ -20,8 +21,10 @@ HOUSE = (REPO / "sim" / "worlds" / "house.yaml").read_text()
 @pytest.fixture
 def project(tmp_path):
     cfg = tmp_path / "actorbt.yaml"
-    cfg.write_text("subsystems:\n  tutorial: actors.tutorial:Tutorial\ntrees: null\n"
-                   "simulator: sim:start_world\nplugins: [sim.cli, demo.cli]\n")
+    cfg.write_text(
+        "subsystems:\n  tutorial: actors.tutorial:Tutorial\ntrees: null\n"
+        "simulator: sim:start_world\nplugins: [sim.cli, demo.cli]\n"
+    )
     return tmp_path
 
 
@@ -30,7 +33,7 @@ def one_error_line(capsys) -> str:
     lines = err.strip().splitlines()
     assert len(lines) == 1, err
     assert lines[0].startswith("actorbt: error: ")
-    return lines[0][len("actorbt: error: "):]
+    return lines[0][len("actorbt: error: ") :]
 
 
 def a_world_with(project: pathlib.Path, old: str, new: str) -> pathlib.Path:
@@ -50,9 +53,11 @@ def test_an_unknown_category_in_a_world(project, capsys):
     line = next(i for i, text in enumerate(world.read_text().splitlines(), 1) if "juice" in text)
     assert run(project, "call", "greet", "--world", str(world)) == 2
     message = one_error_line(capsys)
-    assert re.fullmatch(rf"{re.escape(str(world))}:{line}:\d+: objects\[\d\]: unknown category 'juice' "
-                        r"\(one of: bottle, can, carton, box; or others: every category not listed\)",
-                        message), message
+    assert re.fullmatch(
+        rf"{re.escape(str(world))}:{line}:\d+: objects\[\d\]: unknown category 'juice' "
+        r"\(one of: bottle, can, carton, box; or others: every category not listed\)",
+        message,
+    ), message
 
 
 def test_a_world_with_a_yaml_mistake(project, capsys):
@@ -130,13 +135,16 @@ def write_trace(path: pathlib.Path, records) -> str:
 
 
 @pytest.mark.parametrize("command", ["replay", "plot"])
-@pytest.mark.parametrize("damage, expected", [
-    (lambda rs: rs.__setitem__(2, [1, 2]), r":3:1: expected a JSON object \(an event\), got list"),
-    (lambda rs: rs[2].pop("run"), r":3:1: \w+ event: missing 'run'"),
-    (lambda rs: rs[1].__setitem__("t", "soon"), r":2:1: \w+ event: 't' must be a number \(seconds\), got \"soon\""),
-    (lambda rs: rs[0].__setitem__("start", [1]), r":1:1: header: 'start' must be a number"),
-    (lambda rs: rs[0].__setitem__("trees", 3), r":1:1: header: 'trees' must be an object, got 3"),
-])
+@pytest.mark.parametrize(
+    "damage, expected",
+    [
+        (lambda rs: rs.__setitem__(2, [1, 2]), r":3:1: expected a JSON object \(an event\), got list"),
+        (lambda rs: rs[2].pop("run"), r":3:1: \w+ event: missing 'run'"),
+        (lambda rs: rs[1].__setitem__("t", "soon"), r":2:1: \w+ event: 't' must be a number \(seconds\), got \"soon\""),
+        (lambda rs: rs[0].__setitem__("start", [1]), r":1:1: header: 'start' must be a number"),
+        (lambda rs: rs[0].__setitem__("trees", 3), r":1:1: header: 'trees' must be an object, got 3"),
+    ],
+)
 def test_a_damaged_recording(project, recording, capsys, command, damage, expected):
     capsys.readouterr()
     damage(recording)
@@ -158,9 +166,24 @@ def test_a_recording_that_is_not_json(project, capsys):
 def test_a_user_file_error_is_one_line_from_the_command(project):
     world = a_world_with(project, "category: can", "category: juice")
     env = {**os.environ, "PYTHONPATH": str(REPO)}
-    done = subprocess.run([sys.executable, "-m", "bt_cli.main", "--config", str(project / "actorbt.yaml"),
-                           "call", "greet", "--world", str(world)], capture_output=True, text=True, env=env,
-                          cwd=project, timeout=120)
+    done = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "bt_cli.main",
+            "--config",
+            str(project / "actorbt.yaml"),
+            "call",
+            "greet",
+            "--world",
+            str(world),
+        ],
+        capture_output=True,
+        text=True,
+        env=env,
+        cwd=project,
+        timeout=120,
+    )
     assert done.returncode == 2
     assert done.stdout == ""
     assert done.stderr.count("\n") == 1 and "Traceback" not in done.stderr, done.stderr
@@ -169,8 +192,13 @@ def test_a_user_file_error_is_one_line_from_the_command(project):
 
 def test_a_reader_that_stops_early_is_no_error(project):
     env = {**os.environ, "PYTHONPATH": str(REPO)}
-    proc = subprocess.Popen([sys.executable, "-m", "bt_cli.main", "--config", str(project / "actorbt.yaml"),
-                             "catalog", "--json"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env, cwd=project)
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "bt_cli.main", "--config", str(project / "actorbt.yaml"), "catalog", "--json"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        env=env,
+        cwd=project,
+    )
     proc.stdout.close()  # as `| head` does when it has read enough, here before any output
     err = proc.stderr.read().decode()
     assert proc.wait(timeout=60) == 0

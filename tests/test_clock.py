@@ -1,4 +1,5 @@
 """Virtual and wall clocks, timeouts, determinism."""
+
 from __future__ import annotations
 
 import time
@@ -51,10 +52,13 @@ def _program(log):
 
         @actor
         def main(self):
-            txns = [self.run_actor_mode("worker", "async", None, n, p)
-                    for n, p in [("a", 0.3), ("b", 0.2), ("c", 0.3), ("d", 0.1)]]
+            txns = [
+                self.run_actor_mode("worker", "async", None, n, p)
+                for n, p in [("a", 0.3), ("b", 0.2), ("c", 0.3), ("d", 0.1)]
+            ]
             self.run_actor("sleep", 5)
             return [t.state.value for t in txns]
+
     with Runtime() as rt:
         rt.add_subsystem("c", Chatty)
         return rt.call("main")

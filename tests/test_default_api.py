@@ -1,4 +1,5 @@
 """The module-level API (ros_actor's names) over the default runtime (bt_engine.default)."""
+
 from __future__ import annotations
 
 import pathlib
@@ -8,17 +9,25 @@ import sys
 import pytest
 
 import bt_engine
-from bt_engine import (Runtime, SubSystem, actor, close_default_runtime, default_runtime,
-                       register_subsystem, run_actor, run_actor_async, run_actor_mode,
-                       set_default_runtime)
+from bt_engine import (
+    Runtime,
+    SubSystem,
+    actor,
+    close_default_runtime,
+    default_runtime,
+    register_subsystem,
+    run_actor,
+    run_actor_async,
+    run_actor_mode,
+    set_default_runtime,
+)
 
 PROGRAM = pathlib.Path(__file__).parent / "programs" / "seed_pic_find.py"
 
 
 @pytest.mark.parametrize("clock", ["virtual", "wall"])
 def test_a_ros_actor_style_program_runs_on_the_default_runtime(clock):
-    out = subprocess.run([sys.executable, str(PROGRAM), clock], capture_output=True,
-                         text=True, timeout=60)
+    out = subprocess.run([sys.executable, str(PROGRAM), clock], capture_output=True, text=True, timeout=60)
     assert out.returncode == 0, out.stderr
     assert out.stdout.startswith("found=(22, 13) frame=(24, 32, 3) async=(24, 32, 3)")
     assert "Traceback" not in out.stderr
@@ -81,10 +90,11 @@ def test_values_at_the_root(fresh_default):
 
 def test_ros_actor_forms_subnet_constructor_close_pairs_and_mode_words(rt):
     from bt_engine import SubNet
+
     closed: list = []
 
     class Net(SubNet):
-        def __init__(self, subsystem):           # ros_actor's SubNet(subsystem)
+        def __init__(self, subsystem):  # ros_actor's SubNet(subsystem)
             super().__init__(subsystem)
             self.owner = subsystem
 

@@ -4,6 +4,7 @@ Every `actorbt ...` line of a ```sh block must parse: the command, its sub-comma
 options exist (`[...]` marks optional parts in the docs: they are left out). The quick
 ones, which need no robot and no second shell, are run, and must succeed.
 """
+
 from __future__ import annotations
 
 import re
@@ -25,7 +26,7 @@ def _command_lines() -> list[tuple[str, str]]:
         i = 0
         while i < len(lines):
             line, number = lines[i], block.line + 1 + i
-            while line.rstrip().endswith("\\") and i + 1 < len(lines):   # continued lines
+            while line.rstrip().endswith("\\") and i + 1 < len(lines):  # continued lines
                 i += 1
                 line = line.rstrip()[:-1] + " " + lines[i].strip()
             i += 1
@@ -79,6 +80,11 @@ QUICK = ("actorbt list", "actorbt check", "actorbt catalog --json", "actorbt cat
 @pytest.mark.parametrize("command", QUICK)
 def test_the_quick_documented_commands_run_as_written(command):
     assert any(c.startswith(command) for _, c in LINES), f"{command!r} is no longer documented"
-    run = subprocess.run([sys.executable, "-m", "bt_cli.main", *shlex.split(command)[1:]],
-                         cwd=ROOT, capture_output=True, text=True, timeout=300)
+    run = subprocess.run(
+        [sys.executable, "-m", "bt_cli.main", *shlex.split(command)[1:]],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert run.returncode == 0, run.stderr

@@ -15,6 +15,7 @@ below it to PATH in the scratch project, ``<!-- doc-test: append PATH -->`` appe
 project per document: a copy of actorbt.yaml, the rest of the checkout linked. The files
 are written before the commands run.
 """
+
 from __future__ import annotations
 
 import os
@@ -46,15 +47,18 @@ RUN_DOCS = sorted({b.doc for b in ALL if b.mark.startswith("run")})
 
 
 def test_every_command_block_says_whether_it_runs():
-    unmarked = [b.where for b in ALL if _shows_actorbt(b)
-                and not (b.mark.startswith("run") or b.mark.startswith("skip:"))]
-    assert not unmarked, ("add <!-- doc-test: run --> or <!-- doc-test: skip: why --> above: "
-                          + ", ".join(unmarked))
+    unmarked = [
+        b.where for b in ALL if _shows_actorbt(b) and not (b.mark.startswith("run") or b.mark.startswith("skip:"))
+    ]
+    assert not unmarked, "add <!-- doc-test: run --> or <!-- doc-test: skip: why --> above: " + ", ".join(unmarked)
 
 
 def test_the_marks_are_known():
-    bad = [f"{b.where}: {b.mark!r}" for b in ALL if b.mark
-           and not re.fullmatch(r"run(,\s*timeout\s+\d+)?|skip:\s*\S.*|(write|append)\s+\S+", b.mark)]
+    bad = [
+        f"{b.where}: {b.mark!r}"
+        for b in ALL
+        if b.mark and not re.fullmatch(r"run(,\s*timeout\s+\d+)?|skip:\s*\S.*|(write|append)\s+\S+", b.mark)
+    ]
     assert not bad, bad
 
 
@@ -77,14 +81,21 @@ def _scratch_project(where: Path) -> Path:
 def _run(block: Block, project: Path, env: dict) -> None:
     # `set -e` as a user would expect the block to stop at its first failure; the trap
     # stops the commands started with `&` (a robot, a serve) when the block ends.
-    script = ("set -e\ntrap 'kill $(jobs -p) 2>/dev/null || true; wait' EXIT\n" + block.text)
-    shell = subprocess.Popen(["bash", "-c", script], cwd=project, env=env, stdin=subprocess.DEVNULL,
-                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                             start_new_session=True)
+    script = "set -e\ntrap 'kill $(jobs -p) 2>/dev/null || true; wait' EXIT\n" + block.text
+    shell = subprocess.Popen(
+        ["bash", "-c", script],
+        cwd=project,
+        env=env,
+        stdin=subprocess.DEVNULL,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+    )
     try:
         out, err = shell.communicate(timeout=_timeout(block))
     except subprocess.TimeoutExpired:
-        os.killpg(shell.pid, signal.SIGKILL)        # the block and everything it started
+        os.killpg(shell.pid, signal.SIGKILL)  # the block and everything it started
         out, err = shell.communicate()
         pytest.fail(f"{block.where}: still running after {_timeout(block):.0f} s\n{_tail(out)}\n{_tail(err)}")
     if shell.returncode != 0:
@@ -99,11 +110,15 @@ def _tail(out: str | None, lines: int = 40) -> str:
 @pytest.mark.parametrize("doc", RUN_DOCS, ids=[str(d.relative_to(ROOT)) for d in RUN_DOCS])
 def test_the_documented_examples_run(doc, tmp_path):
     project = _scratch_project(tmp_path / "project")
-    env = dict(os.environ, PATH=f"{Path(sys.executable).parent}{os.pathsep}{os.environ['PATH']}",
-               ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST", ROS_DOMAIN_ID=str(150 + os.getpid() % 80),
-               PYTHONUNBUFFERED="1")
+    env = dict(
+        os.environ,
+        PATH=f"{Path(sys.executable).parent}{os.pathsep}{os.environ['PATH']}",
+        ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST",
+        ROS_DOMAIN_ID=str(150 + os.getpid() % 80),
+        PYTHONUNBUFFERED="1",
+    )
     blocks = blocks_of(doc)
-    for block in blocks:        # the files first: a page may show a command before the script it runs
+    for block in blocks:  # the files first: a page may show a command before the script it runs
         verb, _, arg = block.mark.partition(" ")
         if verb in ("write", "append"):
             target = project / arg

@@ -5,6 +5,7 @@ package; ``bt_engine`` imports; a YAML mission calling Python actors loads and r
 Python and from ``actorbt run``; a command whose extra is missing says which extra it needs.
 Needs the package registry (pip), as ``make`` does.
 """
+
 from __future__ import annotations
 
 import json
@@ -21,8 +22,24 @@ import pytest
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 
 #: distributions of the extras, none of which the engine alone may bring (lower case)
-FRONT_END_PACKAGES = ("ros-", "rclpy", "rosbags", "foxglove", "mcp", "jsonschema", "pybullet", "opencv", "moderngl",
-                      "ompl", "ruckig", "numpy", "scipy", "matplotlib", "graphviz", "ray")
+FRONT_END_PACKAGES = (
+    "ros-",
+    "rclpy",
+    "rosbags",
+    "foxglove",
+    "mcp",
+    "jsonschema",
+    "pybullet",
+    "opencv",
+    "moderngl",
+    "ompl",
+    "ruckig",
+    "numpy",
+    "scipy",
+    "matplotlib",
+    "graphviz",
+    "ray",
+)
 
 ACTORS = '''
 from bt_engine import SubSystem, actor
@@ -36,7 +53,7 @@ class Counter(SubSystem):
         return a + b
 '''
 
-MISSION = '''
+MISSION = """
 name: adder
 doc: Add 2 to x with a Python actor, and check the sum.
 inputs:
@@ -46,9 +63,9 @@ root:
   sequence:
     - {name: add, do: counter.add, with: {a: "{x}", b: 2}, out: total}
     - check: total > x
-'''
+"""
 
-RUN_FROM_PYTHON = '''
+RUN_FROM_PYTHON = """
 import json, sys
 from bt_engine import Runtime
 from bt_engine.trees import register_tree_folder
@@ -60,7 +77,7 @@ with Runtime() as rt:
     print(json.dumps(rt.call("adder", x=40)))
 print(json.dumps(sorted(m for m in sys.modules if m.split(".")[0] in
                         ("rclpy", "numpy", "mcp", "pybullet", "bt_ros", "bt_cli", "bt_mcp", "bt_xml"))))
-'''
+"""
 
 
 @pytest.fixture(scope="module")
@@ -69,8 +86,12 @@ def engine_env(tmp_path_factory):
     where = tmp_path_factory.mktemp("engine")
     venv.EnvBuilder(with_pip=True).create(where / "venv")
     python = where / "venv" / "bin" / "python"
-    done = subprocess.run([str(python), "-m", "pip", "install", "-q", "--disable-pip-version-check", str(ROOT)],
-                          capture_output=True, text=True, timeout=600)
+    done = subprocess.run(
+        [str(python), "-m", "pip", "install", "-q", "--disable-pip-version-check", str(ROOT)],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
     assert done.returncode == 0, done.stderr[-3000:]
     project = where / "project"
     (project / "trees").mkdir(parents=True)
@@ -83,8 +104,7 @@ def engine_env(tmp_path_factory):
 def run(python: pathlib.Path, project: pathlib.Path, *args: str) -> subprocess.CompletedProcess:
     env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "VIRTUAL_ENV")}
     env["PYTHONPATH"] = str(project)  # the user's own actors; the engine comes from the venv
-    return subprocess.run([str(python), *args], cwd=project, env=env, capture_output=True, text=True,
-                          timeout=120)
+    return subprocess.run([str(python), *args], cwd=project, env=env, capture_output=True, text=True, timeout=120)
 
 
 def test_installs_no_front_end_package(engine_env):

@@ -1,6 +1,7 @@
 """What an episode reports (demo/episode.py, demo/first_failure.py): the first step that
 went wrong, not only where the tree gave up, and where its object ended, not where it
 started."""
+
 from __future__ import annotations
 
 import io
@@ -62,11 +63,21 @@ def test_the_first_step_that_went_wrong_is_kept_beside_where_the_tree_gave_up(rt
 
 
 def test_the_printout_names_both_and_the_end_state():
-    ep = Episode("bt_pick_place", "house", 2, "cup", tree_status="FAILURE",
-                 failed_node="bt_catch:catch/attempts/attempt/grasp",
-                 reason="pick: GraspError: cup grasp missed: fingers closed at 0 mm",
-                 tree_failure="tree bt_pick_place failed at pick_place/fetch/attempt/search: SearchExhausted",
-                 target="cup_1", pose="upright", support="floor", end_pose="lying", end_support="the floor")
+    ep = Episode(
+        "bt_pick_place",
+        "house",
+        2,
+        "cup",
+        tree_status="FAILURE",
+        failed_node="bt_catch:catch/attempts/attempt/grasp",
+        reason="pick: GraspError: cup grasp missed: fingers closed at 0 mm",
+        tree_failure="tree bt_pick_place failed at pick_place/fetch/attempt/search: SearchExhausted",
+        target="cup_1",
+        pose="upright",
+        support="floor",
+        end_pose="lying",
+        end_support="the floor",
+    )
     out = io.StringIO()
     print_outcome(ep, out)
     text = out.getvalue()
@@ -87,8 +98,9 @@ def test_the_end_state_is_read_from_the_world():
         sim.advance(0.5)
         assert _end_state(sim, name) == ("upright", "the place location")
         body = sim.scene.objects[name]
-        p.resetBasePositionAndOrientation(body, [2.0, 2.0, 0.034], p.getQuaternionFromEuler([math.pi / 2, 0, 0]),
-                                          physicsClientId=sim.cid)
+        p.resetBasePositionAndOrientation(
+            body, [2.0, 2.0, 0.034], p.getQuaternionFromEuler([math.pi / 2, 0, 0]), physicsClientId=sim.cid
+        )
         sim.advance(0.5)
         assert _end_state(sim, name) == ("lying", "the floor")
     finally:
@@ -98,6 +110,7 @@ def test_the_end_state_is_read_from_the_world():
 def test_a_long_step_is_told_every_heartbeat(rt, tmp_path, monkeypatch):
     """The demo is not silent through a long step: the running node is told."""
     from demo.episode import DemoProgress
+
     (tmp_path / "patrol_test.yaml").write_text(
         "name: patrol_test\nroot:\n  sequence:\n    - name: long drive\n      wait: 5\n"
     )
@@ -112,6 +125,7 @@ def test_a_long_step_is_told_every_heartbeat(rt, tmp_path, monkeypatch):
 def test_the_evaluation_tells_what_its_running_episodes_do(tmp_path, monkeypatch):
     import time as _time
     from demo.evaluate import PROGRESS_LOG, Progress
+
     monkeypatch.setattr(Progress, "HEARTBEAT", 0.2)
     folder = tmp_path / "can_seed3"
     folder.mkdir()
@@ -131,6 +145,7 @@ def test_the_evaluation_tells_what_its_running_episodes_do(tmp_path, monkeypatch
 
 def test_what_the_robot_saw_is_kept_for_the_top_view_also_when_the_run_fails(rt, tmp_path):
     from demo.episode import Sightings
+
     rt.add_subsystem("steps", Steps)
     (tmp_path / "saw_test.yaml").write_text(
         "name: saw_test\nroot:\n  sequence:\n    - do: watch\n    - do: steps.search\n"
@@ -146,7 +161,8 @@ def test_what_the_robot_saw_is_kept_for_the_top_view_also_when_the_run_fails(rt,
 def test_an_object_on_a_turned_pallet_is_on_it_only_within_its_turned_outline():
     from demo.episode import _on_surface
     from sim.world_spec import Box
-    pallet = Box("pallet", 2.0, 1.0, 0.6, 0.4, 0.12, math.radians(90))   # long side along y
-    assert _on_surface((2.0, 1.25, 0.2), pallet)       # inside: 0.25 m along its long side
-    assert not _on_surface((2.25, 1.0, 0.2), pallet)   # inside were it not turned
+
+    pallet = Box("pallet", 2.0, 1.0, 0.6, 0.4, 0.12, math.radians(90))  # long side along y
+    assert _on_surface((2.0, 1.25, 0.2), pallet)  # inside: 0.25 m along its long side
+    assert not _on_surface((2.25, 1.0, 0.2), pallet)  # inside were it not turned
     assert not _on_surface((2.0, 1.25, 0.05), pallet)  # beside it on the floor

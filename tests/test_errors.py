@@ -1,12 +1,21 @@
 """Errors: chaining, call-site errors, bad modes, raising callbacks."""
+
 from __future__ import annotations
 
 import logging
 
 import pytest
 
-from bt_engine import (ActorError, ActorbtError, BadArgumentsError, BadModeError, Failure,
-                       SubSystem, UnknownActorError, actor)
+from bt_engine import (
+    ActorError,
+    ActorbtError,
+    BadArgumentsError,
+    BadModeError,
+    Failure,
+    SubSystem,
+    UnknownActorError,
+    actor,
+)
 from tests.conftest import run_in_actor
 
 
@@ -76,6 +85,7 @@ def test_type_error_inside_actor_is_an_actor_error_not_bad_arguments(rt):
         @actor
         def adds(self, a):
             return a + "x"
+
     rt.add_subsystem("s", S)
     with pytest.raises(ActorError) as e:
         rt.call("adds", 1)
@@ -97,6 +107,7 @@ def test_mode_needs_its_leading_argument(rt, faulty):
 
 def test_unknown_kind_in_decorator():
     with pytest.raises(BadModeError):
+
         @actor("x", "asynchronous")
         def x(self, done):
             pass
@@ -105,10 +116,13 @@ def test_unknown_kind_in_decorator():
 def test_a_raising_callback_is_logged_and_the_runtime_goes_on(rt, faulty, caplog):
     def bad_callback(result):
         raise KeyError("callback bug")
+
     with caplog.at_level(logging.ERROR, logger="actorbt"):
         run_in_actor(rt, lambda: (rt.start("divide", 4, 2, on_done=bad_callback), rt.sleep(1)))
-    assert any("callback bug" in r.getMessage() or (r.exc_info and "callback bug" in str(r.exc_info[1]))
-               for r in caplog.records)
+    assert any(
+        "callback bug" in r.getMessage() or (r.exc_info and "callback bug" in str(r.exc_info[1]))
+        for r in caplog.records
+    )
     assert rt.call("divide", 4, 2) == 2.0
     assert rt.stats() == {"transactions": 0, "tasks": 0}
 
@@ -121,6 +135,7 @@ def test_blocking_from_a_hub_callback_is_a_clear_error(rt, faulty):
             rt.call("divide", 1, 1)
         except ActorbtError as e:
             errors.append(e)
+
     rt.run_on_hub(in_callback)
     assert "must not block" in str(errors[0])
 
@@ -172,6 +187,7 @@ def test_a_custom_base_exception_in_a_stream_ends_it_with_an_actor_error(rt, unu
         with unusual.run_actor_mode("gen_base", "iterator") as it:
             assert next(it) == 1
             next(it)
+
     with pytest.raises(ActorError) as e:
         run_in_actor(rt, body)
     assert "Oddity: mid-stream" in str(e.value)
@@ -182,6 +198,7 @@ def test_keyboard_interrupt_and_system_exit_are_not_failures(rt):
         @actor
         def quits(self) -> None:
             raise SystemExit(3)
+
     rt.add_subsystem("q", Quits)
     with pytest.raises(SystemExit):
         rt.call("quits")
@@ -200,6 +217,7 @@ def test_a_chain_of_failures_gives_one_short_message(rt, unusual):
 
 def test_a_long_cause_is_elided_in_the_middle():
     from bt_engine.errors import shorten
+
     text = "head " + "m" * 1000 + " tail"
     short = shorten(text, 100)
     assert len(short) <= 100 and short.startswith("head ") and short.endswith(" tail") and " ... " in short

@@ -1,4 +1,5 @@
 """demo.evaluate: the benchmarks' success summary (one line per group) and their CSV."""
+
 import csv
 import io
 
@@ -15,8 +16,13 @@ def ep(success: bool, sim: float, wall: float) -> Episode:
 
 def test_rates_medians_and_targets():
     out = io.StringIO()
-    print_rates([("can", [ep(True, 100, 20), ep(True, 120, 30), ep(False, 90, 10)]),
-                 ("bottle", [ep(True, 100, 5)] * 4)], "category", 0.9, target_rtf=10.0, out=out)
+    print_rates(
+        [("can", [ep(True, 100, 20), ep(True, 120, 30), ep(False, 90, 10)]), ("bottle", [ep(True, 100, 5)] * 4)],
+        "category",
+        0.9,
+        target_rtf=10.0,
+        out=out,
+    )
     lines = out.getvalue().strip().splitlines()
     assert lines[0].split()[:3] == ["category", "success", "rate"]
     can, bottle = lines[1], lines[2]
@@ -29,25 +35,34 @@ def test_rates_medians_and_targets():
 def test_successes_per_category_and_pose():
     def posed(cat, success, pose):
         return Episode("bt_pick_place", "house_hard", 0, cat, success=success, pose=pose)
+
     out = io.StringIO()
-    print_pose_table([posed("can", True, "upright"), posed("can", False, "upright"),
-                      posed("can", True, "lying"), posed("carton", False, "")], out)
+    print_pose_table(
+        [
+            posed("can", True, "upright"),
+            posed("can", False, "upright"),
+            posed("can", True, "lying"),
+            posed("carton", False, ""),
+        ],
+        out,
+    )
     head, *rows = out.getvalue().strip().splitlines()
     assert head.split() == ["by", "pose", "upright", "lying", "tilted", "none"]
     assert rows[0].split() == ["can", "1/2", "1/1", "-", "-"]
-    assert rows[1].split() == ["carton", "-", "-", "-", "0/1"]     # no pick was tried
+    assert rows[1].split() == ["carton", "-", "-", "-", "0/1"]  # no pick was tried
 
 
 def test_a_run_cut_off_keeps_the_episodes_it_finished_in_its_csv(tmp_path, monkeypatch):
     def one(seed):
         if seed == 3:
-            raise KeyboardInterrupt       # the run is stopped during its third episode
+            raise KeyboardInterrupt  # the run is stopped during its third episode
         return Episode("bt_pick_place", "house", seed, "can", success=seed == 1, sim_time=10.0)
 
     monkeypatch.setattr(evaluation, "_jobs", lambda tree, world, seeds, first, *rest: list(range(first, first + seeds)))
     monkeypatch.setattr(evaluation, "_one", one)
     with pytest.raises(KeyboardInterrupt):
-        evaluation.evaluate("bt_pick_place", 4, "house", "can", jobs=1, out_dir=tmp_path, first_seed=1,
-                            progress=None, config=object())
+        evaluation.evaluate(
+            "bt_pick_place", 4, "house", "can", jobs=1, out_dir=tmp_path, first_seed=1, progress=None, config=object()
+        )
     rows = list(csv.DictReader(open(tmp_path / "episodes.csv")))
     assert [(r["seed"], r["success"]) for r in rows] == [("1", "True"), ("2", "False")]

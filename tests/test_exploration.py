@@ -5,6 +5,7 @@ A first scan from the start can show a closed room: the doorway behind the robot
 free floor beyond it, is not on the map yet. Without the look round, the exploration
 ended there at once and the mission searched a one-room map (bt_map_then_fetch, house
 seed 4: two search locations, every search exhausted)."""
+
 from __future__ import annotations
 
 import math
@@ -18,7 +19,7 @@ from bt_engine import Runtime, SubSystem, actor
 
 RES = 0.05
 ORIGIN = (-2.0, -2.0)
-SIZE = 80                       # cells: a 4 m square, the robot at its centre
+SIZE = 80  # cells: a 4 m square, the robot at its centre
 
 
 def room(doorway: bool) -> np.ndarray:
@@ -29,8 +30,8 @@ def room(doorway: bool) -> np.ndarray:
     data[10:70, 10] = data[10:70, 69] = 100
     data[10, 10:70] = data[69, 10:70] = 100
     if doorway:
-        data[32:48, 69] = 0                 # 0.8 m wide
-        data[32:48, 70:74] = 0              # and a little floor beyond, then unknown
+        data[32:48, 69] = 0  # 0.8 m wide
+        data[32:48, 70:74] = 0  # and a little floor beyond, then unknown
     return data
 
 
@@ -52,7 +53,7 @@ class Base(SubSystem):
     def __init__(self, reveal: bool, blocked_left: bool = False) -> None:
         super().__init__()
         self.reveal = reveal
-        self.blocked_left = blocked_left        # a wall stops every turn to the left
+        self.blocked_left = blocked_left  # a wall stops every turn to the left
         self.turns: list[float] = []
         self.goals: list[tuple[float, float, float]] = []
         self.register_subscriber("map", OccupancyGridMsg, "/map", "latched")
@@ -77,7 +78,7 @@ class Base(SubSystem):
     @actor
     def goto(self, x: float, y: float, yaw: float) -> bool:
         self.goals.append((x, y, yaw))
-        self.publish(doorway=False)             # seen through: nothing more there
+        self.publish(doorway=False)  # seen through: nothing more there
         return True
 
 
@@ -103,7 +104,7 @@ def test_a_closed_room_on_a_young_map_is_looked_round_before_the_exploration_end
 def test_what_the_look_round_shows_is_explored():
     result, base = explore(reveal=True)
     assert result["finished"] and result["goals"] == 1
-    (x, y, _), = base.goals
+    ((x, y, _),) = base.goals
     assert x > 1.0 and abs(y) < 0.5, "the goal is at the doorway in the east wall"
     # one look round at the start, one after the goal (the map closed again)
     assert len(base.turns) == 2 * LOOK_AROUND

@@ -6,6 +6,7 @@ far longer than the thread needs, so every call must complete on either clock: t
 virtual clock may not jump past a deadline while such work is pending (the rule in
 ``bt_engine.clock.VirtualClock``).
 """
+
 from __future__ import annotations
 
 import threading
@@ -16,8 +17,8 @@ import pytest
 from bt_engine import Failure, Runtime, SubSystem, Transaction, actor
 from tests.conftest import run_in_actor
 
-DELAY = 0.03      # how long the foreign thread takes [s, wall]
-DEADLINE = 1.0    # every deadline in these tests [s, runtime clock]
+DELAY = 0.03  # how long the foreign thread takes [s, wall]
+DEADLINE = 1.0  # every deadline in these tests [s, runtime clock]
 
 
 class Foreign(SubSystem):
@@ -36,6 +37,7 @@ class Foreign(SubSystem):
         def driver() -> None:
             while not stop.wait(DELAY):
                 emit(x)
+
         threading.Thread(target=driver, daemon=True).start()
         return stop.set
 
@@ -113,6 +115,7 @@ def test_iterator_mode(frt, kind):
     def take_three():
         with frt.root.run_actor_mode(kind, "iterator", 1) as it:
             return [next(it) for _ in range(3)]
+
     assert run_in_actor(frt, take_three) == [1, 1, 1]
     with frt.run_actor_mode(kind, "iterator", 1) as it:  # from this (outside) thread
         assert [next(it) for _ in range(2)] == [1, 1]
@@ -122,9 +125,11 @@ def test_iterator_mode(frt, kind):
 @pytest.mark.parametrize("kind", KINDS)
 def test_timed_iterator_mode_yields_before_its_deadline(frt, kind):
     seconds = 0.3
+
     def collect():
         with frt.root.run_actor_mode(kind, "timed_iterator", seconds, 9) as it:
             return list(it)
+
     values = run_in_actor(frt, collect)
     assert values and set(values) == {9}
     with frt.stream(kind, 9, timeout=seconds) as it:
@@ -135,6 +140,7 @@ def test_timed_iterator_mode_yields_before_its_deadline(frt, kind):
 def test_virtual_time_keeps_pace_with_wall_time_while_foreign_work_is_pending():
     """The clock rule, measured: a 0.2 s thread under a 10 s deadline finishes at about
     0.2 s of virtual time, not 10 s, and hub-only work afterwards jumps again."""
+
     class Slow(SubSystem):
         @actor("slow", "async")
         def slow(self, done):
@@ -158,6 +164,7 @@ def test_a_foreign_actor_that_never_answers_still_times_out():
             return lambda: None
 
     from bt_engine import ActorTimeout
+
     with Runtime() as rt:
         rt.add_subsystem("s", Silent)
         t0 = time.perf_counter()

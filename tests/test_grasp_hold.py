@@ -1,5 +1,6 @@
 """Grasps of a bottle that hold: the estimate the hand goes to, and the grip through the
 carry (actors/catch.py)."""
+
 from __future__ import annotations
 
 import math
@@ -11,9 +12,20 @@ from tests.localised_rig import localised_rig
 
 #: house_hard seed 2002: the search's sighting of bottle_1 on the TV bench (0.25 m high),
 #: from 2.7 m away: 35 mm from where it stands (5.279, 3.794)
-FAR_SIGHTING = {"category": "bottle", "x": 5.2513, "y": 3.7729, "z": 0.2546, "height": 0.299,
-                "width": 0.0712, "distance": 2.729, "confidence": 0.886, "colour": "green",
-                "truncated": [], "frame": "map", "pose": "upright"}
+FAR_SIGHTING = {
+    "category": "bottle",
+    "x": 5.2513,
+    "y": 3.7729,
+    "z": 0.2546,
+    "height": 0.299,
+    "width": 0.0712,
+    "distance": 2.729,
+    "confidence": 0.886,
+    "colour": "green",
+    "truncated": [],
+    "frame": "map",
+    "pose": "upright",
+}
 
 
 def test_a_bottle_on_a_low_bench_is_looked_at_from_where_the_camera_sees_it():
@@ -33,7 +45,7 @@ def test_a_bottle_on_a_low_bench_is_looked_at_from_where_the_camera_sees_it():
         assert off < 0.012, f"the pick aims {off * 1000:.0f} mm off the bottle"
         held = rt.call("pick", target=close)
         assert held["category"] == "bottle" and 0.060 <= held["width"] <= 0.078
-        assert sim.object_pose("bottle_1")[2] > truth[2] + 0.03          # lifted
+        assert sim.object_pose("bottle_1")[2] > truth[2] + 0.03  # lifted
         assert rt.call("verify_grasp")
         rt.call("carry_pose")
         assert rt.call("verify_grasp"), "the bottle came loose while the arm folded"
@@ -45,7 +57,7 @@ def test_a_bottle_on_the_bench_is_held_from_a_look_that_sees_it_and_a_straight_d
     at that range); the standoff the planner drove to on that estimate put a finger into
     the bottle, which flew off the bench. Driving straight in from the look pose, the
     estimate and the heading to it come from one belief and the errors cancel."""
-    h = math.radians(80)      # from the south, as the robot came in the episode
+    h = math.radians(80)  # from the south, as the robot came in the episode
     start = (5.177 - 2.2 * math.cos(h), 2.823 - 2.2 * math.sin(h), h)
     with localised_rig("house_hard", 2009, start, lambda sim: place_robot(sim, start)) as (rt, sim):
         truth = sim.object_pose("bottle_1")
@@ -81,12 +93,18 @@ def test_where_its_fingertips_pinched_a_bottle_the_hand_grasps_it_again_and_hold
     carry fold they had crept to 59.6 mm, the bottle still between them, and verify_grasp
     (60 mm at least) called it lost. Now the hand backs off, lines up with where the
     fingers felt it, and grasps it across its axis (about 70 mm)."""
-    bottle = (3.6, 2.0)           # on open floor in house_hard 2009
+    bottle = (3.6, 2.0)  # on open floor in house_hard 2009
     c, s = math.cos(HEADING), math.sin(HEADING)
     start = (bottle[0] - 0.40 * c, bottle[1] - 0.40 * s, HEADING)
-    target = {"category": "bottle", "x": bottle[0] - 0.034 * c, "y": bottle[1] - 0.034 * s,
-              "z": 0.0, "width": 0.069,
-              "height": 0.163, "pose": "upright"}
+    target = {
+        "category": "bottle",
+        "x": bottle[0] - 0.034 * c,
+        "y": bottle[1] - 0.034 * s,
+        "z": 0.0,
+        "width": 0.069,
+        "height": 0.163,
+        "pose": "upright",
+    }
     state = {}
 
     def setup(sim):
@@ -97,7 +115,7 @@ def test_where_its_fingertips_pinched_a_bottle_the_hand_grasps_it_again_and_hold
         name = state["name"]
         held = rt.call("pick", target=target)
         assert 0.064 <= held["width"] <= 0.078, f"held at {held['width'] * 1000:.0f} mm: by the fingertips"
-        assert sim.object_pose(name)[2] > 0.2 and sim.in_gripper(name)         # lifted
+        assert sim.object_pose(name)[2] > 0.2 and sim.in_gripper(name)  # lifted
         rt.call("carry_pose")
         assert sim.in_gripper(name) and rt.call("verify_grasp")
 
@@ -130,18 +148,19 @@ def test_a_grip_check_judges_against_the_width_the_object_was_picked_at():
     in contact, 2.1 N each) when the grip check after the carry fold found 59.6 mm."""
     from actors.catch import _beyond_tips, _still_holds
     from categories import get as category
+
     plan = category("bottle").strategy.upright
     grip = {"stalled": True, "reached_goal": False, "width": 0.0596}
     assert _still_holds(plan, 0.0601, grip)
-    assert _still_holds(plan, 0.070, {**grip, "width": 0.061})   # within the grasp's range
-    assert not _still_holds(plan, 0.070, grip)              # 10 mm narrower: off the body
-    assert not _still_holds(plan, 0.070, {**grip, "width": 0.050})            # slipped
+    assert _still_holds(plan, 0.070, {**grip, "width": 0.061})  # within the grasp's range
+    assert not _still_holds(plan, 0.070, grip)  # 10 mm narrower: off the body
+    assert not _still_holds(plan, 0.070, {**grip, "width": 0.050})  # slipped
     assert not _still_holds(plan, 0.0601, {**grip, "width": 0.0, "stalled": False})
     # the fingertips closed on a chord: the axis lies beyond them
     assert _beyond_tips(plan, {**grip, "width": 0.060}) * 1000 == pytest.approx(17.1, abs=0.2)
-    assert _beyond_tips(plan, {**grip, "width": 0.070}) == 0.0              # across it
+    assert _beyond_tips(plan, {**grip, "width": 0.070}) == 0.0  # across it
     assert _beyond_tips(plan, {**grip, "width": 0.058}) * 1000 == pytest.approx(18.7, abs=0.2)
-    assert _beyond_tips(plan, {**grip, "width": 0.050}) == 0.0              # a miss
+    assert _beyond_tips(plan, {**grip, "width": 0.050}) == 0.0  # a miss
     assert _beyond_tips(plan, {**grip, "width": 0.060, "stalled": False}) == 0.0
     assert _beyond_tips(category("carton").strategy.upright, {**grip, "width": 0.040}) == 0.0
 
@@ -152,6 +171,7 @@ def test_a_pick_that_cannot_lift_puts_the_bottle_back_and_lets_go(monkeypatch):
     retry carried it along and opened the hand over the bench's edge: it fell to the
     floor. A pick that cannot lift now lowers the object, lets go and backs off."""
     from actors.catch import Catcher
+
     monkeypatch.setattr(Catcher, "_lift_pose", lambda self, g, height: (g.reach, 0.6))
     bottle = (3.6, 2.0)
     start = (bottle[0] - 0.40, bottle[1], 0.0)
@@ -168,7 +188,7 @@ def test_a_pick_that_cannot_lift_puts_the_bottle_back_and_lets_go(monkeypatch):
             rt.call("pick", target=target)
         pose = sim.object_pose(name)
         assert not sim.in_gripper(name)
-        assert abs(pose[2] - 0.1525) < 0.005 and math.dist(pose[:2], bottle) < 0.03   # upright, in place
+        assert abs(pose[2] - 0.1525) < 0.005 and math.dist(pose[:2], bottle) < 0.03  # upright, in place
         assert rt.call("get_status")["gripper"]["width"] > 0.08
 
 
@@ -176,6 +196,7 @@ def _in_hand(sim, name: str) -> tuple[tuple, tuple]:
     """Where object ``name`` is in the hand's frame: its position [m] and the direction of
     its z axis (a carton's length), from the simulator's truth."""
     import pybullet as p
+
     hand = sim.link_pose("end_effector_link")
     pose = sim.object_pose(name)
     inv = p.invertTransform(*hand)
@@ -191,16 +212,28 @@ def test_a_lying_carton_stays_where_the_fingers_hold_it_through_the_carry():
     was put down against the pallet's side (2006). Squeezed with the servo's force, it
     stays where the pick held it up to the pallet, the hand pointing down to put it there."""
     start = (9.0, 6.3, -math.pi / 2)
-    sighting = {"category": "carton", "x": 9.031, "y": 5.4016, "z": 0.0, "height": 0.045,
-                "width": 0.07, "distance": 0.9, "confidence": 0.78, "colour": "yellow",
-                "truncated": [], "frame": "map", "yaw": -1.499, "pose": "lying"}
+    sighting = {
+        "category": "carton",
+        "x": 9.031,
+        "y": 5.4016,
+        "z": 0.0,
+        "height": 0.045,
+        "width": 0.07,
+        "distance": 0.9,
+        "confidence": 0.78,
+        "colour": "yellow",
+        "truncated": [],
+        "frame": "map",
+        "yaw": -1.499,
+        "pose": "lying",
+    }
     with localised_rig("house_hard", 2004, start, lambda sim: place_robot(sim, start)) as (rt, sim):
         close = rt.call("approach_object", target=dict(sighting))
         held = rt.call("pick", target=close)
         assert held["pose"] == "lying"
         picked, _ = _in_hand(sim, "carton_1")
         rt.call("carry_pose")
-        rt.call("goto", 7.621, 6.2, math.pi)        # the pallet's east standoff
+        rt.call("goto", 7.621, 6.2, math.pi)  # the pallet's east standoff
         rt.call("move_to_pose", 0.17, 0.0, 0.1955, math.pi / 2)
         now, length = _in_hand(sim, "carton_1")
         assert sim.in_gripper("carton_1") and rt.call("verify_grasp")

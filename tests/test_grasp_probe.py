@@ -1,4 +1,5 @@
 """The referee's grasp measure (demo/grasp_probe.py): the held object's tilt in the hand."""
+
 from __future__ import annotations
 
 import math
@@ -22,11 +23,13 @@ def world():
 
 def _put_in_hand(world, name: str, tilt_deg: float) -> None:
     """The object's frame at the hand, its axis tilted about the hand's y axis."""
+
     def put():
         pos, quat = world.robot.link_pose(HAND)
         tilt = p.getQuaternionFromEuler([0.0, math.radians(tilt_deg), 0.0])
         _, orn = p.multiplyTransforms([0, 0, 0], quat, [0, 0, 0], tilt)
         p.resetBasePositionAndOrientation(world.scene.objects[name], pos, orn, physicsClientId=world.cid)
+
     world.runtime.run_on_hub(put)
 
 
@@ -35,7 +38,7 @@ def test_the_tilt_is_measured_against_the_hand(world, tilt):
     can = next(n for n in world.object_names() if world.object_category(n) == "can")
     _put_in_hand(world, can, tilt)
     assert held_tilt(world) == pytest.approx(tilt, abs=0.05)
-    _put_in_hand(world, can, 180.0 - tilt)          # upside down is held the same way
+    _put_in_hand(world, can, 180.0 - tilt)  # upside down is held the same way
     assert held_tilt(world) == pytest.approx(tilt, abs=0.05)
 
 
@@ -50,11 +53,11 @@ def test_the_picked_object_is_the_category_object_nearest_the_base(world):
     names = world.object_names()
     for i, name in enumerate(names):
         world.set_object_pose(name, 2.5, -2.5 + 0.3 * i)
-    assert nearest_object(world) is None                     # nothing within reach
+    assert nearest_object(world) is None  # nothing within reach
     can = next(n for n in names if world.object_category(n) == "can")
     other = next(n for n in names if world.object_category(n) != "can")
     world.set_object_pose(can, x + 0.6, y)
     world.set_object_pose(other, x + 0.4, y)
     assert nearest_object(world) == other
     assert nearest_object(world, ("can",)) == can
-    assert nearest_object(world, at=(x + 0.62, y)) == can        # nearest the pick's target
+    assert nearest_object(world, at=(x + 0.62, y)) == can  # nearest the pick's target

@@ -7,6 +7,7 @@ controllers' actions. The simulator can also give its exact state: SimWorld's me
 SimWorld(debug_ground_truth=True)). Those are for the referee (demo/episode.py scores the
 outcome and measures the localisation error with them), the tests and debugging.
 """
+
 from __future__ import annotations
 
 import pathlib
@@ -20,7 +21,9 @@ ROBOT_SOFTWARE = ("actors", "navstack", "trees")
 #: truth APIs (SimWorld's methods that read pybullet's state)
 FORBIDDEN = re.compile(
     r"ground[_ ]truth|\bSimWorld\b|\.(robot_pose|odom_pose|object_poses?|link_pose|in_gripper|"
-    r"state_vector|scan_now|render_camera|set_object_pose)\s*\(", re.IGNORECASE)
+    r"state_vector|scan_now|render_camera|set_object_pose)\s*\(",
+    re.IGNORECASE,
+)
 
 
 def robot_files():
@@ -42,8 +45,13 @@ def test_the_robot_software_never_mentions_the_truth():
 
 
 def test_the_guard_catches_what_it_should():
-    for bad in ("sub('/ground_truth/pose')", "x, y, _ = sim.robot_pose()", "world.object_pose('can_1')",
-                "SimWorld(rt)", "the ground truth pose"):
+    for bad in (
+        "sub('/ground_truth/pose')",
+        "x, y, _ = sim.robot_pose()",
+        "world.object_pose('can_1')",
+        "SimWorld(rt)",
+        "the ground truth pose",
+    ):
         assert FORBIDDEN.search(bad), bad
     for fine in ("self.run_actor('get_pose')", "def _odometry(self)", "truth = world.truth"):
         assert not FORBIDDEN.search(fine), fine
@@ -67,6 +75,7 @@ def test_a_demo_episode_puts_no_truth_on_the_bus(monkeypatch, tmp_path):
     def spy_subscribe(self, topic, *args, **kwargs):
         topics.add(topic)
         return subscribe(self, topic, *args, **kwargs)
+
     monkeypatch.setattr(LocalBus, "publisher", spy_publisher)
     monkeypatch.setattr(LocalBus, "subscribe", spy_subscribe)
     ep = run_episode("bt_pick_place", "house", seed=0, category="any", out_dir=tmp_path)

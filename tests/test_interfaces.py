@@ -5,6 +5,7 @@ with a real robot: fields and constants as upstream, and the RIHS01 type hashes 
 computes from the definitions (and checks on the wire) equal to those of upstream's builds.
 Then real rclpy over Fast DDS on loopback: a TFMessage topic, and a goal with feedback and a
 result for each action."""
+
 from __future__ import annotations
 
 import ctypes
@@ -38,11 +39,14 @@ UPSTREAM = Path(__file__).resolve().parents[1] / "interfaces" / "upstream"
 # (navigation2 1.3.x). Types as rosidl's Python classes name them.
 FIELDS = {
     TFMessage: {"transforms": "sequence<geometry_msgs/TransformStamped>"},
-    JointTolerance: {"name": "string", "position": "double", "velocity": "double",
-                     "acceleration": "double"},
-    JointComponentTolerance: {"joint_name": "string", "component": "uint16",
-                              "position": "double", "velocity": "double",
-                              "acceleration": "double"},
+    JointTolerance: {"name": "string", "position": "double", "velocity": "double", "acceleration": "double"},
+    JointComponentTolerance: {
+        "joint_name": "string",
+        "component": "uint16",
+        "position": "double",
+        "velocity": "double",
+        "acceleration": "double",
+    },
     GripperCommandMsg: {"position": "double", "max_effort": "double"},
     FollowJointTrajectory.Goal: {
         "trajectory": "trajectory_msgs/JointTrajectory",
@@ -51,7 +55,8 @@ FIELDS = {
         "component_path_tolerance": "sequence<control_msgs/JointComponentTolerance>",
         "goal_tolerance": "sequence<control_msgs/JointTolerance>",
         "component_goal_tolerance": "sequence<control_msgs/JointComponentTolerance>",
-        "goal_time_tolerance": "builtin_interfaces/Duration"},
+        "goal_time_tolerance": "builtin_interfaces/Duration",
+    },
     FollowJointTrajectory.Result: {"error_code": "int32", "error_string": "string"},
     FollowJointTrajectory.Feedback: {
         "header": "std_msgs/Header",
@@ -62,12 +67,16 @@ FIELDS = {
         "multi_dof_joint_names": "sequence<string>",
         "multi_dof_desired": "trajectory_msgs/MultiDOFJointTrajectoryPoint",
         "multi_dof_actual": "trajectory_msgs/MultiDOFJointTrajectoryPoint",
-        "multi_dof_error": "trajectory_msgs/MultiDOFJointTrajectoryPoint"},
+        "multi_dof_error": "trajectory_msgs/MultiDOFJointTrajectoryPoint",
+    },
     GripperCommand.Goal: {"command": "control_msgs/GripperCommand"},
-    GripperCommand.Result: {"position": "double", "effort": "double", "stalled": "boolean",
-                            "reached_goal": "boolean"},
-    GripperCommand.Feedback: {"position": "double", "effort": "double", "stalled": "boolean",
-                              "reached_goal": "boolean"},
+    GripperCommand.Result: {"position": "double", "effort": "double", "stalled": "boolean", "reached_goal": "boolean"},
+    GripperCommand.Feedback: {
+        "position": "double",
+        "effort": "double",
+        "stalled": "boolean",
+        "reached_goal": "boolean",
+    },
     NavigateToPose.Goal: {"pose": "geometry_msgs/PoseStamped", "behavior_tree": "string"},
     NavigateToPose.Result: {"error_code": "uint16", "error_msg": "string"},
     NavigateToPose.Feedback: {
@@ -75,16 +84,21 @@ FIELDS = {
         "navigation_time": "builtin_interfaces/Duration",
         "estimated_time_remaining": "builtin_interfaces/Duration",
         "number_of_recoveries": "int16",
-        "distance_remaining": "float"},
+        "distance_remaining": "float",
+    },
 }
 
 # Constants are not part of the type hash, so they are checked here one by one.
 CONSTANTS = {
-    JointComponentTolerance: {"X_AXIS": 1, "Y_AXIS": 2, "Z_AXIS": 3, "TRANSLATION": 4,
-                              "ROTATION": 5},
-    FollowJointTrajectory.Result: {"SUCCESSFUL": 0, "INVALID_GOAL": -1, "INVALID_JOINTS": -2,
-                                   "OLD_HEADER_TIMESTAMP": -3, "PATH_TOLERANCE_VIOLATED": -4,
-                                   "GOAL_TOLERANCE_VIOLATED": -5},
+    JointComponentTolerance: {"X_AXIS": 1, "Y_AXIS": 2, "Z_AXIS": 3, "TRANSLATION": 4, "ROTATION": 5},
+    FollowJointTrajectory.Result: {
+        "SUCCESSFUL": 0,
+        "INVALID_GOAL": -1,
+        "INVALID_JOINTS": -2,
+        "OLD_HEADER_TIMESTAMP": -3,
+        "PATH_TOLERANCE_VIOLATED": -4,
+        "GOAL_TOLERANCE_VIOLATED": -5,
+    },
     NavigateToPose.Result: {"NONE": 0},  # Jazzy's only error code
 }
 
@@ -93,56 +107,31 @@ CONSTANTS = {
 # A type's hash covers the full description of every type it references, so e.g. the Goal's
 # also pins JointTolerance and JointComponentTolerance.
 HASHES = {
-    "tf2_msgs/msg/TFMessage":
-        "e369d0f05a23ae52508854b66f6aa0437f3449d652e8cbf22d5abe85d020f087",
-    "control_msgs/msg/JointTolerance":
-        "c254f9cece0f3b733017b6990fd46d1326e25242d6b8844398c97d9a88e7d648",
-    "control_msgs/msg/JointComponentTolerance":
-        "739ea7566931944d33830fa10f1bf5e7a7fbdc3172bce7a7eaac642bd6e3ffa4",
-    "control_msgs/msg/GripperCommand":
-        "57eb8f326c9889ca8bb34ead82cc94cc09bf6bc5c3b6c09546dca3a00b589890",
-    "control_msgs/action/FollowJointTrajectory":
-        "738ebcb7a2d7cfa42f9f1001cc99ce3a4383d1cfe508015d9be8485e4b1c66f6",
-    "control_msgs/action/FollowJointTrajectory_Goal":
-        "8a9060704b269608f5a340934cc26e66869dd14bdac29e2e7fd9ec8b9882d205",
-    "control_msgs/action/FollowJointTrajectory_Result":
-        "8002e99ed2c14c6faa522f2a93c26d744c5982f254f9e98ff9c6f19789bdb220",
-    "control_msgs/action/FollowJointTrajectory_Feedback":
-        "3fd0aaecf71725121ae1ff7f01098a5e0da581e672be18a6b2c286cb43d96b49",
-    "control_msgs/action/FollowJointTrajectory_SendGoal":
-        "b13789dddc325a7a962825c45e28c77d37237ec129dd0c34dc5994562938c57f",
-    "control_msgs/action/FollowJointTrajectory_GetResult":
-        "e3ceb38e3e1867c8dc0f46014df26e90eb93422f27e9e97f936e07f94be4bc8b",
-    "control_msgs/action/FollowJointTrajectory_FeedbackMessage":
-        "80398fcb9674a79081a9906e2ccf0c804dd7cb15e22e362e606ee87186beab71",
-    "control_msgs/action/GripperCommand":
-        "e17c0e644eccf14bea84a0a93e0977182872c2eb7873ca6694900059b46dbc84",
-    "control_msgs/action/GripperCommand_Goal":
-        "607d9f41eb241e1922e90f02125e87ae6bfb78f7f64a71dc92630263d01f8b6d",
-    "control_msgs/action/GripperCommand_Result":
-        "bf512d5aa6a0e4fe4d8be22b2ec4a1973c3d250fa1f65e47450322c25c45c0a0",
-    "control_msgs/action/GripperCommand_Feedback":
-        "8f7c520077bab528bb9161ee3b83c81eee1f8aecadb8922ce82c79d667a819c4",
-    "control_msgs/action/GripperCommand_SendGoal":
-        "6bf8cc4ce80cd499e7dd3258c03c50c3fa6672b469ff8355339ef1df77fcd212",
-    "control_msgs/action/GripperCommand_GetResult":
-        "7e60a7606063d4a2728d21badac099e68b734a196ac3ab42d1d4c668eb0bb3cd",
-    "control_msgs/action/GripperCommand_FeedbackMessage":
-        "392ff03fcd872f9dc2405cbeb2897fcf011ad9998458b6aa85c603b8a49e431d",
-    "nav2_msgs/action/NavigateToPose":
-        "a56dba8a3234a1215e610180dc703ae25bbf406dded8b54887891c9732857eab",
-    "nav2_msgs/action/NavigateToPose_Goal":
-        "22a9dffbd6733011220460bd52edbc7843c8fc86282d40bc7ad3ca176a9dec10",
-    "nav2_msgs/action/NavigateToPose_Result":
-        "ddbff7fc6d1e51d774d5defdb8398a57cb23fa8709355002d676408bb4860b85",
-    "nav2_msgs/action/NavigateToPose_Feedback":
-        "9ebc544c7d41bd8c6060b191bf9f5e4ddca6c2f61ee9e04fcb62ed5d67218a33",
-    "nav2_msgs/action/NavigateToPose_SendGoal":
-        "a4fcb3bee1bf32e21a0e541a943b221aa0826996e2c98f079b47022b256f48b5",
-    "nav2_msgs/action/NavigateToPose_GetResult":
-        "c407920357d566771e8882b4ef4d1f1a84ee922d609920ccd57faa6d6e391dc5",
-    "nav2_msgs/action/NavigateToPose_FeedbackMessage":
-        "9d1f6fa2eb975ce733b419ac2e97b134d8ff92b6478b6559feed9a50bdfd82b3",
+    "tf2_msgs/msg/TFMessage": "e369d0f05a23ae52508854b66f6aa0437f3449d652e8cbf22d5abe85d020f087",
+    "control_msgs/msg/JointTolerance": "c254f9cece0f3b733017b6990fd46d1326e25242d6b8844398c97d9a88e7d648",
+    "control_msgs/msg/JointComponentTolerance": "739ea7566931944d33830fa10f1bf5e7a7fbdc3172bce7a7eaac642bd6e3ffa4",
+    "control_msgs/msg/GripperCommand": "57eb8f326c9889ca8bb34ead82cc94cc09bf6bc5c3b6c09546dca3a00b589890",
+    "control_msgs/action/FollowJointTrajectory": "738ebcb7a2d7cfa42f9f1001cc99ce3a4383d1cfe508015d9be8485e4b1c66f6",
+    "control_msgs/action/FollowJointTrajectory_Goal": "8a9060704b269608f5a340934cc26e66869dd14bdac29e2e7fd9ec8b9882d205",
+    "control_msgs/action/FollowJointTrajectory_Result": "8002e99ed2c14c6faa522f2a93c26d744c5982f254f9e98ff9c6f19789bdb220",
+    "control_msgs/action/FollowJointTrajectory_Feedback": "3fd0aaecf71725121ae1ff7f01098a5e0da581e672be18a6b2c286cb43d96b49",
+    "control_msgs/action/FollowJointTrajectory_SendGoal": "b13789dddc325a7a962825c45e28c77d37237ec129dd0c34dc5994562938c57f",
+    "control_msgs/action/FollowJointTrajectory_GetResult": "e3ceb38e3e1867c8dc0f46014df26e90eb93422f27e9e97f936e07f94be4bc8b",
+    "control_msgs/action/FollowJointTrajectory_FeedbackMessage": "80398fcb9674a79081a9906e2ccf0c804dd7cb15e22e362e606ee87186beab71",
+    "control_msgs/action/GripperCommand": "e17c0e644eccf14bea84a0a93e0977182872c2eb7873ca6694900059b46dbc84",
+    "control_msgs/action/GripperCommand_Goal": "607d9f41eb241e1922e90f02125e87ae6bfb78f7f64a71dc92630263d01f8b6d",
+    "control_msgs/action/GripperCommand_Result": "bf512d5aa6a0e4fe4d8be22b2ec4a1973c3d250fa1f65e47450322c25c45c0a0",
+    "control_msgs/action/GripperCommand_Feedback": "8f7c520077bab528bb9161ee3b83c81eee1f8aecadb8922ce82c79d667a819c4",
+    "control_msgs/action/GripperCommand_SendGoal": "6bf8cc4ce80cd499e7dd3258c03c50c3fa6672b469ff8355339ef1df77fcd212",
+    "control_msgs/action/GripperCommand_GetResult": "7e60a7606063d4a2728d21badac099e68b734a196ac3ab42d1d4c668eb0bb3cd",
+    "control_msgs/action/GripperCommand_FeedbackMessage": "392ff03fcd872f9dc2405cbeb2897fcf011ad9998458b6aa85c603b8a49e431d",
+    "nav2_msgs/action/NavigateToPose": "a56dba8a3234a1215e610180dc703ae25bbf406dded8b54887891c9732857eab",
+    "nav2_msgs/action/NavigateToPose_Goal": "22a9dffbd6733011220460bd52edbc7843c8fc86282d40bc7ad3ca176a9dec10",
+    "nav2_msgs/action/NavigateToPose_Result": "ddbff7fc6d1e51d774d5defdb8398a57cb23fa8709355002d676408bb4860b85",
+    "nav2_msgs/action/NavigateToPose_Feedback": "9ebc544c7d41bd8c6060b191bf9f5e4ddca6c2f61ee9e04fcb62ed5d67218a33",
+    "nav2_msgs/action/NavigateToPose_SendGoal": "a4fcb3bee1bf32e21a0e541a943b221aa0826996e2c98f079b47022b256f48b5",
+    "nav2_msgs/action/NavigateToPose_GetResult": "c407920357d566771e8882b4ef4d1f1a84ee922d609920ccd57faa6d6e391dc5",
+    "nav2_msgs/action/NavigateToPose_FeedbackMessage": "9d1f6fa2eb975ce733b419ac2e97b134d8ff92b6478b6559feed9a50bdfd82b3",
 }
 
 
@@ -252,7 +241,9 @@ def test_tf_message_over_dds(nodes):
         assert (tf.header.frame_id, tf.child_frame_id) == ("odom", "base_footprint")
         assert tf.transform.translation.x == 1.5 and tf.transform.rotation.w == 1.0
         assert publisher_type_hash(client, topic) == (
-            "tf2_msgs/msg/TFMessage", "RIHS01_" + HASHES["tf2_msgs/msg/TFMessage"])
+            "tf2_msgs/msg/TFMessage",
+            "RIHS01_" + HASHES["tf2_msgs/msg/TFMessage"],
+        )
     finally:
         server.destroy_publisher(pub)
         client.destroy_subscription(sub)
@@ -261,11 +252,11 @@ def test_tf_message_over_dds(nodes):
 def _fjt_goal():
     goal = FollowJointTrajectory.Goal()
     goal.trajectory.joint_names = ["joint1", "joint2", "joint3", "joint4"]
-    goal.trajectory.points = [JointTrajectoryPoint(positions=[0.0, -1.0, 0.3, 0.7],
-                                                   time_from_start=Duration(sec=2))]
+    goal.trajectory.points = [JointTrajectoryPoint(positions=[0.0, -1.0, 0.3, 0.7], time_from_start=Duration(sec=2))]
     goal.goal_tolerance = [JointTolerance(name="joint1", position=0.01)]
-    goal.component_path_tolerance = [JointComponentTolerance(
-        joint_name="base", component=JointComponentTolerance.TRANSLATION, position=0.1)]
+    goal.component_path_tolerance = [
+        JointComponentTolerance(joint_name="base", component=JointComponentTolerance.TRANSLATION, position=0.1)
+    ]
     goal.goal_time_tolerance = Duration(sec=1)
     return goal
 
@@ -277,8 +268,9 @@ def _fjt_feedback(goal, i):
 
 
 def _fjt_result(goal):
-    return FollowJointTrajectory.Result(error_code=FollowJointTrajectory.Result.SUCCESSFUL,
-                                        error_string=f"{len(goal.trajectory.points)} point(s)")
+    return FollowJointTrajectory.Result(
+        error_code=FollowJointTrajectory.Result.SUCCESSFUL, error_string=f"{len(goal.trajectory.points)} point(s)"
+    )
 
 
 def _gripper_goal():
@@ -290,8 +282,7 @@ def _gripper_feedback(goal, i):
 
 
 def _gripper_result(goal):
-    return GripperCommand.Result(position=goal.command.position, effort=2.0, stalled=True,
-                                 reached_goal=False)
+    return GripperCommand.Result(position=goal.command.position, effort=2.0, stalled=True, reached_goal=False)
 
 
 def _nav_goal():
@@ -309,17 +300,25 @@ def _nav_feedback(goal, i):
 
 
 def _nav_result(goal):
-    return NavigateToPose.Result(error_code=NavigateToPose.Result.NONE,
-                                 error_msg=goal.pose.header.frame_id)
+    return NavigateToPose.Result(error_code=NavigateToPose.Result.NONE, error_msg=goal.pose.header.frame_id)
 
 
 ACTIONS = {
-    "follow_joint_trajectory": (FollowJointTrajectory, _fjt_goal, _fjt_feedback, _fjt_result,
-                                "control_msgs/action/FollowJointTrajectory"),
-    "gripper_cmd": (GripperCommand, _gripper_goal, _gripper_feedback, _gripper_result,
-                    "control_msgs/action/GripperCommand"),
-    "navigate_to_pose": (NavigateToPose, _nav_goal, _nav_feedback, _nav_result,
-                         "nav2_msgs/action/NavigateToPose"),
+    "follow_joint_trajectory": (
+        FollowJointTrajectory,
+        _fjt_goal,
+        _fjt_feedback,
+        _fjt_result,
+        "control_msgs/action/FollowJointTrajectory",
+    ),
+    "gripper_cmd": (
+        GripperCommand,
+        _gripper_goal,
+        _gripper_feedback,
+        _gripper_result,
+        "control_msgs/action/GripperCommand",
+    ),
+    "navigate_to_pose": (NavigateToPose, _nav_goal, _nav_feedback, _nav_result, "nav2_msgs/action/NavigateToPose"),
 }
 
 
@@ -344,8 +343,7 @@ def test_action_goal_feedback_and_result_over_dds(nodes, name):
         assert client.wait_for_server(timeout_sec=10)
         goal = make_goal()
         feedback = []
-        handle = wait_future(client.send_goal_async(
-            goal, feedback_callback=lambda msg: feedback.append(msg.feedback)))
+        handle = wait_future(client.send_goal_async(goal, feedback_callback=lambda msg: feedback.append(msg.feedback)))
         assert handle is not None and handle.accepted
         response = wait_future(handle.get_result_async())
         assert response.status == GoalStatus.STATUS_SUCCEEDED
@@ -355,7 +353,9 @@ def test_action_goal_feedback_and_result_over_dds(nodes, name):
         assert feedback == [make_feedback(goal, i) for i in range(3)]
         # The feedback topic carries upstream's hash for the type.
         assert publisher_type_hash(client_node, f"{action_name}/_action/feedback") == (
-            f"{type_name}_FeedbackMessage", "RIHS01_" + HASHES[f"{type_name}_FeedbackMessage"])
+            f"{type_name}_FeedbackMessage",
+            "RIHS01_" + HASHES[f"{type_name}_FeedbackMessage"],
+        )
     finally:
         client.destroy()
         server.destroy()

@@ -8,6 +8,7 @@ Every import counts: absolute and relative, at module level, inside functions an
 - no module imports a private module (a ``_name``) of a package it is not part of;
 - inside ``bt_engine`` the parts import only downwards (ENGINE_FORBIDDEN).
 """
+
 from __future__ import annotations
 
 import ast
@@ -106,8 +107,7 @@ def test_sim_uses_only_the_engines_bus_clock_and_errors():
         for node in ast.walk(ast.parse(f.read_text())):
             if isinstance(node, ast.ImportFrom) and node.module and node.module.startswith("bt_engine"):
                 mod = node.module
-                if not any(mod == a or mod.startswith(a + ".") for a in allowed - {"bt_engine"}) \
-                        and mod != "bt_engine":
+                if not any(mod == a or mod.startswith(a + ".") for a in allowed - {"bt_engine"}) and mod != "bt_engine":
                     bad.append(f"{f.relative_to(ROOT)}: {mod}")
     assert not bad, bad
 
@@ -116,14 +116,19 @@ def test_categories_use_only_the_engines_errors_and_file_imports():
     bad = []
     for f in sorted((ROOT / "categories").rglob("*.py")):
         for node in ast.walk(ast.parse(f.read_text())):
-            if isinstance(node, ast.ImportFrom) and node.module and node.module.startswith("bt_engine") \
-                    and node.module not in ("bt_engine.errors", "bt_engine.modules"):
+            if (
+                isinstance(node, ast.ImportFrom)
+                and node.module
+                and node.module.startswith("bt_engine")
+                and node.module not in ("bt_engine.errors", "bt_engine.modules")
+            ):
                 bad.append(f"{f.relative_to(ROOT)}: {node.module}")
     assert not bad, bad
 
 
 def test_public_names_exist():
     import bt_engine
+
     for name in bt_engine.__all__:
         assert hasattr(bt_engine, name), name
 
@@ -145,7 +150,7 @@ def module_imports(path: pathlib.Path, modules: set[str]) -> set[str]:
         if isinstance(node, ast.Import):
             names = [a.name for a in node.names]
         elif isinstance(node, ast.ImportFrom):
-            base = package[:len(package) - node.level + 1] if node.level else []
+            base = package[: len(package) - node.level + 1] if node.level else []
             mod = ".".join(base + ([node.module] if node.module else []))
             names = [f"{mod}.{a.name}" if f"{mod}.{a.name}" in modules else mod for a in node.names]
         else:
@@ -201,6 +206,7 @@ def cycles(graph: dict[str, set[str]]) -> list[list[str]]:
                     break
             if len(component) > 1:
                 found.append(sorted(component))
+
     for v in sorted(graph):
         if v not in index:
             visit(v)
@@ -220,6 +226,7 @@ def sub_packages_as_wholes(graph: dict[str, set[str]]) -> dict[str, set[str]]:
     def node(module: str) -> str:
         two = ".".join(module.split(".")[:2])
         return two if two in inits else module
+
     wholes: dict[str, set[str]] = {}
     for m, deps in graph.items():
         wholes.setdefault(node(m), set()).update(node(n) for n in deps)
@@ -243,9 +250,11 @@ def test_the_cycle_finder_finds_a_cycle():
 
 
 def test_sub_packages_as_wholes_show_a_circle_between_packages():
-    graph = {"bt_engine.trees._run": {"bt_engine.bus.messages"},
-             "bt_engine.bus.messages": {"bt_engine.trees._model"},
-             "bt_engine.trees._model": set()}
+    graph = {
+        "bt_engine.trees._run": {"bt_engine.bus.messages"},
+        "bt_engine.bus.messages": {"bt_engine.trees._model"},
+        "bt_engine.trees._model": set(),
+    }
     assert cycles(within(graph, "bt_engine")) == []
     assert cycles(sub_packages_as_wholes(graph)) == [["bt_engine.bus", "bt_engine.trees"]]
 
@@ -285,8 +294,7 @@ def test_no_private_module_of_another_package(package):
 #: which parts of the engine a part may not import (the core is the top-level modules)
 FRONT_ENDS = ("bt_ros", "bt_cli", "bt_xml", "bt_mcp")
 ENGINE_FORBIDDEN = {
-    "bt_engine.bus": FRONT_ENDS + ("bt_engine.trees", "bt_engine.runtime", "bt_engine.subsystem",
-                                   "bt_engine.default"),
+    "bt_engine.bus": FRONT_ENDS + ("bt_engine.trees", "bt_engine.runtime", "bt_engine.subsystem", "bt_engine.default"),
     "core": FRONT_ENDS + ("bt_engine.trees",),
     "bt_engine.trees": FRONT_ENDS + ("bt_engine.default",),
     "bt_xml": ("bt_ros", "bt_cli", "bt_mcp", "bt_engine.default"),
@@ -310,6 +318,7 @@ def test_engine_parts_import_only_downwards():
     bad = []
     for module, deps in engine_graph().items():
         forbidden = ENGINE_FORBIDDEN.get(part_of(module), ())
-        bad += [f"{module} imports {d}" for d in sorted(deps)
-                if any(d == f or d.startswith(f + ".") for f in forbidden)]
+        bad += [
+            f"{module} imports {d}" for d in sorted(deps) if any(d == f or d.startswith(f + ".") for f in forbidden)
+        ]
     assert not bad, "layering broken:\n" + "\n".join(bad)

@@ -1,6 +1,7 @@
 """Nothing outlives its owner: random halts of running trees, and runtimes made and
 closed again and again, leave no transactions, tasks (greenlets), threads, file
 descriptors, blackboard entries or memory behind."""
+
 from __future__ import annotations
 
 import gc
@@ -81,8 +82,12 @@ class Workers(SubSystem):
 
 
 #: what the halter starts: actor, arguments, how long it runs [s] when left alone
-CALLS = [("busy", {"seconds": 0.5}, 0.5), ("inner", {}, 0.06), ("work", {"seconds": 0.3}, 0.3),
-         ("first_tick", {}, 0.02)]
+CALLS = [
+    ("busy", {"seconds": 0.5}, 0.5),
+    ("inner", {}, 0.06),
+    ("work", {"seconds": 0.3}, 0.3),
+    ("first_tick", {}, 0.02),
+]
 
 
 def write_trees(folder: Path) -> Path:
@@ -124,6 +129,7 @@ def test_a_thousand_random_halts_leave_nothing_behind(tmp_path):
                     txn.cancel("random halt")
                     self.run_actor("sleep", 0)  # let the halt unwind
                 return halted
+
         rt.add_subsystem("h", Halter)
         halted = rt.call("halt_many", 1000)
         assert halted > 900  # nearly all were halted while running

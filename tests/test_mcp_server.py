@@ -1,6 +1,7 @@
 """``actorbt mcp`` as a client sees it: the server runs as a subprocess on a small
 project without a simulator (tests/fixtures/mcp: the tutorial, a fake robot that
 declares motion and limits, three trees), driven with the MCP SDK's stdio client."""
+
 from __future__ import annotations
 
 import json
@@ -39,11 +40,11 @@ def _env(project: pathlib.Path) -> dict[str, str]:
     return {"PYTHONPATH": str(project), "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"}
 
 
-def with_server(project: pathlib.Path, scenario: Callable[[ClientSession], Awaitable[Any]],
-                *options: str) -> Any:
+def with_server(project: pathlib.Path, scenario: Callable[[ClientSession], Awaitable[Any]], *options: str) -> Any:
     """Start ``actorbt mcp OPTIONS`` on ``project``, run ``scenario(session)`` against it."""
-    params = StdioServerParameters(command=sys.executable, args=_command(project, "mcp", *options),
-                                   cwd=str(project), env=_env(project))
+    params = StdioServerParameters(
+        command=sys.executable, args=_command(project, "mcp", *options), cwd=str(project), env=_env(project)
+    )
 
     async def main() -> Any:
         with anyio.fail_after(SCENARIO_TIMEOUT):
@@ -51,6 +52,7 @@ def with_server(project: pathlib.Path, scenario: Callable[[ClientSession], Await
                 async with ClientSession(read, write) as session:
                     await session.initialize()
                     return await scenario(session)
+
     return anyio.run(main)
 
 
@@ -59,9 +61,16 @@ def _text(result: Any) -> str:
 
 
 def test_the_tools_are_the_catalog_and_the_mission_tools(project):
-    catalog = json.loads(subprocess.run([sys.executable, *_command(project, "catalog", "--json")], cwd=project,
-                                        env={**_env(project), "PATH": ""}, capture_output=True, text=True,
-                                        check=True).stdout)
+    catalog = json.loads(
+        subprocess.run(
+            [sys.executable, *_command(project, "catalog", "--json")],
+            cwd=project,
+            env={**_env(project), "PATH": ""},
+            capture_output=True,
+            text=True,
+            check=True,
+        ).stdout
+    )
 
     async def scenario(session: ClientSession) -> Any:
         return (await session.list_tools()).tools
@@ -80,8 +89,8 @@ def test_the_tools_are_the_catalog_and_the_mission_tools(project):
     assert tools["robot.drive"].annotations.destructive_hint is True
     assert tools["robot.drive"].input_schema["properties"]["speed"]["maximum"] == 0.26
     assert "refused while motion is off" in tools["robot.drive"].description
-    assert tools["square"].meta["actorbt"]["moves"] is True        # it calls robot.drive
-    assert tools["hello"].annotations.read_only_hint is True         # it calls tutorial.greet only
+    assert tools["square"].meta["actorbt"]["moves"] is True  # it calls robot.drive
+    assert tools["hello"].annotations.read_only_hint is True  # it calls tutorial.greet only
 
 
 def test_a_tree_reports_every_node_transition_and_returns_its_outputs(project):
@@ -90,15 +99,20 @@ def test_a_tree_reports_every_node_transition_and_returns_its_outputs(project):
 
         async def on_progress(value: float, total: float | None, message: str | None) -> None:
             progress.append((value, message))
+
         result = await session.call_tool("hello", {"name": "ada"}, progress_callback=on_progress)
         trace = await session.call_tool("get_trace", {"types": ["status", "end"]})
         return progress, result, trace
 
     progress, result, trace = with_server(project, scenario)
     assert [m for _, m in progress] == [
-        "hello:sequence running", "hello:sequence/wait 0.2s running", "hello:sequence/wait 0.2s success",
-        "hello:sequence/tutorial.greet running", "hello:sequence/tutorial.greet success",
-        "hello:sequence success"]
+        "hello:sequence running",
+        "hello:sequence/wait 0.2s running",
+        "hello:sequence/wait 0.2s success",
+        "hello:sequence/tutorial.greet running",
+        "hello:sequence/tutorial.greet success",
+        "hello:sequence success",
+    ]
     assert [v for v, _ in progress] == list(range(1, len(progress) + 1))
     assert not result.is_error
     assert result.structured_content["status"] == "SUCCESS"
@@ -113,15 +127,18 @@ def test_a_tree_reports_every_node_transition_and_returns_its_outputs(project):
 
 def test_bad_arguments_are_refused_by_name_and_nothing_moves(project):
     async def scenario(session: ClientSession) -> Any:
-        return [await session.call_tool(name, args) for name, args in [
-            ("tutorial.greet", {"nme": "ada"}),
-            ("robot.drive", {"distance": 0.5, "speed": 2.0}),   # over the declared limit
-            ("robot.drive", {"speed": 0.1}),                    # distance missing
-            ("robot.drive", {"distance": "far"}),
-            ("robot.move_joint", {"q": [0.1, 9.0]}),
-            ("hello", {"name": 3}),
-            ("robot.odometer", {}),
-        ]]
+        return [
+            await session.call_tool(name, args)
+            for name, args in [
+                ("tutorial.greet", {"nme": "ada"}),
+                ("robot.drive", {"distance": 0.5, "speed": 2.0}),  # over the declared limit
+                ("robot.drive", {"speed": 0.1}),  # distance missing
+                ("robot.drive", {"distance": "far"}),
+                ("robot.move_joint", {"q": [0.1, 9.0]}),
+                ("hello", {"name": 3}),
+                ("robot.odometer", {}),
+            ]
+        ]
 
     typo, too_fast, missing, wrong_type, joint, tree_input, odometer = with_server(project, scenario, "--allow-motion")
     assert typo.is_error and "unknown argument 'nme'; did you mean 'name'?" in _text(typo)
@@ -139,10 +156,12 @@ def test_motion_is_refused_unless_allowed(project):
     drive_mission = "name: out_and_back\nroot:\n  sequence:\n    - do: drive\n      with: {distance: 0.2}\n"
 
     async def scenario(session: ClientSession) -> Any:
-        return [await session.call_tool("robot.drive", {"distance": 0.2}),
-                await session.call_tool("square", {}),
-                await session.call_tool("run_mission", {"yaml": drive_mission}),
-                await session.call_tool("robot.odometer", {})]
+        return [
+            await session.call_tool("robot.drive", {"distance": 0.2}),
+            await session.call_tool("square", {}),
+            await session.call_tool("run_mission", {"yaml": drive_mission}),
+            await session.call_tool("robot.odometer", {}),
+        ]
 
     for refused in with_server(project, scenario)[:3]:
         assert refused.is_error and refused.structured_content == {"refused": "motion"}
@@ -165,12 +184,14 @@ def test_cancel_halts_the_tree_and_the_server_keeps_serving(project):
                 waiting.set()
 
         async with anyio.create_task_group() as tg:
+
             async def call() -> None:
                 await session.call_tool("wait_long", {}, progress_callback=on_progress)
                 raise AssertionError("wait_long ended by itself")
+
             tg.start_soon(call)
             await waiting.wait()
-            tg.cancel_scope.cancel()   # the client sends notifications/cancelled
+            tg.cancel_scope.cancel()  # the client sends notifications/cancelled
         trace = await session.call_tool("get_trace", {"types": ["status", "end"]})
         return trace, await session.call_tool("tutorial.greet", {"name": "again"})
 
@@ -178,32 +199,42 @@ def test_cancel_halts_the_tree_and_the_server_keeps_serving(project):
     assert after.structured_content == {"result": "hello, again"}
     content = trace.structured_content
     assert content["tool"] == "wait_long" and content["outcome"]["status"] == "CANCELLED", content["outcome"]
-    halted = {e["path"] for e in content["events"]
-              if e["type"] == "status" and e["old"] == "RUNNING" and e["new"] == "INVALID"}
+    halted = {
+        e["path"]
+        for e in content["events"]
+        if e["type"] == "status" and e["old"] == "RUNNING" and e["new"] == "INVALID"
+    }
     assert halted == {"sequence", "sequence/wait 600s"}
     assert content["events"][-1]["type"] == "end" and content["events"][-1]["status"] == "INVALID"
 
 
 def test_mission_tools_validate_show_and_run_drafts(project):
     typo = "name: draft\nroot:\n  do: tutorial.gret\n"
-    good = ("name: draft\ninputs:\n  who: {type: str, default: bob}\noutputs: [g]\n"
-            "root:\n  sequence:\n    - do: hello\n      with: {name: \"{who}\"}\n      out: h\n"
-            "    - do: tutorial.greet\n      with: {name: \"{who}\"}\n      out: g\n")
+    good = (
+        "name: draft\ninputs:\n  who: {type: str, default: bob}\noutputs: [g]\n"
+        'root:\n  sequence:\n    - do: hello\n      with: {name: "{who}"}\n      out: h\n'
+        '    - do: tutorial.greet\n      with: {name: "{who}"}\n      out: g\n'
+    )
 
     async def scenario(session: ClientSession) -> Any:
         progress: list[str | None] = []
 
         async def on_progress(value: float, total: float | None, message: str | None) -> None:
             progress.append(message)
-        return (await session.call_tool("validate_mission", {"yaml": typo}),
-                await session.call_tool("validate_mission", {"yaml": "name: x\nroot: [\n"}),
-                await session.call_tool("validate_mission", {"yaml": good}),
-                await session.call_tool("show_tree", {"tree": "hello"}),
-                await session.call_tool("show_tree", {"tree": "helo"}),
-                await session.call_tool("run_mission", {"yaml": good, "inputs": {"who": "cy"}},
-                                        progress_callback=on_progress),
-                await session.call_tool("run_mission", {"yaml": typo}),
-                (await session.list_tools()).tools, progress)
+
+        return (
+            await session.call_tool("validate_mission", {"yaml": typo}),
+            await session.call_tool("validate_mission", {"yaml": "name: x\nroot: [\n"}),
+            await session.call_tool("validate_mission", {"yaml": good}),
+            await session.call_tool("show_tree", {"tree": "hello"}),
+            await session.call_tool("show_tree", {"tree": "helo"}),
+            await session.call_tool(
+                "run_mission", {"yaml": good, "inputs": {"who": "cy"}}, progress_callback=on_progress
+            ),
+            await session.call_tool("run_mission", {"yaml": typo}),
+            (await session.list_tools()).tools,
+            progress,
+        )
 
     bad, broken, valid, shown, unknown, ran, not_run, tools, progress = with_server(project, scenario)
     assert bad.is_error
@@ -223,9 +254,12 @@ def test_mission_tools_validate_show_and_run_drafts(project):
 
 def test_the_project_catalog_is_served_with_its_motion_marked():
     """The real actorbt.yaml, without a world: the robot's actors as tools, motion refused."""
-    params = StdioServerParameters(command=sys.executable,
-                                   args=["-m", "bt_cli.main", "mcp", "--world", "none"],
-                                   cwd=str(REPO), env={"ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"})
+    params = StdioServerParameters(
+        command=sys.executable,
+        args=["-m", "bt_cli.main", "mcp", "--world", "none"],
+        cwd=str(REPO),
+        env={"ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"},
+    )
 
     async def main() -> Any:
         with anyio.fail_after(SCENARIO_TIMEOUT):
@@ -245,12 +279,22 @@ def test_the_project_catalog_is_served_with_its_motion_marked():
 
 def test_the_wire_carries_only_protocol_messages(project):
     # robot.chatter writes to fd 1 and to C's stdout, as pybullet does
-    hello = {"jsonrpc": "2.0", "id": 1, "method": "initialize",
-             "params": {"protocolVersion": "2025-06-18", "capabilities": {},
-                        "clientInfo": {"name": "raw", "version": "0"}}}
+    hello = {
+        "jsonrpc": "2.0",
+        "id": 1,
+        "method": "initialize",
+        "params": {"protocolVersion": "2025-06-18", "capabilities": {}, "clientInfo": {"name": "raw", "version": "0"}},
+    }
     chatter = {"jsonrpc": "2.0", "id": 2, "method": "tools/call", "params": {"name": "robot.chatter", "arguments": {}}}
-    proc = subprocess.Popen([sys.executable, *_command(project, "mcp")], cwd=str(project), env=_env(project),
-                            stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    proc = subprocess.Popen(
+        [sys.executable, *_command(project, "mcp")],
+        cwd=str(project),
+        env=_env(project),
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     killer = threading.Timer(SCENARIO_TIMEOUT, proc.kill)
     killer.start()
     try:
@@ -261,8 +305,8 @@ def test_the_wire_carries_only_protocol_messages(project):
         while len(replies) < 2:
             line = proc.stdout.readline()
             assert line, "the server ended before answering"
-            replies.append(json.loads(line))            # every line on the wire is JSON-RPC
-        rest, err = proc.communicate()                  # closes stdin: the server ends
+            replies.append(json.loads(line))  # every line on the wire is JSON-RPC
+        rest, err = proc.communicate()  # closes stdin: the server ends
     finally:
         killer.cancel()
     assert [r.get("id") for r in replies] == [1, 2] and not replies[1]["result"].get("isError")

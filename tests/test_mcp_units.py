@@ -1,5 +1,6 @@
 """The MCP server's parts without a session: argument checks, tool descriptions,
 settings, and the service in-process (what a call does, in which order)."""
+
 from __future__ import annotations
 
 import inspect
@@ -18,10 +19,16 @@ from bt_engine.trees import register_tree_folder
 
 FIXTURE = pathlib.Path(__file__).resolve().parent / "fixtures" / "mcp"
 
-SCHEMA = {"type": "object", "additionalProperties": False, "required": ["distance"],
-          "properties": {"distance": {"type": "number", "description": "how far [m]", "minimum": -1, "maximum": 1},
-                         "speed": {"type": "number", "minimum": 0, "maximum": 0.26},
-                         "q": {"type": "array", "items": {"type": "number", "maximum": 3}}}}
+SCHEMA = {
+    "type": "object",
+    "additionalProperties": False,
+    "required": ["distance"],
+    "properties": {
+        "distance": {"type": "number", "description": "how far [m]", "minimum": -1, "maximum": 1},
+        "speed": {"type": "number", "minimum": 0, "maximum": 0.26},
+        "q": {"type": "array", "items": {"type": "number", "maximum": 3}},
+    },
+}
 
 
 def test_every_problem_names_its_argument():
@@ -30,7 +37,8 @@ def test_every_problem_names_its_argument():
         "missing argument 'distance' (number: how far [m])",
         "unknown argument 'sped'; did you mean 'speed'? (expected: distance, speed, q)",
         "argument 'q'[1]: 4 is greater than the maximum of 3",
-        "argument 'speed': 0.3 is greater than the maximum of 0.26"]
+        "argument 'speed': 0.3 is greater than the maximum of 0.26",
+    ]
     assert argument_errors(SCHEMA, {"distance": "far"}) == ["argument 'distance': 'far' is not of type 'number'"]
 
 
@@ -41,18 +49,30 @@ def _sig(fn) -> inspect.Signature:
 def test_call_arguments_pass_a_variadic_and_what_precedes_it_by_position():
     def move(speed, *q, wait=False): ...
     def walk(distance, speed=0.1): ...
+
     assert call_arguments(_sig(move), {"q": [1, 2]}) == ((), {"q": [1, 2]})  # speed missing: the check says so
     assert call_arguments(_sig(move), {"speed": 3, "q": [1, 2], "wait": True}) == ((3, 1, 2), {"wait": True})
     assert call_arguments(_sig(walk), {"distance": 1.0}) == ((), {"distance": 1.0})
 
 
 def test_a_tool_says_what_it_does_to_the_world():
-    tool = {"name": "base.walk", "description": "Drive straight.", "kind": "sync", "is_tree": False,
-            "moves": True, "read_only": False, "returns": {"description": "how far it went [m]"},
-            "parameters": {"type": "object", "properties": {}, "required": []}}
+    tool = {
+        "name": "base.walk",
+        "description": "Drive straight.",
+        "kind": "sync",
+        "is_tree": False,
+        "moves": True,
+        "read_only": False,
+        "returns": {"description": "how far it went [m]"},
+        "parameters": {"type": "object", "properties": {}, "required": []},
+    }
     off = mcp_tool(tool)
-    assert off["annotations"] == {"title": "base.walk", "readOnlyHint": False, "openWorldHint": True,
-                                  "destructiveHint": True}
+    assert off["annotations"] == {
+        "title": "base.walk",
+        "readOnlyHint": False,
+        "openWorldHint": True,
+        "destructiveHint": True,
+    }
     assert off["description"].startswith("Drive straight.\n\nReturns: how far it went [m]\n\nMoves the robot: refused")
     assert "--allow-motion" in off["description"]
     assert mcp_tool(tool, allow_motion=True)["description"].endswith("Moves the robot.")
@@ -74,9 +94,11 @@ def test_settings_default_to_no_motion_and_the_flag_wins():
 def service(monkeypatch):
     monkeypatch.syspath_prepend(str(FIXTURE))
     from fake_robot import FakeRobot
+
     rt = Runtime()
     rt.add_subsystem("robot", FakeRobot)
     from actors.tutorial import Tutorial
+
     rt.add_subsystem("tutorial", Tutorial)
     register_tree_folder(rt, FIXTURE / "trees")
     svc = ToolService(rt, McpSettings(allow_motion=True))
@@ -90,6 +112,7 @@ def _call(service: ToolService, name: str, arguments: dict) -> tuple[dict, list[
 
     async def report(event: dict) -> None:
         seen.append(f"{event['tree']}:{event['path']} {event['status']}")
+
     return anyio.run(service.call, name, arguments, report), seen
 
 
@@ -104,7 +127,8 @@ def test_the_service_runs_a_moving_tree_under_the_virtual_clock(service):
 def test_the_service_checks_before_it_runs(service):
     result, seen = _call(service, "square", {"side": 5.0, "colour": "red"})
     assert result["isError"] and result["structuredContent"]["problems"] == [
-        "unknown argument 'colour' (expected: side)"]
+        "unknown argument 'colour' (expected: side)"
+    ]
     assert seen == []
     assert _call(service, "robot.odometer", {})[0]["structuredContent"] == {"result": 0.0}
     unknown, _ = _call(service, "hullo", {})

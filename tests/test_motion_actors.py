@@ -1,5 +1,6 @@
 """Manipulator and navigation actors driving the simulated robot through its topics and
 its controllers' actions."""
+
 from __future__ import annotations
 
 import math
@@ -20,10 +21,10 @@ def robot_on(rt, world):
     from sim.initial_pose import initial_pose_msg
     from geometry_msgs.msg import PoseWithCovarianceStamped
     from navstack import NavStack
+
     rt.add_subsystem("robot", Robot)
     rt.add_subsystem("navstack", NavStack)
-    rt.bus.publisher("/initialpose", PoseWithCovarianceStamped).publish(
-        initial_pose_msg(tuple(world.spec.robot_start)))
+    rt.bus.publisher("/initialpose", PoseWithCovarianceStamped).publish(initial_pose_msg(tuple(world.spec.robot_start)))
 
 
 @pytest.fixture(scope="module")
@@ -42,12 +43,10 @@ def tool_in_base_frame(world) -> np.ndarray:
     (x, y, yaw) = world.robot_pose()
     pos, _ = world.link_pose("end_effector_link")
     dx, dy = pos[0] - x, pos[1] - y
-    return np.array([math.cos(yaw) * dx + math.sin(yaw) * dy,
-                     -math.sin(yaw) * dx + math.cos(yaw) * dy, pos[2]])
+    return np.array([math.cos(yaw) * dx + math.sin(yaw) * dy, -math.sin(yaw) * dx + math.cos(yaw) * dy, pos[2]])
 
 
-@pytest.mark.parametrize("target", [(0.24, 0.0, 0.07, 0.0), (0.20, 0.08, 0.12, 0.5),
-                                    (0.15, -0.10, 0.05, 1.2)])
+@pytest.mark.parametrize("target", [(0.24, 0.0, 0.07, 0.0), (0.20, 0.08, 0.12, 0.5), (0.15, -0.10, 0.05, 1.2)])
 def test_move_to_pose_ends_within_one_centimetre(open_floor, target):
     rt, world = open_floor
     rt.call("home")
@@ -68,6 +67,7 @@ def test_joint_moves_and_status(open_floor):
 
 def test_unreachable_pose_is_a_clean_failure(open_floor):
     from bt_engine import ActorError
+
     rt, _ = open_floor
     with pytest.raises(ActorError) as e:
         rt.call("move_to_pose", 1.5, 0.0, 0.1, 0.0)
@@ -79,6 +79,7 @@ def test_an_arm_that_arrives_but_does_not_settle_in_time_counts_as_arrived(open_
     (GOAL_TOLERANCE_VIOLATED), as it does when a loaded arm sags or rocks a little: near
     enough, the motion is done; farther, it fails with the controller's reason."""
     import actors.manipulator as manipulator
+
     rt, _ = open_floor
     rt.call("home")
     # a tolerance no arm settles within, and little time to settle
@@ -95,7 +96,7 @@ def test_gripper_opens_and_closes(open_floor):
     rt, _ = open_floor
     opened = rt.call("open")
     assert opened["width"] == pytest.approx(0.085, abs=0.003) and opened["reached_goal"]
-    closed = rt.call("close")                 # on nothing: reaches the closed end
+    closed = rt.call("close")  # on nothing: reaches the closed end
     assert closed["width"] == pytest.approx(0.0, abs=0.003)
     assert closed["reached_goal"] and not closed["stalled"]
     assert closed["position"] == pytest.approx(-0.010, abs=0.001)
@@ -116,6 +117,7 @@ def test_cancelling_a_trajectory_stops_the_arm_smoothly(open_floor):
             rt.sleep(0.05)
             speeds.append(max(abs(v) for v in rt.call("get_status")["velocities"]))
         return txn, speeds
+
     txn, speeds = run_in_actor(rt, body)
     assert txn.cancelled
     assert max(speeds[:2]) > 0.02, "the stop is a ramp, not a freeze"
@@ -137,6 +139,7 @@ def test_goto_across_two_rooms_of_the_house():
 
 def test_goto_into_a_wall_fails_cleanly(open_floor):
     from bt_engine import ActorError
+
     rt, _ = open_floor
     with pytest.raises(ActorError) as e:
         rt.call("goto", 100.0, 100.0, 0.0)

@@ -1,6 +1,7 @@
 """The navigation actors (actors/navigation.py) driving the simulated robot as a client of
 the robot's navigation: goto through /navigate_to_pose, get_pose from tf, the short moves
 on /odom. navstack stands in for Nav2 and AMCL, localised from /initialpose."""
+
 from __future__ import annotations
 
 import math
@@ -20,6 +21,7 @@ sim_mod = pytest.importorskip("sim")
 def robot_in(world: str, seed: int = 0):
     from actors.navigation import Navigation
     from navstack import NavStack
+
     rt = Runtime()
     sim = sim_mod.SimWorld(rt, world=world, seed=seed, camera=False).start()
     rt.add_subsystem("navigation", Navigation)
@@ -53,12 +55,12 @@ def test_mini_walk_and_turn_on_the_odometry(open_floor):
     driven = rt.call("mini_walk", 0.3)
     assert driven == pytest.approx(0.3, abs=0.01)
     x1, y1, _ = world.robot_pose()
-    assert math.hypot(x1 - x0, y1 - y0) == pytest.approx(0.3, abs=0.02)   # the odometry's few per cent
+    assert math.hypot(x1 - x0, y1 - y0) == pytest.approx(0.3, abs=0.02)  # the odometry's few per cent
     _, _, yaw0 = world.robot_pose()
     yaw = rt.call("mini_turn", math.pi / 2)
     _, _, true_yaw = world.robot_pose()
     assert abs(math.remainder(true_yaw - yaw0 - math.pi / 2, 2 * math.pi)) < 0.03
-    assert abs(math.remainder(yaw - true_yaw, 2 * math.pi)) < 0.05        # the localised yaw
+    assert abs(math.remainder(yaw - true_yaw, 2 * math.pi)) < 0.05  # the localised yaw
     rt.call("migrate", 0.0, 0.0, -math.pi / 2)
 
 
@@ -72,6 +74,7 @@ def test_cancelling_goto_stops_the_base(open_floor):
         txn.cancel("operator stop")
         rt.sleep(1.0)
         return txn
+
     txn = run_in_actor(rt, body)
     odom = rt.call("odom")
     assert txn.cancelled
@@ -100,6 +103,7 @@ def test_marked_obstacles_reach_the_navigation_and_the_queries(open_floor):
     rt.call("sleep", 0.1)
     assert got and got[-1].width > 10 and got[-1].header.frame_id == "map"
     from navstack.navigator import cloud_points
+
     pts = cloud_points(got[-1])
     assert max(math.hypot(px - x - 1.0, py - y) for px, py in pts) <= 0.06 + 1e-6
     # the navigation server has them too: the robot drives round the marked disc
@@ -111,6 +115,7 @@ def test_marked_obstacles_reach_the_navigation_and_the_queries(open_floor):
             trail.append(world.robot_pose()[:2])
             rt.sleep(0.2)
         return txn
+
     assert run_in_actor(rt, body).error is None
     assert min(math.hypot(px - x - 1.0, py - y) for px, py in trail) > 0.2
     rt.call("mark_obstacles", [])
@@ -139,15 +144,16 @@ def test_goto_across_two_rooms_of_the_house():
 def test_require_localised_reads_the_localisers_covariance():
     """No sim: /amcl_pose is published by hand, as an uncertain then a sure estimate."""
     from actors.navigation import Navigation
+
     with Runtime(clock="virtual") as rt:
         rt.add_subsystem("navigation", Navigation)
         pub = rt.bus.publisher("/amcl_pose", PoseWithCovarianceStamped, "latched")
         with pytest.raises(ActorError, match="delocalised: no /amcl_pose received after 1 s"):
             rt.call("require_localised", wait=1.0)
         unsure = initial_pose_msg((1.0, 2.0, 0.0))
-        unsure.pose.covariance[0] = unsure.pose.covariance[7] = 0.5 ** 2
+        unsure.pose.covariance[0] = unsure.pose.covariance[7] = 0.5**2
         pub.publish(unsure)
         with pytest.raises(ActorError, match=r"delocalised: the localisation is uncertain: std 50\.0 cm"):
             rt.call("require_localised", wait=1.0)
-        pub.publish(initial_pose_msg((1.0, 2.0, 0.0)))     # 5 cm, 1.7 degrees
+        pub.publish(initial_pose_msg((1.0, 2.0, 0.0)))  # 5 cm, 1.7 degrees
         assert rt.call("require_localised") == {"std_xy": 0.05, "std_yaw": 0.03}

@@ -1,13 +1,14 @@
 """Obstacles below the laser from a depth image (navstack/depth_obstacles.py), on depth
 images ray-cast here: the floor, and a low box in front of the robot."""
+
 import math
 
 import numpy as np
 
 from navstack.depth_obstacles import DepthObstacleParams, depth_obstacle_points
 
-W, H, F = 320, 240, 231.0          # the simulated camera's size and focal length [px]
-PITCH = math.radians(15)           # looking down
+W, H, F = 320, 240, 231.0  # the simulated camera's size and focal length [px]
+PITCH = math.radians(15)  # looking down
 
 
 def _camera_in_base() -> np.ndarray:
@@ -25,7 +26,7 @@ def _render(T: np.ndarray, box=None) -> np.ndarray:
     """Depth (along the optical axis) of the floor, and of a box's front face
     (x0, half width, height) when given; NaN where a ray meets nothing within 6 m."""
     u, v = np.meshgrid(np.arange(W) - 159.5, np.arange(H) - 119.5)
-    rays = np.stack([u / F, v / F, np.ones_like(u, dtype=float)], axis=-1)   # depth 1 along z
+    rays = np.stack([u / F, v / F, np.ones_like(u, dtype=float)], axis=-1)  # depth 1 along z
     d_base = rays @ T[:3, :3].T
     o = T[:3, 3]
     depth = np.full((H, W), np.nan)
@@ -50,7 +51,7 @@ def test_a_box_lower_than_the_laser_is_seen_where_it_stands():
     T = _camera_in_base()
     pts = depth_obstacle_points(_render(T, box=(0.70, 0.07, 0.04)), F, F, 159.5, 119.5, T)
     assert len(pts) >= 10
-    assert np.allclose(pts[:, 0], 0.70, atol=1e-6)              # on its face
+    assert np.allclose(pts[:, 0], 0.70, atol=1e-6)  # on its face
     assert np.all(np.abs(pts[:, 1]) <= 0.07 + 1e-9)
     # a flatter one (below min_height) and one beyond max_range are not
     flat = DepthObstacleParams(min_height=0.05)
@@ -61,8 +62,8 @@ def test_a_box_lower_than_the_laser_is_seen_where_it_stands():
 def test_what_is_over_the_base_or_nearer_than_min_range_is_left_out():
     T = _camera_in_base()
     depth = _render(T, box=(0.70, 0.07, 0.04))
-    depth[100:140, 140:180] = 0.12        # the arm or what it holds, right before the lens
+    depth[100:140, 140:180] = 0.12  # the arm or what it holds, right before the lens
     pts = depth_obstacle_points(depth, F, F, 159.5, 119.5, T)
     assert np.allclose(pts[:, 0], 0.70, atol=1e-6)
-    inside = DepthObstacleParams(self_box=(-0.23, 0.8, 0.18))      # a base reaching past the box
+    inside = DepthObstacleParams(self_box=(-0.23, 0.8, 0.18))  # a base reaching past the box
     assert len(depth_obstacle_points(depth, F, F, 159.5, 119.5, T, inside)) == 0

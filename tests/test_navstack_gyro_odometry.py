@@ -1,5 +1,6 @@
 """navstack.gyro_odometry: the wheels' distance along the gyro's heading, as the localiser
 and the mapper run on it, and map -> odom back in the wheels' frame for /tf."""
+
 from __future__ import annotations
 
 import math
@@ -9,11 +10,12 @@ import pytest
 from navstack.amcl import compose
 from navstack.gyro_odometry import IMU_STALE, GyroOdometry
 
-DT = 1 / 30          # the simulator's /odom and IMU rate
+DT = 1 / 30  # the simulator's /odom and IMU rate
 
 
-def turn_in_place(odo: GyroOdometry, seconds: float, rate: float, wheel_scale: float,
-                  imu_first: bool, imu: bool = True) -> None:
+def turn_in_place(
+    odo: GyroOdometry, seconds: float, rate: float, wheel_scale: float, imu_first: bool, imu: bool = True
+) -> None:
     """The robot turns at ``rate`` [rad/s]; the wheels report the turn ``wheel_scale``
     times too much (both radii off), the IMU the true heading. ``imu_first``: the IMU's
     message of a stamp arrives before the odometry's."""
@@ -34,7 +36,7 @@ def test_a_turn_takes_the_gyros_heading_not_the_wheels(imu_first):
     odo.on_imu(0.0, 0.0)
     odo.fuse(0.0, (0.0, 0.0, 0.0))
     turn_in_place(odo, 2 * math.pi, 1.0, wheel_scale=1.03, imu_first=imu_first)
-    truth = round(2 * math.pi / DT) * DT          # where the last message has it
+    truth = round(2 * math.pi / DT) * DT  # where the last message has it
     # the wheels are 3 % (10 degrees) off; the fused heading lags the IMU by at most one
     # message's worth of the wheels' own turn when the IMU comes second
     assert abs(math.remainder(odo.wheel[2] - truth, 2 * math.pi)) > math.radians(9)
@@ -85,17 +87,17 @@ def test_map_to_odom_for_tf_is_in_the_wheels_frame():
 
 def test_standing_still_the_gyros_bias_turns_nothing():
     odo = GyroOdometry()
-    bias = math.radians(0.05)                  # [rad/s]: after start-up calibration
-    for k in range(301):                       # 10 s still
+    bias = math.radians(0.05)  # [rad/s]: after start-up calibration
+    for k in range(301):  # 10 s still
         t = k * DT
         odo.on_imu(t, bias * t)
         odo.fuse(t, (1.0, 2.0, 0.5))
     assert odo.fused == pytest.approx((1.0, 2.0, 0.5))
-    for k in range(1, 31):                     # then 1 s turning at 0.5 rad/s: by the gyro
+    for k in range(1, 31):  # then 1 s turning at 0.5 rad/s: by the gyro
         t = 10.0 + k * DT
         odo.on_imu(t, bias * t + 0.5 * k * DT)
         odo.fuse(t, (1.0, 2.0, 0.5 + 1.03 * 0.5 * k * DT))
-    assert odo.fused[2] == pytest.approx(0.5 + 0.5 + bias, abs=1e-3)   # the first step: the wheels
+    assert odo.fused[2] == pytest.approx(0.5 + 0.5 + bias, abs=1e-3)  # the first step: the wheels
 
 
 def drive(odo: GyroOdometry, t0: float, seconds: float, speed: float, rate: float, bias: float) -> float:
@@ -118,10 +120,10 @@ def test_a_stop_measures_the_gyros_bias_and_the_heading_after_it_is_free_of_it()
     odo.on_imu(0.0, 0.0)
     odo.fuse(0.0, (0.0, 0.0, 0.0))
     t = drive(odo, 0.0, 5.0, 0.2, 0.0, bias)
-    before = odo.fused[2] - odo.wheel[2]         # the bias turned the heading while it drove
+    before = odo.fused[2] - odo.wheel[2]  # the bias turned the heading while it drove
     assert before == pytest.approx(5.0 * bias, rel=0.1)
-    t = drive(odo, t, 3.0, 0.0, 0.0, bias)        # a stop: the wheels stand still
-    assert odo.fused[2] - odo.wheel[2] == pytest.approx(before)   # no turn while still
+    t = drive(odo, t, 3.0, 0.0, 0.0, bias)  # a stop: the wheels stand still
+    assert odo.fused[2] - odo.wheel[2] == pytest.approx(before)  # no turn while still
     t = drive(odo, t, 20.0, 0.2, 0.0, bias)
     assert odo.bias == pytest.approx(bias, rel=0.05)
     # after the stop, 20 s of driving add under 2 % of what the bias alone would turn

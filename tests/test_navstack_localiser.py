@@ -1,5 +1,6 @@
 """navstack.localiser: the localiser as a SubSystem on the local bus, fed with the
 synthetic house's /map, /odom and /scan messages."""
+
 from __future__ import annotations
 
 import math
@@ -57,7 +58,7 @@ class Feed:
         self.initial = bus.publisher("/initialpose", PoseWithCovarianceStamped)
         self.tf_static = bus.publisher("/tf_static", TFMessage)
         self.poses = []
-        self.tf = []          # (receive time, map -> odom message)
+        self.tf = []  # (receive time, map -> odom message)
         self.sub = bus.subscribe("/amcl_pose", PoseWithCovarianceStamped, self.poses.append)
         self.tf_sub = bus.subscribe("/tf", TFMessage, lambda m: self.tf.append((self.world.t, m)))
 
@@ -68,7 +69,7 @@ class Feed:
             self.odom.publish(odom_msg(s))
             if s.scan is not None:
                 self.scan.publish(scan_msg(s))
-            self.rt.run_on_hub(lambda: None)     # let the hub deliver them
+            self.rt.run_on_hub(lambda: None)  # let the hub deliver them
         return s
 
 
@@ -87,11 +88,11 @@ def test_localiser_subsystem_tracks_and_relocalises(rt):
     init.pose.pose.position.x, init.pose.pose.position.y = x + 0.1, y - 0.1
     init.pose.pose.orientation.z, init.pose.pose.orientation.w = math.sin(th / 2), math.cos(th / 2)
     cov = np.zeros((6, 6))
-    cov[0, 0] = cov[1, 1] = 0.2 ** 2
-    cov[5, 5] = 0.1 ** 2
+    cov[0, 0] = cov[1, 1] = 0.2**2
+    cov[5, 5] = 0.1**2
     init.pose.covariance = cov.ravel().tolist()
     feed.initial.publish(init)
-    feed.map.publish(occ.to_msg())                # republished: not rebuilt
+    feed.map.publish(occ.to_msg())  # republished: not rebuilt
     t0 = world.t
     s = feed.run(15)
     st = rt.call("localisation_status")
@@ -121,7 +122,7 @@ def test_localiser_subsystem_tracks_and_relocalises(rt):
     # forget it: global localisation from the next scan
     st = rt.call("localise_globally")
     assert st["state"] == "uncertain" and st["pose"] is None
-    unknown = np.asarray(feed.poses[-1].pose.covariance).reshape(6, 6)   # replaces the latched sure one
+    unknown = np.asarray(feed.poses[-1].pose.covariance).reshape(6, 6)  # replaces the latched sure one
     assert unknown[0, 0] > 1 and unknown[5, 5] > 1
     s = feed.run(6)
     st = rt.call("localisation_status")
@@ -140,11 +141,16 @@ def test_localiser_reads_the_laser_mounting_from_tf_static(rt):
     feed = Feed(rt, world)
     feed.map.publish(occ.to_msg())
     feed.run(0.5)
-    assert loc.amcl.params.laser_pose == LASER_POSE          # the URDF's, until /tf_static says
+    assert loc.amcl.params.laser_pose == LASER_POSE  # the URDF's, until /tf_static says
     mount = (-0.1, 0.02, 0.0)
-    feed.tf_static.publish(TFMessage(transforms=[
-        planar_transform("base_footprint", "base_link", (0.0, 0.0, 0.0), 0.0),
-        planar_transform("base_link", "base_scan", mount, 0.0)]))
+    feed.tf_static.publish(
+        TFMessage(
+            transforms=[
+                planar_transform("base_footprint", "base_link", (0.0, 0.0, 0.0), 0.0),
+                planar_transform("base_link", "base_scan", mount, 0.0),
+            ]
+        )
+    )
     feed.run(0.5)
     assert loc.amcl.params.laser_pose == pytest.approx(mount)
     assert feed.tf, "map -> odom went out from the initial pose on"
@@ -185,13 +191,14 @@ def test_a_robot_standing_away_from_the_origin_is_localised_where_it_stands(rt, 
     tour point of the house, its odometry at (0, 0, 0): every sample that says localised
     must be right, on localisation_status and on /tf, and it must say so in the end."""
     occ = read_map_yaml(FIXTURES / "house.yaml")
-    world = SyntheticWorld(occ, world_boxes(FIXTURES / "house_world.yaml"), seed=start, start=start,
-                           reverse=False, speed=0.0, turn=0.0)
+    world = SyntheticWorld(
+        occ, world_boxes(FIXTURES / "house_world.yaml"), seed=start, start=start, reverse=False, speed=0.0, turn=0.0
+    )
     assert math.hypot(*world.truth[:2]) > 1.0
     rt.add_subsystem("localiser", Localiser, seed=start, global_after=1.0)
     feed = Feed(rt, world)
     feed.map.publish(occ.to_msg())
-    unknown = []                                  # (pose, /amcl_pose count) while not localised
+    unknown = []  # (pose, /amcl_pose count) while not localised
     for _ in range(40):
         s = feed.run(0.2)
         st = rt.call("localisation_status")
@@ -204,7 +211,7 @@ def test_a_robot_standing_away_from_the_origin_is_localised_where_it_stands(rt, 
         e, eyaw = _transform_error(feed, s)
         assert e < 0.1 and eyaw < 0.1
     assert st["state"] == "localised" and feed.poses
-    assert unknown and all(u == (None, 0) for u in unknown)   # until then it said it did not know
+    assert unknown and all(u == (None, 0) for u in unknown)  # until then it said it did not know
 
 
 def test_in_a_symmetric_room_the_localiser_says_it_does_not_know(rt):
@@ -214,6 +221,7 @@ def test_in_a_symmetric_room_the_localiser_says_it_does_not_know(rt):
     from actors.navigation import Navigation
     from bt_engine import ActorError
     from tests.test_navstack_localisation import rectangular_room
+
     room, walls = rectangular_room()
     world = SyntheticWorld(room, walls, [(0.0, 0.0), (1.0, 0.0)], seed=1, unmapped=0, speed=0.0, turn=0.0)
     world.teleport((1.1, 0.6, 0.4))
@@ -233,13 +241,14 @@ def test_in_a_symmetric_room_the_localiser_says_it_does_not_know(rt):
 
 def test_the_smoother_removes_the_estimates_jitter_and_follows_a_relocalisation():
     from navstack.smoothing import PoseSmoother
+
     rng = np.random.default_rng(0)
     sm = PoseSmoother()
     raw_jumps, smooth_jumps, errors = [], [], []
     last_raw = last = None
-    for k in range(200):                       # a straight drive, an update every 0.25 m
+    for k in range(200):  # a straight drive, an update every 0.25 m
         truth = (0.25 * k, 1.0, 0.0)
-        odom = (0.25 * k * 1.01, 0.0, 0.0)     # the odometry runs 1 % long
+        odom = (0.25 * k * 1.01, 0.0, 0.0)  # the odometry runs 1 % long
         est = (truth[0] + rng.normal(0, 0.015), truth[1] + rng.normal(0, 0.015), rng.normal(0, 0.005))
         out = sm.update(est, odom)
         if last is not None:
@@ -248,7 +257,7 @@ def test_the_smoother_removes_the_estimates_jitter_and_follows_a_relocalisation(
         last_raw, last = est, out
         errors.append(math.hypot(out[0] - truth[0], out[1] - truth[1]))
     assert np.median(smooth_jumps) < 0.5 * np.median(raw_jumps)
-    assert np.sqrt(np.mean(np.square(errors[20:]))) < 0.015     # and it follows the odometry's drift
+    assert np.sqrt(np.mean(np.square(errors[20:]))) < 0.015  # and it follows the odometry's drift
     # a relocalisation (a correction drift cannot explain) is taken at once
     out = sm.update((truth[0] + 1.0, 1.0, 0.0), (0.25 * 200 * 1.01, 0.0, 0.0))
     assert out == pytest.approx((truth[0] + 1.0, 1.0, 0.0)) and sm.resets == 1
@@ -256,13 +265,14 @@ def test_the_smoother_removes_the_estimates_jitter_and_follows_a_relocalisation(
 
 def test_the_local_hold_keeps_the_frame_until_the_robot_has_moved_away():
     from navstack.smoothing import LocalHold
+
     hold = LocalHold(radius=0.5)
     assert not hold.on_odometry(0.0, (0.0, 0.0, 0.0)) and not hold.holding
-    assert not hold.on_odometry(0.1, (0.0, 0.0, 0.0)) and hold.holding     # it stands still
-    for k in range(1, 6):                                                  # manoeuvres near by
+    assert not hold.on_odometry(0.1, (0.0, 0.0, 0.0)) and hold.holding  # it stands still
+    for k in range(1, 6):  # manoeuvres near by
         assert not hold.on_odometry(0.1 + k, (0.09 * k, 0.0, 0.1 * k)) and hold.holding
-    assert hold.on_odometry(7.0, (0.6, 0.0, 0.0)) and not hold.holding    # left: released once
-    assert not hold.on_odometry(7.1, (0.62, 0.0, 0.0)) and not hold.holding   # driving on
-    assert not hold.on_odometry(9.0, (0.62, 0.0, 0.0)) and hold.holding       # stopped again
+    assert hold.on_odometry(7.0, (0.6, 0.0, 0.0)) and not hold.holding  # left: released once
+    assert not hold.on_odometry(7.1, (0.62, 0.0, 0.0)) and not hold.holding  # driving on
+    assert not hold.on_odometry(9.0, (0.62, 0.0, 0.0)) and hold.holding  # stopped again
     released = [hold.on_odometry(9.0 + 0.1 * k, (0.62, 0.0, 0.15 * k)) for k in range(1, 6)]
-    assert released == [False] * 4 + [True]                                   # turned 0.75 rad
+    assert released == [False] * 4 + [True]  # turned 0.75 rad

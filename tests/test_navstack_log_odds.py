@@ -1,4 +1,5 @@
 """navstack.log_odds: the log-odds update from a laser scan, growth, clamping, to_map()."""
+
 from __future__ import annotations
 
 import math
@@ -33,7 +34,7 @@ def test_one_beam_frees_the_cells_it_crosses_and_marks_its_end():
     for x in np.arange(0.025, 1.0, 0.05):
         assert value(g, x, 0.01) == pytest.approx(p.l_free), x
     assert value(g, 1.07, 0.01) == 0.0
-    assert value(g, 0.5, 0.06) == 0.0          # the neighbouring row is untouched
+    assert value(g, 0.5, 0.06) == 0.0  # the neighbouring row is untouched
     # once per scan: the 10 beams sharing the cells count once
     g2 = LogOddsGrid()
     g2.integrate((0, 0, 0), np.full(10, 1.02), np.zeros(10), 3.5)
@@ -42,7 +43,7 @@ def test_one_beam_frees_the_cells_it_crosses_and_marks_its_end():
 
 def test_no_return_clears_to_max_range_and_marks_nothing():
     p = LogOddsParams()
-    for r in (np.inf, 3.5, 9.0):              # inf, at range_max, beyond: all "no return"
+    for r in (np.inf, 3.5, 9.0):  # inf, at range_max, beyond: all "no return"
         g = beam_grid([r], angle=math.pi / 2)
         assert value(g, 0.01, 3.45) == pytest.approx(p.l_miss)
         assert value(g, 0.01, 3.55) == 0.0
@@ -74,8 +75,8 @@ def test_log_odds_accumulate_and_clamp_and_convert_to_trinary():
     one = beam_grid([1.02])
     m = one.to_map()
     assert m.resolution == 0.05 and set(np.unique(m.data)) <= {-1, 0, 100}
-    assert m.value_at(1.02, 0.01) == 100      # one hit: p 0.7 >= 0.65
-    assert m.value_at(0.5, 0.01) == -1        # one pass: p 0.4, not yet <= 0.25
+    assert m.value_at(1.02, 0.01) == 100  # one hit: p 0.7 >= 0.65
+    assert m.value_at(0.5, 0.01) == -1  # one pass: p 0.4, not yet <= 0.25
     thrice = LogOddsGrid()
     for _ in range(3):
         thrice.integrate((0, 0, 0), [1.02], [0.0], 3.5)

@@ -1,5 +1,6 @@
 """navstack.navigator: /navigate_to_pose served on the local bus, driving the simulated
 robot (open_floor, no camera) localised by navstack's localiser from /initialpose."""
+
 from __future__ import annotations
 
 import math
@@ -59,7 +60,7 @@ def test_a_goal_on_the_map_succeeds_within_the_tolerances(floor):
     result = rt.call("nav", goal_msg(1.5, -0.8, math.pi / 2), timeout=120)
     assert result.error_code == 0 and result.error_msg == ""
     x, y, yaw = world.robot_pose()
-    assert math.hypot(x - 1.5, y + 0.8) < 0.12           # the goal checker's 4 cm + the localisation's error
+    assert math.hypot(x - 1.5, y + 0.8) < 0.12  # the goal checker's 4 cm + the localisation's error
     assert abs(math.remainder(yaw - math.pi / 2, 2 * math.pi)) < 0.08
     st = rt.call("navigator_status")
     assert st["succeeded"] == before["succeeded"] + 1 and st["goal"] is None
@@ -76,11 +77,11 @@ def test_no_path_aborts_with_the_reason(floor):
     assert isinstance(err, ActionGoalError) and err.status == STATUS_ABORTED
     assert err.result.error_code == GOAL_OUTSIDE_MAP and "outside the map" in err.result.error_msg
     with pytest.raises(ActorError) as e:
-        rt.call("nav", goal_msg(3.0, 0.0), timeout=30)        # in the east wall
+        rt.call("nav", goal_msg(3.0, 0.0), timeout=30)  # in the east wall
     err = e.value.root_cause
     assert err.result.error_code == GOAL_OCCUPIED and "blocked" in err.result.error_msg
     with pytest.raises(ActorError) as e:
-        rt.call("nav", goal_msg(3.2, 0.0), timeout=30)        # outside the walls: unknown space
+        rt.call("nav", goal_msg(3.2, 0.0), timeout=30)  # outside the walls: unknown space
     assert e.value.root_cause.result.error_code in (GOAL_OCCUPIED, NO_VALID_PATH)
 
 
@@ -96,6 +97,7 @@ def test_cancel_stops_the_base_and_ends_canceled(floor):
         txn.cancel("operator stop")
         rt.sleep(1.0)
         return txn, moving
+
     txn, moving = run_in_actor(rt, body)
     assert moving == "follow"
     assert txn.cancelled
@@ -106,7 +108,7 @@ def test_cancel_stops_the_base_and_ends_canceled(floor):
     rt.call("sleep", 0.2)
     sub.close()
     assert abs(odom[-1].twist.twist.linear.x) < 0.01 and abs(odom[-1].twist.twist.angular.z) < 0.02
-    assert math.hypot(world.robot_pose()[0] - x, world.robot_pose()[1] - y) > 0.2   # it had moved
+    assert math.hypot(world.robot_pose()[0] - x, world.robot_pose()[1] - y) > 0.2  # it had moved
 
 
 def test_an_obstacle_on_the_scan_but_not_on_the_map_is_driven_around(floor):
@@ -124,6 +126,7 @@ def test_an_obstacle_on_the_scan_but_not_on_the_map_is_driven_around(floor):
             path.append(world.robot_pose()[:2])
             rt.sleep(0.2)
         return txn
+
     txn = run_in_actor(rt, body)
     assert txn.error is None, txn.error
     st = rt.call("navigator_status")
@@ -131,7 +134,7 @@ def test_an_obstacle_on_the_scan_but_not_on_the_map_is_driven_around(floor):
     after = world.object_pose(name)
     assert math.hypot(after[0] - before[0], after[1] - before[1]) < 0.005, "the bottle was not touched"
     assert min(math.hypot(px - before[0], py - before[1]) for px, py in path) > 0.15
-    world.set_object_pose(name, 2.5, 2.5)                     # out of the way of the next tests
+    world.set_object_pose(name, 2.5, 2.5)  # out of the way of the next tests
 
 
 def test_a_start_inside_the_inflation_leaves_through_the_nearest_free_cell():
@@ -142,17 +145,17 @@ def test_a_start_inside_the_inflation_leaves_through_the_nearest_free_cell():
     from planning.failure import FailureReason
     from planning.grid import OccupancyGrid, inflate
 
-    data = np.zeros((40, 60), dtype=np.int8)        # 3 m x 2 m of floor, 5 cm cells
-    data[:, 30] = 100                               # a wall across the middle, x = 1.5 m
-    data[28:, 30] = 0                               # with a door at its top (y >= 1.4 m)
+    data = np.zeros((40, 60), dtype=np.int8)  # 3 m x 2 m of floor, 5 cm cells
+    data[:, 30] = 100  # a wall across the middle, x = 1.5 m
+    data[28:, 30] = 0  # with a door at its top (y >= 1.4 m)
     planner = GridPlanner(inflate(OccupancyGrid(data, 0.05, (0.0, 0.0)), 0.20))
-    start, goal = (1.35, 0.5), (2.5, 0.5)           # 0.15 m from the wall: inside the inflation
+    start, goal = (1.35, 0.5), (2.5, 0.5)  # 0.15 m from the wall: inside the inflation
     assert planner.plan(start, goal).failure is FailureReason.START_INVALID
     path = plan_out_of(planner, start, goal, escape_distance=0.3)
     assert path is not None and path.ok
     assert path.waypoints[0] == start and path.waypoints[-1] == goal
     via = path.waypoints[1]
-    assert 0.05 < math.dist(start, via) <= 0.3 and via[0] < start[0]   # away from the wall
+    assert 0.05 < math.dist(start, via) <= 0.3 and via[0] < start[0]  # away from the wall
     # nothing free within reach: no way out
     assert plan_out_of(planner, start, goal, escape_distance=0.04) is None
 
@@ -176,4 +179,4 @@ def test_an_obstacle_below_the_scan_is_seen_by_the_depth_camera_and_driven_aroun
     assert st["obstacle_stops"] > stats0["obstacle_stops"] and st["recoveries"] > stats0["recoveries"]
     after = world.object_pose(name)
     assert math.hypot(after[0] - before[0], after[1] - before[1]) < 0.005, "the box was not touched"
-    assert rt.bus.subscription_count("/camera/depth/image_raw") == 0     # only while driving
+    assert rt.bus.subscription_count("/camera/depth/image_raw") == 0  # only while driving

@@ -5,6 +5,7 @@ A rehearsal on the real robot, started at (1, 1, 0) with no initial pose, had th
 localiser say "localised" (std 4 cm) at (0.00, 0.00, -0.15): its global localisation had
 converged to (1.04, 1.00), but map -> odom stayed at the identity it held before anything
 was known (tests/test_navstack_localiser.py has the same on the synthetic robot)."""
+
 from __future__ import annotations
 
 import math
@@ -15,13 +16,12 @@ from bt_engine import ActorError, Runtime
 
 sim_mod = pytest.importorskip("sim")
 
-SECONDS = 10.0      # the localiser searches 2 s after the first scan (NavStack's global_after)
-WRONG = 0.3         # [m] and [rad]: "localised" this far from the truth is a wrong pose
+SECONDS = 10.0  # the localiser searches 2 s after the first scan (NavStack's global_after)
+WRONG = 0.3  # [m] and [rad]: "localised" this far from the truth is a wrong pose
 
 
 def _errors(pose, truth):
-    return (math.hypot(pose[0] - truth[0], pose[1] - truth[1]),
-            abs(math.remainder(pose[2] - truth[2], 2 * math.pi)))
+    return (math.hypot(pose[0] - truth[0], pose[1] - truth[1]), abs(math.remainder(pose[2] - truth[2], 2 * math.pi)))
 
 
 def _start_without_initial_pose(world: str, seed: int = 0):
@@ -31,6 +31,7 @@ def _start_without_initial_pose(world: str, seed: int = 0):
     require_localised's refusal (None: it accepted)."""
     from actors.navigation import Navigation
     from navstack import NavStack
+
     rt = Runtime()
     # initial_pose=False: the simulator must not give /initialpose as a user would
     sim = sim_mod.SimWorld(rt, world=world, seed=seed, camera=False, initial_pose=False).start()
@@ -71,7 +72,7 @@ def _check(samples, tf_pose, truth, refusal):
         assert e < 0.10 and eyaw < 0.10, tf_pose
         assert refusal is None
     else:
-        assert st["pose"] is None, st                  # says it does not know
+        assert st["pose"] is None, st  # says it does not know
         assert tf_pose is None, "not localised, so nothing on /tf"
         assert refusal is not None and "delocalised" in refusal
     return st

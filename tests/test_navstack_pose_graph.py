@@ -1,4 +1,5 @@
 """navstack.pose_graph: SE(2) errors, the analytic Jacobian, loop closure by least squares."""
+
 from __future__ import annotations
 
 import math
@@ -24,7 +25,7 @@ def chain(truth, rng, sigma=(0.02, 0.02, 0.01)):
     g = PoseGraph()
     est = truth[0]
     g.add_node(est)
-    info = [1 / s ** 2 for s in sigma]
+    info = [1 / s**2 for s in sigma]
     for k in range(1, len(truth)):
         z = relative(truth[k - 1], truth[k])
         z = tuple(v + rng.normal(0, s) for v, s in zip(z, sigma))
@@ -69,11 +70,13 @@ def test_the_jacobian_matches_finite_differences():
     g.fixed = set()
     captured = {}
     import navstack.pose_graph as pg
+
     real = pg.least_squares
 
     def spy(fun, x0, jac, **kw):
         captured["J"] = jac(X.ravel()).toarray()
         return real(fun, x0, jac=jac, **kw)
+
     pg.least_squares = spy
     try:
         g.optimize(max_iterations=1)
@@ -91,7 +94,7 @@ def test_a_loop_closure_pulls_the_drifted_chain_back():
     g.add_edge(len(truth) - 1, 0, relative(truth[-1], truth[0]), [1e4, 1e4, 1e4], "loop")
     res = g.optimize()
     assert res.success and res.cost_after < 0.01 * res.cost_before
-    assert g.pose(0) == truth[0]                       # the first node is fixed
+    assert g.pose(0) == truth[0]  # the first node is fixed
     after = math.dist(g.pose(end)[:2], truth[end][:2])
     assert before > 0.2 and after < 0.02
     # the end meets the start as the loop edge says

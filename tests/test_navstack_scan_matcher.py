@@ -1,4 +1,5 @@
 """navstack.scan_matcher: correlative matching (branch and bound) against a known offset, ICP."""
+
 from __future__ import annotations
 
 import math
@@ -7,13 +8,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from navstack.scan_matcher import (CorrelativeMatcher, LikelihoodMap, MatcherParams, icp,
-                                   scan_points, transform)
+from navstack.scan_matcher import CorrelativeMatcher, LikelihoodMap, MatcherParams, icp, scan_points, transform
 from navstack.synthetic import cast, world_boxes
 
 FIXTURES = Path(__file__).parent / "fixtures"
 ANGLES = np.arange(360) * 2 * math.pi / 360
-OFFSET = (-0.15, 0.0, 0.0)                # the LDS-01 behind the base's centre
+OFFSET = (-0.15, 0.0, 0.0)  # the LDS-01 behind the base's centre
 
 
 @pytest.fixture(scope="module")
@@ -35,11 +35,14 @@ def reference(boxes, poses, rng):
     return np.vstack([transform(p, points_at(boxes, p, rng)) for p in poses])
 
 
-@pytest.mark.parametrize("true, prior", [
-    ((2.62, 1.47, 0.21), (2.50, 1.55, 0.30)),          # living room
-    ((7.93, 3.12, -1.0), (8.15, 3.00, -0.80)),         # kitchen: 22 cm and 11 degrees off
-    ((2.0, 6.0, 2.5), (1.8, 6.2, 2.5 - 0.2)),          # bedroom
-])
+@pytest.mark.parametrize(
+    "true, prior",
+    [
+        ((2.62, 1.47, 0.21), (2.50, 1.55, 0.30)),  # living room
+        ((7.93, 3.12, -1.0), (8.15, 3.00, -0.80)),  # kitchen: 22 cm and 11 degrees off
+        ((2.0, 6.0, 2.5), (1.8, 6.2, 2.5 - 0.2)),  # bedroom
+    ],
+)
 def test_correlative_match_finds_a_known_offset(boxes, true, prior):
     rng = np.random.default_rng(1)
     ref = reference(boxes, [(true[0] + 0.3, true[1], 0.0), (true[0], true[1] - 0.3, 1.5)], rng)
@@ -67,11 +70,15 @@ def test_branch_and_bound_equals_the_exhaustive_search(boxes):
     prior = (5.08, 1.93, 0.45)
     m = CorrelativeMatcher(MatcherParams(window_xy=0.2, window_yaw=math.radians(6), yaw_step=math.radians(1)))
     res = m.match(lmap, pts, prior)
-    best = max(lmap.score((prior[0] + i * 0.05, prior[1] + j * 0.05, prior[2] + math.radians(k)), pts)
-               for i in range(-4, 5) for j in range(-4, 5) for k in range(-6, 7))
+    best = max(
+        lmap.score((prior[0] + i * 0.05, prior[1] + j * 0.05, prior[2] + math.radians(k)), pts)
+        for i in range(-4, 5)
+        for j in range(-4, 5)
+        for k in range(-6, 7)
+    )
     assert res.score == pytest.approx(best, abs=1e-6)
     n_all = 9 * 9 * 13
-    assert res.evaluated < n_all             # the bound prunes
+    assert res.evaluated < n_all  # the bound prunes
 
 
 def test_a_wide_window_recovers_a_large_offset(boxes):

@@ -3,6 +3,7 @@
 The thresholds are set between what Slam reaches (bench/bench_slam.py) and what the
 odometry alone gives: a front end or a loop closure that stops working fails them.
 """
+
 from __future__ import annotations
 
 import math
@@ -44,11 +45,11 @@ def test_the_trajectory_beats_the_odometry_by_far(house_run):
     traj = slam.trajectory()
     assert len(traj) > 80 and all(t in truth for t, *_ in traj)
     err = np.array([math.hypot(x - truth[t][0], y - truth[t][1]) for t, x, y, _ in traj])
-    rms = float(np.sqrt(np.mean(err ** 2)))
+    rms = float(np.sqrt(np.mean(err**2)))
     o0, x0 = samples[0].odom, samples[0].truth
     odom = np.array([math.dist(compose(x0, relative(o0, s.odom))[:2], s.truth[:2]) for s in samples])
-    odom_rms = float(np.sqrt(np.mean(odom ** 2)))
-    assert odom_rms > 1.0                     # the odometry alone is lost in the house
+    odom_rms = float(np.sqrt(np.mean(odom**2)))
+    assert odom_rms > 1.0  # the odometry alone is lost in the house
     assert rms < 0.25 and rms < 0.15 * odom_rms
     # the loop closes: the end is where it started
     assert math.dist(slam.pose()[:2], samples[-1].truth[:2]) < 0.1
@@ -109,8 +110,8 @@ def test_a_loop_closure_must_be_a_drift_the_travel_allows():
     slam = Slam()
     here = (2.0, 1.0, 0.3)
     assert slam._plausible_correction(here, compose(here, (0.08, 0.0, 0.01)), travelled=4.0)
-    assert not slam._plausible_correction(here, compose(here, (0.40, 0.0, 0.0)), travelled=4.0)   # the wrong wall
-    assert slam._plausible_correction(here, compose(here, (0.40, 0.0, 0.0)), travelled=30.0)     # after a long loop
+    assert not slam._plausible_correction(here, compose(here, (0.40, 0.0, 0.0)), travelled=4.0)  # the wrong wall
+    assert slam._plausible_correction(here, compose(here, (0.40, 0.0, 0.0)), travelled=30.0)  # after a long loop
     assert not slam._plausible_correction(here, compose(here, (0.0, 0.0, 0.3)), travelled=4.0)
 
 
@@ -122,7 +123,7 @@ def test_the_grid_is_rebuilt_only_when_a_closure_moved_the_keyframes(house_run):
     saved = list(poses)
     try:
         poses[len(poses) // 2] = compose(saved[len(poses) // 2], (0.01, 0.0, 0.0))
-        assert not slam._map_moved()                     # a centimetre: the map stands
+        assert not slam._map_moved()  # a centimetre: the map stands
         poses[len(poses) // 2] = compose(saved[len(poses) // 2], (0.05, 0.0, 0.0))
         assert slam._map_moved()
     finally:
@@ -138,14 +139,14 @@ def test_a_map_published_while_mapping_is_rebuilt_at_most_every_rebuild_period(h
         poses[-1] = compose(saved[-1], (0.10, 0.0, 0.0))
         slam._dirty = slam._map_moved()
         assert slam._dirty
-        slam.map(fresh=False)                      # just rebuilt: the grid stays as it is
+        slam.map(fresh=False)  # just rebuilt: the grid stays as it is
         assert slam._dirty
         slam._t += slam.params.rebuild_period
         slam.map(fresh=False)
         assert not slam._dirty
         poses[-1] = saved[-1]
         slam._dirty = slam._map_moved()
-        slam.map()                                 # fresh (save_map): rebuilt whatever the time
+        slam.map()  # fresh (save_map): rebuilt whatever the time
         assert not slam._dirty
     finally:
         poses[:] = saved
@@ -159,9 +160,16 @@ def test_a_keyframes_scans_line_up_in_its_reference_despite_a_heading_drift():
     from navstack.synthetic import LaserSpec, OdomSpec
 
     occ = read_map_yaml(FIXTURES / "house.yaml")
-    world = SyntheticWorld(occ, world_boxes(FIXTURES / "house_world.yaml"), seed=0, start=0, reverse=False,
-                           laser=LaserSpec(sigma_min=0.0, sigma_rel=0.0, dropout=0.0), scan_period=0.05,
-                           odom=OdomSpec(scale=0.0, turn_scale=0.0, drift=math.radians(3.0), sigma_v=0.0, sigma_w=0.0))
+    world = SyntheticWorld(
+        occ,
+        world_boxes(FIXTURES / "house_world.yaml"),
+        seed=0,
+        start=0,
+        reverse=False,
+        laser=LaserSpec(sigma_min=0.0, sigma_rel=0.0, dropout=0.0),
+        scan_period=0.05,
+        odom=OdomSpec(scale=0.0, turn_scale=0.0, drift=math.radians(3.0), sigma_v=0.0, sigma_w=0.0),
+    )
     slam = Slam(SlamParams(initial_pose=world.truth, sensor_offset=world.laser.pose, loop_min_travel=1e9))
     truth = {}
     while world.t < 12:
@@ -175,14 +183,21 @@ def test_a_keyframes_scans_line_up_in_its_reference_despite_a_heading_drift():
         if len(kf.scans) < 3 or any(abs(d[2]) > slam.params.pair_scan_turn for d, _ in kf.scans):
             continue
         ref, _ = slam._pair_reference(i)
-        true = np.vstack([transform(relative(truth[kf.t], truth[scan.t]),
-                                    match_points(scan, slam.params.match_max_range, world.laser.pose))
-                          for _, scan in kf.scans])
-        raw = np.vstack([transform(d, match_points(scan, slam.params.match_max_range, world.laser.pose))
-                         for d, scan in kf.scans])
+        true = np.vstack(
+            [
+                transform(
+                    relative(truth[kf.t], truth[scan.t]),
+                    match_points(scan, slam.params.match_max_range, world.laser.pose),
+                )
+                for _, scan in kf.scans
+            ]
+        )
+        raw = np.vstack(
+            [transform(d, match_points(scan, slam.params.match_max_range, world.laser.pose)) for d, scan in kf.scans]
+        )
         worst = max(worst, float(np.abs(ref - true).max()))
         worst_raw = max(worst_raw, float(np.abs(raw - true).max()))
-    assert worst_raw > 0.02                    # the drift's smear, uncorrected
+    assert worst_raw > 0.02  # the drift's smear, uncorrected
     assert worst < 0.5 * worst_raw and worst < 0.015
 
 
@@ -199,7 +214,7 @@ def _wedged_run(track_scans: bool) -> list[float]:
         if s.scan is not None:
             slam.add(s.odom, s.scan.ranges, s.scan.angles, s.scan.range_max, s.t, s.scan.range_min)
     odom, t, errors = s.odom, s.t, []
-    for _ in range(100):                            # 20 s of 5 Hz scans
+    for _ in range(100):  # 20 s of 5 Hz scans
         t += 0.2
         odom = compose(odom, (0.17 * 0.2, 0.0, 0.0))
         scan = world.scan()
@@ -210,8 +225,8 @@ def _wedged_run(track_scans: bool) -> list[float]:
 
 def test_the_published_pose_follows_the_laser_when_the_wheels_slip():
     tracked = np.array(_wedged_run(track_scans=True))
-    assert np.sqrt(np.mean(tracked ** 2)) < 0.03 and tracked.max() < 0.1
-    assert max(_wedged_run(track_scans=False)) > 0.2       # the odometry between keyframes
+    assert np.sqrt(np.mean(tracked**2)) < 0.03 and tracked.max() < 0.1
+    assert max(_wedged_run(track_scans=False)) > 0.2  # the odometry between keyframes
 
 
 def _gyro_run(gyro: bool, scale: float = 1.015, seconds: float = 150.0):
@@ -242,8 +257,10 @@ def test_a_gyros_heading_links_the_keyframes_and_its_scale_error_is_learned():
     assert "gyro" in kinds and "gyro" not in {e.kind for e in without.graph.edges}
     correction, sigma = with_gyro.gyro_scale()
     assert correction == pytest.approx(1 / 1.015 - 1, abs=0.004) and sigma < 0.004
-    print(f"heading RMS {math.degrees(yaw_rms):.2f} deg with the gyro's links, "
-          f"{math.degrees(yaw_rms_matches):.2f} without")
+    print(
+        f"heading RMS {math.degrees(yaw_rms):.2f} deg with the gyro's links, "
+        f"{math.degrees(yaw_rms_matches):.2f} without"
+    )
     assert yaw_rms < yaw_rms_matches
 
 
@@ -268,9 +285,10 @@ def test_icp_on_what_the_reference_saw_shrinks_the_pair_links_less():
 
 def test_a_return_behind_what_the_laser_saw_is_not_seen():
     from navstack.slam import _Scan, _seen_from
+
     angles = np.radians(np.arange(360.0))
-    scan = _Scan(np.full(360, 2.0, dtype=np.float32), angles, 3.5, 0.12)   # a round room, 2 m
-    q = np.array([[1.0, 0.0], [2.05, 0.0], [0.0, 2.5], [-3.0, 0.0]])       # the laser at the origin
+    scan = _Scan(np.full(360, 2.0, dtype=np.float32), angles, 3.5, 0.12)  # a round room, 2 m
+    q = np.array([[1.0, 0.0], [2.05, 0.0], [0.0, 2.5], [-3.0, 0.0]])  # the laser at the origin
     assert _seen_from(scan, q, (0.0, 0.0, 0.0), (0.01, 0.03)).tolist() == [True, True, False, False]
 
 

@@ -4,6 +4,7 @@ ground truth, distractors, pic_find, get_found and the servoing streams.
 The robot stands off the origin and turned (so the map-frame transform is exercised), in
 the open_floor world; objects are teleported in front of it.
 """
+
 from __future__ import annotations
 
 import math
@@ -24,8 +25,8 @@ from sim.odometry import OdomNoise
 
 from tests.conftest import run_in_actor
 
-ROBOT = (0.7, -0.4, 0.6)          # x, y, yaw of the robot in the map frame
-PARK = (2.5, -2.5)                # out of view (behind the robot), for objects not in use
+ROBOT = (0.7, -0.4, 0.6)  # x, y, yaw of the robot in the map frame
+PARK = (2.5, -2.5)  # out of view (behind the robot), for objects not in use
 RED, GREEN = CATEGORIES["can"].rgba, CATEGORIES["bottle"].rgba
 #: distractors that share a target's colour: only the shape tells them apart
 DISTRACTORS = {
@@ -33,8 +34,9 @@ DISTRACTORS = {
     "green_can": ObjectModel("green_can", (("cylinder", 0.033, 0.122, 0.0),), 0.122, 0.033, 0.04, GREEN),
     "red_tube": ObjectModel("red_tube", (("cylinder", 0.033, 0.25, 0.0),), 0.25, 0.033, 0.06, RED),
     # the carton's yellow, another size: its dimensions tell it apart
-    "yellow_brick": ObjectModel("yellow_brick", (("box", (0.095, 0.06, 0.10), 0.0),), 0.10, 0.056, 0.06,
-                                CATEGORIES["carton"].rgba),
+    "yellow_brick": ObjectModel(
+        "yellow_brick", (("box", (0.095, 0.06, 0.10), 0.0),), 0.10, 0.056, 0.06, CATEGORIES["carton"].rgba
+    ),
 }
 
 
@@ -88,11 +90,13 @@ def _place(sim, names, layout):
 def _random_layout(rng, kinds):
     """Objects 0.4-1.5 m away at bearings within +-26 deg, none hiding another."""
     while True:
-        out = [(k, rng.uniform(0.4, 1.5), rng.uniform(-0.45, 0.45), rng.uniform(-math.pi, math.pi))
-               for k in kinds]
+        out = [(k, rng.uniform(0.4, 1.5), rng.uniform(-0.45, 0.45), rng.uniform(-math.pi, math.pi)) for k in kinds]
         pos = [_in_front(d, b) for _, d, b, _ in out]
-        ok = all(abs(out[i][2] - out[j][2]) > 0.2 and math.dist(pos[i], pos[j]) > 0.25
-                 for i in range(len(out)) for j in range(i + 1, len(out)))
+        ok = all(
+            abs(out[i][2] - out[j][2]) > 0.2 and math.dist(pos[i], pos[j]) > 0.25
+            for i in range(len(out))
+            for j in range(i + 1, len(out))
+        )
         if ok:
             return out
 
@@ -113,10 +117,10 @@ def _match(dets, truth, gate=0.05):
 def test_fixed_radius_circle_fit_recovers_the_axis_from_the_front_arc():
     rng = np.random.default_rng(1)
     c, r = np.array([1.2, -0.3]), 0.033
-    a = rng.uniform(-1.2, 1.2, 200) + math.pi          # the arc that faces a camera at the origin
+    a = rng.uniform(-1.2, 1.2, 200) + math.pi  # the arc that faces a camera at the origin
     pts = c + r * np.stack([np.cos(a), np.sin(a)], axis=1) + rng.normal(0, 2e-4, (200, 2))
     centroid = pts.mean(axis=0)
-    assert np.hypot(*(centroid - c)) > 0.02             # the visible-surface centroid is off
+    assert np.hypot(*(centroid - c)) > 0.02  # the visible-surface centroid is off
     est, rms = fit_circle_fixed(pts, r, centroid)
     assert np.hypot(*(est - c)) < 1e-3 and rms < 5e-4
 
@@ -136,8 +140,20 @@ def test_image_conversions():
 
 def test_combine_sightings_rejects_outliers_and_picks_the_most_seen_object():
     def det(x, y, cat="can", dist=1.0, t=0.0):
-        return {"category": cat, "x": x, "y": y, "z": 0.0, "height": 0.12, "width": 0.066,
-                "distance": dist, "bearing": 0.0, "confidence": 0.9, "pixel": [0, 0], "stamp": t}
+        return {
+            "category": cat,
+            "x": x,
+            "y": y,
+            "z": 0.0,
+            "height": 0.12,
+            "width": 0.066,
+            "distance": dist,
+            "bearing": 0.0,
+            "confidence": 0.9,
+            "pixel": [0, 0],
+            "stamp": t,
+        }
+
     s = [det(1.0, 0.0, t=i) for i in range(4)] + [det(1.03, 0.0, t=5)] + [det(2.0, 1.0, dist=0.5)]
     est = combine_sightings(s, looks=6)
     assert est["sightings"] == 4 and est["x"] == pytest.approx(1.0) and est["category"] == "can"
@@ -152,16 +168,17 @@ def test_an_object_before_furniture_of_a_colour_is_not_part_of_it():
     # house_hard 2034: a yellow ball 0.8 m away, in the image touching an orange sofa 3 m
     # behind it; both coloured, they were one region, of furniture size
     from actors.perception_segments import _depth_steps, _structure
+
     h, w, f = 60, 80, 100.0
     depth = np.full((h, w), 3.0, np.float32)
     coloured = np.zeros((h, w), bool)
-    coloured[10:40, :] = True                       # the sofa, 2.4 m wide
-    coloured[35:47, 30:42] = True                   # the ball, before it
+    coloured[10:40, :] = True  # the sofa, 2.4 m wide
+    coloured[35:47, 30:42] = True  # the ball, before it
     depth[35:47, 30:42] = 0.8
     v, u = np.mgrid[0:h, 0:w]
-    P = np.stack([(u - w / 2) / f * depth, (v - h / 2) / f * depth, depth], axis=-1)   # x, y across; z depth
+    P = np.stack([(u - w / 2) / f * depth, (v - h / 2) / f * depth, depth], axis=-1)  # x, y across; z depth
     ball = (slice(36, 46), slice(31, 41))
-    assert _structure(coloured, P)[ball].all()      # one region in the image
+    assert _structure(coloured, P)[ball].all()  # one region in the image
     structure = _structure(coloured & ~_depth_steps(coloured, depth), P)
     assert not structure[ball].any() and structure[15, 5]
 
@@ -170,14 +187,15 @@ def test_an_objects_foot_hidden_by_the_edge_of_its_table_is_at_the_edges_top():
     # house_hard 2037: a bottle on the TV bench seen from 2 m, the camera 9 cm high: the
     # bench's front edge, 0.9 m away, hides all of it below 0.43 m; its base is at 0.25 m
     from actors.perception_segments import _support
+
     h, w = 20, 5
     depth = np.full((h, w), np.nan)
     P = np.full((h, w, 3), np.nan)
     lab = np.zeros((h, w), np.int32)
     depth[2:9] = 2.0
-    P[2:9, :, 2] = np.linspace(0.50, 0.43, 7)[:, None]           # the bottle, green
+    P[2:9, :, 2] = np.linspace(0.50, 0.43, 7)[:, None]  # the bottle, green
     lab[2:9] = 1
-    depth[11:] = 0.9                                              # the bench's front face
+    depth[11:] = 0.9  # the bench's front face
     P[11:, :, 2] = (0.245 - 0.003 * np.arange(h - 11))[:, None]
     lab[11:] = 2
     low, cols = np.full(w, 8), np.arange(w)
@@ -195,8 +213,8 @@ def test_the_base_of_an_object_on_a_table_is_told_by_the_looks_that_see_most_of_
     far = [{"z": z, "height": 0.21} for z in (0.252, 0.254, 0.251)]
     near = [{"z": z, "height": h} for z, h in ((0.386, 0.05), (0.39, 0.04), (0.37, 0.08), (0.38, 0.06))]
     assert base_height(far + near) == pytest.approx(0.252)
-    assert base_height(near[:1]) == pytest.approx(0.386)          # all there is
-    assert base_height([{"z": 0.01}, {"z": 0.0}, {"z": 0.02}]) == pytest.approx(0.01)   # no heights
+    assert base_height(near[:1]) == pytest.approx(0.386)  # all there is
+    assert base_height([{"z": 0.01}, {"z": 0.0}, {"z": 0.02}]) == pytest.approx(0.01)  # no heights
 
 
 # ----------------------------------------------------------------------------- camera
@@ -209,7 +227,7 @@ def test_camera_streams_and_the_posed_rgbd_frame(world):
     assert isinstance(info, CameraInfo)
     assert pic.shape == (info.height, info.width, 3) and pic.dtype == np.uint8
     assert depth.shape == (info.height, info.width) and depth.dtype == np.float32
-    red = (pic[:, :, 2] > 120) & (pic[:, :, 1] < 60) & (pic[:, :, 0] < 60)   # BGR order
+    red = (pic[:, :, 2] > 120) & (pic[:, :, 1] < 60) & (pic[:, :, 0] < 60)  # BGR order
     assert red.sum() > 100
     frame = rt.call("rgbd")
     assert isinstance(frame, RGBDFrame)
@@ -217,6 +235,7 @@ def test_camera_streams_and_the_posed_rgbd_frame(world):
     # is where the sim has the link
     pos, orn = sim.link_pose("camera_optical_frame")
     import pybullet as p
+
     R = np.array(p.getMatrixFromQuaternion(orn)).reshape(3, 3)
     assert np.allclose(frame.T_map_cam[:3, 3], pos, atol=1e-3)
     assert np.allclose(frame.T_map_cam[:3, :3], R, atol=1e-3)
@@ -234,6 +253,7 @@ def test_rgbd_pairs_colour_and_depth_by_stamp(world):
         with rt.root.run_actor_mode("color_raw", "iterator") as c, rt.root.run_actor_mode("depth_raw", "iterator") as d:
             pair = stamp_seconds(next(c).header), stamp_seconds(next(d).header)
         return got, pair
+
     stamps, pair = run_in_actor(rt, body)
     assert len(stamps) >= 4 and stamps == sorted(stamps)
     assert pair[0] == pair[1]
@@ -287,9 +307,11 @@ def test_a_carton_is_recognised_by_its_size_with_its_centre_and_yaw(world, dista
 
 def test_a_category_registered_after_start_is_recognised(world):
     import categories
+
     rt, sim, names = world
-    tube = categories.Category("purple_tube_test", categories.Cylinder(0.03, 0.15), 0.05,
-                               (0.55, 0.1, 0.8, 1.0), categories.Grasp(height=0.07))
+    tube = categories.Category(
+        "purple_tube_test", categories.Cylinder(0.03, 0.15), 0.05, (0.55, 0.1, 0.8, 1.0), categories.Grasp(height=0.07)
+    )
     categories.register(tube)
     try:
         name = sim.add_object("purple_tube_test", *PARK)
@@ -325,11 +347,10 @@ def test_find_object_pic_find_and_timeout(world):
     found = rt.call("pic_find", "can", 5.0)
     assert found["category"] == "can"
     assert math.hypot(found["x"] - truth[0], found["y"] - truth[1]) <= 0.01
-    assert set(found) >= {"category", "x", "y", "z", "height", "width", "distance", "bearing",
-                          "confidence", "pixel"}
+    assert set(found) >= {"category", "x", "y", "z", "height", "width", "distance", "bearing", "confidence", "pixel"}
     assert rt.call("find_object", "bottle") is None
     assert rt.call("find_object")["category"] == "can"
-    assert rt.call("find_object", "any")["category"] == "can"    # as the docs and trees say it
+    assert rt.call("find_object", "any")["category"] == "can"  # as the docs and trees say it
     _place(sim, names, [("box", 0.6, -0.2, 0.5)])
     t0 = rt.now()
     assert rt.call("pic_find", None, 1.5) is None
@@ -353,6 +374,7 @@ def test_get_found_and_the_servoing_streams(world):
         with rt.root.run_actor_mode("measure_center", "timed_iterator", 0.7, None) as it:
             centre = [m for m in it]
         return dist, centre
+
     dist, centre = run_in_actor(rt, body)
     assert len(dist) >= 3 and all(m["distance"] == pytest.approx(1.1, abs=0.01) for m in dist)
     assert all(m["bearing"] == pytest.approx(0.25, abs=0.01) for m in dist)
@@ -365,6 +387,7 @@ def test_get_found_and_the_servoing_streams(world):
 def test_positions_stay_right_while_the_robot_turns(world):
     """Frames are posed by the base pose interpolated to their stamp."""
     from actors.navigation import Navigation
+
     rt, sim, names = world
     rt.add_subsystem("navigation", Navigation)
     _place(sim, names, [("can", 1.0, 0.0, 0.0)])
@@ -378,10 +401,11 @@ def test_positions_stay_right_while_the_robot_turns(world):
             out = [m for m in it if m]
         txn.cancel("test over")
         return out
+
     seen = run_in_actor(rt, body)
     assert len(seen) >= 4
     bearings = [m["bearing"] for m in seen]
-    assert max(bearings) - min(bearings) > 0.1           # the robot did turn
+    assert max(bearings) - min(bearings) > 0.1  # the robot did turn
     assert all(math.hypot(m["x"] - truth[0], m["y"] - truth[1]) <= 0.01 for m in seen)
 
 

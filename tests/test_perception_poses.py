@@ -1,5 +1,6 @@
 """Perception of objects lying on their side, and of labelled ones, in house_hard's look
 (printed labels, light, colour jitter, depth noise): detect() on rendered frames."""
+
 import dataclasses
 import math
 
@@ -11,7 +12,7 @@ from bench.bench_perception_hard import _frame, _teleport
 from sim import SimWorld
 from common.quiet_pybullet import pybullet as p
 
-SPOT = (1.6, 1.6)          # open floor in the living room
+SPOT = (1.6, 1.6)  # open floor in the living room
 
 
 @pytest.fixture(scope="module")
@@ -43,7 +44,7 @@ def test_a_lying_body_is_recognised_with_its_axis(sim, category, radius):
     axis_yaw = 0.7
     _put(sim, name, p.getQuaternionFromEuler([math.pi / 2, 0.0, axis_yaw - math.pi / 2]), radius + 0.002)
     app = registered_appearances()[category]
-    pose = sim.object_pose(name)           # the frame (a body's base pose is its centre of mass)
+    pose = sim.object_pose(name)  # the frame (a body's base pose is its centre of mass)
     pos, orn = pose[:3], pose[3:]
     R = np.array(p.getMatrixFromQuaternion(orn)).reshape(3, 3)
     body_centre = np.array(pos) + R @ [0, 0, 0.5 * app.body_top - 0.5 * app.height]
@@ -73,7 +74,7 @@ def test_a_labelled_bottle_standing_is_one_bottle(sim):
         dets = _look(sim, bearing, 0.7)
         found = _near(dets, "bottle", SPOT, 0.01)
         assert found and found[0]["pose"] == "upright", dets
-        assert abs(found[0]["z"]) < 0.01, found[0]          # its base, not the label's top
+        assert abs(found[0]["z"]) < 0.01, found[0]  # its base, not the label's top
     sim.set_object_pose(name, 40.0, 40.0)
 
 
@@ -81,17 +82,18 @@ def test_a_labelled_bottle_on_a_table_seen_across_it_has_its_base_on_the_table()
     """From the low camera (9 cm), across the study table, the table's edge hides the
     green below the bottle's label: the green in view ends at the label's top, 0.15 m
     above the base, and the label goes on below it."""
-    world = SimWorld(None, "house_hard", seed=2011)      # a bottle at the table's far end
+    world = SimWorld(None, "house_hard", seed=2011)  # a bottle at the table's far end
     try:
-        bottle = next(n for n in world.object_names() if world.object_category(n) == "bottle"
-                      and world.object_pose(n)[2] > 0.2)
+        bottle = next(
+            n for n in world.object_names() if world.object_category(n) == "bottle" and world.object_pose(n)[2] > 0.2
+        )
         x, y, z = world.object_pose(bottle)[:3]
-        base = z - 0.305 / 2                                 # its frame is at half its height
+        base = z - 0.305 / 2  # its frame is at half its height
         _teleport(world, 6.4, 6.6, math.atan2(y - 6.6, x - 6.4))
         standing = []
-        for _ in range(3):      # (seen so, part of it, its lean is noise: some frames say lying)
+        for _ in range(3):  # (seen so, part of it, its lean is noise: some frames say lying)
             dets = detect(_frame(world), registered_appearances())
-            found = _near(dets, "bottle", (x, y), 0.08)    # (from 1.7 m, a few cm off)
+            found = _near(dets, "bottle", (x, y), 0.08)  # (from 1.7 m, a few cm off)
             assert found, dets
             standing += [d for d in found if d["pose"] != "lying"]
         assert standing
@@ -105,12 +107,12 @@ def test_a_labelled_bottle_on_a_table_seen_across_it_has_its_base_on_the_table()
 def test_a_lying_carton_is_recognised_with_the_face_it_lies_on(sim, roll_axis, height, across):
     # 70 x 45 x 120 mm: lying on its 70 mm face it is 45 mm high, and the other way round
     name = next(n for n in sim.object_names() if sim.object_category(n) == "carton")
-    axis_yaw = 0.4                                 # where its long (z) side points
+    axis_yaw = 0.4  # where its long (z) side points
     euler = [math.pi / 2, 0.0, axis_yaw + math.pi / 2] if roll_axis == "x" else [0.0, math.pi / 2, axis_yaw]
     _put(sim, name, p.getQuaternionFromEuler(euler), height / 2 + 0.002)
     pose = sim.object_pose(name)
     R = np.array(p.getMatrixFromQuaternion(pose[3:])).reshape(3, 3)
-    assert abs(R[2, 2]) < 0.05                     # its long side is level
+    assert abs(R[2, 2]) < 0.05  # its long side is level
     true_yaw = math.atan2(R[1, 2], R[0, 2])
     seen = 0
     for bearing in (0.0, 1.2, -1.4):
@@ -133,22 +135,22 @@ def test_a_patch_of_a_table_in_a_categorys_colour_is_no_object():
         for yaw in (-20, -10, 0, 10):
             _teleport(world, 1.75, 1.95, 0.35 + math.radians(yaw))
             dets = detect(_frame(world), registered_appearances())
-            near_table = [d for d in dets if d["category"] != "unknown"
-                          and 2.9 < d["x"] < 4.1 and 2.25 < d["y"] < 2.95]
+            near_table = [d for d in dets if d["category"] != "unknown" and 2.9 < d["x"] < 4.1 and 2.25 < d["y"] < 2.95]
             assert not near_table, near_table
     finally:
         world.close()
+
 
 #: seed 2004's pallet (0.6 x 0.4 x 0.12 m: a carton's height; under that light in the
 #: carton's hue) seen so that a carton-sized part of it shows: the robot's pose, and where
 #: a carton is put in the same frame (None: none)
 PALLET_VIEWS = [
-    ((8.57, 3.56, 2.785), (7.41, 3.89)),        # the search's view from 3 m: its corner at
+    ((8.57, 3.56, 2.785), (7.41, 3.89)),  # the search's view from 3 m: its corner at
     #                                             the image's right border, the rest out of view
-    ((6.72, 5.50, 2.033), (6.43, 5.97)),        # the close look from 0.5 m: the same
+    ((6.72, 5.50, 2.033), (6.43, 5.97)),  # the close look from 0.5 m: the same
     ((7.89, 2.80, math.pi / 2), (7.79, 3.80)),  # its corner beside a nearer wall, its 0.4 m
     #                                             side seen edge-on
-    ((4.59, 7.79, -0.349), None),               # its corner beside the nearer desk, of its hue
+    ((4.59, 7.79, -0.349), None),  # its corner beside the nearer desk, of its hue
 ]
 
 
@@ -163,9 +165,13 @@ def test_a_part_of_the_pallet_is_no_carton_and_a_carton_in_the_same_view_is():
             world.set_object_pose(carton, *(put or (40.0, 40.0)), 0.3)
             _teleport(world, x, y, yaw)
             dets = detect(_frame(world), registered_appearances())
-            on_pallet = [d for d in dets if d["category"] != "unknown"
-                         and abs(d["x"] - pallet.x) < pallet.sx / 2 + 0.1
-                         and abs(d["y"] - pallet.y) < pallet.sy / 2 + 0.1]
+            on_pallet = [
+                d
+                for d in dets
+                if d["category"] != "unknown"
+                and abs(d["x"] - pallet.x) < pallet.sx / 2 + 0.1
+                and abs(d["y"] - pallet.y) < pallet.sy / 2 + 0.1
+            ]
             assert not on_pallet, ((x, y, yaw), on_pallet)
             if put:
                 assert _near(dets, "carton", put, 0.02), ((x, y, yaw), dets)
@@ -242,10 +248,15 @@ def cone():
     import categories
     from categories import Category, Grasp, Revolution
 
-    cat = categories.register(Category(
-        name="cone_test",
-        shape=Revolution(((0.019, 0.0259), (0.038, 0.0282), (0.057, 0.0305), (0.076, 0.0328), (0.095, 0.0351))),
-        mass=0.012, rgba=(0.10, 0.30, 0.90, 1.0), grasp=Grasp(height=0.050, open_width=0.085, lift=0.10)))
+    cat = categories.register(
+        Category(
+            name="cone_test",
+            shape=Revolution(((0.019, 0.0259), (0.038, 0.0282), (0.057, 0.0305), (0.076, 0.0328), (0.095, 0.0351))),
+            mass=0.012,
+            rgba=(0.10, 0.30, 0.90, 1.0),
+            grasp=Grasp(height=0.050, open_width=0.085, lift=0.10),
+        )
+    )
     try:
         yield cat
     finally:
@@ -262,7 +273,7 @@ def test_a_lying_tapered_body_is_recognised_from_its_side(cone):
         _put(s, name, p.getQuaternionFromEuler([math.pi / 2, 0.0, axis_yaw - math.pi / 2]), 0.04)
         pose = s.object_pose(name)
         seen = []
-        for bearing in (0.0, 2.4, -0.9, 2.2):           # from the side and obliquely
+        for bearing in (0.0, 2.4, -0.9, 2.2):  # from the side and obliquely
             for distance in (0.6, 1.0):
                 found = _near(_look(s, bearing, distance), "cone_test", pose[:2], tol=0.06)
                 seen += [(bearing, distance)] if found else []

@@ -2,6 +2,7 @@
 2004's yellow mug (a pybullet_data mesh, a distractor) must not pass the carton's box
 fit, and the world's real carton must still be found; seed 2001's red flat box is no
 lying can. detect() on rendered frames (depth noise on)."""
+
 import math
 
 import numpy as np
@@ -45,8 +46,11 @@ def _tip_over(world, name, rpy_deg):
     p.resetBasePositionAndOrientation(body, pos, q, physicsClientId=world.cid)
     lo, hi = p.getAABB(body, physicsClientId=world.cid)
     p.resetBasePositionAndOrientation(
-        body, [pos[0] + x - 0.5 * (lo[0] + hi[0]), pos[1] + y - 0.5 * (lo[1] + hi[1]), pos[2] - lo[2] + 5e-4],
-        q, physicsClientId=world.cid)
+        body,
+        [pos[0] + x - 0.5 * (lo[0] + hi[0]), pos[1] + y - 0.5 * (lo[1] + hi[1]), pos[2] - lo[2] + 5e-4],
+        q,
+        physicsClientId=world.cid,
+    )
     return x, y
 
 
@@ -61,8 +65,14 @@ def test_the_standing_mug_is_no_carton_from_close_by(world):
 # Views of the mug knocked over on its side (its handle up) where the box fit took it for
 # a standing carton before its faces had to be flat: the curved side fits a rectangle
 # within the noise point by point, but bows by centimetres.
-TIPPED_VIEWS = [(0.5, 100, -0.35), (0.5, 100, 0.0), (0.5, 100, 0.35), (0.7, 100, -0.35), (0.7, 100, 0.0),
-                (0.9, 100, 0.35)]
+TIPPED_VIEWS = [
+    (0.5, 100, -0.35),
+    (0.5, 100, 0.0),
+    (0.5, 100, 0.35),
+    (0.7, 100, -0.35),
+    (0.7, 100, 0.0),
+    (0.9, 100, 0.35),
+]
 
 
 def test_a_tipped_over_mug_is_no_carton():
@@ -90,7 +100,7 @@ def test_a_lying_carton_is_found_end_on_and_side_on_from_the_grasp_standoff(worl
     # The grasps come square to it, end on or side on.
     carton = _name(world, "carton")
     pose = world.object_poses()[carton]
-    axis = np.array(p.getMatrixFromQuaternion(pose[3:])).reshape(3, 3)[:, 2]   # its 120 mm side
+    axis = np.array(p.getMatrixFromQuaternion(pose[3:])).reshape(3, 3)[:, 2]  # its 120 mm side
     along = math.degrees(math.atan2(axis[1], axis[0]))
     for bearing in (along, along + 90, along + 180, along + 270):
         found = [d for d in _near(_look(world, pose[:2], 0.35, bearing), pose[:2], 0.02) if d["category"] == "carton"]

@@ -76,9 +76,7 @@ def test_path_through_the_door_is_collision_free_and_smoothed():
     for a, b in zip(path.waypoints[:-1], path.waypoints[1:]):
         assert _segment_is_clear(planner.costmap, a, b) >= RADIUS
     # it crosses the wall through the door, near its middle
-    crossings = [
-        (a, b) for a, b in zip(path.waypoints[:-1], path.waypoints[1:]) if (a[0] - 3.05) * (b[0] - 3.05) < 0
-    ]
+    crossings = [(a, b) for a, b in zip(path.waypoints[:-1], path.waypoints[1:]) if (a[0] - 3.05) * (b[0] - 3.05) < 0]
     assert len(crossings) == 1
     (ax, ay), (bx, by) = crossings[0]
     y_at_wall = ay + (by - ay) * (3.05 - ax) / (bx - ax)

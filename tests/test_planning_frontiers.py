@@ -1,4 +1,5 @@
 """Frontier exploration on hand-made grids: frontiers, their goals, the end of exploring."""
+
 import math
 
 import numpy as np
@@ -14,7 +15,7 @@ def corridor(known_until: float) -> OccupancyGrid:
     """A 6 m x 1.5 m corridor along x, walled, known (free) up to x = ``known_until``."""
     data = np.zeros((30, 120), np.int8)
     data[0, :] = data[-1, :] = data[:, 0] = data[:, -1] = 100
-    data[:, int(known_until / RES):] = -1
+    data[:, int(known_until / RES) :] = -1
     return OccupancyGrid(data, RES, (0.0, 0.0))
 
 
@@ -24,7 +25,7 @@ def test_the_frontier_is_where_the_known_corridor_ends():
     f = fs[0]
     assert f.middle[0] == pytest.approx(2.975, abs=0.06)
     gx, gy, yaw = f.goal
-    assert 2.5 < gx < 3.0 and abs(yaw) < 0.3           # just short of it, facing the unknown
+    assert 2.5 < gx < 3.0 and abs(yaw) < 0.3  # just short of it, facing the unknown
     assert f.distance == pytest.approx(gx - 0.5, abs=0.15)
 
 
@@ -41,7 +42,7 @@ def test_goals_that_failed_are_avoided():
 
 def test_path_distances_go_around_walls():
     data = np.zeros((40, 40), np.int8)
-    data[0:30, 20] = 100                                  # a wall with a gap at the top
+    data[0:30, 20] = 100  # a wall with a gap at the top
     cm = inflate(OccupancyGrid(data, RES, (0.0, 0.0)), 0.05)
     d = path_distances(cm, (0.5, 0.5))
     straight = 1.0
@@ -55,16 +56,16 @@ def test_bad_parameters_are_refused():
 
 
 def test_a_small_unknown_pocket_is_not_worth_a_trip_a_closed_room_is():
-    data = np.zeros((60, 80), np.int8)                    # 4 m x 3 m, all seen
+    data = np.zeros((60, 80), np.int8)  # 4 m x 3 m, all seen
     data[0, :] = data[-1, :] = data[:, 0] = data[:, -1] = 100
-    data[10:20, 10:22] = -1                               # under a table: 0.6 m x 0.5 m unknown
-    data[10:20, 10] = 100                                 # (its legs and back seen, the front open)
+    data[10:20, 10:22] = -1  # under a table: 0.6 m x 0.5 m unknown
+    data[10:20, 10] = 100  # (its legs and back seen, the front open)
     cm = inflate(OccupancyGrid(data, RES, (0.0, 0.0)), 0.2)
     assert next_frontier(cm, (3.0, 2.0)) is None
-    assert next_frontier(cm, (3.0, 2.0), min_unknown=0.1) is not None     # a big enough pocket
+    assert next_frontier(cm, (3.0, 2.0), min_unknown=0.1) is not None  # a big enough pocket
     # a room never looked into (1.5 m x 1.5 m behind a door) is explored
     data[28:59, 48:79] = -1
     data[28, 48:79] = 100
-    data[28, 55:63] = 0                                   # its door, open
+    data[28, 55:63] = 0  # its door, open
     f = next_frontier(inflate(OccupancyGrid(data, RES, (0.0, 0.0)), 0.2), (3.0, 0.5))
     assert f is not None and f.middle[1] == pytest.approx(1.42, abs=0.1) and 2.7 < f.middle[0] < 3.2

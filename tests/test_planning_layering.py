@@ -62,7 +62,15 @@ def test_results_are_frozen_dataclasses():
         planning.Obstacle,
     ):
         assert dataclasses.is_dataclass(cls) and cls.__dataclass_params__.frozen, cls.__name__
-    assert all(issubclass(e, planning.PlanningError) for e in (
-        planning.ModelError, planning.InvalidInputError, planning.UnreachableError,
-        planning.InvalidStateError, planning.NoPathError, planning.TrajectoryError, planning.SceneError,
-    ))
+    assert all(
+        issubclass(e, planning.PlanningError)
+        for e in (
+            planning.ModelError,
+            planning.InvalidInputError,
+            planning.UnreachableError,
+            planning.InvalidStateError,
+            planning.NoPathError,
+            planning.TrajectoryError,
+            planning.SceneError,
+        )
+    )

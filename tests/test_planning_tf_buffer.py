@@ -1,5 +1,6 @@
 """The transform tree (planning.tf_buffer): chains, inverses, interpolation, statics and
 clear errors."""
+
 from __future__ import annotations
 
 import math
@@ -8,8 +9,17 @@ from types import SimpleNamespace as NS
 import numpy as np
 import pytest
 
-from planning.tf_buffer import (TransformBuffer, TransformError, interpolate, invert, matrix_quaternion, planar,
-                                pose2d, quaternion_matrix, transform_matrix)
+from planning.tf_buffer import (
+    TransformBuffer,
+    TransformError,
+    interpolate,
+    invert,
+    matrix_quaternion,
+    planar,
+    pose2d,
+    quaternion_matrix,
+    transform_matrix,
+)
 
 
 def tree() -> TransformBuffer:
@@ -29,8 +39,9 @@ def test_a_chain_composes_parent_to_child():
 
 def test_the_reverse_lookup_is_the_inverse():
     tf = tree()
-    np.testing.assert_allclose(tf.lookup("base_scan", "map", 1.0), invert(tf.lookup("map", "base_scan", 1.0)),
-                               atol=1e-12)
+    np.testing.assert_allclose(
+        tf.lookup("base_scan", "map", 1.0), invert(tf.lookup("map", "base_scan", 1.0)), atol=1e-12
+    )
 
 
 def test_times_between_samples_are_interpolated_and_statics_hold_at_any_time():
@@ -55,8 +66,12 @@ def test_unknown_and_unconnected_frames_are_named():
 
 def test_messages_are_read_like_tf2_msgs():
     def stamped(parent, child, x, sec):
-        return NS(header=NS(frame_id=parent, stamp=NS(sec=sec, nanosec=0)), child_frame_id=child,
-                  transform=NS(translation=NS(x=x, y=0.0, z=0.0), rotation=NS(x=0.0, y=0.0, z=0.0, w=1.0)))
+        return NS(
+            header=NS(frame_id=parent, stamp=NS(sec=sec, nanosec=0)),
+            child_frame_id=child,
+            transform=NS(translation=NS(x=x, y=0.0, z=0.0), rotation=NS(x=0.0, y=0.0, z=0.0, w=1.0)),
+        )
+
     tf = TransformBuffer()
     tf.add_message(NS(transforms=[stamped("/odom", "base_footprint", 0.5, 1)]))
     tf.add_message(stamped("base_footprint", "base_link", 0.0, 0), static=True)

@@ -1,4 +1,5 @@
 """Search viewpoints on hand-made grids: every room gets a view, walls block the view."""
+
 import numpy as np
 import pytest
 
@@ -21,9 +22,9 @@ def two_rooms(door: bool = True) -> OccupancyGrid:
 def test_each_room_is_seen_from_a_place_inside_it():
     views = viewpoints(inflate(two_rooms(), 0.2), (1.0, 1.0), view_range=2.5)
     assert any(x < 4.0 for x, _ in views) and any(x > 4.0 for x, _ in views)
-    assert views[0][0] < 4.0                 # the tour starts in the robot's room
+    assert views[0][0] < 4.0  # the tour starts in the robot's room
     cm = inflate(two_rooms(), 0.2)
-    for x, y in views:                       # every place is one the base may stand on
+    for x, y in views:  # every place is one the base may stand on
         assert not cm.lethal[cm.grid.cell_of(x, y)]
 
 

@@ -2,6 +2,7 @@
 RViz's "2D Pose Estimate" sends it, heard by a subscription in this test; no subscriber is
 exit status 1, the local bus exit status 2 with where to give the pose instead. Also the
 navigation's set_initial_pose actor, which gives it from a runtime on any bus."""
+
 from __future__ import annotations
 
 import math
@@ -22,12 +23,14 @@ DOMAIN = str(231 + os.getpid() % 2)
 def config(tmp_path, transport: str) -> str:
     """An actorbt.yaml with nothing to start: pose init needs only the transport."""
     cfg = tmp_path / "actorbt.yaml"
-    cfg.write_text(textwrap.dedent(f"""\
+    cfg.write_text(
+        textwrap.dedent(f"""\
         subsystems: {{}}
         trees: null
         world: null
         transport: {transport}
-        """))
+        """)
+    )
     return str(cfg)
 
 
@@ -71,19 +74,33 @@ def test_over_ros_a_subscriber_gets_the_pose_and_covariance(tmp_path, capsys, ro
     from rclpy.qos import QoSProfile
 
     from bt_ros.host import RosHost
+
     heard: list = []
     arrived = threading.Event()
 
     def on_pose(msg) -> None:  # the executor thread
         heard.append(msg)
         arrived.set()
+
     with RosHost("amcl-stand-in", domain_id=ros_domain) as host:
         node = host.create_node("amcl", lean=True)
-        host.call(node.create_subscription, PoseWithCovarianceStamped, "/initialpose", on_pose,
-                  QoSProfile(depth=10))
+        host.call(node.create_subscription, PoseWithCovarianceStamped, "/initialpose", on_pose, QoSProfile(depth=10))
         # transport: ros in actorbt.yaml, as actorbt.real.yaml says it (no --bus)
-        rc = main(["--config", config(tmp_path, "ros"), "pose", "init", "1.5", "-2", "-1.57",
-                   "--std-xy", "0.2", "--wait", "20"])
+        rc = main(
+            [
+                "--config",
+                config(tmp_path, "ros"),
+                "pose",
+                "init",
+                "1.5",
+                "-2",
+                "-1.57",
+                "--std-xy",
+                "0.2",
+                "--wait",
+                "20",
+            ]
+        )
         out, err = capsys.readouterr()
         assert rc == 0, err
         assert arrived.wait(5), "the pose never arrived"
@@ -100,18 +117,15 @@ def test_over_ros_a_subscriber_gets_the_pose_and_covariance(tmp_path, capsys, ro
 
 
 def test_over_ros_with_no_subscriber_it_says_so_and_exits_1(tmp_path, capsys, ros_domain):
-    rc = main(["--config", config(tmp_path, "local"), "pose", "init", "1", "1", "0",
-               "--bus", "ros", "--wait", "0.5"])
+    rc = main(["--config", config(tmp_path, "local"), "pose", "init", "1", "1", "0", "--bus", "ros", "--wait", "0.5"])
     out, err = capsys.readouterr()
     assert rc == 1 and out == ""
-    assert ("nobody subscribes to /initialpose after 0.5 s: is AMCL / the navstack running?"
-            in err)
+    assert "nobody subscribes to /initialpose after 0.5 s: is AMCL / the navstack running?" in err
 
 
 def test_a_standard_deviation_is_not_negative(tmp_path, capsys):
     with pytest.raises(SystemExit) as stop:
-        main(["--config", config(tmp_path, "ros"), "pose", "init", "1", "1", "0",
-              "--std-yaw", "-0.1"])
+        main(["--config", config(tmp_path, "ros"), "pose", "init", "1", "1", "0", "--std-yaw", "-0.1"])
     assert stop.value.code == 2
     assert "expected a standard deviation >= 0, got -0.1" in capsys.readouterr().err
 
@@ -122,6 +136,7 @@ def test_set_initial_pose_publishes_initialpose_in_the_map_frame():
 
     from actors.navigation import Navigation
     from bt_engine import Runtime
+
     heard: list = []
     with Runtime() as rt:
         rt.add_subsystem("navigation", Navigation)
@@ -134,6 +149,6 @@ def test_set_initial_pose_publishes_initialpose_in_the_map_frame():
     assert (first.pose.pose.position.x, first.pose.pose.position.y) == (2.0, 3.0)
     assert abs(yaw_of(first.pose.pose.orientation)) == pytest.approx(math.pi)
     assert first.pose.covariance[0] == first.pose.covariance[7] == pytest.approx(0.25)
-    assert first.pose.covariance[35] == pytest.approx(0.2618 ** 2)
+    assert first.pose.covariance[35] == pytest.approx(0.2618**2)
     assert second.pose.covariance[0] == pytest.approx(0.01)
     assert second.pose.covariance[35] == pytest.approx(0.0025)

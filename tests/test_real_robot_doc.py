@@ -1,6 +1,7 @@
 """docs/real-robot.md's interfaces table is what `actorbt robot` offers: every topic and
 action the simulated robot and the navstack publish, subscribe to or serve has its row,
 with the same type, and no row names one they do not offer."""
+
 from __future__ import annotations
 
 import contextlib
@@ -20,8 +21,8 @@ ROW = re.compile(r"^\| `(?P<name>/[^`]+)` \| `(?P<type>[^`]+)` \|")
 
 def documented() -> dict[str, str]:
     text = DOC.read_text()
-    section = text[text.index("## The interfaces actorbt uses"):]
-    section = section[:section.index("\n## ", 3)]
+    section = text[text.index("## The interfaces actorbt uses") :]
+    section = section[: section.index("\n## ", 3)]
     rows = [ROW.match(line) for line in section.splitlines()]
     return {m["name"]: m["type"] for m in rows if m}
 
@@ -30,8 +31,19 @@ def documented() -> dict[str, str]:
 def offered() -> dict[str, str]:
     out = io.StringIO()
     with contextlib.redirect_stdout(out):
-        rc = main(["--config", str(REPO / "actorbt.yaml"), "robot", "--world", "house", "--interfaces",
-                   "--json", "--bus", "local"])
+        rc = main(
+            [
+                "--config",
+                str(REPO / "actorbt.yaml"),
+                "robot",
+                "--world",
+                "house",
+                "--interfaces",
+                "--json",
+                "--bus",
+                "local",
+            ]
+        )
     assert rc == 0
     data = json.loads(out.getvalue())
     return {i["name"]: i["type"] for i in data["topics"] + data["actions"]}
@@ -50,8 +62,8 @@ def test_the_table_lists_what_the_robot_side_offers(offered):
 
 def test_each_row_names_its_upstream_source():
     text = DOC.read_text()
-    section = text[text.index("## The interfaces actorbt uses"):]
-    section = section[:section.index("\n## ", 3)]
+    section = text[text.index("## The interfaces actorbt uses") :]
+    section = section[: section.index("\n## ", 3)]
     for line in section.splitlines():
         if ROW.match(line):
             cells = [c.strip() for c in line.strip().strip("|").split("|")]

@@ -8,6 +8,7 @@ on the pallet (about 90 s of wall time). The outcome is judged from the robot si
 (`actorbt robot --truth`), not from the mission's word; and a referee node watches the ROS
 graph for what the mission process subscribes to: nothing a real robot lacks (every topic
 is one the robot side offers, or an action's own topics)."""
+
 from __future__ import annotations
 
 import json
@@ -26,11 +27,10 @@ REPO = Path(__file__).resolve().parents[1]
 ACTORBT = [sys.executable, "-m", "bt_cli.main"]
 #: a ROS domain of its own (see test_pose_cli for the others)
 DOMAIN = "0"
-ENV = dict(os.environ, ROS_DOMAIN_ID=DOMAIN, ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST",
-           PYTHONUNBUFFERED="1")
+ENV = dict(os.environ, ROS_DOMAIN_ID=DOMAIN, ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST", PYTHONUNBUFFERED="1")
 WORLD, SEED = "open_floor", "0"
-PLACE = {"x": 2.0, "y": -2.0, "size_x": 0.6, "size_y": 0.4, "height": 0.12}   # open_floor's pallet
-MISSION_TIMEOUT = 300.0      # [s, wall]; the run takes about 90 s
+PLACE = {"x": 2.0, "y": -2.0, "size_x": 0.6, "size_y": 0.4, "height": 0.12}  # open_floor's pallet
+MISSION_TIMEOUT = 300.0  # [s, wall]; the run takes about 90 s
 ACTION_TOPIC = re.compile(r"^(?P<action>/.+)/_action/(feedback|status)$")
 
 
@@ -40,6 +40,7 @@ class GraphReferee:
 
     def __init__(self) -> None:
         import rclpy
+
         self.rclpy = rclpy
         self.ctx = rclpy.Context()
         rclpy.init(context=self.ctx, domain_id=int(DOMAIN))
@@ -69,11 +70,17 @@ class GraphReferee:
 
 def offered_by_the_robot_side() -> tuple[dict[str, str], dict[str, str]]:
     """(topic: type, action: type) of `actorbt robot --interfaces --json`."""
-    out = subprocess.run([*ACTORBT, "robot", "--world", WORLD, "--interfaces", "--json", "--bus", "local"],
-                         cwd=REPO, env=ENV, capture_output=True, text=True, timeout=120, check=True)
+    out = subprocess.run(
+        [*ACTORBT, "robot", "--world", WORLD, "--interfaces", "--json", "--bus", "local"],
+        cwd=REPO,
+        env=ENV,
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=True,
+    )
     offered = json.loads(out.stdout)
-    return ({t["name"]: t["type"] for t in offered["topics"]},
-            {a["name"]: a["type"] for a in offered["actions"]})
+    return ({t["name"]: t["type"] for t in offered["topics"]}, {a["name"]: a["type"] for a in offered["actions"]})
 
 
 def wait_for_line(proc: subprocess.Popen, pattern: str, timeout: float) -> str:
@@ -93,16 +100,24 @@ def wait_for_line(proc: subprocess.Popen, pattern: str, timeout: float) -> str:
 
 def on_the_place(pose, place) -> bool:
     x, y, z = pose[:3]
-    return (abs(x - place["x"]) <= place["size_x"] / 2 and abs(y - place["y"]) <= place["size_y"] / 2
-            and z > place["height"])
+    return (
+        abs(x - place["x"]) <= place["size_x"] / 2
+        and abs(y - place["y"]) <= place["size_y"] / 2
+        and z > place["height"]
+    )
 
 
 @pytest.fixture
 def robot_side(tmp_path):
     truth = tmp_path / "truth.json"
-    proc = subprocess.Popen([*ACTORBT, "robot", "--world", WORLD, "--seed", SEED, "--truth", str(truth)],
-                            cwd=REPO, env=ENV, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                            text=True)
+    proc = subprocess.Popen(
+        [*ACTORBT, "robot", "--world", WORLD, "--seed", SEED, "--truth", str(truth)],
+        cwd=REPO,
+        env=ENV,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+    )
     try:
         wait_for_line(proc, "robot ready", 90)
         yield proc, truth
@@ -123,10 +138,27 @@ def test_the_missions_run_against_the_robot_side_as_on_a_real_robot(robot_side, 
     trace = tmp_path / "run.jsonl"
     try:
         mission = subprocess.Popen(
-            [*ACTORBT, "--config", str(REPO / "actorbt.real.yaml"), "run", "bt_pick_place",
-             "--arg", "category=can", "--arg", f"place={json.dumps(PLACE)}",
-             "--arg", "home={x: 0.0, y: 0.0, yaw: 0.0}", "--record", str(trace)],
-            cwd=REPO, env=ENV, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+            [
+                *ACTORBT,
+                "--config",
+                str(REPO / "actorbt.real.yaml"),
+                "run",
+                "bt_pick_place",
+                "--arg",
+                "category=can",
+                "--arg",
+                f"place={json.dumps(PLACE)}",
+                "--arg",
+                "home={x: 0.0, y: 0.0, yaw: 0.0}",
+                "--record",
+                str(trace),
+            ],
+            cwd=REPO,
+            env=ENV,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.STDOUT,
+            text=True,
+        )
         referee.pid = mission.pid
         try:
             out, _ = mission.communicate(timeout=MISSION_TIMEOUT)
@@ -138,7 +170,7 @@ def test_the_missions_run_against_the_robot_side_as_on_a_real_robot(robot_side, 
         referee.close()
     assert mission.returncode == 0, out[-4000:]
 
-    robot.send_signal(signal.SIGINT)          # the robot side writes its truth as it stops
+    robot.send_signal(signal.SIGINT)  # the robot side writes its truth as it stops
     robot.wait(timeout=30)
     truth = json.loads(truth_file.read_text())
     cans = [o["pose"] for o in truth["objects"].values() if o["category"] == "can"]
@@ -160,6 +192,12 @@ def test_the_missions_run_against_the_robot_side_as_on_a_real_robot(robot_side, 
     assert {"/tf", "/tf_static", "/odom", "/camera/color/image_raw"} <= set(referee.subscribed)
 
     # and the recording replays with no robot at all
-    replay = subprocess.run([*ACTORBT, "--config", str(REPO / "actorbt.real.yaml"), "replay", str(trace)],
-                            cwd=REPO, env=ENV, capture_output=True, text=True, timeout=300)
+    replay = subprocess.run(
+        [*ACTORBT, "--config", str(REPO / "actorbt.real.yaml"), "replay", str(trace)],
+        cwd=REPO,
+        env=ENV,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert replay.returncode == 0, replay.stdout[-3000:] + replay.stderr[-3000:]

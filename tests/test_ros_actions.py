@@ -1,6 +1,7 @@
 """Actions served from the hub over ROS 2 (bt_ros.action_server): one runtime
 serves, another is the client, over real DDS on loopback. The same server code as on
 the local bus (tests/test_bus_actions.py)."""
+
 from __future__ import annotations
 
 import pytest
@@ -21,8 +22,6 @@ class Client(SubSystem):
     def __init__(self) -> None:
         super().__init__()
         self.register_action("echo", CallActor, SERVER)
-
-
 
 
 @pytest.fixture(scope="module")

@@ -1,5 +1,6 @@
 """The classic ros_actor examples (a camera search, a subsystem of skills), written as a
 ros_actor user writes them, doing what their documentation says."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -20,7 +21,7 @@ def find_coke(cv_image: np.ndarray):
 class SampleSystem(SubSystem):
     def __init__(self):
         super().__init__()
-        self.register_subscriber('pic', Image, "/intel_realsense_r200_depth/image_raw", 10)
+        self.register_subscriber("pic", Image, "/intel_realsense_r200_depth/image_raw", 10)
 
     @actor
     def sample_actor(self, mes):
@@ -29,19 +30,21 @@ class SampleSystem(SubSystem):
     # hub_only: the local bus calls back on the hub, so the virtual clock need not pace
     # itself to wall time while a picture is awaited (tests/test_foreign_completion.py
     # runs the same pattern fed by a thread).
-    @actor('pic_receiver', 'async', hub_only=True)
+    @actor("pic_receiver", "async", hub_only=True)
     def pic_receiver(self, callback):
         """Start receiving one picture; call back with it as an array."""
+
         def on_frame(msg):
             sub.close()
             callback(np.frombuffer(bytes(msg.data), np.uint8).reshape(msg.height, msg.width, 3))
+
         sub = self.runtime.bus.subscribe("/intel_realsense_r200_depth/image_raw", Image, on_frame)
         return sub.close
 
     @actor
     def pic_find(self):
         ret = None
-        with self.run_actor_mode('pic_receiver', 'timed_iterator', 10) as pic_iter:
+        with self.run_actor_mode("pic_receiver", "timed_iterator", 10) as pic_iter:
             for cv_image in pic_iter:
                 ret = find_coke(cv_image)
                 if ret:
@@ -59,12 +62,14 @@ def start_camera(rt, coke_after: float | None):
             img[10:18, 20:26] = (200, 20, 20)
         msg = Image(height=24, width=32, encoding="rgb8", step=96, data=img.tobytes())
         pub.publish(msg)
+
     return rt.call_every(0.1, frame)
 
 
 def test_sample_actor_prints_hello(rt, capsys):
     s = rt.add_subsystem("sample", SampleSystem)
     from tests.conftest import run_in_actor
+
     run_in_actor(rt, lambda: s.run_actor("sample_actor", "hello"))
     assert capsys.readouterr().out == "hello\n"
 
@@ -74,6 +79,7 @@ def test_async_call_runs_callback_when_finished(rt, capsys):
     calls = []
     callback = calls.append
     from tests.conftest import run_in_actor
+
     run_in_actor(rt, lambda: (s.run_actor_mode("sample_actor", "async", callback, "hi"), rt.sleep(0.1)))
     assert calls == [None] and capsys.readouterr().out == "hi\n"
 
@@ -87,6 +93,7 @@ def test_iterator_calls_repeatedly_with_same_arguments(rt, capsys):
         with iterator:
             for _, _ in zip(range(3), iterator):
                 pass
+
     run_in_actor(rt, body)
     assert capsys.readouterr().out == "again\n" * 3
 

@@ -2,6 +2,7 @@
 offers (close matches), one line per goal from the server, the warm shell
 (``actorbt rshell``), start-up progress of ``actorbt sim run``, a client with no serve
 to talk to, and the discovery settings every actorbt process starts with."""
+
 from __future__ import annotations
 
 import io
@@ -43,8 +44,10 @@ def test_close_matches_put_names_containing_the_text_first():
     assert close_matches("pick", served)[:2] == ["bt_pick", "bt_pick_place"]
     assert close_matches("nosuchtree", served) == []
     err = UnknownTreeError("bt_pik", served)
-    assert str(err) == ("no served tree 'bt_pik'; did you mean: bt_pick, bt_pick_place? "
-                        "(served: bt_carry, bt_catch, bt_pick, bt_pick_place, bt_search, reset)")
+    assert str(err) == (
+        "no served tree 'bt_pik'; did you mean: bt_pick, bt_pick_place? "
+        "(served: bt_carry, bt_catch, bt_pick, bt_pick_place, bt_search, reset)"
+    )
     assert str(UnknownTreeError("x", [])) == "no served tree 'x' (served: none)"
 
 
@@ -105,6 +108,7 @@ def served(tmp_path_factory):
     try:
         rt.add_subsystem("work", Work)
         from bt_engine.trees import register_tree_folder
+
         register_tree_folder(rt, write_trees(tmp / "trees"))
         server = serve(rt, record_dir=tmp / "goals", on_event=lines.append)
         remote = Remote(wait=10.0)
@@ -171,23 +175,39 @@ class _Entry:
 
 def test_the_warm_shell_calls_completes_and_describes(served):
     rt, remote, lines = served
-    index = [_Entry("work.echo", "(*args, **kwargs) -> dict", doc="Echo the arguments."),
-             _Entry("work.slow", "(steps: int = 3, period: float = 0.02) -> int"),
-             _Entry("steps_tree", "(steps: int = 3, period: float = 0.02) -> dict", kind="tree")]
-    script = "\n".join(["work.echo 1 k='v'", "echo 2", "help echo", "help work.ech", "list work",
-                        "work.slow 1 2 3", "trees", "quit", "work.echo 3"]) + "\n"
+    index = [
+        _Entry("work.echo", "(*args, **kwargs) -> dict", doc="Echo the arguments."),
+        _Entry("work.slow", "(steps: int = 3, period: float = 0.02) -> int"),
+        _Entry("steps_tree", "(steps: int = 3, period: float = 0.02) -> dict", kind="tree"),
+    ]
+    script = (
+        "\n".join(
+            [
+                "work.echo 1 k='v'",
+                "echo 2",
+                "help echo",
+                "help work.ech",
+                "list work",
+                "work.slow 1 2 3",
+                "trees",
+                "quit",
+                "work.echo 3",
+            ]
+        )
+        + "\n"
+    )
     out = io.StringIO()
     shell = RemoteShell(remote, lambda: index, stdin=io.StringIO(script), stdout=out)
     shell.cmdloop()
     text = out.getvalue()
     assert "{'args': [1], 'kwargs': {'k': 'v'}}" in text
-    assert "{'args': [2], 'kwargs': {}}" in text                  # resolved by the serve
+    assert "{'args': [2], 'kwargs': {}}" in text  # resolved by the serve
     assert "work.echo(*args, **kwargs) -> dict  [sync]\nEcho the arguments." in text
     assert "error: unknown actor 'work.ech'; did you mean: work.echo" in text
     assert "  work.slow(steps: int = 3, period: float = 0.02) -> int  [sync]" in text
-    assert "error: refused (INVALID_GOAL):" in text                # too many arguments
+    assert "error: refused (INVALID_GOAL):" in text  # too many arguments
     assert "  steps_tree\n" in text
-    assert "{'args': [3]" not in text                             # after quit
+    assert "{'args': [3]" not in text  # after quit
     assert shell.completenames("work.e") == ["work.echo"]
     assert "steps_tree" in shell.completenames("steps")
 
@@ -204,30 +224,59 @@ def test_the_warm_shell_costs_a_round_trip_per_call(served):
 
 # -- processes ---------------------------------------------------------------------------------
 #: a ROS domain with no serve in it (test_ros_common takes 1..100 for this process)
-LONELY = dict(os.environ, ROS_DOMAIN_ID=str(101 + os.getpid() % 100), PYTHONUNBUFFERED="1",
-              ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST")
+LONELY = dict(
+    os.environ,
+    ROS_DOMAIN_ID=str(101 + os.getpid() % 100),
+    PYTHONUNBUFFERED="1",
+    ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST",
+)
 
 
-@pytest.mark.parametrize("argv", [["goal", "bt_pick", "--wait", "1"],
-                                  ["rcall", "get_pose", "--wait", "1"],
-                                  ["rshell", "--wait", "1"]])
+@pytest.mark.parametrize(
+    "argv", [["goal", "bt_pick", "--wait", "1"], ["rcall", "get_pose", "--wait", "1"], ["rshell", "--wait", "1"]]
+)
 def test_with_no_serve_the_clients_say_how_to_start_one(argv):
-    proc = subprocess.run([sys.executable, "-m", "bt_cli.main", *argv], cwd=ROOT,
-                          env=LONELY, input="", capture_output=True, text=True, timeout=60)
+    proc = subprocess.run(
+        [sys.executable, "-m", "bt_cli.main", *argv],
+        cwd=ROOT,
+        env=LONELY,
+        input="",
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
     assert proc.returncode == 2, proc.stdout + proc.stderr
     assert "no actorbt serve found within 1 s; start one with `actorbt serve`" in proc.stderr
 
 
 def test_sim_run_tells_its_start_up_and_loads_no_actors():
     # -X importtime lists every module imported on stderr
-    proc = subprocess.run([sys.executable, "-X", "importtime", "-m", "bt_cli.main", "sim",
-                           "run", "--world", "house", "--bus", "ros", "--seconds", "0.5"],
-                          cwd=ROOT, env=LONELY, capture_output=True, text=True, timeout=120)
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-X",
+            "importtime",
+            "-m",
+            "bt_cli.main",
+            "sim",
+            "run",
+            "--world",
+            "house",
+            "--bus",
+            "ros",
+            "--seconds",
+            "0.5",
+        ],
+        cwd=ROOT,
+        env=LONELY,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert proc.returncode == 0, proc.stdout + proc.stderr
     assert "actorbt sim run: starting world house (seed 0) on the ros bus..." in proc.stderr
     assert re.search(r"world house running on the ros bus, ready in \d+\.\d s", proc.stdout), proc.stdout
-    imported = {line.rpartition("|")[2].strip() for line in proc.stderr.splitlines()
-                if line.startswith("import time:")}
+    imported = {line.rpartition("|")[2].strip() for line in proc.stderr.splitlines() if line.startswith("import time:")}
     assert "sim.simworld" in imported
     assert not {m for m in imported if m.split(".")[0] in ("actors", "planning")}
     assert "bt_engine.trees" not in imported

@@ -5,6 +5,7 @@ subprocess.
 This module holds no tests itself. ``actorbt serve`` subprocesses import ``Work`` from
 here (through a temporary actorbt.yaml).
 """
+
 from __future__ import annotations
 
 import os
@@ -93,14 +94,16 @@ def write_config(tmp: pathlib.Path) -> pathlib.Path:
     """An actorbt.yaml with the Work subsystem and the test trees, on the ROS bus."""
     write_trees(tmp / "trees")
     cfg = tmp / "actorbt.yaml"
-    cfg.write_text(textwrap.dedent(f"""\
+    cfg.write_text(
+        textwrap.dedent(f"""\
         subsystems:
           work: tests.test_ros_common:Work
-        trees: {tmp / 'trees'}
+        trees: {tmp / "trees"}
         world: null
         transport: ros
         clock: wall
-        """))
+        """)
+    )
     return cfg
 
 
@@ -156,15 +159,24 @@ def wait_until(cond, timeout: float = 5.0, step: float = 0.01) -> bool:
 
 
 #: the environment of actorbt subprocesses: DDS on this machine, output unbuffered
-SUBPROCESS_ENV = dict(os.environ, ROS_AUTOMATIC_DISCOVERY_RANGE=os.environ.get(
-    "ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST"), PYTHONUNBUFFERED="1")
+SUBPROCESS_ENV = dict(
+    os.environ,
+    ROS_AUTOMATIC_DISCOVERY_RANGE=os.environ.get("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST"),
+    PYTHONUNBUFFERED="1",
+)
 
 
 def actorbt(*args: str, **kw) -> subprocess.Popen:
     """``actorbt ARGS`` in a subprocess, stdout and stderr merged into one text pipe."""
-    return subprocess.Popen([sys.executable, "-m", "bt_cli.main", *args], cwd=ROOT,
-                            env=SUBPROCESS_ENV, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                            text=True, **kw)
+    return subprocess.Popen(
+        [sys.executable, "-m", "bt_cli.main", *args],
+        cwd=ROOT,
+        env=SUBPROCESS_ENV,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+        **kw,
+    )
 
 
 class ServeProcess:

@@ -2,6 +2,7 @@
 subprocess, and clients here (action-client actors, the Remote client) and in further
 subprocesses (``actorbt goal``, ``actorbt rcall``, ``actorbt rshell``). The server is
 started once for the module."""
+
 from __future__ import annotations
 
 import json
@@ -20,8 +21,15 @@ from actorbt_interfaces.action import CallActor, RunTree  # noqa: E402
 from bt_engine import ActorError, Runtime  # noqa: E402
 from bt_ros.remote import Remote  # noqa: E402
 from bt_ros.transport import RosTransport  # noqa: E402
-from tests.test_ros_common import (ROOT, SUBPROCESS_ENV, ServeProcess, actorbt, shm_leaks,  # noqa: E402
-                                   shm_mapped, wait_until)
+from tests.test_ros_common import (
+    ROOT,
+    SUBPROCESS_ENV,
+    ServeProcess,
+    actorbt,
+    shm_leaks,  # noqa: E402
+    shm_mapped,
+    wait_until,
+)
 
 ENV = SUBPROCESS_ENV
 
@@ -78,8 +86,11 @@ def test_goal_with_feedback_and_cancel_mid_run(server, client):
     rt, remote = client
     before = remote.call("work.stats")
     feedback: list = []
-    g = remote.tree_goal("steps_tree", {"steps": 1000, "period": 0.01},
-                         on_feedback=lambda fb: feedback.append((fb.status, fb.active_node, fb.tick_count)))
+    g = remote.tree_goal(
+        "steps_tree",
+        {"steps": 1000, "period": 0.01},
+        on_feedback=lambda fb: feedback.append((fb.status, fb.active_node, fb.tick_count)),
+    )
     assert wait_until(lambda: any("counting" in a for _, a, _ in feedback), 10.0), feedback
     assert feedback[0][0] == "running"
     t0 = time.monotonic()
@@ -90,17 +101,20 @@ def test_goal_with_feedback_and_cancel_mid_run(server, client):
     assert cancel_latency < 1.0
     stats = remote.call("work.stats")
     assert stats["cancelled"] == before["cancelled"] + 1 and stats["live"] == []
+
     # the server's trace of the goal: the leaf's actor call and its transaction cancelled
     def trace_events():
         files = sorted((server.tmp / "goals").glob("*steps_tree*.jsonl"), key=os.path.getmtime)
         return [json.loads(line) for line in files[-1].read_text().splitlines()] if files else []
+
     assert wait_until(lambda: any(e["type"] == "end" for e in trace_events()), 5.0)
     events = trace_events()
     assert events[0]["type"] == "header" and events[0]["tree"] == "steps_tree"
-    assert any(e["type"] == "return" and e["actor"] == "work.slow" and e["state"] == "cancelled"
-               for e in events)
-    assert any(e["type"] == "txn" and e["phase"] == "end" and e["actor"] == "work.slow"
-               and e["state"] == "cancelled" for e in events)
+    assert any(e["type"] == "return" and e["actor"] == "work.slow" and e["state"] == "cancelled" for e in events)
+    assert any(
+        e["type"] == "txn" and e["phase"] == "end" and e["actor"] == "work.slow" and e["state"] == "cancelled"
+        for e in events
+    )
     assert [e["status"] for e in events if e["type"] == "end"] == ["INVALID"]
 
 
@@ -155,11 +169,18 @@ def test_rcall_of_an_unknown_actor_lists_close_matches(server):
 
 
 def test_rshell_runs_calls_from_piped_lines(server):
-    lines = "\n".join(["work.echo 1 k='v'", "work.boom", "help work.echo", "no_such_actor",
-                       "trees", "work.echo [2,3]", ""])
-    proc = subprocess.run([sys.executable, "-m", "bt_cli.main", "--config", str(server.cfg),
-                           "rshell"], cwd=ROOT, env=ENV, input=lines, capture_output=True,
-                          text=True, timeout=60)
+    lines = "\n".join(
+        ["work.echo 1 k='v'", "work.boom", "help work.echo", "no_such_actor", "trees", "work.echo [2,3]", ""]
+    )
+    proc = subprocess.run(
+        [sys.executable, "-m", "bt_cli.main", "--config", str(server.cfg), "rshell"],
+        cwd=ROOT,
+        env=ENV,
+        input=lines,
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
     assert proc.returncode == 0, proc.stdout + proc.stderr
     out = proc.stdout
     assert "{'args': [1], 'kwargs': {'k': 'v'}}" in out
@@ -167,7 +188,7 @@ def test_rshell_runs_calls_from_piped_lines(server):
     assert "kaput" in out
     assert "work.echo(*args, **kwargs) -> dict  [sync]" in out  # help, from the actor index
     assert "error: refused (INVALID_GOAL): unknown actor 'no_such_actor'" in out
-    assert "  steps_tree" in out                                 # trees
+    assert "  steps_tree" in out  # trees
     assert "{'args': [[2, 3]], 'kwargs': {}}" in out
     assert "connected in" in proc.stderr
 
@@ -177,6 +198,7 @@ def test_serve_prints_one_line_per_goal(server):
     # server has finished with it, which on a loaded machine can be after its client returned
     def has(pattern: str) -> bool:
         return wait_until(lambda: any(re.fullmatch(pattern, line) for line in server.lines), 5.0)
+
     gid = r"[0-9a-f]{8}"
     assert has(rf"goal {gid} steps_tree: succeeded in \d+\.\d+ s \(trace .*steps_tree.*\.jsonl\)"), server.output()
     assert has(rf"goal {gid} steps_tree \{{steps: 3, period: 0\.01\}}: accepted")
@@ -184,8 +206,10 @@ def test_serve_prints_one_line_per_goal(server):
     assert has(rf"goal {gid} steps_tree \{{steps: x\}}: refused \(INVALID_GOAL\): .*expected int.*")
     assert has(rf"call {gid} work\.echo\(1, k='v'\): succeeded in \d+\.\d+ s")
     assert has(rf"call {gid} work\.boom\(\): failed: .*kaput in \d+\.\d+ s")
-    assert has(rf"call {gid} work\.ech\(1\): refused \(INVALID_GOAL\): unknown actor 'work\.ech'; "
-               r"did you mean: work\.echo.*")
+    assert has(
+        rf"call {gid} work\.ech\(1\): refused \(INVALID_GOAL\): unknown actor 'work\.ech'; "
+        r"did you mean: work\.echo.*"
+    )
     # one line each: no goal is told twice
     end = re.compile(rf"(goal|call) {gid} .*: (succeeded|failed|canceled|aborted)")
     ends = [line for line in server.lines if end.match(line)]

@@ -1,5 +1,6 @@
 """``serve(rt)`` in one process, real rclpy: tree goals with feedback and results,
 CallActor, malformed goals, cancel, a second goal (rejected, or preempting)."""
+
 from __future__ import annotations
 
 import inspect
@@ -36,9 +37,11 @@ def served(tmp_path_factory):
     remote = server = None
     try:
         rt.add_subsystem("work", Work)
-        rt.run_on_hub(rt.root.add_actor, "quick_tree", _quick_tree, is_tree=True,
-                      signature=inspect.signature(_quick_tree))
+        rt.run_on_hub(
+            rt.root.add_actor, "quick_tree", _quick_tree, is_tree=True, signature=inspect.signature(_quick_tree)
+        )
         from bt_engine.trees import register_tree_folder
+
         register_tree_folder(rt, write_trees(tmp / "trees"))
         server = serve(rt, record_dir=tmp / "goals")
         remote = Remote()
@@ -59,6 +62,7 @@ def _feedback_log():
     def on_feedback(fb):
         with lock:
             log.append((fb.status, fb.active_node, fb.tick_count))
+
     return log, on_feedback
 
 
@@ -104,6 +108,7 @@ def test_a_goal_trace_replays(served, capsys):
     """`actorbt replay` of the trace serve wrote for a goal (wall clock, the recorder opened
     before the run starts), while another caller runs the same tree in the same runtime."""
     from bt_cli.main import main
+
     rt, server, remote, tmp = served
     before = set((tmp / "goals").glob("*steps_tree*.jsonl"))
     other = threading.Event()
@@ -142,12 +147,15 @@ def test_call_actor_results_and_failures(served):
     assert g.wait(5) and g.result.error_code == CallActor.Result.NONE and g.result.error_msg == ""
 
 
-@pytest.mark.parametrize("actor, args_yaml, reason", [
-    ("work.echo", "[1, 2", "not valid YAML at line 1, column 6: YAML syntax error: the end of the text where"),
-    ("no_such_actor", "", "unknown actor"),
-    ("work.slow", "{steps: 1, speed: 2}", "bad arguments"),
-    ("work.slow", "{args: 3}", "'args' must be a list"),
-])
+@pytest.mark.parametrize(
+    "actor, args_yaml, reason",
+    [
+        ("work.echo", "[1, 2", "not valid YAML at line 1, column 6: YAML syntax error: the end of the text where"),
+        ("no_such_actor", "", "unknown actor"),
+        ("work.slow", "{steps: 1, speed: 2}", "bad arguments"),
+        ("work.slow", "{args: 3}", "'args' must be a list"),
+    ],
+)
 def test_malformed_calls_are_rejected_with_a_reason(served, actor, args_yaml, reason):
     rt, server, remote, tmp = served
     g = remote.send(CallActor, "/actorbt/call", CallActor.Goal(actor=actor, args_yaml=args_yaml))
@@ -158,12 +166,15 @@ def test_malformed_calls_are_rejected_with_a_reason(served, actor, args_yaml, re
     assert remote.call("work.echo", 5) == {"args": [5], "kwargs": {}}  # still serving
 
 
-@pytest.mark.parametrize("inputs, reason", [
-    ("{steps: [", "the text ends inside a value"),
-    ("[1, 2]", "must be a mapping"),
-    ("{steps: many}", "expected int"),
-    ("{stride: 2}", "stride"),
-])
+@pytest.mark.parametrize(
+    "inputs, reason",
+    [
+        ("{steps: [", "the text ends inside a value"),
+        ("[1, 2]", "must be a mapping"),
+        ("{steps: many}", "expected int"),
+        ("{stride: 2}", "stride"),
+    ],
+)
 def test_malformed_tree_goals_are_rejected_with_a_reason(served, inputs, reason):
     rt, server, remote, tmp = served
     g = remote.tree_goal("steps_tree", inputs)
@@ -228,8 +239,11 @@ def test_goal_yaml_parsing():
     for bad in ("{1: 2}", "{args: [1], kwargs: [2]}", "!!python/object:os.system ls"):
         with pytest.raises(GoalError):
             parse_call_args(bad)
-    assert yaml.safe_load(dump({"t": (1, 2), "s": {3}, "o": RunTree.Goal(inputs_yaml="x")})) == \
-        {"t": [1, 2], "s": [3], "o": {"inputs_yaml": "x"}}
+    assert yaml.safe_load(dump({"t": (1, 2), "s": {3}, "o": RunTree.Goal(inputs_yaml="x")})) == {
+        "t": [1, 2],
+        "s": [3],
+        "o": {"inputs_yaml": "x"},
+    }
 
 
 def test_a_watched_folder_serves_new_trees_and_withdraws_removed_ones(tmp_path):
@@ -237,6 +251,7 @@ def test_a_watched_folder_serves_new_trees_and_withdraws_removed_ones(tmp_path):
     goal with TREE_REMOVED and withdraws the action; a broken file is told, not served."""
     from bt_engine.trees import register_tree_folder
     from tests.test_ros_common import STEPS_TREE
+
     rt = Runtime(clock="wall", bus=RosTransport)
     server = remote = None
     lines: list[str] = []
@@ -250,8 +265,7 @@ def test_a_watched_folder_serves_new_trees_and_withdraws_removed_ones(tmp_path):
         (folder / "bad.yaml").write_text("name: bad\nroot: {do: work.nothing}\n")
         assert wait_until(lambda: "/actorbt/tree/more" in server.actions, 5.0), lines
         assert "tree more: served on /actorbt/tree/more" in lines
-        assert any(line.startswith("tree file not served: ") and "bad.yaml:2:" in line
-                   for line in lines), lines
+        assert any(line.startswith("tree file not served: ") and "bad.yaml:2:" in line for line in lines), lines
         assert "/actorbt/tree/bad" not in server.actions
         g = remote.tree_goal("more", {"steps": 1000, "period": 0.01})
         assert g.accepted.wait(10.0)

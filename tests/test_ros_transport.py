@@ -1,6 +1,7 @@
 """The ROS transport of the bus, real rclpy over Fast DDS on loopback: topics as actors
 (subscriber streams with timed iterators, sensor QoS for images), action and service
 clients as async actors, and a clean shutdown."""
+
 from __future__ import annotations
 
 import threading
@@ -20,8 +21,14 @@ from bt_ros.host import RosHost  # noqa: E402
 from bt_ros.qos import qos_profile  # noqa: E402
 from bt_ros.server import serve  # noqa: E402
 from bt_ros.transport import RosTransport  # noqa: E402
-from tests.test_ros_common import (Work, os_threads, python_threads, shm_leaks,  # noqa: E402
-                                   shm_mapped, wait_until)
+from tests.test_ros_common import (
+    Work,
+    os_threads,
+    python_threads,
+    shm_leaks,  # noqa: E402
+    shm_mapped,
+    wait_until,
+)
 
 
 class Talker(SubSystem):
@@ -38,6 +45,7 @@ class Listener(SubSystem):
 
         def frames(emit):  # a sensor stream: best effort, keep the latest 5
             return bus.subscribe("/ros_test/image", Image, emit, "sensor").close
+
         self.add_actor("frames", frames, Kind.STREAM, buffer=qos_depth("sensor"))
 
 
@@ -66,6 +74,7 @@ def _publish_while(rt, stop, make, topic, qos, period):
 
 def test_qos_settings():
     from rclpy.qos import DurabilityPolicy, ReliabilityPolicy
+
     assert qos_profile(7).depth == 7 and qos_profile(7).reliability == ReliabilityPolicy.RELIABLE
     assert qos_profile("sensor").reliability == ReliabilityPolicy.BEST_EFFORT
     assert qos_profile("latched").durability == DurabilityPolicy.TRANSIENT_LOCAL
@@ -85,6 +94,7 @@ def test_subscriber_stream_with_a_timed_iterator_on_a_real_topic(pair):
             a.call("say", String(data=f"m{i}"))
             i += 1
             time.sleep(0.01)
+
     with b.stream("heard", timeout=0.8) as it:
         assert wait_until(lambda: a.bus.subscription_count("/ros_test/chat") >= 1, 5.0)
         t = threading.Thread(target=talk)
@@ -111,6 +121,7 @@ def test_images_with_sensor_qos(pair):
         img = Image(height=240, width=320, encoding="rgb8", step=320 * 3)
         img.data = bytes([i % 256]) * (320 * 240 * 3)
         return img
+
     t = threading.Thread(target=_publish_while, args=(a, stop, make, "/ros_test/image", "sensor", 0.02))
     t.start()
     try:
@@ -134,6 +145,7 @@ def test_service_client_actor():
             resp.success = req.data
             resp.message = f"set to {req.data}"
             return resp
+
         srv_host.call(node.create_service, SetBool, "/ros_test/set", handle)
         rt.run_on_hub(rt.bus.register_service, rt.root, "set_flag", SetBool, "/ros_test/set")
         resp = rt.call("set_flag", data=True)
@@ -156,8 +168,7 @@ def test_action_client_actor_against_another_runtime_and_cancel():
     try:
         server_rt.add_subsystem("work", Work)
         server = serve(server_rt)
-        client.run_on_hub(client.bus.register_action, client.root, "remote", CallActor,
-                          "/actorbt/call")
+        client.run_on_hub(client.bus.register_action, client.root, "remote", CallActor, "/actorbt/call")
         assert "goal" in str(client.resolve("remote").signature)
         res = client.call("remote", actor="work.echo", args_yaml="[1, two]")
         assert res.success and res.result_yaml.startswith("args:")
@@ -226,11 +237,12 @@ def test_a_goal_whose_server_dies_fails_instead_of_waiting_for_ever():
     node = rclpy.create_node("doomed_server", context=ctx)
     started, release = threading.Event(), threading.Event()
 
-    def execute(goal):               # accepts, then never finishes until released
+    def execute(goal):  # accepts, then never finishes until released
         started.set()
         release.wait(30)
         goal.abort()
         return CallActor.Result()
+
     server = ActionServer(node, CallActor, "/ros_test/doomed", execute)
     executor = SingleThreadedExecutor(context=ctx)
     executor.add_node(node)
@@ -241,7 +253,7 @@ def test_a_goal_whose_server_dies_fails_instead_of_waiting_for_ever():
         client.run_on_hub(client.bus.register_action, client.root, "doomed", CallActor, "/ros_test/doomed")
         txn = client.start("doomed", actor="x")
         assert started.wait(10), "the goal never reached the server"
-        server.destroy()                 # the server goes away with the goal under way
+        server.destroy()  # the server goes away with the goal under way
         node.destroy_node()
         t0 = time.monotonic()
         assert wait_until(lambda: txn.done, LOST_GRACE + 5.0), "the goal still waits for its server"

@@ -1,5 +1,6 @@
 """Search locations and the floor they leave unseen (actors/search.py), on a hand-made
 two-room map with a base that goes where it is told."""
+
 from __future__ import annotations
 
 import math
@@ -49,8 +50,12 @@ class _Base(SubSystem):
 
     @actor
     def search_views(self, view_range: float = 2.5, seen_from: list | None = None) -> list:
-        return [list(p) for p in viewpoints(self.costmap, self.pose[:2], view_range=view_range,
-                                            seen_from=[tuple(p) for p in seen_from or ()])]
+        return [
+            list(p)
+            for p in viewpoints(
+                self.costmap, self.pose[:2], view_range=view_range, seen_from=[tuple(p) for p in seen_from or ()]
+            )
+        ]
 
     @actor
     def mini_turn(self, angle: float) -> None:
@@ -81,7 +86,7 @@ def test_a_survey_of_one_room_also_looks_from_the_map_places_that_see_the_other(
     base, search = base_and_search
     assert run_in_actor(rt, lambda: search.survey([[2.0, 2.0]], views=2)) == []
     assert base.looked_from[0] == (2.0, 2.0)
-    assert any(x > 4.5 for x, _ in base.looked_from), base.looked_from     # the other room
+    assert any(x > 4.5 for x, _ in base.looked_from), base.looked_from  # the other room
     # given everything already, nothing more is added
     base.looked_from.clear()
     everywhere = viewpoints(two_rooms(), (1.0, 1.0))

@@ -1,5 +1,6 @@
 """The RGB-D camera and the map on the bus: rendered only while subscribed, a can in front
 of the robot is seen where the intrinsics say and at the right depth."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -41,15 +42,18 @@ def test_camera_renders_only_while_subscribed(world):
     assert sim.frames_rendered == before
     got = _collect(rt, [("/camera/color/image_raw", Image)], 1.0)
     n = len(got["/camera/color/image_raw"])
-    assert 4 <= n <= 5                                   # 5 Hz
-    assert sim.frames_rendered - before in (n, n + 1)    # the last frame may land after the close
+    assert 4 <= n <= 5  # 5 Hz
+    assert sim.frames_rendered - before in (n, n + 1)  # the last frame may land after the close
     assert sim.renderer_name in ("gl", "egl", "tiny")
 
 
 def test_can_in_front_is_seen_at_the_right_place_and_depth(world):
     rt, sim = world
-    got = _collect(rt, [("/camera/color/image_raw", Image), ("/camera/depth/image_raw", Image),
-                        ("/camera/camera_info", CameraInfo)], 0.4)
+    got = _collect(
+        rt,
+        [("/camera/color/image_raw", Image), ("/camera/depth/image_raw", Image), ("/camera/camera_info", CameraInfo)],
+        0.4,
+    )
     rgb_msg = got["/camera/color/image_raw"][-1]
     depth_msg = got["/camera/depth/image_raw"][-1]
     info = got["/camera/camera_info"][-1]
@@ -68,7 +72,7 @@ def test_can_in_front_is_seen_at_the_right_place_and_depth(world):
     pos, orn = sim.link_pose("camera_optical_frame")
     R = np.array(p.getMatrixFromQuaternion(orn)).reshape(3, 3)
     can = np.array(sim.object_pose("can_1")[:3])
-    pc = R.T @ (can - np.array(pos))                      # can centre in the optical frame
+    pc = R.T @ (can - np.array(pos))  # can centre in the optical frame
     K = np.array(info.k).reshape(3, 3)
     u, v = (K @ (pc / pc[2]))[:2]
     assert abs(np.median(cols) - u) < 4 and abs(np.median(rows) - v) < 8, ((u, v), np.median(cols), np.median(rows))
@@ -83,7 +87,7 @@ def test_can_in_front_is_seen_at_the_right_place_and_depth(world):
 def test_the_map_is_published_once_and_latched(world):
     rt, sim = world
     maps = []
-    sub = rt.bus.subscribe("/map", OccupancyGrid, maps.append, "latched")   # as map_server's are
+    sub = rt.bus.subscribe("/map", OccupancyGrid, maps.append, "latched")  # as map_server's are
     rt.call("sleep", 0.5)
     sub.close()
     assert len(maps) == 1

@@ -1,6 +1,7 @@
 """The simulated arm and gripper controllers, as ros2_control serves them on a TurtleBot3 +
 OpenManipulator-X: /arm_controller/follow_joint_trajectory and
 /gripper_controller/gripper_cmd on the bus, on open_floor under the virtual clock."""
+
 from __future__ import annotations
 
 import math
@@ -15,8 +16,7 @@ from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 from bt_engine import ActorError, Runtime, SubSystem
 from bt_engine.bus.actions import STATUS_ABORTED, STATUS_CANCELED, STATUS_SUCCEEDED, ActionGoalError, ServerGoal
 from sim import SimWorld
-from sim.actuators import (GRIPPER_POSITION_CLOSED, GRIPPER_POSITION_OPEN, gripper_opening,
-                           gripper_position)
+from sim.actuators import GRIPPER_POSITION_CLOSED, GRIPPER_POSITION_OPEN, gripper_opening, gripper_position
 from sim.controllers import ARM_ACTION, GRIPPER_ACTION, PREEMPTED
 
 ARM = ["joint1", "joint2", "joint3", "joint4"]
@@ -69,9 +69,11 @@ class Probe:
             self.status, self.result, self.ended_at = status, result, rt.now()
 
         def send():
-            self.goal = ServerGoal(server.name, server.action_type, request, finish,
-                                   lambda fb: self.feedback.append((rt.now(), fb)))
+            self.goal = ServerGoal(
+                server.name, server.action_type, request, finish, lambda fb: self.feedback.append((rt.now(), fb))
+            )
             server.on_goal(self.goal)
+
         rt.run_on_hub(send)
 
     def cancel(self, rt) -> None:
@@ -105,10 +107,11 @@ def test_a_goal_is_followed_and_succeeds_when_its_time_has_come(arm):
     rt, sim = arm
     target = [0.6, -0.4, 0.5, 0.3]
     t0 = rt.now()
-    result = rt.call("arm", arm_goal(trajectory((1.0, [0.3, -0.7, 0.4, 0.5]), (2.0, target)),
-                                     tolerance=0.01, settle=1.0))
+    result = rt.call(
+        "arm", arm_goal(trajectory((1.0, [0.3, -0.7, 0.4, 0.5]), (2.0, target)), tolerance=0.01, settle=1.0)
+    )
     assert result.error_code == R.SUCCESSFUL
-    assert rt.now() - t0 >= 2.0                       # not before the last point's time
+    assert rt.now() - t0 >= 2.0  # not before the last point's time
     assert rt.now() - t0 < 3.0
     assert max(abs(a - b) for a, b in zip(arm_now(sim), target)) < 0.01
 
@@ -119,24 +122,26 @@ def test_feedback_tells_desired_actual_and_error_at_the_monitor_rate(arm):
     rt.call("sleep", 1.5)
     assert probe.status == STATUS_SUCCEEDED and probe.result.error_code == R.SUCCESSFUL
     times = [t for t, _ in probe.feedback]
-    assert 15 <= len(times) <= 25                           # 20 Hz for ~1 s
+    assert 15 <= len(times) <= 25  # 20 Hz for ~1 s
     t, fb = probe.feedback[len(probe.feedback) // 2]
     assert list(fb.joint_names) == ARM
     err = [d - a for d, a in zip(fb.desired.positions, fb.actual.positions)]
     assert list(fb.error.positions) == pytest.approx(err)
-    assert fb.desired.velocities[0] > 0.1                   # joint1 is on its way
+    assert fb.desired.velocities[0] > 0.1  # joint1 is on its way
     assert fb.header.stamp.sec + fb.header.stamp.nanosec * 1e-9 == pytest.approx(t, abs=0.02)
 
 
-@pytest.mark.parametrize("traj, code, words", [
-    (trajectory((1.0, [0.1, 0, 0, 0]), names=["joint1", "joint2", "joint3", "wrist"]),
-     R.INVALID_JOINTS, "'wrist'"),
-    (trajectory((1.0, [0.1, 0.2])), R.INVALID_GOAL, "2 positions for 4 joints"),
-    (trajectory((1.0, [0.1, 0.2]), names=["joint1", "joint2"]), R.INVALID_JOINTS, "leaves out"),
-    (trajectory(names=ARM), R.INVALID_GOAL, "no points"),
-    (trajectory((1.0, START), (1.0, START)), R.INVALID_GOAL, "does not increase"),
-    (trajectory((1.0, START, [0.1, 0, 0, 0])), R.INVALID_GOAL, "velocity of the last"),
-])
+@pytest.mark.parametrize(
+    "traj, code, words",
+    [
+        (trajectory((1.0, [0.1, 0, 0, 0]), names=["joint1", "joint2", "joint3", "wrist"]), R.INVALID_JOINTS, "'wrist'"),
+        (trajectory((1.0, [0.1, 0.2])), R.INVALID_GOAL, "2 positions for 4 joints"),
+        (trajectory((1.0, [0.1, 0.2]), names=["joint1", "joint2"]), R.INVALID_JOINTS, "leaves out"),
+        (trajectory(names=ARM), R.INVALID_GOAL, "no points"),
+        (trajectory((1.0, START), (1.0, START)), R.INVALID_GOAL, "does not increase"),
+        (trajectory((1.0, START, [0.1, 0, 0, 0])), R.INVALID_GOAL, "velocity of the last"),
+    ],
+)
 def test_an_invalid_goal_is_aborted_with_the_controllers_error_code(arm, traj, code, words):
     rt, sim = arm
     before = arm_now(sim)
@@ -146,13 +151,13 @@ def test_an_invalid_goal_is_aborted_with_the_controllers_error_code(arm, traj, c
     assert isinstance(error, ActionGoalError) and error.status == STATUS_ABORTED
     assert error.result.error_code == code
     assert words in error.result.error_string
-    assert max(abs(a - b) for a, b in zip(arm_now(sim), before)) < 0.01   # nothing moved
+    assert max(abs(a - b) for a, b in zip(arm_now(sim), before)) < 0.01  # nothing moved
 
 
 def test_an_old_header_stamp_is_refused(arm):
     rt, _ = arm
     traj = trajectory((0.5, START))
-    traj.header.stamp = Time(sec=0, nanosec=1)          # long ago, past its 0.5 s
+    traj.header.stamp = Time(sec=0, nanosec=1)  # long ago, past its 0.5 s
     with pytest.raises(ActorError) as failed:
         rt.call("arm", arm_goal(traj))
     assert failed.value.__cause__.result.error_code == R.OLD_HEADER_TIMESTAMP
@@ -160,7 +165,7 @@ def test_an_old_header_stamp_is_refused(arm):
 
 def test_an_unreachable_goal_violates_the_goal_tolerance(arm):
     rt, _ = arm
-    beyond = [3.5, -1.0, 0.3, 0.7]                      # joint1 stops at its limit (pi)
+    beyond = [3.5, -1.0, 0.3, 0.7]  # joint1 stops at its limit (pi)
     t0 = rt.now()
     with pytest.raises(ActorError) as failed:
         rt.call("arm", arm_goal(trajectory((1.5, beyond)), tolerance=0.02, settle=0.5))
@@ -174,7 +179,7 @@ def test_cancel_brings_the_arm_to_rest_smoothly_and_ends_canceled(arm):
     rt, sim = arm
     probe = Probe(rt, sim.topics.arm.server, arm_goal(trajectory((3.0, [1.8, -0.2, 0.0, 0.2]))))
     rt.call("sleep", 1.0)
-    speed = lambda: max(abs(v) for v in sim.robot.joint_states()[1][2:6])   # noqa: E731
+    speed = lambda: max(abs(v) for v in sim.robot.joint_states()[1][2:6])  # noqa: E731
     moving = speed()
     assert moving > 0.3
     probe.cancel(rt)
@@ -196,12 +201,13 @@ def test_cancelling_the_client_call_cancels_the_goal(arm):
         txn = rt.start("arm", arm_goal(trajectory((3.0, [1.8, -0.2, 0.0, 0.2]))))
         rt.call_later(1.0, txn.cancel, "operator stop")
         return txn
+
     txn = rt.run_on_hub(begin)
     rt.call("sleep", 2.5)
     assert txn.state.name == "CANCELLED"
     assert sim.topics.arm.active is None
     assert max(abs(v) for v in sim.robot.joint_states()[1][2:6]) < 0.02
-    assert arm_now(sim)[0] < 1.5                        # stopped well short of 1.8
+    assert arm_now(sim)[0] < 1.5  # stopped well short of 1.8
 
 
 def test_a_new_goal_preempts_the_running_one(arm):
@@ -229,6 +235,7 @@ def test_a_trajectory_on_the_topic_preempts_a_goal_too(arm):
 # ------------------------------------------------------------------------------ gripper
 def test_the_position_scale_maps_monotonically_onto_the_fingers():
     from actors.manipulator import gripper_command_position, gripper_width
+
     assert gripper_opening(GRIPPER_POSITION_CLOSED) == 0.0
     assert gripper_opening(GRIPPER_POSITION_OPEN) == pytest.approx(0.09)
     positions = [GRIPPER_POSITION_CLOSED + k * 0.001 for k in range(30)]
@@ -256,7 +263,7 @@ def _ik(x, z, pitch=0.0):
     xs, zs = -0.035 + 0.012, 0.101 + 0.017 + 0.0595
     wx, wz = x - l3 * math.cos(pitch) - xs, z + l3 * math.sin(pitch) - zs
     d = math.hypot(wx, wz)
-    up = math.atan2(wz, wx) + math.acos((l1 ** 2 + d ** 2 - l2 ** 2) / (2 * l1 * d))
+    up = math.atan2(wz, wx) + math.acos((l1**2 + d**2 - l2**2) / (2 * l1 * d))
     fore = math.atan2(wz - l1 * math.sin(up), wx - l1 * math.cos(up))
     j2 = (math.pi / 2 - a0) - up
     j3 = -fore - j2
@@ -285,7 +292,7 @@ def test_closing_on_a_can_stalls_short_of_the_closed_position(world):
     # the TurtleBot3's gripper controller aborts a stalled goal (allow_stalling false)
     assert status == STATUS_ABORTED
     assert result.stalled and not result.reached_goal
-    assert result.position > GRIPPER_POSITION_CLOSED + 0.015          # held open by the can
+    assert result.position > GRIPPER_POSITION_CLOSED + 0.015  # held open by the can
     assert gripper_opening(result.position) == pytest.approx(0.066, abs=0.004)
     assert result.effort > 0
     assert rt.now() - t0 >= sim.topics.gripper.config.stall_timeout
@@ -311,4 +318,4 @@ def test_a_gripper_goal_preempts_the_last_and_a_cancel_holds(world):
     assert second.status == STATUS_CANCELED
     held = sim.robot.gripper_opening()
     rt.call("sleep", 0.5)
-    assert sim.robot.gripper_opening() == pytest.approx(held, abs=0.003)   # holds where it was
+    assert sim.robot.gripper_opening() == pytest.approx(held, abs=0.003)  # holds where it was

@@ -1,6 +1,7 @@
 """The camera's own GL renderer (sim/gl_renderer.py): the same depth and colours as
 pybullet's renderer, bodies drawn where they are now (moved, added, removed), labels
 drawn from their textures, and the renderer choice falling back cleanly."""
+
 from __future__ import annotations
 
 import math
@@ -54,8 +55,9 @@ def _render(sim, view, segmentation=False):
     light = sim.spec.lighting
     kw = {"light_direction": None if light is None else light.direction}
     if segmentation:
-        return sim._gl_call(sim.renderer.gl.render, cam.width, cam.height, view, cam.projection(),
-                            segmentation=True, **kw)
+        return sim._gl_call(
+            sim.renderer.gl.render, cam.width, cam.height, view, cam.projection(), segmentation=True, **kw
+        )
     return sim._gl_call(sim.renderer.render, cam.width, cam.height, view, cam.projection(), **kw)
 
 
@@ -213,14 +215,19 @@ def test_the_renderer_choice_falls_back_cleanly(monkeypatch, caplog):
         # no GL here: the next one, with the reason logged
         def no_gl():
             raise glr.GLUnavailable("no EGL OpenGL 3.3 context: test")
+
         monkeypatch.setattr(glr, "create_context", no_gl)
         renderer_mod._warned.clear()
         with caplog.at_level("WARNING", logger="sim.renderer"):
             r = Renderer(cid, prefer_egl=False)
         assert r.name == "tiny" and "gl: no EGL OpenGL 3.3 context: test" in r.why
         assert "camera renderer: tiny" in caplog.text and "no EGL OpenGL 3.3 context" in caplog.text
-        rgb, depth = r.render(8, 6, p.computeViewMatrix([0, 0, 1], [1, 0, 1], [0, 0, 1]),
-                              p.computeProjectionMatrixFOV(60, 8 / 6, 0.05, 10))
+        rgb, depth = r.render(
+            8,
+            6,
+            p.computeViewMatrix([0, 0, 1], [1, 0, 1], [0, 0, 1]),
+            p.computeProjectionMatrixFOV(60, 8 / 6, 0.05, 10),
+        )
         assert rgb.shape == (6, 8, 3) and depth.shape == (6, 8)
         r.close()
     finally:
@@ -235,6 +242,7 @@ def test_a_gl_failure_while_rendering_falls_back_to_the_tiny_renderer(monkeypatc
 
         def broken(*a, **k):
             raise RuntimeError("lost the context")
+
         monkeypatch.setattr(r.gl, "render", broken)
         view = p.computeViewMatrix([0, 0, 1], [1, 0, 1], [0, 0, 1])
         proj = p.computeProjectionMatrixFOV(60, 8 / 6, 0.05, 10)
@@ -249,8 +257,12 @@ def test_a_gl_failure_while_rendering_falls_back_to_the_tiny_renderer(monkeypatc
 
 def test_primitives_and_meshes_tessellate_closed_and_outward():
     """Every triangle faces away from the shape's centre (back faces are culled)."""
-    for pos, nrm, _ in (gl_meshes.box((0.1, 0.2, 0.3)), gl_meshes.cylinder(0.2, 0.05),
-                        gl_meshes.sphere(0.1), gl_meshes.capsule(0.2, 0.05)):
+    for pos, nrm, _ in (
+        gl_meshes.box((0.1, 0.2, 0.3)),
+        gl_meshes.cylinder(0.2, 0.05),
+        gl_meshes.sphere(0.1),
+        gl_meshes.capsule(0.2, 0.05),
+    ):
         t = pos.reshape(-1, 3, 3).astype(float)
         n = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
         keep = np.linalg.norm(n, axis=1) > 1e-12

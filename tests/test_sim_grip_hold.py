@@ -7,6 +7,7 @@ map-world episode a bottle turned 23 degrees and, let go askew, toppled off the 
 (actor_demo_house seed 3). While the fingers hold something, the solver runs
 HOLDING_SOLVER_ITERATIONS.
 """
+
 from __future__ import annotations
 
 import math
@@ -42,14 +43,14 @@ def _worst_turn(category: str, grip_z: float, **world) -> tuple[float, set]:
         name = next(n for n in sim.object_names() if sim.object_category(n) == category)
         body = sim.scene.objects[name]
         kin = ArmKinematics.from_urdf()
-        x, y = 7.5, 5.0                                # open floor in that world
+        x, y = 7.5, 5.0  # open floor in that world
         z0 = p.getBasePositionAndOrientation(sim.robot.body, physicsClientId=sim.cid)[0][2]
         p.resetBasePositionAndOrientation(sim.robot.body, [x - REACH, y, z0], [0, 0, 0, 1], physicsClientId=sim.cid)
-        sim.set_object_pose(name, x + 0.3, y)          # out of the way while the arm unfolds
+        sim.set_object_pose(name, x + 0.3, y)  # out of the way while the arm unfolds
         sim.robot.set_gripper(0.09)
         sim.robot.set_arm(kin.ik(REACH, 0.0, grip_z, 0.0).best)
         sim.advance(2.0)
-        assert sim.solver_iterations_now == sim.solver_iterations     # nothing held yet
+        assert sim.solver_iterations_now == sim.solver_iterations  # nothing held yet
         ee = sim.link_pose("end_effector_link")[0]
         sim.set_object_pose(name, ee[0], ee[1])
         sim.advance(0.5)
@@ -74,9 +75,10 @@ def _worst_turn(category: str, grip_z: float, **world) -> tuple[float, set]:
         sim.close()
 
 
-@pytest.mark.parametrize("category, heights", [("bottle", (0.045, 0.055, 0.065)),
-                                               ("can", (0.045, 0.055, 0.065)),
-                                               ("carton", (0.045, 0.05, 0.055))])
+@pytest.mark.parametrize(
+    "category, heights",
+    [("bottle", (0.045, 0.055, 0.065)), ("can", (0.045, 0.055, 0.065)), ("carton", (0.045, 0.05, 0.055))],
+)
 def test_a_held_object_does_not_turn_in_the_hand_over_a_fold_and_a_carry(category, heights):
     """Which grasp creeps most is chaotic (a different physics rate before the grasp moves
     the worst case between heights), so the judge is several grasps: the worst of 9 went
@@ -88,9 +90,14 @@ def test_a_held_object_does_not_turn_in_the_hand_over_a_fold_and_a_carry(categor
         turns.append(worst)
     assert max(turns) < 5.0, turns
     assert statistics.median(turns) < 3.0, turns
+
+
 def test_at_the_usual_solver_iterations_held_objects_creep():
     """What the holding iterations are for: the same carries without them turn a bottle and
     a can several times as far (a median of about 10 degrees against about 2)."""
-    turns = [_worst_turn(category, grip_z, holding_solver_iterations=50)[0]
-             for category in ("bottle", "can") for grip_z in (0.045, 0.055, 0.065)]
+    turns = [
+        _worst_turn(category, grip_z, holding_solver_iterations=50)[0]
+        for category in ("bottle", "can")
+        for grip_z in (0.045, 0.055, 0.065)
+    ]
     assert statistics.median(turns) > 3.0, turns

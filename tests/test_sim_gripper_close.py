@@ -8,6 +8,7 @@ a table it threw the carton off (house_hard 2044 and 2040: upright cartons on ta
 misses at 0 mm with the hand around them). The gripper is now a speed- and force-limited
 position servo, as the real one in current-based position control: no finger sinks more
 than a few millimetres, also once it squeezes with the servo's full force."""
+
 from __future__ import annotations
 
 import math
@@ -19,14 +20,14 @@ from planning import ArmKinematics
 from sim import SimWorld
 
 REACH = 0.27
-PENETRATION = 0.003     # [m] how far a finger may sink into what it closes on
+PENETRATION = 0.003  # [m] how far a finger may sink into what it closes on
 
 
 def _hand_around_carton(yaw_deg: float, off: float = 0.0) -> SimWorld:
     """house_hard 2044's bare world with its carton upright on open floor (its yaw
     ``yaw_deg``) and the open hand around it, ``off`` [m] to its side."""
     sim = SimWorld(None, "house_hard", seed=2044)
-    x, y, heading = 7.5, 5.0, math.pi                 # an open spot of that world
+    x, y, heading = 7.5, 5.0, math.pi  # an open spot of that world
     sim.set_object_pose("carton_1", x, y, math.radians(yaw_deg))
     body = sim.robot.body
     # the base REACH behind the carton, the hand ``off`` to its side
@@ -59,7 +60,7 @@ def test_closing_fingers_do_not_sink_into_the_object(off, yaw):
         body, carton = sim.robot.body, sim.scene.objects["carton_1"]
         sim.robot.set_gripper(0.0)
         deepest = 0.0
-        for _ in range(60):                               # a second: closed and squeezing
+        for _ in range(60):  # a second: closed and squeezing
             sim.step()
             contacts = p.getContactPoints(body, carton, physicsClientId=sim.cid)
             deepest = min([deepest] + [c[8] for c in contacts])
@@ -77,12 +78,13 @@ def test_stalled_fingers_squeeze_with_the_servo_force_and_let_go_at_once():
     check (the same goal again) keeps the squeeze; opening lets go within a control
     period, the carton left where it stands."""
     from sim.robot import GRIPPER_FORCE
+
     sim = _hand_around_carton(180.0)
     try:
         sim.robot.set_gripper(0.0)
         sim.advance(1.0)
         assert _finger_forces(sim) == [pytest.approx(GRIPPER_FORCE, rel=0.1)] * 2
-        sim.robot.set_gripper(0.0)                        # a grip check closes again
+        sim.robot.set_gripper(0.0)  # a grip check closes again
         sim.step()
         assert _finger_forces(sim) == [pytest.approx(GRIPPER_FORCE, rel=0.1)] * 2
         before = sim.object_pose("carton_1")

@@ -1,5 +1,6 @@
 """`actorbt sim interfaces` (issue [senses]): what the simulated robot offers, with ROS type
 names, read from the bus of a running world (so it cannot drift from what the world does)."""
+
 from __future__ import annotations
 
 import json
@@ -23,10 +24,10 @@ def interfaces(capsys, *argv):
 def offered():
     import contextlib
     import io
+
     buf = io.StringIO()
     with contextlib.redirect_stdout(buf):
-        rc = main(["--config", str(REPO / "actorbt.yaml"), "sim", "interfaces", "--world", "house",
-                   "--json"])
+        rc = main(["--config", str(REPO / "actorbt.yaml"), "sim", "interfaces", "--world", "house", "--json"])
     assert rc == 0
     return json.loads(buf.getvalue())
 
@@ -35,19 +36,27 @@ def test_the_robots_sensors_and_actuators_with_ros_types(offered):
     topics = {t["name"]: t for t in offered["topics"]}
     assert topics["/scan"]["type"] == "sensor_msgs/msg/LaserScan"
     assert topics["/scan"]["direction"] == "publishes"
-    assert topics["/scan"]["qos"] == "best effort"            # as the LDS driver offers it
+    assert topics["/scan"]["qos"] == "best effort"  # as the LDS driver offers it
     # ROS 2 Jazzy's diff_drive_controller: ~/cmd_vel, stamped only
     assert topics["/diff_drive_controller/cmd_vel"] == {
-        "name": "/diff_drive_controller/cmd_vel", "type": "geometry_msgs/msg/TwistStamped",
-        "direction": "subscribes", "qos": ""}
+        "name": "/diff_drive_controller/cmd_vel",
+        "type": "geometry_msgs/msg/TwistStamped",
+        "direction": "subscribes",
+        "qos": "",
+    }
     assert "/cmd_vel" not in topics
     assert "/initialpose" not in topics, "the pose estimate is the user's, not the robot's"
-    expected = {"/odom": "nav_msgs/msg/Odometry", "/tf": "tf2_msgs/msg/TFMessage",
-                "/tf_static": "tf2_msgs/msg/TFMessage", "/joint_states": "sensor_msgs/msg/JointState",
-                "/map": "nav_msgs/msg/OccupancyGrid", "/camera/color/image_raw": "sensor_msgs/msg/Image",
-                "/camera/depth/image_raw": "sensor_msgs/msg/Image",
-                "/camera/camera_info": "sensor_msgs/msg/CameraInfo",
-                "/imu_broadcaster/imu": "sensor_msgs/msg/Imu"}
+    expected = {
+        "/odom": "nav_msgs/msg/Odometry",
+        "/tf": "tf2_msgs/msg/TFMessage",
+        "/tf_static": "tf2_msgs/msg/TFMessage",
+        "/joint_states": "sensor_msgs/msg/JointState",
+        "/map": "nav_msgs/msg/OccupancyGrid",
+        "/camera/color/image_raw": "sensor_msgs/msg/Image",
+        "/camera/depth/image_raw": "sensor_msgs/msg/Image",
+        "/camera/camera_info": "sensor_msgs/msg/CameraInfo",
+        "/imu_broadcaster/imu": "sensor_msgs/msg/Imu",
+    }
     for name, type_ in expected.items():
         assert topics[name]["type"] == type_ and topics[name]["direction"] == "publishes", name
     assert topics["/tf_static"]["qos"] == "reliable, transient local"
@@ -69,8 +78,10 @@ def test_the_text_form_is_a_table(capsys):
     subscribed = lines.index("Topics it subscribes to:")
     scan = next(line for line in lines[published:subscribed] if line.split()[0] == "/scan")
     assert scan.split()[1:] == ["sensor_msgs/msg/LaserScan", "best", "effort"]
-    assert any(line.split()[:2] == ["/diff_drive_controller/cmd_vel", "geometry_msgs/msg/TwistStamped"]
-               for line in lines[subscribed:])
+    assert any(
+        line.split()[:2] == ["/diff_drive_controller/cmd_vel", "geometry_msgs/msg/TwistStamped"]
+        for line in lines[subscribed:]
+    )
     assert "Services it serves: none" in lines
 
 
@@ -79,21 +90,28 @@ def test_the_list_is_read_from_the_bus(capsys, monkeypatch):
     from std_msgs.msg import String
 
     import sim.topics
+
     original = sim.topics.SimTopics.__init__
 
     def with_extra(self, sim_, rt):
         original(self, sim_, rt)
         self.pub_extra = rt.bus.publisher("/extra/status", String)
+
     monkeypatch.setattr(sim.topics.SimTopics, "__init__", with_extra)
     data = json.loads(interfaces(capsys, "--json"))
-    assert {"name": "/extra/status", "type": "std_msgs/msg/String", "direction": "publishes",
-            "qos": "reliable"} in data["topics"]
+    assert {
+        "name": "/extra/status",
+        "type": "std_msgs/msg/String",
+        "direction": "publishes",
+        "qos": "reliable",
+    } in data["topics"]
 
 
 def test_the_real_robots_configuration_differs_only_where_it_must():
     """docs/real-robot.md: actorbt.real.yaml is actorbt.yaml without the simulator and the
     navstack (Nav2 and AMCL stand in), on ROS and the wall clock."""
     from bt_cli.config import load_config
+
     sim, real = load_config(REPO / "actorbt.yaml"), load_config(REPO / "actorbt.real.yaml")
     assert real.world is None and real.simulator is None
     assert real.transport == "ros" and real.clock == "wall"

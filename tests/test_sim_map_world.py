@@ -2,6 +2,7 @@
 door, the cleanup a SLAM map needs, locations files and their errors, the PGM/YAML round
 trip, a SimWorld on the house's own exported map, and worlds from maps made to look like
 real SLAM maps (sim/map_degrade.py): the house's, and two rooms joined by 1-cell gaps only."""
+
 from __future__ import annotations
 
 import dataclasses
@@ -20,7 +21,7 @@ from sim.map_world import merge_rectangles
 from sim.world_spec import WorldError
 
 RES = 0.05
-ORIGIN = (-1.25, -0.55)      # non-zero: cell (0, 0)'s corner in the map frame
+ORIGIN = (-1.25, -0.55)  # non-zero: cell (0, 0)'s corner in the map frame
 
 
 def room_map(door_cells: int = 6, speckle=True) -> np.ndarray:
@@ -31,13 +32,13 @@ def room_map(door_cells: int = 6, speckle=True) -> np.ndarray:
     g[5:55, 5:95] = 0
     g[5, 5:95] = g[54, 5:95] = 100
     g[5:55, 5] = g[5:55, 94] = 100
-    g[5:55, 50] = 100                             # the dividing wall...
+    g[5:55, 50] = 100  # the dividing wall...
     d0 = 30 - door_cells // 2
-    g[d0:d0 + door_cells, 50] = 0                 # ... and its door
+    g[d0 : d0 + door_cells, 50] = 0  # ... and its door
     if speckle:
-        g[40, 20] = 100                           # lidar noise in the open
-        g[15:17, 35:37] = -1                      # a 2 x 2 gap in the floor's coverage
-    g[30:45, 80:94] = -1                          # a bay the lidar never saw
+        g[40, 20] = 100  # lidar noise in the open
+        g[15:17, 35:37] = -1  # a 2 x 2 gap in the floor's coverage
+    g[30:45, 80:94] = -1  # a bay the lidar never saw
     return g
 
 
@@ -51,7 +52,7 @@ def cells_xy(r, c):
     return ORIGIN[0] + (c + 0.5) * RES, ORIGIN[1] + (r + 0.5) * RES
 
 
-LEFT, RIGHT = cells_xy(30, 25), cells_xy(20, 70)   # room centres (x, y)
+LEFT, RIGHT = cells_xy(30, 25), cells_xy(20, 70)  # room centres (x, y)
 
 
 def plannable(grid: GridMap, a, b) -> bool:
@@ -95,9 +96,9 @@ def test_merged_boxes_and_cleanup(tmp_path):
     assert len(spec.walls) < occupied / 10, (len(spec.walls), occupied)
     grid = build_grid(spec, RES)
     sx, sy = cells_xy(40, 20)
-    assert grid.value_at(sx, sy) == 0                     # the speckle is floor
-    assert grid.value_at(*cells_xy(15, 35)) == 0          # the small hole is floor
-    assert grid.value_at(*cells_xy(38, 88)) == -1         # the unseen bay stays outside
+    assert grid.value_at(sx, sy) == 0  # the speckle is floor
+    assert grid.value_at(*cells_xy(15, 35)) == 0  # the small hole is floor
+    assert grid.value_at(*cells_xy(38, 88)) == -1  # the unseen bay stays outside
 
 
 def test_unknown_is_outside_walled_off(tmp_path):
@@ -115,8 +116,8 @@ def test_unknown_is_outside_walled_off(tmp_path):
 
 def test_narrow_door_stops_the_robot(tmp_path):
     locs = _locs(tmp_path, start=LEFT, place=cells_xy(12, 12))
-    narrow = load_world(write_room(tmp_path, door_cells=6, name="narrow"), locations=locs)   # 0.30 m door
-    wide = load_world(write_room(tmp_path, door_cells=14, name="wide"), locations=locs)      # 0.70 m door
+    narrow = load_world(write_room(tmp_path, door_cells=6, name="narrow"), locations=locs)  # 0.30 m door
+    wide = load_world(write_room(tmp_path, door_cells=14, name="wide"), locations=locs)  # 0.70 m door
     assert not plannable(build_grid(narrow, RES), LEFT, RIGHT)
     assert plannable(build_grid(wide, RES), LEFT, RIGHT)
     # objects and search spots only where the robot can go: the left room
@@ -148,7 +149,7 @@ def test_locations_file(tmp_path):
         assert near <= 1.5 + 1e-9
         assert grid.value_at(o.x, o.y) == 0
     again = load_world(world, seed=3, locations=_locs(tmp_path, home=start, pallet=place, **spots))
-    assert again.objects == spec.objects                       # seeded
+    assert again.objects == spec.objects  # seeded
     other = load_world(world, seed=4, locations=_locs(tmp_path, home=start, **spots))
     assert other.objects != spec.objects
     assert other.place is not None and math.hypot(other.place.x - start[0], other.place.y - start[1]) < 3
@@ -160,20 +161,23 @@ def test_without_locations_picks_its_own(tmp_path):
     assert grid.value_at(*spec.robot_start[:2]) == 0
     assert len(spec.search_locations) >= 2
     assert spec.place is not None and len(spec.objects) == 4
-    assert max(x for x, _ in spec.search_locations) > cells_xy(0, 50)[0]   # both rooms
+    assert max(x for x, _ in spec.search_locations) > cells_xy(0, 50)[0]  # both rooms
 
 
-@pytest.mark.parametrize("text, line, words", [
-    ("start: [0.0, 0.0, 0.0]\ndesk: [1, 2, 3, 4]\n", 2, "must be [x, y, theta]"),
-    ("start: [0.0, 0.0]\ndesk: [1, oops]\n", 2, "must be a number"),
-    ("start: [0.0, 0.0]\n  desk: [1, 2]\n", 2, ""),                       # bad YAML
-    ("desk: [{wall}, 0.0]\n", 1, "in a wall"),
-    ("desk: [9.0, 9.0]\n", 1, "outside the map"),
-    ("desk: [{right}]\n", 1, "cannot be reached"),
-    ("home: [0, 0]\nstart: [0, 0]\n", 2, "keep one"),
-])
+@pytest.mark.parametrize(
+    "text, line, words",
+    [
+        ("start: [0.0, 0.0, 0.0]\ndesk: [1, 2, 3, 4]\n", 2, "must be [x, y, theta]"),
+        ("start: [0.0, 0.0]\ndesk: [1, oops]\n", 2, "must be a number"),
+        ("start: [0.0, 0.0]\n  desk: [1, 2]\n", 2, ""),  # bad YAML
+        ("desk: [{wall}, 0.0]\n", 1, "in a wall"),
+        ("desk: [9.0, 9.0]\n", 1, "outside the map"),
+        ("desk: [{right}]\n", 1, "cannot be reached"),
+        ("home: [0, 0]\nstart: [0, 0]\n", 2, "keep one"),
+    ],
+)
 def test_locations_errors(tmp_path, text, line, words):
-    world = write_room(tmp_path)          # the 0.3 m door: the right room is out of reach
+    world = write_room(tmp_path)  # the 0.3 m door: the right room is out of reach
     wall_x = cells_xy(0, 50)[0]
     text = text.replace("{wall}", f"{wall_x:.3f}").replace("{right}", f"{RIGHT[0]:.3f}, {RIGHT[1]:.3f}")
     f = tmp_path / "bad_locs.yaml"
@@ -185,8 +189,9 @@ def test_locations_errors(tmp_path, text, line, words):
 
 def test_map_errors(tmp_path):
     (tmp_path / "empty.pgm").write_bytes(b"P5\n4 4\n255\n" + bytes([205] * 16))
-    (tmp_path / "empty.yaml").write_text("image: empty.pgm\nresolution: 0.05\norigin: [0, 0, 0]\n"
-                                         "negate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\n")
+    (tmp_path / "empty.yaml").write_text(
+        "image: empty.pgm\nresolution: 0.05\norigin: [0, 0, 0]\nnegate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\n"
+    )
     with pytest.raises(WorldError, match="no free space"):
         load_world(tmp_path / "empty.yaml")
     (tmp_path / "yaw.yaml").write_text("image: empty.pgm\nresolution: 0.05\norigin: [0, 0, 0.3]\n")
@@ -210,8 +215,8 @@ def test_merge_rectangles_covers_exactly():
     rects = merge_rectangles(mask)
     cover = np.zeros((40, 50), int)
     for r, c, h, w in rects:
-        cover[r:r + h, c:c + w] += 1
-    assert np.array_equal(cover, mask.astype(int))        # every cell once, nothing else
+        cover[r : r + h, c : c + w] += 1
+    assert np.array_equal(cover, mask.astype(int))  # every cell once, nothing else
     assert len(merge_rectangles(np.ones((30, 3), bool))) == 1
 
 
@@ -224,17 +229,18 @@ def house_map(tmp_path_factory):
 def test_house_map_rebuilds_the_same_grid(house_map):
     spec = load_world(house_map)
     old = read_pgm_yaml(house_map)
-    new = build_grid(dataclasses.replace(spec, place=None), RES)     # the pallet is new
+    new = build_grid(dataclasses.replace(spec, place=None), RES)  # the pallet is new
     # the built world is cropped to the known cells: compare cell by cell in the map frame
     dr, dc = (round((new.origin[i] - old.origin[i]) / RES) for i in (1, 0))
     same = np.full(old.data.shape, -1, np.int8)
-    same[dr:dr + new.height, dc:dc + new.width] = new.data
+    same[dr : dr + new.height, dc : dc + new.width] = new.data
     assert np.array_equal(same, old.data)
     assert len(spec.walls) < 60
 
 
 def test_simworld_on_the_house_map_sees_walls(house_map):
     from sim import SimWorld
+
     sim = SimWorld(None, str(house_map), seed=1, camera=False)
     try:
         sim.advance(0.3)
@@ -242,8 +248,8 @@ def test_simworld_on_the_house_map_sees_walls(house_map):
         assert math.hypot(x - sim.spec.robot_start[0], y - sim.spec.robot_start[1]) < 0.05
         ranges = np.asarray(sim.scan_now())
         hits = np.isfinite(ranges) & (ranges > 0)
-        assert hits.mean() > 0.5                    # walls within 3.5 m on most sides
-        assert ranges[hits].min() < 1.0             # the start is near the house's corner
+        assert hits.mean() > 0.5  # walls within 3.5 m on most sides
+        assert ranges[hits].min() < 1.0  # the start is near the house's corner
         assert sorted(sim.object_names()) == ["bottle_1", "box_1", "can_1", "carton_1"]
     finally:
         sim.close()
@@ -253,11 +259,13 @@ def test_simworld_on_the_house_map_sees_walls(house_map):
 # worlds from maps that look like real SLAM maps (sim/map_degrade.py): turned 3°, thin
 # ragged walls with 1-cell gaps, speckles, unknown patches and shadows
 
+
 @pytest.fixture(scope="module")
 def slam_house(tmp_path_factory):
     """The house's lidar-height export made SLAM-like, with the house's places in its frame."""
     from sim.gridmap import lidar_height
     from sim.map_degrade import write_slam_like
+
     out = tmp_path_factory.mktemp("slam_house")
     src = write_map("house", 0, out / "house.pgm", height=lidar_height())[1]
     house = load_world("house", 0)
@@ -290,16 +298,17 @@ def test_world_from_a_slam_like_map(slam_house, seed):
         assert plannable(grid, start, p), p
     clear = cv2.distanceTransform((grid.data == 0).astype(np.uint8), cv2.DIST_L2, cv2.DIST_MASK_PRECISE) * RES
     for o in spec.objects:
-        assert clear[grid.cell(o.x, o.y)] >= 0.3, o                # not against a ragged wall
+        assert clear[grid.cell(o.x, o.y)] >= 0.3, o  # not against a ragged wall
         assert min(math.dist((o.x, o.y), s) for s in spec.search_locations) <= 1.5 + 1e-9
 
 
 def test_one_cell_gaps_in_a_thin_wall_do_not_let_the_robot_through(tmp_path):
     from sim.map_degrade import slam_like
     from sim.map_world import write_locations
-    data = room_map(door_cells=0, speckle=False)       # no door: the wall has only gaps
+
+    data = room_map(door_cells=0, speckle=False)  # no door: the wall has only gaps
     for r in range(9, 52, 7):
-        data[r, 50] = 0                                   # 1-cell (5 cm) gaps, 7 of them
+        data[r, 50] = 0  # 1-cell (5 cm) gaps, 7 of them
     place = cells_xy(44, 16)
     drive = [LEFT, cells_xy(12, 12), place, RIGHT, cells_xy(48, 70)]
     m = slam_like(GridMap(data, RES, ORIGIN), drive, seed=0)

@@ -1,6 +1,7 @@
 """The physics rate follows the hand (sim/simworld.py): the full rate while the arm or the
 gripper moves, and what it touched settles; the still hand's rate otherwise (driving,
 looking, standing, carrying), with more solver iterations while the fingers hold something."""
+
 from __future__ import annotations
 
 import math

@@ -1,5 +1,6 @@
 """The simulated robot through its ROS topics (and its gripper action), under the virtual
 clock, on open_floor: driving, turning, arm trajectories, a friction grasp, determinism."""
+
 from __future__ import annotations
 
 import math
@@ -31,17 +32,21 @@ class Robot:
         self.rt, self.sim = rt, sim
         self.last = {}
         bus = rt.bus
-        self.subs = [bus.subscribe("/odom", Odometry, self._keep("odom")),
-                     bus.subscribe("/ground_truth/pose", PoseStamped, self._keep("gt")),
-                     bus.subscribe("/joint_states", JointState, self._keep("js"))]
+        self.subs = [
+            bus.subscribe("/odom", Odometry, self._keep("odom")),
+            bus.subscribe("/ground_truth/pose", PoseStamped, self._keep("gt")),
+            bus.subscribe("/joint_states", JointState, self._keep("js")),
+        ]
         self.cmd_vel = bus.publisher(CMD_VEL, TwistStamped)
         self.traj = bus.publisher("/arm_controller/joint_trajectory", JointTrajectory)
-        self.grip_goal = rt.run_on_hub(bus.register_action, rt.root, "_grip", GripperCommand,
-                                       "/gripper_controller/gripper_cmd")
+        self.grip_goal = rt.run_on_hub(
+            bus.register_action, rt.root, "_grip", GripperCommand, "/gripper_controller/gripper_cmd"
+        )
 
     def _keep(self, key):
         def cb(msg):
             self.last[key] = msg
+
         return cb
 
     def sleep(self, seconds):
@@ -50,7 +55,7 @@ class Robot:
     def drive(self, v, w, seconds):
         tw = TwistStamped()
         tw.twist.linear.x, tw.twist.angular.z = float(v), float(w)
-        period = 0.1     # as a controller does: diff_drive_controller brakes after 0.5 s without
+        period = 0.1  # as a controller does: diff_drive_controller brakes after 0.5 s without
         for _ in range(round(seconds / period)):
             self.cmd_vel.publish(tw)
             self.sleep(period)
@@ -119,7 +124,7 @@ def test_turn_ninety_degrees(robot):
 
 
 def test_speed_is_clamped_to_turtlebot3_limits(robot):
-    robot.drive(1.0, 0.0, 2.0)          # asks 1 m/s; the Waffle Pi does 0.26 m/s
+    robot.drive(1.0, 0.0, 2.0)  # asks 1 m/s; the Waffle Pi does 0.26 m/s
     assert robot.ground_truth()[0] == pytest.approx(0.26 * 2.0, abs=0.05)
 
 
@@ -134,7 +139,7 @@ def test_joint_trajectory_is_tracked(robot):
         msg.points.append(pt)
     robot.traj.publish(msg)
     robot.sleep(1.5)
-    assert np.max(np.abs(np.subtract(robot.arm(), goals[0]))) < 0.05      # on its way
+    assert np.max(np.abs(np.subtract(robot.arm(), goals[0]))) < 0.05  # on its way
     robot.sleep(3.3)
     err = np.abs(np.subtract(robot.arm(), goals[-1]))
     assert np.max(err) < 0.02, err
@@ -147,7 +152,7 @@ def _ik(x, z, pitch=0.0):
     xs, zs = -0.035 + 0.012, 0.101 + 0.017 + 0.0595
     wx, wz = x - l3 * math.cos(pitch) - xs, z + l3 * math.sin(pitch) - zs
     d = math.hypot(wx, wz)
-    up = math.atan2(wz, wx) + math.acos((l1 ** 2 + d ** 2 - l2 ** 2) / (2 * l1 * d))
+    up = math.atan2(wz, wx) + math.acos((l1**2 + d**2 - l2**2) / (2 * l1 * d))
     fore = math.atan2(wz - l1 * math.sin(up), wx - l1 * math.cos(up))
     j2 = (math.pi / 2 - a0) - up
     j3 = -fore - j2
@@ -158,26 +163,28 @@ def test_friction_grasp_holds_a_can(robot):
     sim = robot.sim
     sim.set_object_pose("can_1", 0.26, 0.0)
     robot.grip(0.09, 0.5)
-    robot.move_arm(_ik(0.26, 0.20), 2.0)             # above the can, fingers open
-    robot.move_arm(_ik(0.26, 0.062), 1.5)            # straddle it
-    robot.grip(0.0, 1.5)                             # squeeze
+    robot.move_arm(_ik(0.26, 0.20), 2.0)  # above the can, fingers open
+    robot.move_arm(_ik(0.26, 0.062), 1.5)  # straddle it
+    robot.grip(0.0, 1.5)  # squeeze
     opening = sum(robot.last["js"].position[-2:])
-    assert opening == pytest.approx(0.066, abs=0.004)     # stopped by the can
+    assert opening == pytest.approx(0.066, abs=0.004)  # stopped by the can
     z0 = sim.object_pose("can_1")[2]
-    robot.move_arm(_ik(0.26, 0.162), 1.5)            # lift 10 cm
+    robot.move_arm(_ik(0.26, 0.162), 1.5)  # lift 10 cm
     z1 = sim.object_pose("can_1")[2]
     assert z1 - z0 == pytest.approx(0.10, abs=0.01)
     robot.sleep(2.0)
     z2 = sim.object_pose("can_1")[2]
     assert sim.in_gripper("can_1")
     assert abs(z2 - z1) < 0.005, (z1, z2)
-    assert _constraints_on(sim, sim.scene.objects["can_1"]) == []     # friction only
+    assert _constraints_on(sim, sim.scene.objects["can_1"]) == []  # friction only
 
 
 def _constraints_on(sim, body):
     cid = sim.cid
-    infos = [p.getConstraintInfo(p.getConstraintUniqueId(i, physicsClientId=cid), physicsClientId=cid)
-             for i in range(p.getNumConstraints(physicsClientId=cid))]
+    infos = [
+        p.getConstraintInfo(p.getConstraintUniqueId(i, physicsClientId=cid), physicsClientId=cid)
+        for i in range(p.getNumConstraints(physicsClientId=cid))
+    ]
     return [info for info in infos if body in (info[0], info[2])]
 
 
@@ -203,7 +210,7 @@ def test_the_fingers_move_as_one_and_a_held_can_does_not_slide_between_them():
 
         left, right = fingers()
         assert left == pytest.approx(right, abs=0.0005)
-        for _ in range(round(1.0 / sim.dt)):     # 3 N sideways for a second, about its weight
+        for _ in range(round(1.0 / sim.dt)):  # 3 N sideways for a second, about its weight
             p.applyExternalForce(can, -1, [0.0, 3.0, 0.0], [0, 0, 0], p.LINK_FRAME, physicsClientId=sim.cid)
             sim.step()
         left, right = fingers()
@@ -247,6 +254,7 @@ def test_same_seed_same_state_after_n_steps():
 
 def test_odometry_noise_model_is_configurable():
     from sim.sensors import OdomNoise
+
     ends = {}
     for name, noise in (("exact", OdomNoise.exact()), ("biased", OdomNoise.exact(radius_bias=0.05))):
         sim = SimWorld(None, "open_floor", seed=0, camera=False, odom_noise=noise, cmd_vel_timeout=0)
@@ -261,11 +269,12 @@ def test_odometry_noise_model_is_configurable():
     odom, truth = ends["exact"]
     assert odom == pytest.approx(truth, abs=0.005)
     odom, truth = ends["biased"]
-    assert odom == pytest.approx(1.05 * truth, abs=0.005)      # 5 % long wheel radius
+    assert odom == pytest.approx(1.05 * truth, abs=0.005)  # 5 % long wheel radius
 
 
 def test_wall_clock_runs_in_real_time():
     import time
+
     with Runtime(clock="wall") as rt:
         sim = SimWorld(rt, "open_floor", seed=0, camera=False).start()
         try:

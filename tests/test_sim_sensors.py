@@ -1,5 +1,6 @@
 """The simulated robot's own senses: the LDS-01 scan, wheel odometry with a real robot's
 errors, the ground-truth topic behind its debug flag, and the frames /tf will carry."""
+
 from __future__ import annotations
 
 import math
@@ -19,7 +20,7 @@ from sim.odometry import OdomNoise, WheelOdometry
 from sim.odometry import episode_rng as odometry_rng
 from sim.topics import CMD_VEL
 
-SCAN_X = -0.150          # base_scan in base_footprint (URDF: scan_joint)
+SCAN_X = -0.150  # base_scan in base_footprint (URDF: scan_joint)
 SCAN_Z = 0.132
 
 # one wall 2 m ahead of the robot: its face at x = 1.95, from y = -1.05 to 1.05
@@ -71,9 +72,10 @@ def test_scan_noise_is_a_few_centimetres_and_seeded():
             return np.array([sim.scan() for _ in range(n)])
         finally:
             sim.close()
+
     a = scans(0)
     beam0 = a[:, 0]
-    sigma = 0.03 * WALL_RANGE                       # 3 % of the range (> 1 cm)
+    sigma = 0.03 * WALL_RANGE  # 3 % of the range (> 1 cm)
     assert beam0.mean() == pytest.approx(WALL_RANGE, abs=3 * sigma / math.sqrt(len(beam0)))
     assert beam0.std() == pytest.approx(sigma, rel=0.35)
     assert np.array_equal(a, scans(0)), "same seed, same noise"
@@ -90,7 +92,7 @@ def test_scan_respects_range_min():
             r = sim.scan()
             finite = r[np.isfinite(r)]
             assert np.all(finite >= 0.12)
-            assert np.isneginf(r[180]), r[180]          # REP 117: too close -> -inf
+            assert np.isneginf(r[180]), r[180]  # REP 117: too close -> -inf
             assert np.all(finite <= 3.5)
     finally:
         sim.close()
@@ -100,14 +102,14 @@ def test_scan_sees_a_bottle_that_the_grid_does_not_have_and_not_a_can():
     sim = SimWorld(None, FLOOR, seed=0, camera=False, lidar_noise=False, cmd_vel_timeout=0)
     try:
         sim.add_object("bottle", 1.0, 0.0)
-        sim.add_object("can", 1.0, 1.0)                  # 41 deg to the left of base_scan
-        sim.advance(0.5)                                 # let them settle
+        sim.add_object("can", 1.0, 1.0)  # 41 deg to the left of base_scan
+        sim.advance(0.5)  # let them settle
         assert sim.grid.value_at(1.0, 0.0) != 100, "objects are not in the occupancy grid"
         r = sim.scan()
-        assert r[0] == pytest.approx(1.0 - 0.035 - SCAN_X, abs=0.003)      # the bottle's body
+        assert r[0] == pytest.approx(1.0 - 0.035 - SCAN_X, abs=0.003)  # the bottle's body
         # a can is 0.122 m tall, under the 0.132 m scan plane: the real LDS-01 misses it too
         can_deg = math.degrees(math.atan2(1.0, 1.0 - SCAN_X))
-        assert np.all(np.isposinf(r[_beam(can_deg) - 3:_beam(can_deg) + 4]))
+        assert np.all(np.isposinf(r[_beam(can_deg) - 3 : _beam(can_deg) + 4]))
     finally:
         sim.close()
 
@@ -128,17 +130,19 @@ def test_scan_and_odom_topics_and_rates_on_the_runtime_clock():
         rt.call("sleep", 1.0)
         assert sim.lidar.scans == 0, "no subscriber, no ray cast"
         scans, odoms = [], []
-        subs = [rt.bus.subscribe("/scan", LaserScan, scans.append, "sensor"),
-                rt.bus.subscribe("/odom", Odometry, odoms.append)]
+        subs = [
+            rt.bus.subscribe("/scan", LaserScan, scans.append, "sensor"),
+            rt.bus.subscribe("/odom", Odometry, odoms.append),
+        ]
         rt.call("sleep", 3.0)
         for s in subs:
             s.close()
         t_scan = np.array([m.header.stamp.sec + 1e-9 * m.header.stamp.nanosec for m in scans])
         t_odom = np.array([m.header.stamp.sec + 1e-9 * m.header.stamp.nanosec for m in odoms])
         assert len(scans) == pytest.approx(15, abs=1)
-        assert np.allclose(np.diff(t_scan), 0.2, atol=1e-6)                 # 5 Hz
+        assert np.allclose(np.diff(t_scan), 0.2, atol=1e-6)  # 5 Hz
         assert len(odoms) == pytest.approx(90, abs=2)
-        assert np.allclose(np.diff(t_odom), 1 / 30, atol=1e-6)             # 30 Hz
+        assert np.allclose(np.diff(t_odom), 1 / 30, atol=1e-6)  # 30 Hz
         m = scans[-1]
         assert m.header.frame_id == "base_scan"
         assert (m.angle_min, m.range_min, m.range_max, m.scan_time) == pytest.approx((0.0, 0.12, 3.5, 0.2))
@@ -160,14 +164,16 @@ def test_ground_truth_topic_only_with_the_debug_flag(flag):
     sim = SimWorld(rt, WALL, seed=0, camera=False, debug_ground_truth=flag).start()
     try:
         got = {"gt": [], "odom": []}
-        subs = [rt.bus.subscribe("/ground_truth/pose", PoseStamped, got["gt"].append),
-                rt.bus.subscribe("/odom", Odometry, got["odom"].append)]
+        subs = [
+            rt.bus.subscribe("/ground_truth/pose", PoseStamped, got["gt"].append),
+            rt.bus.subscribe("/odom", Odometry, got["odom"].append),
+        ]
         rt.call("sleep", 0.5)
         for s in subs:
             s.close()
         assert len(got["odom"]) > 10
         assert (len(got["gt"]) > 10) if flag else (got["gt"] == [])
-        assert sim.robot_pose() == pytest.approx((0.0, 0.0, 0.0), abs=1e-3)   # still inside the sim
+        assert sim.robot_pose() == pytest.approx((0.0, 0.0, 0.0), abs=1e-3)  # still inside the sim
     finally:
         sim.close()
         rt.close()
@@ -190,14 +196,16 @@ def l_drive():
             pose = sim.robot_pose()
             trace.append((q[0], q[1], pose[2]))
             truth.append(pose)
+
         record()
         for v, w, seconds in ((0.25, 0.0, 20.0), (0.0, 1.0, math.pi / 2), (0.25, 0.0, 20.0), (0.0, 0.0, 1.0)):
             sim.apply_cmd_vel(v, w)
             for _ in range(int(round(seconds / sim.dt))):
                 sim.advance(sim.dt)
                 record()
-        return dict(trace=trace, truth=np.array(truth), dt=sim.dt, odom=sim.odom_pose(),
-                    cov=sim.odometry.pose_covariance())
+        return dict(
+            trace=trace, truth=np.array(truth), dt=sim.dt, odom=sim.odom_pose(), cov=sim.odometry.pose_covariance()
+        )
     finally:
         sim.close()
 
@@ -237,8 +245,8 @@ def test_odometry_drifts_like_a_real_robot_and_is_seeded(l_drive):
         errors.append(err / dist)
         # the reported uncertainty covers the error (x/y standard deviation, 3 sigma)
         assert err < 3 * math.sqrt(2 * odo.pose_covariance()[0])
-    assert np.mean(errors) > 0.01, errors                  # > 1 % of the distance, on average
-    assert max(errors) < 0.08, errors                      # ... but a plausible few per cent
+    assert np.mean(errors) > 0.01, errors  # > 1 % of the distance, on average
+    assert max(errors) < 0.08, errors  # ... but a plausible few per cent
     assert len(set(round(e, 9) for e in errors)) == len(errors), "each seed its own errors"
     assert _error(l_drive, _replay(l_drive, 5)) / dist == errors[5], "same seed, same errors"
 
@@ -248,8 +256,9 @@ def test_exact_odometry_follows_the_wheels(l_drive):
 
 
 def test_heading_from_the_wheels_bends_with_the_wheels_mismatch(l_drive):
-    scale_only = dict(wheel_noise=0.0, wheel_scale=0.0, gyro_bias=0.0, gyro_bias_walk=0.0,
-                      gyro_noise=0.0, gyro_scale=0.0)
+    scale_only = dict(
+        wheel_noise=0.0, wheel_scale=0.0, gyro_bias=0.0, gyro_bias_walk=0.0, gyro_noise=0.0, gyro_scale=0.0
+    )
     for seed in range(3):
         imu = _replay(l_drive, seed, OdomNoise(heading="imu", **scale_only))
         wheels = _replay(l_drive, seed, OdomNoise(**scale_only))
@@ -273,6 +282,7 @@ def test_joint_frames_match_pybullet():
         sim.advance(1.5)
         q, _, _ = sim.robot.joint_states()
         from sim.robot import JOINT_STATE_NAMES
+
         edges = {t.child: t for t in static_transforms() + joint_transforms(dict(zip(JOINT_STATE_NAMES, q)))}
         chain, link = [], "end_effector_link"
         while link != "base_footprint":
@@ -284,6 +294,7 @@ def test_joint_frames_match_pybullet():
         base_pos, base_orn = sim.link_pose("base_footprint")
         ee_pos, ee_orn = sim.link_pose("end_effector_link")
         import pybullet as p
+
         inv = p.invertTransform(base_pos, base_orn)
         rel_pos, rel_orn = p.multiplyTransforms(inv[0], inv[1], ee_pos, ee_orn)
         assert t.translation == pytest.approx(rel_pos, abs=1e-4)

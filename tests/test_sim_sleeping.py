@@ -1,5 +1,6 @@
 """Objects at rest sleep (sim/scene.py): they leave the contact solver, yet anything that
 touches them, or the simulator moving them, wakes them as before."""
+
 from __future__ import annotations
 
 import math
@@ -18,7 +19,7 @@ def test_a_sleeping_object_is_pushed_by_the_base_that_drives_into_it():
     try:
         x, y, _ = sim.robot_pose()
         name = sim.add_object("can", x + 0.45, y)
-        sim.advance(4.0)                    # long enough at rest to fall asleep
+        sim.advance(4.0)  # long enough at rest to fall asleep
         before = _position(sim, name)
         sim.robot.set_base_velocity(0.2, 0.0)
         sim.advance(3.0)

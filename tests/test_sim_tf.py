@@ -1,6 +1,7 @@
 """/tf and /tf_static from the simulator: REP 105 frames from sim/frames.py, odom ->
 base_footprint from the (noisy) odometry, the joints from the joint states, the static
 tree latched for late subscribers, and never map -> odom."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -40,9 +41,11 @@ def driven():
     rt = Runtime(clock="virtual")
     sim = SimWorld(rt, "open_floor", seed=3, camera=False, cmd_vel_timeout=0).start()
     heard = {"tf": [], "static": [], "odom": []}
-    subs = [rt.bus.subscribe("/tf", TFMessage, heard["tf"].append),
-            rt.bus.subscribe("/tf_static", TFMessage, heard["static"].append),
-            rt.bus.subscribe("/odom", Odometry, heard["odom"].append)]
+    subs = [
+        rt.bus.subscribe("/tf", TFMessage, heard["tf"].append),
+        rt.bus.subscribe("/tf_static", TFMessage, heard["static"].append),
+        rt.bus.subscribe("/odom", Odometry, heard["odom"].append),
+    ]
     tw = TwistStamped()
     tw.twist.linear.x, tw.twist.angular.z = 0.2, 0.3
     rt.bus.publisher(CMD_VEL, TwistStamped).publish(tw)
@@ -84,8 +87,7 @@ def test_tf_goes_out_at_the_odometry_rate_with_the_odometry_pose(driven):
 
 def test_no_map_to_odom_from_the_simulator(driven):
     _, _, heard = driven
-    edges = {(t.header.frame_id, t.child_frame_id) for m in heard["tf"] + heard["static"]
-             for t in m.transforms}
+    edges = {(t.header.frame_id, t.child_frame_id) for m in heard["tf"] + heard["static"] for t in m.transforms}
     assert not any(child == "odom" for _, child in edges)
     assert "map" not in {parent for parent, _ in edges}
 
@@ -95,8 +97,7 @@ def test_static_tree_is_the_urdfs_fixed_joints(driven):
     assert heard["static"], "/tf_static reached the first subscriber"
     got = {(t.header.frame_id, t.child_frame_id) for t in heard["static"][0].transforms}
     assert got == {(t.parent, t.child) for t in static_transforms()}
-    assert {("base_footprint", "base_link"), ("base_link", "base_scan"),
-            ("camera_link", "camera_optical_frame")} <= got
+    assert {("base_footprint", "base_link"), ("base_link", "base_scan"), ("camera_link", "camera_optical_frame")} <= got
     assert len(heard["static"]) == 1, "sent once, not with every /tf"
 
 
@@ -105,7 +106,7 @@ def test_odom_to_sensor_frames_match_sim_frames(driven):
     buf = _buffer(heard)
     odom = heard["odom"][-1]
     stamp = odom.header.stamp.sec + odom.header.stamp.nanosec * 1e-9
-    base = odom_transform(sim.odometry)       # the robot has stopped: the latest is the last
+    base = odom_transform(sim.odometry)  # the robot has stopped: the latest is the last
     for frame in ("base_scan", "camera_optical_frame", "camera_link"):
         want = _matrix(compose(base, _chain("base_footprint", frame)))
         got = buf.lookup("odom", frame, stamp)
@@ -123,8 +124,16 @@ def test_arm_frames_follow_the_joint_states(driven):
     assert got[:3, 3] == pytest.approx(rel_pos, abs=2e-3)
     assert got[:3, :3] == pytest.approx(transform_matrix((0, 0, 0), rel_orn)[:3, :3], abs=2e-3)
     moving = {t.child_frame_id for t in heard["tf"][-1].transforms}
-    assert {"link2", "link3", "link4", "link5", "gripper_left_link", "gripper_right_link",
-            "wheel_left_link", "wheel_right_link"} <= moving
+    assert {
+        "link2",
+        "link3",
+        "link4",
+        "link5",
+        "gripper_left_link",
+        "gripper_right_link",
+        "wheel_left_link",
+        "wheel_right_link",
+    } <= moving
 
 
 def test_a_late_subscriber_still_gets_the_static_tree(driven):

@@ -1,5 +1,6 @@
 """Worlds from YAML: validation with file:line, seeded placement, the occupancy map,
 the PGM/YAML export and the top-view snapshot."""
+
 from __future__ import annotations
 
 import math
@@ -45,21 +46,24 @@ def test_categories_match_the_brief():
     assert can.radius * 2 == pytest.approx(0.066) and can.height == pytest.approx(0.122)
     assert can.mass == pytest.approx(0.040) and can.rgba[0] > 0.7 > max(can.rgba[1:3])
     bottle = CATEGORIES["bottle"]
-    assert len(bottle.parts) >= 2 and bottle.mass <= 0.3     # body + neck, light for the arm
+    assert len(bottle.parts) >= 2 and bottle.mass <= 0.3  # body + neck, light for the arm
 
 
 def test_others_places_one_of_every_category_not_listed(tmp_path):
     import categories
+
     w = load_world("house", seed=2)
     assert sorted(o.category for o in w.objects) == ["bottle", "box", "box", "can", "can", "carton"]
     juice = tmp_path / "juice.py"
-    juice.write_text("from categories import Box, Category, Grasp, register\n"
-                     "register(Category('juice_world_test', Box(0.06, 0.04, 0.1), 0.05, (1, .5, 0, 1),"
-                     " Grasp(height=0.05)))\n")
+    juice.write_text(
+        "from categories import Box, Category, Grasp, register\n"
+        "register(Category('juice_world_test', Box(0.06, 0.04, 0.1), 0.05, (1, .5, 0, 1),"
+        " Grasp(height=0.05)))\n"
+    )
     categories.load(juice)
     try:
         again = load_world("house", seed=2)
-        assert again.objects[:6] == w.objects            # the layout so far stays
+        assert again.objects[:6] == w.objects  # the layout so far stays
         (extra,) = again.objects[6:]
         assert extra.category == "juice_world_test" and again.room_of(extra.x, extra.y)
     finally:
@@ -79,7 +83,7 @@ def test_placement_keeps_clear_of_walls_furniture_and_each_other():
             r = CATEGORIES[o.category].radius
             assert all(ob.distance(o.x, o.y) >= r + 0.3 - 1e-9 for ob in w.obstacles), (seed, o)
         for i, a in enumerate(w.objects):
-            for b in w.objects[i + 1:]:
+            for b in w.objects[i + 1 :]:
                 assert math.hypot(a.x - b.x, a.y - b.y) > 0.3
 
 
@@ -132,17 +136,19 @@ def test_occupancy_grid_from_geometry():
     w = load_world("house", 0)
     g = build_grid(w)
     assert g.resolution == 0.05
-    assert g.value_at(5.0, 0.0) == 100          # outer wall
+    assert g.value_at(5.0, 0.0) == 100  # outer wall
     assert g.value_at(*w.robot_start[:2]) == 0  # start is free
-    assert g.value_at(-0.3, -0.3) == -1         # outside the house: unknown
-    assert g.value_at(2.0, 4.5) == 0            # a doorway is open
+    assert g.value_at(-0.3, -0.3) == -1  # outside the house: unknown
+    assert g.value_at(2.0, 4.5) == 0  # a doorway is open
     assert g.value_at(w.place.x, w.place.y) == 100
     for f in w.furniture:
         assert g.value_at(f.x, f.y) == 100
     # every room is reachable through its doorways
     for name, (x0, y0, x1, y1) in w.rooms.items():
-        assert (g.data[g.cell(x0 + 0.3, y0 + 0.3)[0]:g.cell(x1, y1)[0],
-                       g.cell(x0 + 0.3, y0 + 0.3)[1]:g.cell(x1, y1)[1]] == 0).any(), name
+        assert (
+            g.data[g.cell(x0 + 0.3, y0 + 0.3)[0] : g.cell(x1, y1)[0], g.cell(x0 + 0.3, y0 + 0.3)[1] : g.cell(x1, y1)[1]]
+            == 0
+        ).any(), name
 
 
 def test_map_export_round_trips(tmp_path):
@@ -158,8 +164,15 @@ def test_urdf_has_the_contracted_names_and_physics():
     root = ET.parse(URDF).getroot()
     links = {link.get("name"): link for link in root.findall("link")}
     joints = {j.get("name"): j for j in root.findall("joint")}
-    for n in ("base_footprint", "base_link", "end_effector_link", "camera_link", "camera_optical_frame",
-              "base_scan", "imu_link"):
+    for n in (
+        "base_footprint",
+        "base_link",
+        "end_effector_link",
+        "camera_link",
+        "camera_optical_frame",
+        "base_scan",
+        "imu_link",
+    ):
         assert n in links
     for n in ("wheel_left_joint", "wheel_right_joint"):
         assert joints[n].get("type") == "continuous"
@@ -179,6 +192,7 @@ def test_snapshot_writes_top_view_and_camera(tmp_path):
     out = snapshot("open_floor", 1, tmp_path / "w.png", camera=True, camera_size=(160, 120))
     assert [p.name for p in out] == ["w.png", "w_camera.png"]
     import cv2
+
     top, cam = cv2.imread(str(out[0])), cv2.imread(str(out[1]))
     assert top.shape[0] > 400 and top.shape[1] > 400
     assert cam.shape == (120, 320, 3)
@@ -186,4 +200,5 @@ def test_snapshot_writes_top_view_and_camera(tmp_path):
 
 def test_urdf_is_what_its_generator_writes():
     from sim.models import build_urdf
+
     assert build_urdf.build() == URDF.read_text(), "run `python -m sim.models.build_urdf`"

@@ -2,6 +2,7 @@
 SUBSCRIBER_WAIT) for a message fails with ActorTimeout naming the topic, its type and
 whether anything publishes it. The wait bounds each wait for a message, not the stream's
 life, and a caller's own deadline replaces it."""
+
 from __future__ import annotations
 
 import pathlib
@@ -54,8 +55,10 @@ def test_no_publisher_fails_after_the_default_naming_the_topic(ear):
         ear.call("heard")
     assert ear.now() - t0 == pytest.approx(SUBSCRIBER_WAIT)
     assert time.monotonic() - t_wall < 2.0  # virtual time: nothing can publish, it jumps
-    assert str(e.value) == (f"actor ear.heard: no message on {TOPIC} (std_msgs/msg/String) within "
-                            "10 s: nothing publishes it (is the robot or the simulator running?)")
+    assert str(e.value) == (
+        f"actor ear.heard: no message on {TOPIC} (std_msgs/msg/String) within "
+        "10 s: nothing publishes it (is the robot or the simulator running?)"
+    )
     assert e.value.path == "ear.heard" and e.value.seconds == SUBSCRIBER_WAIT
     assert isinstance(e.value, ActorbtError)
     assert ear.bus.subscription_count(TOPIC) == 0  # the subscription was closed
@@ -93,6 +96,7 @@ def test_the_callers_own_deadline_replaces_the_wait(ear):
         with ear.run_actor_mode("heard", "timed_iterator", 25.0) as it:
             got = list(it)  # nothing comes: the iteration just ends at its deadline
         return got, ear.now() - t0
+
     got, took = run_in_actor(ear, body)
     assert got == [] and took == pytest.approx(25.0)
 
@@ -110,8 +114,9 @@ def test_a_stream_goes_on_while_messages_flow_and_fails_when_they_stop(ear):
             except ActorTimeout as e:
                 return got, ear.now() - t0, str(e)
         return got, ear.now() - t0, None
+
     got, took, error = run_in_actor(ear, body)
-    assert got == [f"m{i}" for i in range(20)]            # 40 s of messages, four waits long
+    assert got == [f"m{i}" for i in range(20)]  # 40 s of messages, four waits long
     assert took == pytest.approx(39.0 + SUBSCRIBER_WAIT)  # then 10 s of silence
     assert error is not None and f"no message on {TOPIC}" in error
     assert ear.bus.subscription_count(TOPIC) == 0
@@ -124,13 +129,14 @@ def test_an_iterator_bounds_the_callers_wait_not_the_time_between_messages(ear):
 
     def body():
         with ear.run_actor_mode("heard", "iterator") as it:
-            ear.sleep(15.0)                  # busy: the message is buffered
+            ear.sleep(15.0)  # busy: the message is buffered
             first = next(it).data
             t0 = ear.now()
             try:
                 next(it)
             except ActorTimeout:
                 return first, ear.now() - t0
+
     assert run_in_actor(ear, body) == ("m0", pytest.approx(SUBSCRIBER_WAIT))
 
 
@@ -148,6 +154,7 @@ def test_wait_none_waits_until_cancelled(ear):
         txn.cancel("enough")
         ear.sleep(0.0)
         return alive, txn.state.value
+
     assert run_in_actor(ear, body) == (True, "cancelled")
     assert ear.bus.subscription_count(TOPIC) == 0
 
@@ -164,6 +171,7 @@ def test_wait_none_sync_call_is_cancelled_by_its_caller(ear):
         txn.cancel("enough")
         ear.sleep(0.0)
         return txn.outcome()
+
     outcome = run_in_actor(ear, body)
     assert isinstance(outcome, Failure) and outcome.cancelled
 
@@ -175,6 +183,7 @@ def test_async_mode_gets_a_failure(ear):
     def body():
         ear.start("heard", on_done=got.append)
         ear.sleep(SUBSCRIBER_WAIT + 1)
+
     run_in_actor(ear, body)
     assert len(got) == 1 and isinstance(got[0], Failure)
     assert isinstance(got[0].exception, ActorTimeout)
@@ -189,6 +198,7 @@ def test_multi_mode_bounds_the_gap_between_messages(ear):
         txn = ear.run_actor_mode("heard", "multi", got.append)
         ear.sleep(40.0)
         return txn.state.value
+
     assert run_in_actor(ear, body) == "failed"
     assert [m.data for m in got[:3]] == ["m0", "m1", "m2"]
     assert len(got) == 4 and isinstance(got[3], Failure)
@@ -197,6 +207,7 @@ def test_multi_mode_bounds_the_gap_between_messages(ear):
 
 def test_a_tree_leaf_fails_and_the_trace_says_why(ear, tmp_path):
     from bt_engine.trees import TraceRecorder, TreeFailure, register_tree_folder
+
     folder = tmp_path / "trees"
     folder.mkdir()
     (folder / "listen.yaml").write_text("name: listen\nroot: {do: ear.heard, out: msg}\n")
@@ -217,18 +228,24 @@ def test_a_message_from_another_thread_is_waited_for_at_wall_pace():
     a jump of virtual time."""
     rt = Runtime(clock="virtual")
     try:
+
         def feed(emit):
             timer = threading.Timer(0.5, emit, args=("late",))
             timer.start()
             return timer.cancel
-        rt.run_on_hub(lambda: rt.root.add_actor("driver", feed, Kind.STREAM, wait=1.0,
-                                                wait_detail=lambda s: f"no frame in {s:g} s"))
+
+        rt.run_on_hub(
+            lambda: rt.root.add_actor(
+                "driver", feed, Kind.STREAM, wait=1.0, wait_detail=lambda s: f"no frame in {s:g} s"
+            )
+        )
         t0 = time.monotonic()
         assert rt.call("driver") == "late"
         assert time.monotonic() - t0 >= 0.45
 
         def silent(emit):
             return lambda: None
+
         rt.run_on_hub(lambda: rt.root.add_actor("silent", silent, Kind.STREAM, wait=0.3))
         t0 = time.monotonic()
         with pytest.raises(ActorTimeout, match=r"^actor silent: no value within 0.3 s$"):
@@ -257,27 +274,30 @@ def test_a_local_action_without_a_server_fails_at_once_naming_it(rt):
         def __init__(self):
             super().__init__()
             self.register_action("grip", GripperCommand, "/gripper_controller/gripper_cmd")
+
     rt.add_subsystem("arm", Arm)
     t0 = rt.now()
     with pytest.raises(ActorbtError) as e:
         rt.call("grip")
     assert rt.now() == t0
     assert isinstance(e.value.root_cause, ServerUnavailableError)
-    assert ("no server for /gripper_controller/gripper_cmd (nothing serves it on the local bus)"
-            in str(e.value))
+    assert "no server for /gripper_controller/gripper_cmd (nothing serves it on the local bus)" in str(e.value)
 
 
 # -- the actorbt command ---------------------------------------------------------------------
 def test_actorbt_call_of_a_silent_topic_ends_with_the_reason(capsys):
     from bt_cli.main import main
+
     config = str(REPO / "actorbt.yaml")
     t0 = time.monotonic()
     rc = main(["--config", config, "call", "robot.navigation.odom", "--world", "none"])
     took = time.monotonic() - t0
     err = capsys.readouterr().err
     assert rc != 0
-    assert ("actor robot.navigation.odom: no message on /odom (nav_msgs/msg/Odometry) within "
-            "10 s: nothing publishes it (is the robot or the simulator running?)") in err
+    assert (
+        "actor robot.navigation.odom: no message on /odom (nav_msgs/msg/Odometry) within "
+        "10 s: nothing publishes it (is the robot or the simulator running?)"
+    ) in err
     assert took < 30.0  # virtual clock: no wall-time wait at all (about 1 s in all)
     # with the simulated world, the message comes at once
     assert main(["--config", config, "call", "robot.navigation.odom"]) == 0
@@ -305,8 +325,9 @@ def test_ros_subscriber_waits_in_wall_time_under_the_virtual_clock():
         with pytest.raises(ActorTimeout) as e:
             listener.call("nobody")
         assert time.monotonic() - t0 >= 1.4  # wall pace, though the clock is virtual
-        assert "no message on /deadline_test/nobody (std_msgs/msg/String) within 1.5 s: " \
-               "nothing publishes it" in str(e.value)
+        assert "no message on /deadline_test/nobody (std_msgs/msg/String) within 1.5 s: nothing publishes it" in str(
+            e.value
+        )
         assert "ROS_DOMAIN_ID" in str(e.value)
 
         pub = talker.bus.publisher("/deadline_test/ros_chat", String)
@@ -316,6 +337,7 @@ def test_ros_subscriber_waits_in_wall_time_under_the_virtual_clock():
             while not stop.is_set():
                 pub.publish(String(data="hi"))
                 time.sleep(0.1)
+
         t = threading.Thread(target=talk)
         t.start()
         try:

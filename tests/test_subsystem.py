@@ -1,4 +1,5 @@
 """SubSystem, SubNet, values and name scoping."""
+
 from __future__ import annotations
 
 import pytest
@@ -68,8 +69,8 @@ def robot(rt):
 
 
 def test_relative_lookup_walks_up_and_down(rt, robot):
-    assert rt.call("go") == 0.3                     # unique below the root
-    assert rt.call("who_is_home") == "arm home"     # own actor wins over the parent's
+    assert rt.call("go") == 0.3  # unique below the root
+    assert rt.call("who_is_home") == "arm home"  # own actor wins over the parent's
     assert rt.call("robot.home") == "robot home"
 
 
@@ -119,12 +120,14 @@ def test_transactions_listing(rt, robot):
         assert txn in live and robot.transactions() == live
         assert [t.path for t in live] == [live[0].path, "sleep"]  # the probe itself, then sleep
         txn.cancel()
+
     run_in_actor(rt, body)
 
 
 def test_register_subsystem_alias_and_duplicates(rt):
     rt.register_subsystem("one", Arm)
     from bt_engine import ActorbtError
+
     with pytest.raises(ActorbtError):
         rt.add_subsystem("one", Arm)
     with pytest.raises(ActorbtError):

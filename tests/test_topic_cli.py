@@ -3,6 +3,7 @@
 the simulated world fast and times are sim time, and over ROS against an `actorbt sim run
 --bus ros` in another process. Also what they stand on: the bus's topic listing and the
 message converter."""
+
 from __future__ import annotations
 
 import array
@@ -33,7 +34,8 @@ def world_config(tmp_path_factory):
     """An actorbt.yaml with the house world alone (no subsystems: quick to start)."""
     folder = tmp_path_factory.mktemp("topic")
     cfg = folder / "actorbt.yaml"
-    cfg.write_text(textwrap.dedent("""\
+    cfg.write_text(
+        textwrap.dedent("""\
         subsystems: {}
         trees: null
         world: {name: house, seed: 0}
@@ -41,7 +43,8 @@ def world_config(tmp_path_factory):
         transport: local
         clock: virtual
         plugins: [sim.cli]
-        """))
+        """)
+    )
     return str(cfg)
 
 
@@ -55,6 +58,7 @@ def run(capsys, cfg, *argv):
 def test_type_names_and_classes():
     from control_msgs.action import FollowJointTrajectory
     from sensor_msgs.msg import LaserScan
+
     assert type_name(LaserScan) == "sensor_msgs/msg/LaserScan"
     assert type_name(FollowJointTrajectory) == "control_msgs/action/FollowJointTrajectory"
     for name in ("sensor_msgs/msg/LaserScan", "sensor_msgs/LaserScan", "sensor_msgs.msg.LaserScan"):
@@ -65,16 +69,17 @@ def test_type_names_and_classes():
 
 def test_messages_become_plain_data_with_ros_field_names():
     from sensor_msgs.msg import CameraInfo, Image, LaserScan
+
     scan = LaserScan(range_max=3.5, angle_increment=0.017453292519943295)
     scan.header.frame_id = "base_scan"
     scan.ranges = array.array("f", [0.1, float("inf"), float("nan")] + [1.0] * 300)
     plain = to_plain(scan)
     assert list(plain) == list(LaserScan.get_fields_and_field_types())
     assert plain["header"] == {"stamp": {"sec": 0, "nanosec": 0}, "frame_id": "base_scan"}
-    assert plain["angle_increment"] == 0.017453293          # float32 shown as float32
+    assert plain["angle_increment"] == 0.017453293  # float32 shown as float32
     assert plain["ranges"][0] == 0.1 and plain["ranges"][1] == float("inf")
     assert len(plain["ranges"]) == 129 and plain["ranges"][-1] == "..."  # ros2's 128, then '...'
-    assert to_plain(scan, finite=True)["ranges"][1:3] == [None, None]    # for JSON
+    assert to_plain(scan, finite=True)["ranges"][1:3] == [None, None]  # for JSON
     assert len(to_plain(scan, truncate=None)["ranges"]) == 303
     image = Image(height=2, width=2, encoding="rgb8", step=6, data=array.array("B", range(12)))
     assert to_plain(image, arrays=False)["data"] == "<sequence<uint8>, length: 12>"
@@ -87,6 +92,7 @@ def test_no_arr_leaves_out_arrays_of_numbers_but_not_of_messages_or_strings():
     from geometry_msgs.msg import PoseWithCovarianceStamped, TransformStamped
     from sensor_msgs.msg import JointState
     from tf2_msgs.msg import TFMessage
+
     arm = TransformStamped(child_frame_id="link1")
     arm.header.frame_id = "base_link"
     plain = to_plain(TFMessage(transforms=[arm, TransformStamped()]), arrays=False)
@@ -101,6 +107,7 @@ def test_no_arr_leaves_out_arrays_of_numbers_but_not_of_messages_or_strings():
 
 def test_yaml_prints_fields_on_lines_and_number_lists_on_one():
     from geometry_msgs.msg import PoseStamped
+
     text = format_yaml({"pose": to_plain(PoseStamped())["pose"], "k": [1.0, 2.0]})
     assert "  position:\n    x: 0.0\n" in text and "k: [1.0, 2.0]\n" in text
 
@@ -124,7 +131,9 @@ def test_the_local_bus_lists_its_topics_and_actions():
     from control_msgs.action import GripperCommand
     from geometry_msgs.msg import Twist
     from sensor_msgs.msg import LaserScan
+
     with Runtime() as rt:
+
         def setup():
             bus = rt.bus
             bus.publisher("/scan", LaserScan, "sensor")
@@ -132,12 +141,13 @@ def test_the_local_bus_lists_its_topics_and_actions():
             bus.subscribe("/cmd_vel", Twist, lambda m: None)
             bus.action_server("/gripper_controller/gripper_cmd", GripperCommand, lambda g: None)
             return bus.topics(), bus.actions(), bus.services()
+
         topics, actions, services = rt.run_on_hub(setup)
     assert [tuple(t) for t in topics] == [
         ("/cmd_vel", "geometry_msgs/msg/Twist", 0, 1, ""),
-        ("/scan", "sensor_msgs/msg/LaserScan", 1, 1, "best effort")]
-    assert [tuple(a) for a in actions] == [("/gripper_controller/gripper_cmd",
-                                            "control_msgs/action/GripperCommand")]
+        ("/scan", "sensor_msgs/msg/LaserScan", 1, 1, "best effort"),
+    ]
+    assert [tuple(a) for a in actions] == [("/gripper_controller/gripper_cmd", "control_msgs/action/GripperCommand")]
     assert services == []
 
 
@@ -151,8 +161,13 @@ def test_list_shows_names_and_with_t_types(capsys, world_config):
     assert "/tf_static [tf2_msgs/msg/TFMessage]" in lines
     rc, out, _ = run(capsys, world_config, "list", "--json")
     scan = next(t for t in json.loads(out) if t["name"] == "/scan")
-    assert scan == {"name": "/scan", "type": "sensor_msgs/msg/LaserScan", "publishers": 1,
-                    "subscribers": 0, "qos": "best effort"}
+    assert scan == {
+        "name": "/scan",
+        "type": "sensor_msgs/msg/LaserScan",
+        "publishers": 1,
+        "subscribers": 0,
+        "qos": "best effort",
+    }
 
 
 def test_echo_once_prints_one_message_as_yaml(capsys, world_config):
@@ -256,9 +271,13 @@ def test_action_list_shows_the_robots_actions_with_types(capsys):
 
 
 def test_ctrl_c_exits_130_cleanly(world_config):
-    proc = subprocess.Popen([sys.executable, "-m", "bt_cli.main", "--config", world_config,
-                             "topic", "hz", "/scan"], cwd=ROOT, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "bt_cli.main", "--config", world_config, "topic", "hz", "/scan"],
+        cwd=ROOT,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     try:
         ready, _, _ = select.select([proc.stdout], [], [], 120)
         assert ready, "no report within 120 s"
@@ -276,27 +295,43 @@ def test_ctrl_c_exits_130_cleanly(world_config):
 
 # -- over ROS, against `actorbt sim run --bus ros` -----------------------------------------------
 #: a ROS domain of its own (test_ros_common takes 1..100, test_ros_cli 101..200)
-ROS_ENV = dict(os.environ, ROS_DOMAIN_ID=str(201 + os.getpid() % 30), PYTHONUNBUFFERED="1",
-               ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST")
+ROS_ENV = dict(
+    os.environ,
+    ROS_DOMAIN_ID=str(201 + os.getpid() % 30),
+    PYTHONUNBUFFERED="1",
+    ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST",
+)
 
 
 def actorbt(*argv: str, timeout: float = 120) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "bt_cli.main", *argv], cwd=ROOT,
-                          env=ROS_ENV, capture_output=True, text=True, timeout=timeout)
+    return subprocess.run(
+        [sys.executable, "-m", "bt_cli.main", *argv],
+        cwd=ROOT,
+        env=ROS_ENV,
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+    )
 
 
 @pytest.fixture(scope="module")
 def sim_over_ros():
     pytest.importorskip("rclpy")
-    proc = subprocess.Popen([sys.executable, "-m", "bt_cli.main", "sim", "run", "--world",
-                             "house", "--bus", "ros", "--seconds", "300"], cwd=ROOT, env=ROS_ENV,
-                            stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "bt_cli.main", "sim", "run", "--world", "house", "--bus", "ros", "--seconds", "300"],
+        cwd=ROOT,
+        env=ROS_ENV,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.DEVNULL,
+        text=True,
+    )
     ready = threading.Event()
 
     def read():
         for line in proc.stdout:
             if "ready in" in line:
                 ready.set()
+
     threading.Thread(target=read, daemon=True).start()
     try:
         assert ready.wait(120), "actorbt sim run --bus ros did not start"
@@ -311,8 +346,7 @@ def sim_over_ros():
 
 
 def test_over_ros_echo_once_and_list(sim_over_ros):
-    proc = actorbt("topic", "echo", "/odom", "--once", "--bus", "ros", "--wait", "30",
-                   "--timeout", "60")
+    proc = actorbt("topic", "echo", "/odom", "--once", "--bus", "ros", "--wait", "30", "--timeout", "60")
     assert proc.returncode == 0, proc.stderr
     msg = yaml.safe_load(proc.stdout.split("---")[0])
     assert msg["header"]["frame_id"] == "odom" and msg["child_frame_id"] == "base_footprint"
@@ -323,8 +357,7 @@ def test_over_ros_echo_once_and_list(sim_over_ros):
     assert "/scan [sensor_msgs/msg/LaserScan]" in lines and "/tf [tf2_msgs/msg/TFMessage]" in lines
     assert not any("/_action/" in line for line in lines)  # hidden, as ros2 hides them
     # /scan is best effort: heard only with the QoS its publisher offers
-    proc = actorbt("topic", "hz", "/scan", "--count", "4", "--bus", "ros", "--wait", "30",
-                   "--timeout", "60")
+    proc = actorbt("topic", "hz", "/scan", "--count", "4", "--bus", "ros", "--wait", "30", "--timeout", "60")
     assert proc.returncode == 0, proc.stderr
     assert "(wall time)" in proc.stdout.splitlines()[-2]
 

@@ -50,7 +50,10 @@ def test_bad_mission_gives_one_positioned_error(path: Path) -> None:
 def test_command_line_prints_one_line_per_file_and_no_traceback() -> None:
     proc = subprocess.run(
         [sys.executable, "-m", "bt_engine.trees", "--fake-actors", *map(str, FILES)],
-        capture_output=True, text=True, timeout=120, cwd=Path(__file__).parent.parent,
+        capture_output=True,
+        text=True,
+        timeout=120,
+        cwd=Path(__file__).parent.parent,
     )
     assert proc.returncode == 1
     assert "Traceback" not in proc.stderr

@@ -111,10 +111,7 @@ def test_show_ascii_and_drawings(config: str, tmp_path: Path, capsys: pytest.Cap
 
 def test_show_draws_any_text_literally(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
     mission = tmp_path / "odd.yaml"
-    mission.write_text(
-        "name: odd\n"
-        "root: {sequence: [{name: 'say \"hi\" \\l <b>', set: {a: '<i>'}}], name: '<seq>'}\n"
-    )
+    mission.write_text("name: odd\nroot: {sequence: [{name: 'say \"hi\" \\l <b>', set: {a: '<i>'}}], name: '<seq>'}\n")
     dot = tmp_path / "odd.dot"
     assert main(["show", str(mission), "--out", str(dot)]) == 0
     source = dot.read_text()
@@ -127,8 +124,9 @@ def test_show_draws_any_text_literally(tmp_path: Path, capsys: pytest.CaptureFix
     capsys.readouterr()
 
 
-def test_show_without_graphviz_says_what_to_do(config: str, tmp_path: Path, capsys: pytest.CaptureFixture,
-                                                monkeypatch: pytest.MonkeyPatch) -> None:
+def test_show_without_graphviz_says_what_to_do(
+    config: str, tmp_path: Path, capsys: pytest.CaptureFixture, monkeypatch: pytest.MonkeyPatch
+) -> None:
     monkeypatch.setenv("PATH", str(tmp_path))  # no dot here
     assert main(["--config", config, "show", "demo_patrol", "--out", str(tmp_path / "t.png")]) == 2
     assert "Graphviz 'dot' is not installed, so t.png cannot be drawn" in capsys.readouterr().err
@@ -136,8 +134,7 @@ def test_show_without_graphviz_says_what_to_do(config: str, tmp_path: Path, caps
 
 def test_run_ending_like_demo(config: str, tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
     trace = tmp_path / "run.jsonl"
-    assert main(["--config", config, "run", "demo_patrol", "--arg", "rounds=1", "--json",
-                 "--record", str(trace)]) == 0
+    assert main(["--config", config, "run", "demo_patrol", "--arg", "rounds=1", "--json", "--record", str(trace)]) == 0
     lines = capsys.readouterr().out.strip().splitlines()
     assert lines[-3] == 'SUCCESS {"last": "bedroom"}'
     assert lines[-2].startswith("sim time 7.5 s, wall time ")
@@ -150,8 +147,9 @@ def test_run_failure_ending(config: str, capsys: pytest.CaptureFixture) -> None:
     lines = capsys.readouterr().out.strip().splitlines()
     assert lines[-2] == "FAILURE at sequence/too small: n > 5: false"
     assert lines[-1].startswith("sim time 0.0 s, wall time ")
-    assert not any(line.endswith("fails: FAILURE: tree fails failed at sequence/too small: n > 5: false")
-                   for line in lines)  # said once, on the outcome line
+    assert not any(
+        line.endswith("fails: FAILURE: tree fails failed at sequence/too small: n > 5: false") for line in lines
+    )  # said once, on the outcome line
 
 
 def test_nested_runs_still_show_their_outcome(config: str, tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
@@ -168,13 +166,13 @@ def _world_config(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> str:
     (tmp_path / "fake_sim_for_cli.py").write_text("def start(rt, name, seed=0, gui=False):\n    return None\n")
     monkeypatch.syspath_prepend(str(tmp_path))
     cfg = tmp_path / "actorbt.yaml"
-    cfg.write_text("subsystems: {}\ntrees: null\nworld: {name: flat, seed: 4}\n"
-                   "simulator: fake_sim_for_cli:start\n")
+    cfg.write_text("subsystems: {}\ntrees: null\nworld: {name: flat, seed: 4}\nsimulator: fake_sim_for_cli:start\n")
     return str(cfg)
 
 
-def test_quiet_by_default_info_with_v(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
-                                      capsys: pytest.CaptureFixture, caplog: pytest.LogCaptureFixture) -> None:
+def test_quiet_by_default_info_with_v(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture, caplog: pytest.LogCaptureFixture
+) -> None:
     cfg = _world_config(tmp_path, monkeypatch)
     caplog.set_level(logging.NOTSET)  # the handler takes all; the root level decides
     assert main(["--config", cfg, "call", "sleep", "0.1"]) == 0

@@ -28,14 +28,18 @@ def test_resume_sequence_resumes_at_the_failed_child(w: World) -> None:
             - {name: a, do: act, with: {tag: a}}
             - {name: b, do: act, with: {tag: b}}
     """)
-    w.table(run, "rs a b", [
-        (None,          "R", "R", "I"),
-        (w.finish("a"), "R", "S", "R"),
-        (w.fail("b"),   "F", "S", "F"),
-        (None,          "R", "S", "R"),   # b again, a not restarted
-        (w.finish("b"), "S", "S", "S"),
-        (None,          "R", "R", "I"),   # after a success it starts over
-    ])
+    w.table(
+        run,
+        "rs a b",
+        [
+            (None, "R", "R", "I"),
+            (w.finish("a"), "R", "S", "R"),
+            (w.fail("b"), "F", "S", "F"),
+            (None, "R", "S", "R"),  # b again, a not restarted
+            (w.finish("b"), "S", "S", "S"),
+            (None, "R", "R", "I"),  # after a success it starts over
+        ],
+    )
     assert w.script.started == ["a", "b", "b", "a"]
 
 
@@ -48,14 +52,18 @@ def test_pipeline_sequence_keeps_earlier_children_ticking(w: World) -> None:
             - {name: a, do: act, with: {tag: a}}
             - {name: b, do: act, with: {tag: b}}
     """)
-    w.table(run, "ps a b", [
-        (None,          "R", "R", "I"),
-        (w.finish("a"), "R", "S", "R"),
-        (None,          "R", "R", "R"),   # a restarted alongside b
-        (w.finish("a"), "R", "S", "R"),
-        (w.finish("b"), "R", "R", "S"),   # a restarted, b done: the furthest is b, a runs
-        (w.finish("a"), "S", "I", "I"),   # all succeeded in one tick (b re-ticked is restarted: not here)
-    ][:4])
+    w.table(
+        run,
+        "ps a b",
+        [
+            (None, "R", "R", "I"),
+            (w.finish("a"), "R", "S", "R"),
+            (None, "R", "R", "R"),  # a restarted alongside b
+            (w.finish("a"), "R", "S", "R"),
+            (w.finish("b"), "R", "R", "S"),  # a restarted, b done: the furthest is b, a runs
+            (w.finish("a"), "S", "I", "I"),  # all succeeded in one tick (b re-ticked is restarted: not here)
+        ][:4],
+    )
     w.rt.run_on_hub(lambda: w.script.fail("b"))
     w.rt.run_on_hub(run.tick)
     assert run.status.name == "FAILURE"
@@ -72,12 +80,16 @@ def test_if_then_else_decides_once(w: World) -> None:
             - {name: then, do: act, with: {tag: then}}
             - {name: else, do: act, with: {tag: else}}
     """)
-    w.table(run, "ite cond then else", [
-        (None,              "R", "R", "I", "I"),
-        (w.fail("cond"),    "R", "F", "I", "R"),
-        (None,              "R", "F", "I", "R"),   # the condition is not ticked again
-        (w.finish("else"),  "S", "F", "I", "S"),
-    ])
+    w.table(
+        run,
+        "ite cond then else",
+        [
+            (None, "R", "R", "I", "I"),
+            (w.fail("cond"), "R", "F", "I", "R"),
+            (None, "R", "F", "I", "R"),  # the condition is not ticked again
+            (w.finish("else"), "S", "F", "I", "S"),
+        ],
+    )
 
 
 def test_if_then_else_without_else_fails(w: World) -> None:
@@ -103,12 +115,16 @@ def test_while_do_else_switches_branch_when_the_condition_changes(w: World) -> N
             - {name: work, do: act, with: {tag: work}}
             - {name: idle, do: act, with: {tag: idle}}
     """)
-    w.table(run, "wde cond work idle", [
-        (None,                        "R", "S", "R", "I"),
-        (w.write(run, "go", False),   "R", "F", "I", "R"),
-        (w.write(run, "go", True),    "R", "S", "R", "I"),
-        (w.finish("work"),            "S", "S", "S", "I"),
-    ])
+    w.table(
+        run,
+        "wde cond work idle",
+        [
+            (None, "R", "S", "R", "I"),
+            (w.write(run, "go", False), "R", "F", "I", "R"),
+            (w.write(run, "go", True), "R", "S", "R", "I"),
+            (w.finish("work"), "S", "S", "S", "I"),
+        ],
+    )
     assert w.script.cancelled == ["work", "idle"]
 
 
@@ -123,14 +139,18 @@ def test_recovery_retries_after_a_successful_recovery(w: World) -> None:
               - {name: act, do: act, with: {tag: act}}
               - {name: fix, do: act, with: {tag: fix}}
     """)
-    w.table(run, "rec act fix", [
-        (None,            "R", "R", "I"),
-        (w.fail("act"),   "R", "F", "R"),
-        (w.finish("fix"), "R", "R", "S"),
-        (w.fail("act"),   "R", "F", "R"),
-        (w.finish("fix"), "R", "R", "S"),
-        (w.fail("act"),   "F", "F", "S"),   # two recoveries used
-    ])
+    w.table(
+        run,
+        "rec act fix",
+        [
+            (None, "R", "R", "I"),
+            (w.fail("act"), "R", "F", "R"),
+            (w.finish("fix"), "R", "R", "S"),
+            (w.fail("act"), "R", "F", "R"),
+            (w.finish("fix"), "R", "R", "S"),
+            (w.fail("act"), "F", "F", "S"),  # two recoveries used
+        ],
+    )
 
 
 def test_recovery_fails_when_the_recovery_fails(w: World) -> None:
@@ -140,11 +160,15 @@ def test_recovery_fails_when_the_recovery_fails(w: World) -> None:
           name: rec
           recovery: {children: [{name: act, do: act, with: {tag: act}}, {name: fix, do: act, with: {tag: fix}}]}
     """)
-    w.table(run, "rec act fix", [
-        (None,          "R", "R", "I"),
-        (w.fail("act"), "R", "F", "R"),
-        (w.fail("fix"), "F", "F", "F"),
-    ])
+    w.table(
+        run,
+        "rec act fix",
+        [
+            (None, "R", "R", "I"),
+            (w.fail("act"), "R", "F", "R"),
+            (w.fail("fix"), "F", "F", "F"),
+        ],
+    )
 
 
 def test_counting_parallel(w: World) -> None:
@@ -160,12 +184,16 @@ def test_counting_parallel(w: World) -> None:
               - {name: b, do: act, with: {tag: b}}
               - {name: c, do: act, with: {tag: c}}
     """)
-    w.table(run, "par a b c", [
-        (None,          "R", "R", "R", "R"),
-        (w.fail("a"),   "R", "F", "R", "R"),   # one failure is allowed
-        (w.finish("b"), "R", "F", "S", "R"),
-        (w.finish("c"), "S", "F", "S", "S"),
-    ])
+    w.table(
+        run,
+        "par a b c",
+        [
+            (None, "R", "R", "R", "R"),
+            (w.fail("a"), "R", "F", "R", "R"),  # one failure is allowed
+            (w.finish("b"), "R", "F", "S", "R"),
+            (w.finish("c"), "S", "F", "S", "S"),
+        ],
+    )
 
 
 def test_counting_parallel_fails_when_success_is_out_of_reach(w: World) -> None:
@@ -180,10 +208,14 @@ def test_counting_parallel_fails_when_success_is_out_of_reach(w: World) -> None:
               - {name: a, do: act, with: {tag: a}}
               - {name: b, do: act, with: {tag: b}}
     """)
-    w.table(run, "par a b", [
-        (None,          "R", "R", "R"),
-        (w.fail("a"),   "F", "F", "I"),
-    ])
+    w.table(
+        run,
+        "par a b",
+        [
+            (None, "R", "R", "R"),
+            (w.fail("a"), "F", "F", "I"),
+        ],
+    )
     assert w.script.cancelled == ["b"]
 
 
@@ -199,14 +231,18 @@ def test_rate_controller_ticks_the_child_once_per_period(w: World) -> None:
                 child: {name: plan, do: act, with: {tag: plan}}
             - {name: follow, do: act, with: {tag: follow}}
     """)
-    w.table(run, "ps rate plan follow", [
-        (None,             "R", "R", "R", "I"),
-        (w.finish("plan"), "R", "S", "S", "R"),
-        (1.0,              "R", "R", "S", "R"),   # within the period: the child is not ticked
-        (1.0,              "R", "R", "R", "R"),   # 2 s later: planned again while following
-        (w.finish("plan"), "R", "S", "S", "R"),
-        (w.finish("follow"), "S", "I", "I", "I"),
-    ][:5])
+    w.table(
+        run,
+        "ps rate plan follow",
+        [
+            (None, "R", "R", "R", "I"),
+            (w.finish("plan"), "R", "S", "S", "R"),
+            (1.0, "R", "R", "S", "R"),  # within the period: the child is not ticked
+            (1.0, "R", "R", "R", "R"),  # 2 s later: planned again while following
+            (w.finish("plan"), "R", "S", "S", "R"),
+            (w.finish("follow"), "S", "I", "I", "I"),
+        ][:5],
+    )
     assert w.script.started == ["plan", "follow", "plan"]
 
 
@@ -221,10 +257,14 @@ def test_run_once(w: World) -> None:
               name: once
               run_once: {then: success, child: {name: a, do: act, with: {tag: a}}}
     """)
-    w.table(run, "rep once a", [
-        (None,          "R", "R", "R"),
-        (w.fail("a"),   "F", "F", "F"),
-    ])
+    w.table(
+        run,
+        "rep once a",
+        [
+            (None, "R", "R", "R"),
+            (w.fail("a"), "F", "F", "F"),
+        ],
+    )
     run2 = w.tree("""
         name: once2
         root:
@@ -233,12 +273,16 @@ def test_run_once(w: World) -> None:
             times: 3
             child: {name: once, run_once: {then: success, child: {name: a, do: act, with: {tag: a2}}}}
     """)
-    w.table(run2, "rep once a", [
-        (None,           "R", "R", "R"),
-        (w.finish("a2"), "R", "S", "S"),
-        (None,           "R", "S", "S"),   # not ticked again
-        (None,           "S", "S", "S"),
-    ])
+    w.table(
+        run2,
+        "rep once a",
+        [
+            (None, "R", "R", "R"),
+            (w.finish("a2"), "R", "S", "S"),
+            (None, "R", "S", "S"),  # not ticked again
+            (None, "S", "S", "S"),
+        ],
+    )
     assert w.script.started.count("a2") == 1
 
 
@@ -261,15 +305,18 @@ def test_retry_forever(w: World) -> None:
     assert w.script.started.count("a") == 6
 
 
-@pytest.mark.parametrize("text, message", [
-    ("if_then_else: [{check: a}]", "expected 2 or 3"),
-    ("recovery: {children: [{check: a}]}", "expected 2: the action and its recovery"),
-    ("parallel: {success_count: 4, children: [{check: a}, {check: a}]}", "expected an integer from 1 to 2"),
-    ("parallel: {success_count: 1, policy: success_on_one, children: [{check: a}]}", "not both"),
-    ("rate_controller: {hz: 0, child: {check: a}}", "hz is 0"),
-    ("run_once: {then: skip, child: {check: a}}", "expected one of: same, success, failure"),
-    ("recovery: {retries: -1, children: [{check: a}, {check: a}]}", "recovery retries is -1"),
-])
+@pytest.mark.parametrize(
+    "text, message",
+    [
+        ("if_then_else: [{check: a}]", "expected 2 or 3"),
+        ("recovery: {children: [{check: a}]}", "expected 2: the action and its recovery"),
+        ("parallel: {success_count: 4, children: [{check: a}, {check: a}]}", "expected an integer from 1 to 2"),
+        ("parallel: {success_count: 1, policy: success_on_one, children: [{check: a}]}", "not both"),
+        ("rate_controller: {hz: 0, child: {check: a}}", "hz is 0"),
+        ("run_once: {then: skip, child: {check: a}}", "expected one of: same, success, failure"),
+        ("recovery: {retries: -1, children: [{check: a}, {check: a}]}", "recovery retries is -1"),
+    ],
+)
 def test_control_errors_are_located(text: str, message: str) -> None:
     with pytest.raises(InvalidValueError, match=message) as info:
         parse_mission(f"name: t\ninputs: {{a: bool}}\nroot:\n  {text}\n", "t.yaml")

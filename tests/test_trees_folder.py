@@ -114,13 +114,17 @@ def test_strict_loading_is_all_or_nothing(rt: Runtime, folder: Path) -> None:
 def test_a_file_that_does_not_parse_is_skipped_under_its_declared_name(rt: Runtime, tmp_path: Path) -> None:
     (tmp_path / "syn.yaml").write_text("name: syn\nroot: {do: [\n")
     (tmp_path / "anon.yaml").write_text("root: [\n")
-    write(tmp_path, user="""
+    write(
+        tmp_path,
+        user="""
         name: user
         root: {do: syn}
-    """, fine="""
+    """,
+        fine="""
         name: fine
         root: {wait: 1}
-    """)
+    """,
+    )
     host = TreeHost(rt)
     assert [m.name for m in host.load_folder(tmp_path, strict=False)] == ["fine"]
     broken = host.library.broken
@@ -133,8 +137,12 @@ def test_a_file_that_does_not_parse_is_skipped_under_its_declared_name(rt: Runti
 
 
 def test_two_files_with_one_name_skip_that_name(rt: Runtime, tmp_path: Path) -> None:
-    write(tmp_path, a="name: same\nroot: {wait: 1}\n", b="name: same\nroot: {wait: 2}\n",
-          c="name: other\nroot: {wait: 1}\n")
+    write(
+        tmp_path,
+        a="name: same\nroot: {wait: 1}\n",
+        b="name: same\nroot: {wait: 2}\n",
+        c="name: other\nroot: {wait: 1}\n",
+    )
     host = register_tree_folder(rt, tmp_path, strict=False)
     assert host.library.names == ["other"]
     assert isinstance(host.library.broken["same"], DuplicateTreeError)
@@ -143,8 +151,7 @@ def test_two_files_with_one_name_skip_that_name(rt: Runtime, tmp_path: Path) -> 
 
 
 def test_a_tree_named_like_an_actor_is_skipped_but_the_actor_stays(rt: Runtime, tmp_path: Path) -> None:
-    write(tmp_path, sleep="name: sleep\nroot: {wait: 1}\n",
-          nap="name: nap\nroot: {do: sleep, with: {seconds: 2}}\n")
+    write(tmp_path, sleep="name: sleep\nroot: {wait: 1}\n", nap="name: nap\nroot: {do: sleep, with: {seconds: 2}}\n")
     host = register_tree_folder(rt, tmp_path, strict=False)
     assert host.library.names == ["nap"]
     assert list(host.library.broken) == [str(tmp_path / "sleep.yaml")]
@@ -155,15 +162,15 @@ def test_a_tree_named_like_an_actor_is_skipped_but_the_actor_stays(rt: Runtime, 
 
 
 def test_trees_in_a_cycle_are_skipped(rt: Runtime, tmp_path: Path) -> None:
-    write(tmp_path, a="name: ta\nroot: {do: tb}\n", b="name: tb\nroot: {do: ta}\n",
-          c="name: tc\nroot: {wait: 1}\n")
+    write(tmp_path, a="name: ta\nroot: {do: tb}\n", b="name: tb\nroot: {do: ta}\n", c="name: tc\nroot: {wait: 1}\n")
     host = register_tree_folder(rt, tmp_path, strict=False)
     assert host.library.names == ["tc"]
     assert all(isinstance(host.library.broken[n], (SubtreeCycleError, BrokenDependencyError)) for n in ("ta", "tb"))
 
 
-def test_a_tree_loaded_later_that_calls_a_skipped_tree_gives_the_reason(rt: Runtime, folder: Path,
-                                                                        tmp_path_factory) -> None:
+def test_a_tree_loaded_later_that_calls_a_skipped_tree_gives_the_reason(
+    rt: Runtime, folder: Path, tmp_path_factory
+) -> None:
     host = register_tree_folder(rt, folder, strict=False)
     extra = write(tmp_path_factory.mktemp("extra"), late="name: late\nroot: {do: broken}\n")
     with pytest.raises(MissionError, match="tree 'broken' was skipped"):

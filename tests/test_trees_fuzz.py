@@ -32,15 +32,39 @@ Mutator = Callable[[random.Random, bytes], bytes]
 # ---------------------------------------------------------------- mutations
 
 _CONTROL = [bytes([c]) for c in (*range(0x00, 0x09), 0x0B, 0x0C, 0x1B, 0x7F)] + [
-    "\x85".encode(), "\u2028".encode(), "\ufeff".encode(), "\ufffe".encode(), "\uffff".encode(),
+    "\x85".encode(),
+    "\u2028".encode(),
+    "\ufeff".encode(),
+    "\ufffe".encode(),
+    "\uffff".encode(),
     b"\xed\xa0\x80",  # an encoded surrogate: not UTF-8
-    b"\xc3", b"\xff", b"\xfe\xff", b"\r", b"\t", b"\t\t",
+    b"\xc3",
+    b"\xff",
+    b"\xfe\xff",
+    b"\r",
+    b"\t",
+    b"\t\t",
 ]
 _DEPTHS = (10, 63, 64, 65, 99, 100, 101, 300, 1000, 3000, 5000)
 _NUMBERS = (
-    "9" * 101, "9" * 4300, "9" * 4301, "-" + "9" * 5000, "0x" + "f" * 5000, "0b" + "1" * 20000,
-    "0o" + "7" * 5000, "0" + "7" * 5000, "1_" * 3000 + "1", ":".join(["59"] * 2000), "1" * 5000 + ".5",
-    "1e99999", ".nan", "-.inf", "2001-02-30", "0000-01-01", "2001-01-01 00:00:00 +99:99", "2001-1-1T1:1:1.5Z",
+    "9" * 101,
+    "9" * 4300,
+    "9" * 4301,
+    "-" + "9" * 5000,
+    "0x" + "f" * 5000,
+    "0b" + "1" * 20000,
+    "0o" + "7" * 5000,
+    "0" + "7" * 5000,
+    "1_" * 3000 + "1",
+    ":".join(["59"] * 2000),
+    "1" * 5000 + ".5",
+    "1e99999",
+    ".nan",
+    "-.inf",
+    "2001-02-30",
+    "0000-01-01",
+    "2001-01-01 00:00:00 +99:99",
+    "2001-1-1T1:1:1.5Z",
 )
 _EXPRESSIONS = (
     lambda n: "(" * n + "1" + ")" * n + " > 0",
@@ -63,21 +87,104 @@ _EXPRESSIONS = (
 )
 _SNIPPETS = (
     "a: &a [1, 2]\nb: *a",
-    "lol0: &l0 [x, x, x, x, x, x, x, x, x, x]\n" + "".join(
-        f"lol{i}: &l{i} [{', '.join([f'*l{i - 1}'] * 10)}]\n" for i in range(1, 9)) + "root: {set: {bomb: *l8}}",
-    "x: &r [*r]", "x: *undefined", "x: !!python/object/apply:os.system [echo]", "x: !!set {a}", "x: !foo bar",
-    "<<: {a: 1}", "? [a, b]\n: c", "1: x", "null: x", "~: y", "? {a: 1}\n: b", "x: !!binary '###'",
-    "x: =", "x: !!timestamp today", "%YAML 1.1\n---", "---", "...", "--- !!map\n", "x: |\n  block\n    text",
-    "x: 'unterminated", 'x: "\\xZZ"', 'x: "\\ud800"', 'x: "\\U0010FFFF"', 'x: "\\x00"', "x: " + "y" * 20000,
-    "inputs: {class: int}", "inputs: {None: {type: str, default: x}}", "x: {{y}}", "x: [", "x: {",
-    "\t- a", "x: 07:30", "x: 1:2:3:4", "x: !!int 1e3", "x: !!float abc", "x: !!str [a]",
+    "lol0: &l0 [x, x, x, x, x, x, x, x, x, x]\n"
+    + "".join(f"lol{i}: &l{i} [{', '.join([f'*l{i - 1}'] * 10)}]\n" for i in range(1, 9))
+    + "root: {set: {bomb: *l8}}",
+    "x: &r [*r]",
+    "x: *undefined",
+    "x: !!python/object/apply:os.system [echo]",
+    "x: !!set {a}",
+    "x: !foo bar",
+    "<<: {a: 1}",
+    "? [a, b]\n: c",
+    "1: x",
+    "null: x",
+    "~: y",
+    "? {a: 1}\n: b",
+    "x: !!binary '###'",
+    "x: =",
+    "x: !!timestamp today",
+    "%YAML 1.1\n---",
+    "---",
+    "...",
+    "--- !!map\n",
+    "x: |\n  block\n    text",
+    "x: 'unterminated",
+    'x: "\\xZZ"',
+    'x: "\\ud800"',
+    'x: "\\U0010FFFF"',
+    'x: "\\x00"',
+    "x: " + "y" * 20000,
+    "inputs: {class: int}",
+    "inputs: {None: {type: str, default: x}}",
+    "x: {{y}}",
+    "x: [",
+    "x: {",
+    "\t- a",
+    "x: 07:30",
+    "x: 1:2:3:4",
+    "x: !!int 1e3",
+    "x: !!float abc",
+    "x: !!str [a]",
 )
 _WORDS = (
-    "sequence", "selector", "parallel", "retry", "repeat", "timeout", "invert", "do", "set", "check", "wait",
-    "behaviour", "with", "out", "name", "root", "inputs", "outputs", "doc", "type", "default", "child",
-    "children", "policy", "selected", "times", "seconds", "forever", "success_on_selected", "class", "def",
-    "None", "True", "__class__", "_private", "yes", "no", "on", "~", "null", "'{x}'", '"{x}"', "{x}", "{{",
-    "}}", "-1", "0", ".nan", "[]", "{}", "''", "int", "any", "dict", "bt_search", "bt_catch", "reset",
+    "sequence",
+    "selector",
+    "parallel",
+    "retry",
+    "repeat",
+    "timeout",
+    "invert",
+    "do",
+    "set",
+    "check",
+    "wait",
+    "behaviour",
+    "with",
+    "out",
+    "name",
+    "root",
+    "inputs",
+    "outputs",
+    "doc",
+    "type",
+    "default",
+    "child",
+    "children",
+    "policy",
+    "selected",
+    "times",
+    "seconds",
+    "forever",
+    "success_on_selected",
+    "class",
+    "def",
+    "None",
+    "True",
+    "__class__",
+    "_private",
+    "yes",
+    "no",
+    "on",
+    "~",
+    "null",
+    "'{x}'",
+    '"{x}"',
+    "{x}",
+    "{{",
+    "}}",
+    "-1",
+    "0",
+    ".nan",
+    "[]",
+    "{}",
+    "''",
+    "int",
+    "any",
+    "dict",
+    "bt_search",
+    "bt_catch",
+    "reset",
 )
 
 
@@ -91,7 +198,7 @@ def _line_bounds(data: bytes, rng: random.Random) -> tuple[int, int]:
 
 def flip_byte(rng: random.Random, data: bytes) -> bytes:
     i = rng.randrange(len(data)) if data else 0
-    return data[:i] + bytes([rng.randrange(256)]) + data[i + 1:]
+    return data[:i] + bytes([rng.randrange(256)]) + data[i + 1 :]
 
 
 def insert_control(rng: random.Random, data: bytes) -> bytes:
@@ -100,7 +207,7 @@ def insert_control(rng: random.Random, data: bytes) -> bytes:
 
 
 def truncate(rng: random.Random, data: bytes) -> bytes:
-    return data[:rng.randrange(len(data) + 1)]
+    return data[: rng.randrange(len(data) + 1)]
 
 
 def duplicate_line(rng: random.Random, data: bytes) -> bytes:
@@ -126,7 +233,7 @@ def reindent(rng: random.Random, data: bytes) -> bytes:
     if rng.random() < 0.5:
         line = rng.choice((b" ", b"  ", b"    ", b"\t", b" \t")) + line
     else:
-        line = line[rng.randint(1, 4):] if line.startswith(b" ") else line
+        line = line[rng.randint(1, 4) :] if line.startswith(b" ") else line
     return data[:start] + line + data[end:]
 
 
@@ -137,7 +244,7 @@ def _replace_value(rng: random.Random, data: bytes, value: str) -> bytes:
     if colon < 0:
         colon = data.find(b"root: ") + 4
         end = len(data)
-    return data[:colon + 2] + value.encode() + b"\n" + data[end:]
+    return data[: colon + 2] + value.encode() + b"\n" + data[end:]
 
 
 def _replace_node(rng: random.Random, data: bytes, value: str) -> bytes:
@@ -194,7 +301,7 @@ def replace_word(rng: random.Random, data: bytes) -> bytes:
 def splice(rng: random.Random, data: bytes) -> bytes:
     other = SOURCES[TREES[rng.randrange(len(TREES))]] if rng.random() < 0.3 else data
     a = rng.randrange(len(other) + 1)
-    chunk = other[a:a + rng.randint(1, 80)]
+    chunk = other[a : a + rng.randint(1, 80)]
     i = rng.randrange(len(data) + 1)
     return data[:i] + chunk + data[i:]
 
@@ -218,9 +325,26 @@ def whole_file(rng: random.Random, data: bytes) -> bytes:
 
 
 MUTATORS: tuple[Mutator, ...] = (
-    flip_byte, flip_byte, insert_control, insert_control, truncate, duplicate_line, delete_line, swap_lines,
-    reindent, reindent, deep_nesting, huge_number, deep_check, deep_check, yaml_snippet, yaml_snippet,
-    replace_word, replace_word, splice, whole_file,
+    flip_byte,
+    flip_byte,
+    insert_control,
+    insert_control,
+    truncate,
+    duplicate_line,
+    delete_line,
+    swap_lines,
+    reindent,
+    reindent,
+    deep_nesting,
+    huge_number,
+    deep_check,
+    deep_check,
+    yaml_snippet,
+    yaml_snippet,
+    replace_word,
+    replace_word,
+    splice,
+    whole_file,
 )
 
 
@@ -368,8 +492,18 @@ def test_actorbt_check_prints_one_line_per_nasty_file(nasty: tuple[str, list[str
         assert re.match(rf"{re.escape(path)}:\d+:\d+: \S", line), line
 
 
-@pytest.mark.parametrize("name", ["control.yaml", "huge_int.yaml", "deep_parens.yaml", "deep_yaml.yaml",
-                                  "laughs.yaml", "bad_date.yaml", "keyword_input.yaml"])
+@pytest.mark.parametrize(
+    "name",
+    [
+        "control.yaml",
+        "huge_int.yaml",
+        "deep_parens.yaml",
+        "deep_yaml.yaml",
+        "laughs.yaml",
+        "bad_date.yaml",
+        "keyword_input.yaml",
+    ],
+)
 def test_actorbt_show_fails_with_one_line_and_status_2(nasty: tuple[str, list[str]], name: str, capsys) -> None:
     from bt_cli.main import main
 

@@ -84,7 +84,8 @@ def test_design_example_parses_with_positions() -> None:
 
 
 def test_every_node_type_parses() -> None:
-    m = parse_mission("""
+    m = parse_mission(
+        """
 name: all_nodes
 inputs:
   n: {type: int, default: 2}
@@ -114,12 +115,30 @@ root:
     - behaviour: Blinker
       with: {period: "{n}"}
       writes: [blinked]
-""", "all.yaml")
+""",
+        "all.yaml",
+    )
     kinds = [type(c).__name__ for c in m.root.children]
     assert kinds == [
-        "ReactiveSequence", "Selector", "Selector", "ReactiveSelector", "ReactiveSelector", "Parallel",
-        "Parallel", "Retry", "Repeat", "Repeat", "Timeout", "Invert", "ForceSuccess", "ForceFailure",
-        "Do", "SetValues", "Check", "Wait", "UseBehaviour",
+        "ReactiveSequence",
+        "Selector",
+        "Selector",
+        "ReactiveSelector",
+        "ReactiveSelector",
+        "Parallel",
+        "Parallel",
+        "Retry",
+        "Repeat",
+        "Repeat",
+        "Timeout",
+        "Invert",
+        "ForceSuccess",
+        "ForceFailure",
+        "Do",
+        "SetValues",
+        "Check",
+        "Wait",
+        "UseBehaviour",
     ]
     c = m.root.children
     assert c[6].policy is ParallelPolicy.SUCCESS_ON_SELECTED and c[6].selected == ("a",)
@@ -132,7 +151,8 @@ root:
 
 
 def test_references_are_typed_and_escapable() -> None:
-    m = parse_mission("""
+    m = parse_mission(
+        """
 name: refs
 inputs:
   pose: {type: dict, default: {x: 1}}
@@ -143,7 +163,9 @@ root:
     literal: "{{pose}}"
     braces: "a {b c} d"
     number: 3
-""", "refs.yaml")
+""",
+        "refs.yaml",
+    )
     values = m.root.values
     assert isinstance(values["whole"], Ref)
     assert isinstance(values["nested"]["a"][0], Ref) and values["nested"]["a"][0].fields == ("x",)
@@ -153,7 +175,8 @@ root:
 
 
 def test_inputs_shorthand_inference_and_signature() -> None:
-    m = parse_mission("""
+    m = parse_mission(
+        """
 name: sig
 inputs:
   target: str
@@ -163,9 +186,15 @@ inputs:
 outputs:
   result: {type: dict, doc: what happened}
 root: {set: {result: {}}}
-""", "sig.yaml")
+""",
+        "sig.yaml",
+    )
     assert [(i.name, i.type) for i in m.inputs] == [
-        ("target", ValueType.STR), ("speed", ValueType.FLOAT), ("tries", ValueType.INT), ("extra", ValueType.ANY)]
+        ("target", ValueType.STR),
+        ("speed", ValueType.FLOAT),
+        ("tries", ValueType.INT),
+        ("extra", ValueType.ANY),
+    ]
     assert m.inputs[0].default is REQUIRED and m.inputs[3].required
     assert str(m.signature()) == "(target: str, speed: float = 0.5, tries: int = 3, *, extra) -> dict"
     assert m.bind_inputs("kitchen", extra=None) == {"target": "kitchen", "speed": 0.5, "tries": 3, "extra": None}
@@ -176,16 +205,19 @@ root: {set: {result: {}}}
         m.bind_inputs(extra=1)
 
 
-@pytest.mark.parametrize("vtype,text,value", [
-    (ValueType.STR, "kitchen", "kitchen"),
-    (ValueType.INT, "3", 3),
-    (ValueType.FLOAT, "0.25", 0.25),
-    (ValueType.BOOL, "yes", True),
-    (ValueType.BOOL, "false", False),
-    (ValueType.LIST, "[1, a]", [1, "a"]),
-    (ValueType.DICT, "{x: 1}", {"x": 1}),
-    (ValueType.ANY, "3.5", 3.5),
-])
+@pytest.mark.parametrize(
+    "vtype,text,value",
+    [
+        (ValueType.STR, "kitchen", "kitchen"),
+        (ValueType.INT, "3", 3),
+        (ValueType.FLOAT, "0.25", 0.25),
+        (ValueType.BOOL, "yes", True),
+        (ValueType.BOOL, "false", False),
+        (ValueType.LIST, "[1, a]", [1, "a"]),
+        (ValueType.DICT, "{x: 1}", {"x": 1}),
+        (ValueType.ANY, "3.5", 3.5),
+    ],
+)
 def test_command_line_values_coerce(vtype: ValueType, text: str, value: object) -> None:
     assert vtype.coerce(text) == value
 
@@ -206,18 +238,21 @@ def test_validator_checks_literal_types_against_annotations() -> None:
 
 
 def test_validator_checks_reference_types_against_annotations() -> None:
-    m = parse_mission("""
+    m = parse_mission(
+        """
 name: t
 inputs: {room: {type: int, default: 1}}
 root: {do: navigate, with: {target: "{room}"}}
-""", "t.yaml")
+""",
+        "t.yaml",
+    )
     [error] = validate_mission(m, demo_resolver())
-    assert str(error) == ("t.yaml:4:39: argument 'target' of actor 'navigate' expects a str, "
-                          "but {room} holds an int")
+    assert str(error) == ("t.yaml:4:39: argument 'target' of actor 'navigate' expects a str, but {room} holds an int")
 
 
 def test_validator_collects_all_errors_in_order() -> None:
-    m = parse_mission("""
+    m = parse_mission(
+        """
 name: many
 root:
   sequence:
@@ -225,10 +260,15 @@ root:
     - check: missing > 1
     - do: navigate
       with: {target: "{nothing}"}
-""", "many.yaml")
+""",
+        "many.yaml",
+    )
     errors = validate_mission(m, demo_resolver())
     assert [type(e).__name__ for e in errors] == [
-        "UnresolvedActorError", "UnknownBlackboardKeyError", "UnknownBlackboardKeyError"]
+        "UnresolvedActorError",
+        "UnknownBlackboardKeyError",
+        "UnknownBlackboardKeyError",
+    ]
     assert [e.pos.line for e in errors] == [5, 6, 8]
 
 
@@ -255,15 +295,17 @@ def test_library_detects_cycles_across_files(tmp_path: Path) -> None:
     lib.load_folder(tmp_path)
     errors = lib.validate()
     assert len(errors) == 3 and all(isinstance(e, SubtreeCycleError) for e in errors)
-    assert str(errors[0]) == (f"{tmp_path / 'a.yaml'}:2:57: subtree cycle tree_a -> tree_b -> tree_c -> tree_a, "
-                              "expected trees that do not call themselves directly or through other trees")
+    assert str(errors[0]) == (
+        f"{tmp_path / 'a.yaml'}:2:57: subtree cycle tree_a -> tree_b -> tree_c -> tree_a, "
+        "expected trees that do not call themselves directly or through other trees"
+    )
 
 
 def test_library_trees_call_each_other_with_signature_checks(tmp_path: Path) -> None:
-    (tmp_path / "inner.yaml").write_text(
-        "name: inner\ninputs: {n: int}\noutputs: [m]\nroot: {set: {m: \"{n}\"}}\n")
+    (tmp_path / "inner.yaml").write_text('name: inner\ninputs: {n: int}\noutputs: [m]\nroot: {set: {m: "{n}"}}\n')
     (tmp_path / "outer.yaml").write_text(
-        "name: outer\nroot: {sequence: [{do: inner, with: {n: 2}, out: r}, {check: r.m == 2}]}\n")
+        "name: outer\nroot: {sequence: [{do: inner, with: {n: 2}, out: r}, {check: r.m == 2}]}\n"
+    )
     (tmp_path / "bad.yaml").write_text("name: bad\nroot: {do: inner, with: {n: two}}\n")
     (tmp_path / "typo.yaml").write_text("name: typo\nroot: {do: iner}\n")
     errors = check_files(sorted(tmp_path.glob("*.yaml")), demo_resolver())
@@ -298,13 +340,20 @@ def test_unreadable_and_binary_files_give_positioned_errors(tmp_path: Path) -> N
         load_mission(binary)
 
 
-
-
 def test_walk_visits_in_source_order() -> None:
     m = parse_mission(DESIGN_EXAMPLE, "x.yaml")
     labels = [n.label for n in walk(m.root)]
-    assert labels == ["sequence", "watch", "navigate", "retry x3", "sequence", "open_gripper", "pick",
-                      "timeout 20s", "sleep"]
+    assert labels == [
+        "sequence",
+        "watch",
+        "navigate",
+        "retry x3",
+        "sequence",
+        "open_gripper",
+        "pick",
+        "timeout 20s",
+        "sleep",
+    ]
 
 
 def test_repo_trees_validate_against_the_runtime(rt) -> None:
@@ -374,10 +423,18 @@ def test_empty_files_are_one_error(text: str) -> None:
     assert where(error) == (1, 1) and "empty mission file" in error.message
 
 
-@pytest.mark.parametrize("number", [
-    "9" * 5000, "-" + "9" * 4301, "0x" + "f" * 5000, "0b" + "1" * 9000, "1_" * 3000 + "1",
-    ":".join(["59"] * 2000), "1" * 5000 + ".5",
-])
+@pytest.mark.parametrize(
+    "number",
+    [
+        "9" * 5000,
+        "-" + "9" * 4301,
+        "0x" + "f" * 5000,
+        "0b" + "1" * 9000,
+        "1_" * 3000 + "1",
+        ":".join(["59"] * 2000),
+        "1" * 5000 + ".5",
+    ],
+)
 def test_huge_yaml_numbers_name_the_limit(number: str) -> None:
     error = error_of(f"name: a\nroot:\n  sequence:\n    - wait: {number}\n")
     assert isinstance(error, LimitError)
@@ -451,20 +508,25 @@ def test_recursive_aliases_are_rejected() -> None:
     assert "YAML alias *r is not supported" in error_of("name: a\nroot: &r {invert: *r}\n").message
 
 
-@pytest.mark.parametrize("value,message", [
-    ("!!python/object/apply:os.system [echo]",
-     "unsupported YAML tag 'tag:yaml.org,2002:python/object/apply:os.system'"),
-    ("!!python/name:os.system", "unsupported YAML tag 'tag:yaml.org,2002:python/name:os.system'"),
-    ("!!bool maybe", "'maybe' is not a valid bool, expected a bool or no tag"),
-    ("!!int 1e3", "'1e3' is not a valid int"),
-    ("!!float abc", "'abc' is not a valid float"),
-    ("!!timestamp today", "'today' is not a valid timestamp"),
-    ("2001-02-30", "invalid timestamp '2001-02-30': day is out of range for month"),
-    ("2001-01-01 00:00:00 +99:00", "invalid timestamp"),
-    ("0b_", "invalid int '0b_'"),
-    ("!!set {a}", "unsupported YAML tag 'tag:yaml.org,2002:set'"),
-    ("!local x", "unsupported YAML tag '!local'"),
-])
+@pytest.mark.parametrize(
+    "value,message",
+    [
+        (
+            "!!python/object/apply:os.system [echo]",
+            "unsupported YAML tag 'tag:yaml.org,2002:python/object/apply:os.system'",
+        ),
+        ("!!python/name:os.system", "unsupported YAML tag 'tag:yaml.org,2002:python/name:os.system'"),
+        ("!!bool maybe", "'maybe' is not a valid bool, expected a bool or no tag"),
+        ("!!int 1e3", "'1e3' is not a valid int"),
+        ("!!float abc", "'abc' is not a valid float"),
+        ("!!timestamp today", "'today' is not a valid timestamp"),
+        ("2001-02-30", "invalid timestamp '2001-02-30': day is out of range for month"),
+        ("2001-01-01 00:00:00 +99:00", "invalid timestamp"),
+        ("0b_", "invalid int '0b_'"),
+        ("!!set {a}", "unsupported YAML tag 'tag:yaml.org,2002:set'"),
+        ("!local x", "unsupported YAML tag '!local'"),
+    ],
+)
 def test_tags_and_impossible_values_are_located(value: str, message: str) -> None:
     error = error_of(f"name: a\nroot:\n  set:\n    x: {value}\n")
     assert where(error) == (4, 8)
@@ -476,13 +538,16 @@ def test_explicit_tags_that_agree_with_the_text_are_fine() -> None:
     assert m.root.values == {"f": 1.0, "i": 7, "s": "3", "e": "="}
 
 
-@pytest.mark.parametrize("text,pos,message", [
-    ("name: a\nroot: {wait: 1}\n1: x\n", (3, 1), "unknown field '1' in the mission"),
-    ("name: a\nroot: {set: {1: x}}\n", (2, 14), "blackboard key must be a string, got int '1'"),
-    ("name: a\nroot: {set: {~: x}}\n", (2, 14), "blackboard key must be a string, got nothing"),
-    ("name: a\nroot: {set: {? [k]: x}}\n", (2, 16), "complex mapping key, expected a plain string key"),
-    ("name: a\nroot: {do: say, with: {true: x}}\n", (2, 24), "argument name must be a string, got bool 'true'"),
-])
+@pytest.mark.parametrize(
+    "text,pos,message",
+    [
+        ("name: a\nroot: {wait: 1}\n1: x\n", (3, 1), "unknown field '1' in the mission"),
+        ("name: a\nroot: {set: {1: x}}\n", (2, 14), "blackboard key must be a string, got int '1'"),
+        ("name: a\nroot: {set: {~: x}}\n", (2, 14), "blackboard key must be a string, got nothing"),
+        ("name: a\nroot: {set: {? [k]: x}}\n", (2, 16), "complex mapping key, expected a plain string key"),
+        ("name: a\nroot: {do: say, with: {true: x}}\n", (2, 24), "argument name must be a string, got bool 'true'"),
+    ],
+)
 def test_non_string_keys_are_located_errors(text: str, pos: tuple[int, int], message: str) -> None:
     error = error_of(text)
     assert (where(error), message in error.message) == (pos, True), str(error)
@@ -551,8 +616,11 @@ def test_validation_of_a_file_full_of_problems_stops_after_max_errors() -> None:
     from bt_engine.trees._validate import MAX_ERRORS
 
     n = MAX_SUGGESTION_CHOICES + 100
-    text = "name: many\nroot:\n  sequence:\n" + "".join(f"    - set: {{key_{i}: 1}}\n" for i in range(n)) \
+    text = (
+        "name: many\nroot:\n  sequence:\n"
+        + "".join(f"    - set: {{key_{i}: 1}}\n" for i in range(n))
         + "".join(f"    - check: kez_{i} > 1\n" for i in range(n))
+    )
     errors = validate_mission(parse_mission(text, "many.yaml"))
     assert len(errors) == MAX_ERRORS + 1
     assert all(isinstance(e, UnknownBlackboardKeyError) for e in errors[:-1])

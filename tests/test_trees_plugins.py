@@ -9,8 +9,20 @@ import pytest
 from py_trees.common import Status
 
 from bt_engine import Runtime, SubSystem, actor
-from bt_engine.trees import (ControlNode, DecoratorNode, InputPort, MissionError, OutputPort, TreeHost, TreeLibrary,
-                             TraceRecorder, control_node, decorator_node, parse_mission, validate_mission)
+from bt_engine.trees import (
+    ControlNode,
+    DecoratorNode,
+    InputPort,
+    MissionError,
+    OutputPort,
+    TreeHost,
+    TreeLibrary,
+    TraceRecorder,
+    control_node,
+    decorator_node,
+    parse_mission,
+    validate_mission,
+)
 from bt_tools.replay import replay
 from bt_tools.show import ascii_tree
 from bt_engine.trees.testing import FakeResolver, ScriptedActors
@@ -73,20 +85,25 @@ def test_round_robin_takes_turns_from_where_it_left_off(w: World) -> None:
             - {name: b, do: act, with: {tag: b}}
             - {name: c, do: act, with: {tag: c}}
     """)
-    w.table(run, "rr a b c", [
-        (None,          "R", "R", "I", "I"),
-        (w.fail("a"),   "R", "F", "R", "I"),   # a failed: b's turn, in the same tick
-        (w.finish("b"), "S", "F", "S", "I"),   # the first success succeeds
-        (None,          "R", "F", "S", "R"),   # ticked again: c's turn
-        (w.fail("c"),   "R", "R", "S", "F"),   # round and round: a
-        (w.fail("a"),   "R", "F", "R", "F"),
-        (w.fail("b"),   "F", "F", "F", "F"),   # all three failed in one round
-    ])
+    w.table(
+        run,
+        "rr a b c",
+        [
+            (None, "R", "R", "I", "I"),
+            (w.fail("a"), "R", "F", "R", "I"),  # a failed: b's turn, in the same tick
+            (w.finish("b"), "S", "F", "S", "I"),  # the first success succeeds
+            (None, "R", "F", "S", "R"),  # ticked again: c's turn
+            (w.fail("c"), "R", "R", "S", "F"),  # round and round: a
+            (w.fail("a"), "R", "F", "R", "F"),
+            (w.fail("b"), "F", "F", "F", "F"),  # all three failed in one round
+        ],
+    )
     assert w.script.started == ["a", "b", "c", "a", "b"]
 
 
 def test_round_robin_starts_over_after_a_halt(w: World) -> None:
-    run = w.tree("""
+    run = w.tree(
+        """
         name: rrh
         inputs: {go: bool}
         root:
@@ -98,13 +115,19 @@ def test_round_robin_starts_over_after_a_halt(w: World) -> None:
               children:
                 - {name: a, do: act, with: {tag: a}}
                 - {name: b, do: act, with: {tag: b}}
-    """, go=True)
-    w.table(run, "rr a b", [
-        (None,          "R", "R", "I"),
-        (w.fail("a"),   "R", "F", "R"),
-        (w.write(run, "go", False), "I", "I", "I"),   # halted: b is cancelled
-        (w.write(run, "go", True),  "R", "R", "I"),   # starts over at a
-    ])
+    """,
+        go=True,
+    )
+    w.table(
+        run,
+        "rr a b",
+        [
+            (None, "R", "R", "I"),
+            (w.fail("a"), "R", "F", "R"),
+            (w.write(run, "go", False), "I", "I", "I"),  # halted: b is cancelled
+            (w.write(run, "go", True), "R", "R", "I"),  # starts over at a
+        ],
+    )
     assert w.script.cancelled == ["b"]
 
 
@@ -118,12 +141,16 @@ def test_a_control_written_in_python(w: World) -> None:
             - {name: a, do: act, with: {tag: a}}
             - {name: b, do: act, with: {tag: b}}
     """)
-    w.table(run, "fts a b", [
-        (None,          "R", "R", "R"),
-        (w.fail("a"),   "R", "F", "R"),   # a restarted on the next tick
-        (None,          "R", "R", "R"),
-        (w.finish("b"), "S", "I", "S"),   # a, still running, is halted by the base class
-    ])
+    w.table(
+        run,
+        "fts a b",
+        [
+            (None, "R", "R", "R"),
+            (w.fail("a"), "R", "F", "R"),  # a restarted on the next tick
+            (None, "R", "R", "R"),
+            (w.finish("b"), "S", "I", "S"),  # a, still running, is halted by the base class
+        ],
+    )
     assert w.script.cancelled == ["a"]
 
 
@@ -140,16 +167,21 @@ def test_a_decorator_calls_an_actor_and_writes_the_blackboard(w: World) -> None:
               child: {name: drive, do: act, with: {tag: drive}}
             - {name: fast, check: speed == 1.0}
     """)
-    w.table(run, "thr drive fast", [
-        (None,                    "R", "I", "I"),   # waiting for the limit
-        (w.finish("limit", 0.5),  "R", "R", "I"),   # 0.5 * 2 written, the child runs
-        (w.finish("drive"),       "S", "S", "S"),
-    ])
+    w.table(
+        run,
+        "thr drive fast",
+        [
+            (None, "R", "I", "I"),  # waiting for the limit
+            (w.finish("limit", 0.5), "R", "R", "I"),  # 0.5 * 2 written, the child runs
+            (w.finish("drive"), "S", "S", "S"),
+        ],
+    )
     assert run.bb.get("speed") == 1.0
 
 
 def test_halting_a_plugin_mid_run_leaves_no_transaction(w: World) -> None:
-    run = w.tree("""
+    run = w.tree(
+        """
         name: halt
         inputs: {go: bool}
         root:
@@ -159,33 +191,46 @@ def test_halting_a_plugin_mid_run_leaves_no_transaction(w: World) -> None:
             - name: thr
               decorator: Throttled
               child: {name: drive, do: act, with: {tag: drive}}
-    """, go=True)
-    w.table(run, "thr drive", [
-        (None,                        "R", "I"),
-        (w.write(run, "go", False),   "I", "I"),   # halted while its own call runs
-        (w.write(run, "go", True),    "R", "I"),
-        (w.finish("limit", 1.0),      "R", "R"),
-        (w.write(run, "go", False),   "I", "I"),   # halted while its child runs
-    ])
+    """,
+        go=True,
+    )
+    w.table(
+        run,
+        "thr drive",
+        [
+            (None, "R", "I"),
+            (w.write(run, "go", False), "I", "I"),  # halted while its own call runs
+            (w.write(run, "go", True), "R", "I"),
+            (w.finish("limit", 1.0), "R", "R"),
+            (w.write(run, "go", False), "I", "I"),  # halted while its child runs
+        ],
+    )
     assert w.script.cancelled == ["limit", "drive"]
     assert w.rt.transactions() == []
 
 
 def test_goal_updated_controller_ticks_the_child_when_the_goal_changes(w: World) -> None:
-    run = w.tree("""
+    run = w.tree(
+        """
         name: guc
         inputs: {goal: any}
         root:
           name: guc
           decorator: GoalUpdatedController
           child: {name: plan, do: act, with: {tag: plan}}
-    """, goal={"x": 1})
-    w.table(run, "guc plan", [
-        (None,                              "R", "R"),
-        (w.finish("plan"),                  "S", "S"),
-        (None,                              "R", "S"),   # same goal: not ticked
-        (w.write(run, "goal", {"x": 2}),    "R", "R"),   # a new goal: planned again
-    ])
+    """,
+        goal={"x": 1},
+    )
+    w.table(
+        run,
+        "guc plan",
+        [
+            (None, "R", "R"),
+            (w.finish("plan"), "S", "S"),
+            (None, "R", "S"),  # same goal: not ticked
+            (w.write(run, "goal", {"x": 2}), "R", "R"),  # a new goal: planned again
+        ],
+    )
     assert w.script.started == ["plan", "plan"]
 
 
@@ -226,14 +271,15 @@ root:
 """)
     TreeHost(rt).load_folder(tmp_path)
     rt.call("dc")
-    assert robot.plans == [0.0, 1.0, 2.0]   # at the start, then every metre
+    assert robot.plans == [0.0, 1.0, 2.0]  # at the start, then every metre
     assert rt.stats() == {"transactions": 0, "tasks": 0}
 
 
 def test_path_longer_on_approach_ticks_the_child_only_for_a_detour_near_the_goal(w: World) -> None:
-    near = [(0.0, 0.0), (1.0, 0.0), (2.0, 0.0)]                  # 2 m, under prox_len
-    detour = [(0.0, 0.0), (0.0, 3.0), (2.0, 3.0), (2.0, 0.0)]    # 8 m to the same goal: > 2 x 2 m
-    run = w.tree("""
+    near = [(0.0, 0.0), (1.0, 0.0), (2.0, 0.0)]  # 2 m, under prox_len
+    detour = [(0.0, 0.0), (0.0, 3.0), (2.0, 3.0), (2.0, 0.0)]  # 8 m to the same goal: > 2 x 2 m
+    run = w.tree(
+        """
         name: ploa
         inputs: {path: any}
         root:
@@ -241,14 +287,20 @@ def test_path_longer_on_approach_ticks_the_child_only_for_a_detour_near_the_goal
           decorator: PathLongerOnApproach
           with: {path: "{path}", prox_len: 3.0, length_factor: 2.0}
           child: {name: replan, do: act, with: {tag: replan}}
-    """, path=near)
-    w.table(run, "ploa replan", [
-        (None,                                       "S", "I"),   # the first path: nothing to compare
-        (None,                                       "S", "I"),   # the same path
-        (w.write(run, "path", detour),               "R", "R"),   # a detour on approach
-        (w.finish("replan"),                         "S", "I"),   # the child's success, then halted
-        (w.write(run, "path", [(0.0, 0.0), (5.0, 5.0)]), "S", "I"),  # another goal: compared from now on
-    ])
+    """,
+        path=near,
+    )
+    w.table(
+        run,
+        "ploa replan",
+        [
+            (None, "S", "I"),  # the first path: nothing to compare
+            (None, "S", "I"),  # the same path
+            (w.write(run, "path", detour), "R", "R"),  # a detour on approach
+            (w.finish("replan"), "S", "I"),  # the child's success, then halted
+            (w.write(run, "path", [(0.0, 0.0), (5.0, 5.0)]), "S", "I"),  # another goal: compared from now on
+        ],
+    )
     assert w.script.started == ["replan"]
 
 
@@ -276,7 +328,7 @@ root:
   child: {do: follow, with: {goal: "{current}"}, out: followed}
 """)
     TreeHost(rt).load_folder(tmp_path)
-    assert rt.call("gu", goal={"x": 1}) == {"followed": {"x": 1}}   # no update: the goal given
+    assert rt.call("gu", goal={"x": 1}) == {"followed": {"x": 1}}  # no update: the goal given
     goals.newer = {"x": 7}
     assert rt.call("gu", goal={"x": 1}) == {"followed": {"x": 7}}
 
@@ -301,12 +353,16 @@ class Cruiser(Robot):
             self.x += 0.25 * self.speed
 
 
-@pytest.mark.parametrize("speed, plans", [
-    (1.0, [0.0, 0.5, 1.0, 1.5, 2.0, 2.5]),   # 2 Hz at max_speed
-    (0.0, [0.0, 0.5, 2.5]),                  # the first period at max_rate, then 0.5 Hz standing still
-])
-def test_speed_controller_ticks_the_child_faster_the_faster_the_robot(rt: Runtime, tmp_path: Path,
-                                                                        speed: float, plans: list[float]) -> None:
+@pytest.mark.parametrize(
+    "speed, plans",
+    [
+        (1.0, [0.0, 0.5, 1.0, 1.5, 2.0, 2.5]),  # 2 Hz at max_speed
+        (0.0, [0.0, 0.5, 2.5]),  # the first period at max_rate, then 0.5 Hz standing still
+    ],
+)
+def test_speed_controller_ticks_the_child_faster_the_faster_the_robot(
+    rt: Runtime, tmp_path: Path, speed: float, plans: list[float]
+) -> None:
     robot = rt.add_subsystem("robot", Cruiser)
     robot.speed = speed
     (tmp_path / "sc.yaml").write_text("""\
@@ -339,23 +395,43 @@ def test_an_unset_port_fails_the_node_at_run_time(w: World) -> None:
 # ---------------------------------------------------------------- load time
 
 
-@pytest.mark.parametrize("body, where, message", [
-    ("control: RoundRobbin\n  children: [{do: a}]", "3:12",
-     "unknown control 'RoundRobbin' (did you mean 'RoundRobin'?)"),
-    ("decorator: RoundRobin\n  child: {do: a}", "3:14", "'RoundRobin' is a control node, expected control:"),
-    ("control: FirstToSucceed\n  children: [{do: a}]", "4:13", "control 'FirstToSucceed' has 1 children, "
-                                                                "expected at least 2"),
-    ("decorator: DistanceController\n  with: {distnce: 2}\n  child: {do: a}", "4:19",
-     "'distnce' is not a port of it (did you mean 'distance'?)"),
-    ("decorator: DistanceController\n  with: {distance: far}\n  child: {do: a}", "4:20",
-     "port 'distance' of decorator 'DistanceController' expects a float, got str 'far'"),
-    ("decorator: GoalUpdater\n  with: {input_goal: 1}\n  out: {output: g}\n  child: {do: a}", "5:17",
-     "has no output port 'output' (did you mean 'output_goal'?)"),
-    ("decorator: DistanceController\n  with: {pose_actor: wher}\n  child: {do: a}", "4:22",
-     "unknown actor 'wher'"),
-    ("decorator: GoalUpdater\n  with: {input_goal: \"{goal}\"}\n  child: {do: a}", "4:24",
-     "blackboard key 'goal' is never written"),
-])
+@pytest.mark.parametrize(
+    "body, where, message",
+    [
+        (
+            "control: RoundRobbin\n  children: [{do: a}]",
+            "3:12",
+            "unknown control 'RoundRobbin' (did you mean 'RoundRobin'?)",
+        ),
+        ("decorator: RoundRobin\n  child: {do: a}", "3:14", "'RoundRobin' is a control node, expected control:"),
+        (
+            "control: FirstToSucceed\n  children: [{do: a}]",
+            "4:13",
+            "control 'FirstToSucceed' has 1 children, expected at least 2",
+        ),
+        (
+            "decorator: DistanceController\n  with: {distnce: 2}\n  child: {do: a}",
+            "4:19",
+            "'distnce' is not a port of it (did you mean 'distance'?)",
+        ),
+        (
+            "decorator: DistanceController\n  with: {distance: far}\n  child: {do: a}",
+            "4:20",
+            "port 'distance' of decorator 'DistanceController' expects a float, got str 'far'",
+        ),
+        (
+            "decorator: GoalUpdater\n  with: {input_goal: 1}\n  out: {output: g}\n  child: {do: a}",
+            "5:17",
+            "has no output port 'output' (did you mean 'output_goal'?)",
+        ),
+        ("decorator: DistanceController\n  with: {pose_actor: wher}\n  child: {do: a}", "4:22", "unknown actor 'wher'"),
+        (
+            'decorator: GoalUpdater\n  with: {input_goal: "{goal}"}\n  child: {do: a}',
+            "4:24",
+            "blackboard key 'goal' is never written",
+        ),
+    ],
+)
 def test_plugin_errors_are_located(body: str, where: str, message: str) -> None:
     mission = parse_mission(f"name: bad\nroot:\n  {body}\n", "bad.yaml")
     errors = validate_mission(mission, FakeResolver(a=lambda: None, where=lambda: None), nodes=TreeLibrary().nodes)
@@ -365,8 +441,9 @@ def test_plugin_errors_are_located(body: str, where: str, message: str) -> None:
 
 
 def test_a_plugin_is_drawn_with_its_ports() -> None:
-    mission = parse_mission("name: t\nroot:\n  decorator: GoalUpdater\n  with: {input_goal: 1}\n"
-                            "  out: {output_goal: g}\n  child: {do: a}\n")
+    mission = parse_mission(
+        "name: t\nroot:\n  decorator: GoalUpdater\n  with: {input_goal: 1}\n  out: {output_goal: g}\n  child: {do: a}\n"
+    )
     assert "decorator GoalUpdater(input_goal=1, output_goal->g)" in ascii_tree(mission)
 
 

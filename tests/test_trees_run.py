@@ -82,10 +82,13 @@ def test_demo_patrol_runs_on_virtual_time(rt: Runtime, tmp_path: Path) -> None:
 
 
 def test_a_tree_waiting_on_a_long_actor_ticks_only_on_events(rt: Runtime, tmp_path: Path) -> None:
-    write_trees(tmp_path, idle="""
+    write_trees(
+        tmp_path,
+        idle="""
         name: idle
         root: {do: block, with: {tag: long, seconds: 60}}
-    """)
+    """,
+    )
     host, script, rec = host_for(rt, tmp_path)
     assert rt.call("idle") == {}
     assert rt.now() == pytest.approx(60.0)
@@ -93,17 +96,22 @@ def test_a_tree_waiting_on_a_long_actor_ticks_only_on_events(rt: Runtime, tmp_pa
 
 
 def test_max_period_bounds_the_time_between_ticks(rt: Runtime, tmp_path: Path) -> None:
-    write_trees(tmp_path, idle="""
+    write_trees(
+        tmp_path,
+        idle="""
         name: idle
         root: {do: block, with: {tag: long, seconds: 10}}
-    """)
+    """,
+    )
     host, script, rec = host_for(rt, tmp_path, max_period=1.0)
     rt.call("idle")
     assert rec.ticks("idle") == 11
 
 
 def test_deadlines_wake_the_tick_loop(rt: Runtime, tmp_path: Path) -> None:
-    write_trees(tmp_path, deadlines="""
+    write_trees(
+        tmp_path,
+        deadlines="""
         name: deadlines
         root:
           sequence:
@@ -112,7 +120,8 @@ def test_deadlines_wake_the_tick_loop(rt: Runtime, tmp_path: Path) -> None:
                 - timeout: {seconds: 3, child: {do: block, with: {tag: slow, seconds: 100}}}
                 - set: {fallback: true}
             - wait: 0.5
-    """)
+    """,
+    )
     host, script, rec = host_for(rt, tmp_path)
     rt.call("deadlines")
     assert rt.now() == pytest.approx(5.5)
@@ -122,13 +131,16 @@ def test_deadlines_wake_the_tick_loop(rt: Runtime, tmp_path: Path) -> None:
 
 
 def test_retry_and_repeat_restart_without_waiting(rt: Runtime, tmp_path: Path) -> None:
-    write_trees(tmp_path, restarts="""
+    write_trees(
+        tmp_path,
+        restarts="""
         name: restarts
         root:
           sequence:
             - retry: {times: 3, child: {do: flaky, with: {tag: f, failures: 2}}}
             - repeat: {times: 3, child: {do: echo, with: {value: 1}}}
-    """)
+    """,
+    )
     host, script, rec = host_for(rt, tmp_path)
     assert rt.call("restarts") == {}
     assert script.started == ["f", "f", "f"]
@@ -136,7 +148,9 @@ def test_retry_and_repeat_restart_without_waiting(rt: Runtime, tmp_path: Path) -
 
 
 def test_halting_a_subtree_cancels_its_actors(rt: Runtime, tmp_path: Path) -> None:
-    write_trees(tmp_path, race="""
+    write_trees(
+        tmp_path,
+        race="""
         name: race
         root:
           parallel:
@@ -145,7 +159,8 @@ def test_halting_a_subtree_cancels_its_actors(rt: Runtime, tmp_path: Path) -> No
               - {do: block, with: {tag: loser, seconds: 100}}
               - {do: act, with: {tag: loser_async}}
               - {do: block, with: {tag: winner, seconds: 1}}
-    """)
+    """,
+    )
     host, script, rec = host_for(rt, tmp_path)
     assert rt.call("race") == {}
     assert sorted(script.cancelled) == ["loser", "loser_async"]
@@ -154,15 +169,19 @@ def test_halting_a_subtree_cancels_its_actors(rt: Runtime, tmp_path: Path) -> No
 
 
 def test_cancelling_the_tree_transaction_reaches_the_actor(rt: Runtime, tmp_path: Path) -> None:
-    write_trees(tmp_path, long="""
+    write_trees(
+        tmp_path,
+        long="""
         name: long
         root:
           sequence:
             - {do: act, with: {tag: a}}
-    """, outer="""
+    """,
+        outer="""
         name: outer
         root: {do: long}
-    """)
+    """,
+    )
     host, script, rec = host_for(rt, tmp_path)
     outcomes: list[Any] = []
     txn = rt.start("outer", on_done=outcomes.append)
@@ -180,7 +199,9 @@ def test_cancelling_the_tree_transaction_reaches_the_actor(rt: Runtime, tmp_path
 
 
 def test_a_tree_called_from_python_a_tree_and_an_actor_gives_the_same_result(rt: Runtime, tmp_path: Path) -> None:
-    write_trees(tmp_path, pick="""
+    write_trees(
+        tmp_path,
+        pick="""
         name: pick
         inputs:
           target: str
@@ -190,7 +211,8 @@ def test_a_tree_called_from_python_a_tree_and_an_actor_gives_the_same_result(rt:
           sequence:
             - retry: {times: "{tries}", child: {do: flaky, with: {tag: "{target}", failures: 1}}}
             - {do: echo, with: {value: {target: "{target}", ok: true}}, out: grasp}
-    """, pick_place="""
+    """,
+        pick_place="""
         name: pick_place
         inputs: {target: str}
         outputs: [result]
@@ -198,7 +220,8 @@ def test_a_tree_called_from_python_a_tree_and_an_actor_gives_the_same_result(rt:
           sequence:
             - {do: pick, with: {target: "{target}"}, out: picked}
             - set: {result: "{picked}"}
-    """)
+    """,
+    )
 
     class Caller(SubSystem):
         @actor
@@ -216,12 +239,15 @@ def test_a_tree_called_from_python_a_tree_and_an_actor_gives_the_same_result(rt:
 
 
 def test_trees_answer_every_call_mode(rt: Runtime, tmp_path: Path) -> None:
-    write_trees(tmp_path, echo_tree="""
+    write_trees(
+        tmp_path,
+        echo_tree="""
         name: echo_tree
         inputs: {v: any}
         outputs: [v]
         root: {wait: 1}
-    """)
+    """,
+    )
     host, script, rec = host_for(rt, tmp_path)
     assert rt.run_actor("echo_tree", 1) == {"v": 1}
     results: list[Any] = []
@@ -264,32 +290,39 @@ def test_recursion_five_deep_passes_inputs_and_outputs(rt: Runtime, tmp_path: Pa
 
 
 def test_same_tree_twice_in_parallel_keeps_separate_blackboards(rt: Runtime, tmp_path: Path) -> None:
-    write_trees(tmp_path, sub="""
+    write_trees(
+        tmp_path,
+        sub="""
         name: sub
         inputs: {tag: str, seconds: float}
         outputs: [got]
         root: {do: block, with: {tag: "{tag}", seconds: "{seconds}"}, out: got}
-    """, both="""
+    """,
+        both="""
         name: both
         outputs: [a, b]
         root:
           parallel:
             - {do: sub, with: {tag: first, seconds: 2}, out: a}
             - {do: sub, with: {tag: second, seconds: 1}, out: b}
-    """)
+    """,
+    )
     host, script, rec = host_for(rt, tmp_path)
     assert rt.call("both") == {"a": {"got": "first"}, "b": {"got": "second"}}
     assert_clean(rt, host)
 
 
 def test_tree_failure_names_the_failed_node(rt: Runtime, tmp_path: Path) -> None:
-    write_trees(tmp_path, fails="""
+    write_trees(
+        tmp_path,
+        fails="""
         name: fails
         root:
           sequence:
             - set: {n: 1}
             - {name: must hold, check: n > 5}
-    """)
+    """,
+    )
     host, script, rec = host_for(rt, tmp_path)
     with pytest.raises(ActorError) as info:
         rt.call("fails")
@@ -302,11 +335,14 @@ def test_tree_failure_names_the_failed_node(rt: Runtime, tmp_path: Path) -> None
 
 
 def test_bad_inputs_fail_at_the_call_site(rt: Runtime, tmp_path: Path) -> None:
-    write_trees(tmp_path, typed="""
+    write_trees(
+        tmp_path,
+        typed="""
         name: typed
         inputs: {n: int}
         root: {wait: "{n}"}
-    """)
+    """,
+    )
     host, script, rec = host_for(rt, tmp_path)
     with pytest.raises(ActorError) as info:
         rt.call("typed", n="three")
@@ -317,14 +353,17 @@ def test_bad_inputs_fail_at_the_call_site(rt: Runtime, tmp_path: Path) -> None:
 
 
 def test_observers_see_ticks_status_changes_and_writes(rt: Runtime, tmp_path: Path) -> None:
-    write_trees(tmp_path, small="""
+    write_trees(
+        tmp_path,
+        small="""
         name: small
         inputs: {x: {type: int, default: 1}}
         root:
           sequence:
             - {name: get, do: echo, with: {value: 7}, out: y}
             - {name: check, check: y == 7}
-    """)
+    """,
+    )
     host, script, rec = host_for(rt, tmp_path)
     rt.call("small")
     assert rec.events == [
@@ -360,7 +399,9 @@ def test_behaviour_nodes_use_registered_py_trees_behaviours(rt: Runtime, tmp_pat
             self.bb.done = "yes"
             return Status.SUCCESS
 
-    write_trees(tmp_path, counting="""
+    write_trees(
+        tmp_path,
+        counting="""
         name: counting
         inputs: {n: {type: int, default: 3}}
         outputs: [done]
@@ -370,7 +411,8 @@ def test_behaviour_nodes_use_registered_py_trees_behaviours(rt: Runtime, tmp_pat
               with: {n: "{n}"}
               writes: [done]
             - check: done == "yes"
-    """)
+    """,
+    )
     host, script, rec = host_for(rt, tmp_path, behaviours={"CountDown": CountDown})
     assert rt.call("counting") == {"done": "yes"}
     assert rec.ticks("counting") == 3  # polled every behaviour_period
@@ -379,10 +421,14 @@ def test_behaviour_nodes_use_registered_py_trees_behaviours(rt: Runtime, tmp_pat
 
 def test_a_tree_may_not_replace_a_root_actor(rt: Runtime, tmp_path: Path) -> None:
     from bt_engine.trees import DuplicateTreeError
-    write_trees(tmp_path, sleep="""
+
+    write_trees(
+        tmp_path,
+        sleep="""
         name: sleep
         root: {wait: 1}
-    """)
+    """,
+    )
     with pytest.raises(DuplicateTreeError, match="tree name 'sleep' is already the actor sleep"):
         TreeHost(rt).load_folder(tmp_path)
     assert not rt.resolve("sleep").is_tree
@@ -391,14 +437,17 @@ def test_a_tree_may_not_replace_a_root_actor(rt: Runtime, tmp_path: Path) -> Non
 def test_a_condition_under_a_reactive_parent_lets_its_sibling_finish(rt: Runtime, tmp_path: Path) -> None:
     # the guard is asked again on every tick (one a second); as a condition it answers
     # within the tick, so the running sibling is never halted
-    write_trees(tmp_path, guarded="""
+    write_trees(
+        tmp_path,
+        guarded="""
         name: guarded
         root:
           reactive_fallback:
             - condition: echo
               with: {value: false}
             - {do: block, with: {tag: work, seconds: 5}}
-    """)
+    """,
+    )
     host, script, rec = host_for(rt, tmp_path, max_period=1.0)
     assert rt.call("guarded") == {}
     assert rt.now() == pytest.approx(5.0)
@@ -411,7 +460,9 @@ def test_a_condition_under_a_reactive_parent_lets_its_sibling_finish(rt: Runtime
 def test_the_same_guard_as_a_do_leaf_halts_its_sibling_on_every_tick(rt: Runtime, tmp_path: Path) -> None:
     # why condition: exists (a do: leaf is RUNNING for a tick, and the reactive parent
     # halts whatever ran after it)
-    write_trees(tmp_path, restless="""
+    write_trees(
+        tmp_path,
+        restless="""
         name: restless
         root:
           timeout:
@@ -421,7 +472,8 @@ def test_the_same_guard_as_a_do_leaf_halts_its_sibling_on_every_tick(rt: Runtime
                 - do: echo
                   with: {value: false}
                 - {do: block, with: {tag: work, seconds: 5}}
-    """)
+    """,
+    )
     host, script, rec = host_for(rt, tmp_path, max_period=1.0)
     with pytest.raises(ActorError, match="timed out after 10 s"):
         rt.call("restless")
@@ -430,7 +482,9 @@ def test_the_same_guard_as_a_do_leaf_halts_its_sibling_on_every_tick(rt: Runtime
 
 
 def test_a_condition_holds_the_tick_until_it_answers_and_cancels_cleanly(rt: Runtime, tmp_path: Path) -> None:
-    write_trees(tmp_path, slow_guard="""
+    write_trees(
+        tmp_path,
+        slow_guard="""
         name: slow_guard
         root:
           sequence:
@@ -439,7 +493,8 @@ def test_a_condition_holds_the_tick_until_it_answers_and_cancels_cleanly(rt: Run
               out: answer
             - condition: act
               with: {tag: stuck}
-    """)
+    """,
+    )
     host, script, rec = host_for(rt, tmp_path)
     outcomes: list[Any] = []
     txn = rt.start("slow_guard", on_done=outcomes.append)

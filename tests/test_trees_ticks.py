@@ -21,12 +21,16 @@ def test_sequence_has_memory(w: World) -> None:
             - {name: b, do: act, with: {tag: b}}
             - {name: c, do: act, with: {tag: c}}
     """)
-    w.table(run, "seq a b c", [
-        (None,            "R", "R", "I", "I"),
-        (w.finish("a"),   "R", "S", "R", "I"),
-        (None,            "R", "S", "R", "I"),
-        (w.fail("b"),     "F", "S", "F", "I"),
-    ])
+    w.table(
+        run,
+        "seq a b c",
+        [
+            (None, "R", "R", "I", "I"),
+            (w.finish("a"), "R", "S", "R", "I"),
+            (None, "R", "S", "R", "I"),
+            (w.fail("b"), "F", "S", "F", "I"),
+        ],
+    )
     assert w.script.started == ["a", "b"]  # a was not restarted while b ran
 
 
@@ -40,11 +44,15 @@ def test_reactive_sequence_halts_the_running_child_when_a_condition_fails(w: Wor
             - {name: guard, check: ok}
             - {name: a, do: act, with: {tag: a}}
     """)
-    w.table(run, "rseq guard a", [
-        (None,                        "R", "S", "R"),
-        (None,                        "R", "S", "R"),
-        (w.write(run, "ok", False),   "F", "F", "I"),
-    ])
+    w.table(
+        run,
+        "rseq guard a",
+        [
+            (None, "R", "S", "R"),
+            (None, "R", "S", "R"),
+            (w.write(run, "ok", False), "F", "F", "I"),
+        ],
+    )
     assert w.script.cancelled == ["a"]
 
 
@@ -57,12 +65,16 @@ def test_selector_has_memory(w: World) -> None:
             - {name: a, do: act, with: {tag: a}}
             - {name: b, do: act, with: {tag: b}}
     """)
-    w.table(run, "sel a b", [
-        (None,                     "R", "R", "I"),
-        (w.fail("a"),              "R", "F", "R"),
-        (None,                     "R", "I", "R"),   # py_trees resets the skipped child
-        (w.finish("b"),            "S", "I", "S"),
-    ])
+    w.table(
+        run,
+        "sel a b",
+        [
+            (None, "R", "R", "I"),
+            (w.fail("a"), "R", "F", "R"),
+            (None, "R", "I", "R"),  # py_trees resets the skipped child
+            (w.finish("b"), "S", "I", "S"),
+        ],
+    )
     assert w.script.started == ["a", "b"]  # a was not retried while b ran
 
 
@@ -75,10 +87,14 @@ def test_fallback_is_selector_and_fails_when_all_fail(w: World) -> None:
             - {name: a, do: act, with: {tag: a}}
             - {name: b, check: "false"}
     """)
-    w.table(run, "fb a b", [
-        (None,           "R", "R", "I"),
-        (w.fail("a"),    "F", "F", "F"),
-    ])
+    w.table(
+        run,
+        "fb a b",
+        [
+            (None, "R", "R", "I"),
+            (w.fail("a"), "F", "F", "F"),
+        ],
+    )
 
 
 def test_reactive_selector_lets_a_higher_priority_child_take_over(w: World) -> None:
@@ -91,10 +107,14 @@ def test_reactive_selector_lets_a_higher_priority_child_take_over(w: World) -> N
             - {name: guard, check: done}
             - {name: a, do: act, with: {tag: a}}
     """)
-    w.table(run, "rsel guard a", [
-        (None,                          "R", "F", "R"),
-        (w.write(run, "done", True),    "S", "S", "I"),
-    ])
+    w.table(
+        run,
+        "rsel guard a",
+        [
+            (None, "R", "F", "R"),
+            (w.write(run, "done", True), "S", "S", "I"),
+        ],
+    )
     assert w.script.cancelled == ["a"]
 
 
@@ -107,12 +127,16 @@ def test_parallel_success_on_all(w: World) -> None:
             - {name: a, do: act, with: {tag: a}}
             - {name: b, do: act, with: {tag: b}}
     """)
-    w.table(run, "par a b", [
-        (None,            "R", "R", "R"),
-        (w.finish("b"),   "R", "R", "S"),
-        (None,            "R", "R", "S"),
-        (w.finish("a"),   "S", "S", "S"),
-    ])
+    w.table(
+        run,
+        "par a b",
+        [
+            (None, "R", "R", "R"),
+            (w.finish("b"), "R", "R", "S"),
+            (None, "R", "R", "S"),
+            (w.finish("a"), "S", "S", "S"),
+        ],
+    )
     assert w.script.started == ["a", "b"]  # b was not restarted after it succeeded
 
 
@@ -127,10 +151,14 @@ def test_parallel_fails_on_the_first_failure_and_halts_the_rest(w: World) -> Non
               - {name: a, do: act, with: {tag: a}}
               - {name: b, do: act, with: {tag: b}}
     """)
-    w.table(run, "par a b", [
-        (None,            "R", "R", "R"),
-        (w.fail("a"),     "F", "F", "I"),
-    ])
+    w.table(
+        run,
+        "par a b",
+        [
+            (None, "R", "R", "R"),
+            (w.fail("a"), "F", "F", "I"),
+        ],
+    )
     assert w.script.cancelled == ["b"]
 
 
@@ -145,10 +173,14 @@ def test_parallel_success_on_one(w: World) -> None:
               - {name: a, do: act, with: {tag: a}}
               - {name: b, do: act, with: {tag: b}}
     """)
-    w.table(run, "par a b", [
-        (None,            "R", "R", "R"),
-        (w.finish("b"),   "S", "I", "S"),
-    ])
+    w.table(
+        run,
+        "par a b",
+        [
+            (None, "R", "R", "R"),
+            (w.finish("b"), "S", "I", "S"),
+        ],
+    )
     assert w.script.cancelled == ["a"]
 
 
@@ -165,12 +197,16 @@ def test_parallel_success_on_selected(w: World) -> None:
               - {name: b, do: act, with: {tag: b}}
               - {name: c, do: act, with: {tag: c}}
     """)
-    w.table(run, "par a b c", [
-        (None,            "R", "R", "R", "R"),
-        (w.finish("b"),   "R", "R", "S", "R"),
-        (w.finish("a"),   "R", "S", "S", "R"),
-        (w.finish("c"),   "S", "S", "S", "S"),
-    ])
+    w.table(
+        run,
+        "par a b c",
+        [
+            (None, "R", "R", "R", "R"),
+            (w.finish("b"), "R", "R", "S", "R"),
+            (w.finish("a"), "R", "S", "S", "R"),
+            (w.finish("c"), "S", "S", "S", "S"),
+        ],
+    )
 
 
 def test_retry_restarts_the_child_until_attempts_run_out(w: World) -> None:
@@ -182,14 +218,18 @@ def test_retry_restarts_the_child_until_attempts_run_out(w: World) -> None:
             times: 3
             child: {name: a, do: act, with: {tag: a}}
     """)
-    w.table(run, "retry a", [
-        (None,            "R", "R"),
-        (w.fail("a"),     "R", "F"),   # attempt 1 failed; the child restarts next tick
-        (None,            "R", "R"),
-        (w.fail("a"),     "R", "F"),
-        (None,            "R", "R"),
-        (w.fail("a"),     "F", "F"),   # attempt 3 failed: give up
-    ])
+    w.table(
+        run,
+        "retry a",
+        [
+            (None, "R", "R"),
+            (w.fail("a"), "R", "F"),  # attempt 1 failed; the child restarts next tick
+            (None, "R", "R"),
+            (w.fail("a"), "R", "F"),
+            (None, "R", "R"),
+            (w.fail("a"), "F", "F"),  # attempt 3 failed: give up
+        ],
+    )
     assert w.script.started == ["a", "a", "a"]
 
 
@@ -200,12 +240,16 @@ def test_retry_succeeds_with_the_child(w: World) -> None:
           name: retry
           retry: {times: 3, child: {name: a, do: act, with: {tag: a}}}
     """)
-    w.table(run, "retry a", [
-        (None,            "R", "R"),
-        (w.fail("a"),     "R", "F"),
-        (None,            "R", "R"),
-        (w.finish("a"),   "S", "S"),
-    ])
+    w.table(
+        run,
+        "retry a",
+        [
+            (None, "R", "R"),
+            (w.fail("a"), "R", "F"),
+            (None, "R", "R"),
+            (w.finish("a"), "S", "S"),
+        ],
+    )
 
 
 def test_repeat_counts_successes_and_stops_on_failure(w: World) -> None:
@@ -216,24 +260,32 @@ def test_repeat_counts_successes_and_stops_on_failure(w: World) -> None:
           name: rep
           repeat: {times: "{n}", child: {name: a, do: act, with: {tag: a}}}
     """)
-    w.table(run, "rep a", [
-        (None,            "R", "R"),
-        (w.finish("a"),   "R", "S"),
-        (None,            "R", "R"),
-        (w.finish("a"),   "S", "S"),
-    ])
+    w.table(
+        run,
+        "rep a",
+        [
+            (None, "R", "R"),
+            (w.finish("a"), "R", "S"),
+            (None, "R", "R"),
+            (w.finish("a"), "S", "S"),
+        ],
+    )
     run = w.tree("""
         name: repeat_fail
         root:
           name: rep
           repeat: {child: {name: a, do: act, with: {tag: a}}}
     """)
-    w.table(run, "rep a", [
-        (None,            "R", "R"),
-        (w.finish("a"),   "R", "S"),
-        (None,            "R", "R"),
-        (w.fail("a"),     "F", "F"),
-    ])
+    w.table(
+        run,
+        "rep a",
+        [
+            (None, "R", "R"),
+            (w.finish("a"), "R", "S"),
+            (None, "R", "R"),
+            (w.fail("a"), "F", "F"),
+        ],
+    )
 
 
 def test_timeout_halts_the_child_at_the_deadline(w: World) -> None:
@@ -243,11 +295,15 @@ def test_timeout_halts_the_child_at_the_deadline(w: World) -> None:
           name: to
           timeout: {seconds: 5, child: {name: a, do: act, with: {tag: a}}}
     """)
-    w.table(run, "to a", [
-        (None,                 "R", "R"),
-        (4.9,                  "R", "R"),
-        (0.1,                  "F", "I"),
-    ])
+    w.table(
+        run,
+        "to a",
+        [
+            (None, "R", "R"),
+            (4.9, "R", "R"),
+            (0.1, "F", "I"),
+        ],
+    )
     assert w.script.cancelled == ["a"]
     assert "timed out" in run.failure().reason
 
@@ -259,11 +315,15 @@ def test_timeout_passes_through_an_early_result(w: World) -> None:
           name: to
           timeout: {seconds: 5, child: {name: a, do: act, with: {tag: a}}}
     """)
-    w.table(run, "to a", [
-        (None,                 "R", "R"),
-        (w.finish("a"),        "S", "S"),
-        (10,                   "R", "R"),   # the root restarts; the deadline is new
-    ])
+    w.table(
+        run,
+        "to a",
+        [
+            (None, "R", "R"),
+            (w.finish("a"), "S", "S"),
+            (10, "R", "R"),  # the root restarts; the deadline is new
+        ],
+    )
 
 
 def test_invert_force_success_force_failure(w: World) -> None:
@@ -276,9 +336,13 @@ def test_invert_force_success_force_failure(w: World) -> None:
             - {name: fs, force_success: {name: b, do: act, with: {tag: b}}}
             - {name: ff, force_failure: {name: c, check: "true"}}
     """)
-    w.table(run, "par inv a fs b ff c", [
-        (None,            "F", "I", "I", "I", "I", "F", "S"),
-    ])
+    w.table(
+        run,
+        "par inv a fs b ff c",
+        [
+            (None, "F", "I", "I", "I", "I", "F", "S"),
+        ],
+    )
     run = w.tree("""
         name: decos2
         root:
@@ -287,11 +351,15 @@ def test_invert_force_success_force_failure(w: World) -> None:
             - {name: inv, invert: {name: a, do: act, with: {tag: a}}}
             - {name: fs, force_success: {name: b, do: act, with: {tag: b}}}
     """)
-    w.table(run, "seq inv a fs b", [
-        (None,            "R", "R", "R", "I", "I"),
-        (w.fail("a"),     "R", "S", "F", "R", "R"),
-        (w.fail("b"),     "S", "S", "F", "S", "F"),
-    ])
+    w.table(
+        run,
+        "seq inv a fs b",
+        [
+            (None, "R", "R", "R", "I", "I"),
+            (w.fail("a"), "R", "S", "F", "R", "R"),
+            (w.fail("b"), "S", "S", "F", "S", "F"),
+        ],
+    )
 
 
 def test_wait_runs_on_the_runtime_clock(w: World) -> None:
@@ -304,11 +372,15 @@ def test_wait_runs_on_the_runtime_clock(w: World) -> None:
             - {name: w, wait: "{s}"}
             - {name: c, check: "true"}
     """)
-    w.table(run, "seq w c", [
-        (None,              "R", "R", "I"),
-        (1.0,                "R", "R", "I"),
-        (1.0,                "S", "S", "S"),
-    ])
+    w.table(
+        run,
+        "seq w c",
+        [
+            (None, "R", "R", "I"),
+            (1.0, "R", "R", "I"),
+            (1.0, "S", "S", "S"),
+        ],
+    )
 
 
 def test_actor_leaf_outcomes_set_and_check(w: World) -> None:
@@ -322,11 +394,15 @@ def test_actor_leaf_outcomes_set_and_check(w: World) -> None:
             - {name: c, check: "copy.kind == 'can' and 2 in fixed"}
             - {name: b, do: act, with: {tag: b}}
     """)
-    w.table(run, "seq a s c b", [
-        (None,                                  "R", "R", "I", "I", "I"),
-        (w.finish("a", {"kind": "can"}),        "R", "S", "S", "S", "R"),
-        (w.finish("b", False),                  "F", "S", "S", "S", "F"),
-    ])
+    w.table(
+        run,
+        "seq a s c b",
+        [
+            (None, "R", "R", "I", "I", "I"),
+            (w.finish("a", {"kind": "can"}), "R", "S", "S", "S", "R"),
+            (w.finish("b", False), "F", "S", "S", "S", "F"),
+        ],
+    )
     assert run.bb.get("copy") == {"kind": "can"}
     failure = run.failure()
     assert failure.node_path == "seq/b" and "returned False" in failure.reason

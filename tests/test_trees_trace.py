@@ -118,7 +118,8 @@ def test_replay_detects_an_edited_tree(folder: Path, tmp_path: Path) -> None:
     # the edited check itself, told before the mission it ends
     assert str(report.divergence) == (
         "first divergence at event 57: expected [t=3.250s run 1] status of mission/verify: INVALID -> SUCCESS, "
-        "got [t=3.250s run 1] status of mission/verify: INVALID -> FAILURE")
+        "got [t=3.250s run 1] status of mission/verify: INVALID -> FAILURE"
+    )
 
 
 def test_replay_detects_changed_actor_arguments_in_a_subtree(folder: Path, tmp_path: Path) -> None:
@@ -142,7 +143,7 @@ def test_replay_reports_a_changed_call(folder: Path, tmp_path: Path) -> None:
     path.write_text(path.read_text().replace("tag: fast, seconds: 1", "tag: fast, seconds: 2"))
     report = replay(trace, trees=folder)
     assert not report.ok
-    assert 'call #' in str(report.divergence) and 'block(tag="fast", seconds=2)' in str(report.divergence)
+    assert "call #" in str(report.divergence) and 'block(tag="fast", seconds=2)' in str(report.divergence)
 
 
 def test_replay_needs_the_tree_files(folder: Path, tmp_path: Path) -> None:
@@ -216,8 +217,14 @@ def test_values_become_json() -> None:
         def __repr__(self) -> str:
             return "<opaque>"
 
-    value = {"g": Grasp(0.02, (1, 2)), "err": ValueError("bad"), "o": Opaque(), "nan": float("nan"),
-             "arr": np.arange(3), 5: {1, 2} and [1]}
+    value = {
+        "g": Grasp(0.02, (1, 2)),
+        "err": ValueError("bad"),
+        "o": Opaque(),
+        "nan": float("nan"),
+        "arr": np.arange(3),
+        5: {1, 2} and [1],
+    }
     out = to_json(value)
     json.dumps(out)
     assert out["g"] == {"__type__": Grasp.__qualname__, "width": 0.02, "pose": [1, 2]}
@@ -230,6 +237,7 @@ def test_values_become_json() -> None:
 
 def test_ros_messages_become_json() -> None:
     from geometry_msgs.msg import Twist
+
     msg = Twist()
     msg.linear.x = 0.5
     out = to_json(msg)
@@ -278,16 +286,34 @@ def nap_folder(tmp_path: Path) -> Path:
 
 
 @pytest.mark.parametrize("clock", ["virtual", "wall"])
-def test_actorbt_run_record_replays(nap_folder: Path, tmp_path: Path, clock: str,
-                                    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture) -> None:
+def test_actorbt_run_record_replays(
+    nap_folder: Path, tmp_path: Path, clock: str, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture
+) -> None:
     from bt_cli.main import main
+
     config = tmp_path / "actorbt.yaml"
-    config.write_text("subsystems: {script: bt_engine.trees.testing:ScriptedActors}\n"
-                      "trees: trees\nworld: null\n")
+    config.write_text("subsystems: {script: bt_engine.trees.testing:ScriptedActors}\ntrees: trees\nworld: null\n")
     monkeypatch.chdir(tmp_path)
     trace = tmp_path / "run.jsonl"
-    assert main(["--config", str(config), "run", "nap", "--arg", "tag=b", "--quiet", "--json",
-                 "--record", str(trace), "--clock", clock]) == 0
+    assert (
+        main(
+            [
+                "--config",
+                str(config),
+                "run",
+                "nap",
+                "--arg",
+                "tag=b",
+                "--quiet",
+                "--json",
+                "--record",
+                str(trace),
+                "--clock",
+                clock,
+            ]
+        )
+        == 0
+    )
     assert json.loads(capsys.readouterr().out) == {"said": "b"}
     assert read_trace(trace)[0]["clock"] == clock
     assert main(["replay", str(trace)]) == 0
@@ -377,6 +403,7 @@ def test_a_recorder_that_follows_a_transaction_skips_other_runs(nap_folder: Path
                 mine = rt.start("nap", tag="b", on_done=lambda _: done[0].set())
                 rec.follow(mine)
                 rt.start("nap", tag="other", on_done=lambda _: done[1].set())
+
             rt.run_on_hub(start)
             assert done[0].wait(10) and done[1].wait(10)
     _, events = read_trace(trace)
@@ -389,6 +416,7 @@ def test_a_recording_in_the_old_order_still_replays(folder: Path, tmp_path: Path
     """Recordings made before a tick's changes were told children first (a parent's end
     before its children's) replay: within one tick, the order of status changes is free."""
     import json
+
     trace = tmp_path / "run.jsonl"
     record(folder, trace)
     lines = trace.read_text().splitlines()

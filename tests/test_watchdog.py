@@ -1,4 +1,5 @@
 """The hub watchdog names the actor that blocked the hub and where."""
+
 from __future__ import annotations
 
 import logging

@@ -1,4 +1,5 @@
 """Plain-words advice for YAML syntax errors (bt_engine.yaml_hints)."""
+
 from __future__ import annotations
 
 import pytest
@@ -13,30 +14,33 @@ def error_of(text: str) -> yaml.MarkedYAMLError:
     return caught.value
 
 
-@pytest.mark.parametrize("text, advice", [
-    # a list item out of line with its list
-    ("root:\n  children:\n    - a\n  - b\n", "check the indentation of this line against the line above"),
-    ("a:\n  - x\n  - y\n - z\n", "'-' items of one list start in the same column"),
-    # a key out of line with its mapping
-    ("a:\n    b: 1\n  c: 2\n", "the keys of one mapping start in the same column"),
-    ("a:\n  b: 1\n   c: 2\n", "check its indentation"),
-    # a second ':' in a value
-    ("a: b: c\n", "put the value in quotes"),
-    # tabs
-    ("a:\n\tb: 1\n", "replace the tab on this line with spaces"),
-    # an unclosed quote, bracket or brace
-    ("a: \"hello\nb: 2\n", "the quoted text opened at line 1 is never closed"),
-    ("a: [1, 2\nb: 3\n", "the [list] opened at line 1 is not closed"),
-    ("a: {x: 1\nb: 3\n", "the {mapping} opened at line 1 is not closed"),
-    # characters that cannot start a plain value
-    ("a: @foo\n", "cannot start with '@'"),
-    ("a: `foo`\n", "cannot start with '`'"),
-    ("a: *x\n", "'*' starts an alias"),
-    # the text ends inside a value
-    ("a: [", "the text ends inside a value"),
-    # text after a quoted value
-    ("a: \"x\" y\n", "quote the whole value"),
-])
+@pytest.mark.parametrize(
+    "text, advice",
+    [
+        # a list item out of line with its list
+        ("root:\n  children:\n    - a\n  - b\n", "check the indentation of this line against the line above"),
+        ("a:\n  - x\n  - y\n - z\n", "'-' items of one list start in the same column"),
+        # a key out of line with its mapping
+        ("a:\n    b: 1\n  c: 2\n", "the keys of one mapping start in the same column"),
+        ("a:\n  b: 1\n   c: 2\n", "check its indentation"),
+        # a second ':' in a value
+        ("a: b: c\n", "put the value in quotes"),
+        # tabs
+        ("a:\n\tb: 1\n", "replace the tab on this line with spaces"),
+        # an unclosed quote, bracket or brace
+        ('a: "hello\nb: 2\n', "the quoted text opened at line 1 is never closed"),
+        ("a: [1, 2\nb: 3\n", "the [list] opened at line 1 is not closed"),
+        ("a: {x: 1\nb: 3\n", "the {mapping} opened at line 1 is not closed"),
+        # characters that cannot start a plain value
+        ("a: @foo\n", "cannot start with '@'"),
+        ("a: `foo`\n", "cannot start with '`'"),
+        ("a: *x\n", "'*' starts an alias"),
+        # the text ends inside a value
+        ("a: [", "the text ends inside a value"),
+        # text after a quoted value
+        ('a: "x" y\n', "quote the whole value"),
+    ],
+)
 def test_the_likely_fix_is_said_in_plain_words(text, advice):
     exc = error_of(text)
     assert advice in syntax_hint(exc)
@@ -44,18 +48,23 @@ def test_the_likely_fix_is_said_in_plain_words(text, advice):
     assert message.startswith("YAML syntax error: ")
     assert message.endswith(syntax_hint(exc))
     # the parser's token names are said in words
-    assert not any(jargon in message for jargon in ("'?'", "<block end>", "<stream end>", "<scalar>",
-                                                     "while parsing", "while scanning"))
+    assert not any(
+        jargon in message
+        for jargon in ("'?'", "<block end>", "<stream end>", "<scalar>", "while parsing", "while scanning")
+    )
 
 
-@pytest.mark.parametrize("text, words", [
-    ("root:\n  - do: sleep\n  with: [1]\n", "a key where the end of the block above was expected"),
-    ("a: {x: 1\n", "the end of the text where ',' or '}' was expected"),
-    ("a: b: c\n", "a ':' after a value"),
-    ("a:\n\tb: 1\n", "a tab character"),
-    ("a: \"x\n", "the text ends inside a quoted value"),
-    ("a: @x\n", "'@' cannot start a value"),
-])
+@pytest.mark.parametrize(
+    "text, words",
+    [
+        ("root:\n  - do: sleep\n  with: [1]\n", "a key where the end of the block above was expected"),
+        ("a: {x: 1\n", "the end of the text where ',' or '}' was expected"),
+        ("a: b: c\n", "a ':' after a value"),
+        ("a:\n\tb: 1\n", "a tab character"),
+        ('a: "x\n', "the text ends inside a quoted value"),
+        ("a: @x\n", "'@' cannot start a value"),
+    ],
+)
 def test_what_the_parser_met_is_said_in_words(text, words):
     assert syntax_message(error_of(text)).startswith(f"YAML syntax error: {words}; ")
 

@@ -12,6 +12,7 @@ Runs the steps in order and prints one JSON list, a result per step:
 - ``wait_action``: action, present (bool), timeout -> found (whether the action's
   presence became as asked within timeout).
 """
+
 import json
 import sys
 import time
@@ -42,11 +43,18 @@ def goal(node, step):
 
     def on_feedback(msg):
         fb = msg.feedback
-        events.append({"type": "feedback", "t": time.monotonic(), "status": fb.status,
-                       "active_node": fb.active_node, "tick_count": fb.tick_count,
-                       "elapsed": fb.elapsed})
-    sent = client.send_goal_async(RunTree.Goal(inputs_yaml=step.get("inputs", "")),
-                                  feedback_callback=on_feedback)
+        events.append(
+            {
+                "type": "feedback",
+                "t": time.monotonic(),
+                "status": fb.status,
+                "active_node": fb.active_node,
+                "tick_count": fb.tick_count,
+                "elapsed": fb.elapsed,
+            }
+        )
+
+    sent = client.send_goal_async(RunTree.Goal(inputs_yaml=step.get("inputs", "")), feedback_callback=on_feedback)
     if not spin_until(node, sent, WAIT):
         return {"error": "no goal response"}
     handle = sent.result()
@@ -56,6 +64,7 @@ def goal(node, step):
 
     def on_result(fut):
         events.append({"type": "result", "t": time.monotonic()})
+
     result.add_done_callback(on_result)
     if not spin_until(node, result, step.get("timeout", 30.0)):
         return {"accepted": True, "error": "no result"}
@@ -64,9 +73,16 @@ def goal(node, step):
         rclpy.spin_once(node, timeout_sec=0.05)
     res = result.result()
     r = res.result
-    return {"accepted": True, "status": res.status, "success": r.success,
-            "result_status": r.status, "outputs_yaml": r.outputs_yaml,
-            "error_code": r.error_code, "error_msg": r.error_msg, "events": events}
+    return {
+        "accepted": True,
+        "status": res.status,
+        "success": r.success,
+        "result_status": r.status,
+        "outputs_yaml": r.outputs_yaml,
+        "error_code": r.error_code,
+        "error_msg": r.error_msg,
+        "events": events,
+    }
 
 
 def call_service(node, srv_type, name, request):
@@ -82,18 +98,26 @@ def describe(node, step):
     resp = call_service(node, Describe, step["service"], Describe.Request(name=step.get("name", "")))
     if resp is None:
         return {"error": "no server"}
-    return {"error_code": resp.error_code, "error_msg": resp.error_msg,
-            "doc": json.loads(resp.tools_json) if resp.tools_json else None}
+    return {
+        "error_code": resp.error_code,
+        "error_msg": resp.error_msg,
+        "doc": json.loads(resp.tools_json) if resp.tools_json else None,
+    }
 
 
 def call_now(node, step):
-    req = CallActorNow.Request(actor=step["actor"], args_yaml=step.get("args", ""),
-                               timeout=float(step.get("timeout", 0.0)))
+    req = CallActorNow.Request(
+        actor=step["actor"], args_yaml=step.get("args", ""), timeout=float(step.get("timeout", 0.0))
+    )
     resp = call_service(node, CallActorNow, step["service"], req)
     if resp is None:
         return {"error": "no server"}
-    return {"success": resp.success, "result_yaml": resp.result_yaml,
-            "error_code": resp.error_code, "error_msg": resp.error_msg}
+    return {
+        "success": resp.success,
+        "result_yaml": resp.result_yaml,
+        "error_code": resp.error_code,
+        "error_msg": resp.error_msg,
+    }
 
 
 def wait_action(node, step):

@@ -32,7 +32,7 @@ def main() -> None:
     with Runtime(clock="virtual") as rt:
         rt.add_subsystem("script", ScriptedActors)
         host = TreeHost(rt)
-        host.load_folder(REPO / "trees", strict=False)   # trees needing robot actors are skipped
+        host.load_folder(REPO / "trees", strict=False)  # trees needing robot actors are skipped
         host.load_folder(HERE)
         for file, tree, inputs in RECORDINGS:
             with TraceRecorder(HERE / file, host, tree=tree, inputs=inputs):
