@@ -346,6 +346,60 @@ class CorrelativeMatcher:
 
 
 # -- ICP -------------------------------------------------------------------------------------------
+class IcpReference:
+    """Reference points for point-to-line ICP, with their KD-tree and line normals, made
+    once for every alignment against them (a keyframe is the reference of several links).
+
+    Each reference point's line is the principal axis of its ``neighbours`` nearest
+    reference points (so noisy or grid-quantised walls give clean normals)."""
+
+    def __init__(self, reference: np.ndarray, neighbours: int = 6, tree: cKDTree | None = None):
+        self.points = np.asarray(reference, dtype=np.float64).reshape(-1, 2)
+        self.usable = len(self.points) >= neighbours
+        self.tree = tree or cKDTree(self.points)
+        self.normals = self.centres = np.zeros((0, 2))
+        if self.usable:
+            _, nb = self.tree.query(self.points, k=neighbours)
+            q = self.points[nb] - self.points[nb].mean(axis=1, keepdims=True)
+            cxx, cyy, cxy = (q[..., 0] ** 2).sum(1), (q[..., 1] ** 2).sum(1), (q[..., 0] * q[..., 1]).sum(1)
+            theta = 0.5 * np.arctan2(2 * cxy, cxx - cyy)  # the principal (line) direction
+            self.normals = np.column_stack([-np.sin(theta), np.cos(theta)])
+            self.centres = self.points[nb].mean(axis=1)
+
+    def align(self, points: np.ndarray, prior, iterations: int = 15, max_dist: float = 0.2, tol: float = 1e-4):
+        """The pose (x [m], y [m], yaw [rad]) that puts the (K, 2) base-frame ``points``
+        onto the reference, from ``prior``; pairs farther than ``max_dist`` [m] are
+        dropped. Returns (pose, rms residual [m], inlier fraction)."""
+        pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+        if not self.usable or len(pts) < 3:
+            return tuple(prior), float("inf"), 0.0
+        x = np.array(prior, dtype=np.float64)
+        rms, frac = float("inf"), 0.0
+        for _ in range(iterations):
+            w = transform(x, pts)
+            dist, j = self.tree.query(w, distance_upper_bound=max_dist)
+            ok = np.isfinite(dist)
+            frac = float(ok.mean())
+            if ok.sum() < 3:
+                break
+            n, cen, wp = self.normals[j[ok]], self.centres[j[ok]], w[ok]
+            r = ((wp - cen) * n).sum(axis=1)
+            # linearised in (dx, dy, dyaw) about the current pose, rotation about its origin
+            rel = wp - x[:2]
+            J = np.column_stack([n[:, 0], n[:, 1], -rel[:, 1] * n[:, 0] + rel[:, 0] * n[:, 1]])
+            # Huber-like weights against the odd wrong pair
+            k = 0.05
+            wt = np.where(np.abs(r) <= k, 1.0, k / np.abs(r))
+            A = J.T @ (J * wt[:, None]) + 1e-9 * np.eye(3)
+            step = -np.linalg.solve(A, J.T @ (wt * r))
+            x = x + step
+            rms = float(np.sqrt(np.mean(r**2)))
+            if np.abs(step[:2]).max() < tol and abs(step[2]) < tol:
+                break
+        x[2] = math.remainder(x[2], 2 * math.pi)
+        return (float(x[0]), float(x[1]), float(x[2])), rms, frac
+
+
 def icp(
     reference: np.ndarray,
     points: np.ndarray,
@@ -356,47 +410,7 @@ def icp(
     tol: float = 1e-4,
     tree: cKDTree | None = None,
 ):
-    """Point-to-line ICP: the pose (x [m], y [m], yaw [rad]) that puts the (K, 2)
-    base-frame ``points`` onto the (N, 2) ``reference`` points, from ``prior``.
-
-    Each reference point's line is the principal axis of its ``neighbours`` nearest
-    reference points (so noisy or grid-quantised walls give clean normals). Pairs farther
-    than ``max_dist`` [m] are dropped. Returns (pose, rms residual [m], inlier fraction).
-    """
-    ref = np.asarray(reference, dtype=np.float64).reshape(-1, 2)
-    pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
-    if len(ref) < neighbours or len(pts) < 3:
-        return tuple(prior), float("inf"), 0.0
-    tree = tree or cKDTree(ref)
-    # normals of the reference, from its neighbourhoods' covariance
-    _, nb = tree.query(ref, k=neighbours)
-    q = ref[nb] - ref[nb].mean(axis=1, keepdims=True)
-    cxx, cyy, cxy = (q[..., 0] ** 2).sum(1), (q[..., 1] ** 2).sum(1), (q[..., 0] * q[..., 1]).sum(1)
-    theta = 0.5 * np.arctan2(2 * cxy, cxx - cyy)  # the principal (line) direction
-    normals = np.column_stack([-np.sin(theta), np.cos(theta)])
-    centres = ref[nb].mean(axis=1)
-    x = np.array(prior, dtype=np.float64)
-    rms, frac = float("inf"), 0.0
-    for _ in range(iterations):
-        w = transform(x, pts)
-        dist, j = tree.query(w, distance_upper_bound=max_dist)
-        ok = np.isfinite(dist)
-        frac = float(ok.mean())
-        if ok.sum() < 3:
-            break
-        n, cen, wp = normals[j[ok]], centres[j[ok]], w[ok]
-        r = ((wp - cen) * n).sum(axis=1)
-        # linearised in (dx, dy, dyaw) about the current pose, rotation about its origin
-        rel = wp - x[:2]
-        J = np.column_stack([n[:, 0], n[:, 1], -rel[:, 1] * n[:, 0] + rel[:, 0] * n[:, 1]])
-        # Huber-like weights against the odd wrong pair
-        k = 0.05
-        wt = np.where(np.abs(r) <= k, 1.0, k / np.abs(r))
-        A = J.T @ (J * wt[:, None]) + 1e-9 * np.eye(3)
-        step = -np.linalg.solve(A, J.T @ (wt * r))
-        x = x + step
-        rms = float(np.sqrt(np.mean(r**2)))
-        if np.abs(step[:2]).max() < tol and abs(step[2]) < tol:
-            break
-    x[2] = math.remainder(x[2], 2 * math.pi)
-    return (float(x[0]), float(x[1]), float(x[2])), rms, frac
+    """Point-to-line ICP (:class:`IcpReference`) of the (K, 2) base-frame ``points`` onto
+    the (N, 2) ``reference`` points, from ``prior``: (pose, rms residual [m], inlier
+    fraction)."""
+    return IcpReference(reference, neighbours, tree).align(points, prior, iterations, max_dist, tol)

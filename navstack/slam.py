@@ -53,13 +53,21 @@ import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from .log_odds import LogOddsGrid, LogOddsParams
 from .map_io import OccupancyMap
 from .odometry import as_pose
 from .pose_graph import PoseGraph, compose, relative
-from .scan_matcher import CorrelativeMatcher, LikelihoodMap, MatcherParams, icp, refine, scan_points, transform
+from .scan_matcher import (
+    CorrelativeMatcher,
+    IcpReference,
+    LikelihoodMap,
+    MatcherParams,
+    icp,
+    refine,
+    scan_points,
+    transform,
+)
 
 IDENTITY = (0.0, 0.0, 0.0)
 
@@ -160,8 +168,7 @@ class Keyframe:
     gyro: bool = False  # its odometry's heading is the gyro's
     scans: list = field(default_factory=list)  # (relative pose to this keyframe, scan) to rebuild the map
     density: LikelihoodMap | None = None  # of its returns, for pair edges (lazily, once complete)
-    pair_ref: np.ndarray | None = None  # its returns for pair_match "icp_visible"
-    pair_tree: cKDTree | None = None  # and their KD-tree (both lazily, once complete)
+    pair_icp: IcpReference | None = None  # its returns for pair_match "icp_visible" (lazily, once complete)
 
 
 @dataclass
@@ -508,16 +515,15 @@ class Slam:
         reference never saw (round a corner, past furniture) would be pulled onto what it
         did see, which lies back towards it."""
         kf = self.keyframes[i]
-        if kf.pair_ref is None or kf.pair_tree is None:  # (both or neither)
-            kf.pair_ref = self._pair_reference(i)[0]
-            kf.pair_tree = cKDTree(kf.pair_ref)
+        if kf.pair_icp is None:
+            kf.pair_icp = IcpReference(self._pair_reference(i)[0], neighbours=10)
         scan = kf.scans[0][1]
         z = z0
         for _ in range(2):
             keep = _seen_from(scan, transform(z, pts), self.params.sensor_offset, self.params.range_noise)
             if keep.sum() < 20:
                 return z0
-            z = icp(kf.pair_ref, pts[keep], z, iterations=30, neighbours=10, tree=kf.pair_tree)[0]
+            z = kf.pair_icp.align(pts[keep], z, iterations=30)[0]
         return z
 
     def _pair_reference(self, i: int) -> tuple[np.ndarray, np.ndarray]:

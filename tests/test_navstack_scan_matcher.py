@@ -8,7 +8,15 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from navstack.scan_matcher import CorrelativeMatcher, LikelihoodMap, MatcherParams, icp, scan_points, transform
+from navstack.scan_matcher import (
+    CorrelativeMatcher,
+    IcpReference,
+    LikelihoodMap,
+    MatcherParams,
+    icp,
+    scan_points,
+    transform,
+)
 from navstack.synthetic import cast, world_boxes
 
 FIXTURES = Path(__file__).parent / "fixtures"
@@ -60,6 +68,18 @@ def test_correlative_match_finds_a_known_offset(boxes, true, prior):
     assert math.hypot(pose[0] - true[0], pose[1] - true[1]) < 0.02
     assert abs(math.remainder(pose[2] - true[2], 2 * math.pi)) < math.radians(0.5)
     assert inliers > 0.9 and rms < 0.06
+
+
+def test_one_icp_reference_aligns_several_scans_as_icp_does(boxes):
+    rng = np.random.default_rng(4)
+    ref = reference(boxes, [(2.6, 1.5, 0.2)], rng)
+    made = IcpReference(ref)
+    for true, prior in [((2.7, 1.45, 0.25), (2.65, 1.5, 0.2)), ((2.5, 1.6, 0.1), (2.55, 1.55, 0.15))]:
+        pts = points_at(boxes, true, rng)
+        assert made.align(pts, prior) == icp(ref, pts, prior)
+        assert math.dist(made.align(pts, prior)[0][:2], true[:2]) < 0.02
+    # too few reference points for a normal: the prior, no fit
+    assert IcpReference(ref[:3]).align(pts, prior) == (prior, float("inf"), 0.0)
 
 
 def test_branch_and_bound_equals_the_exhaustive_search(boxes):
