@@ -56,7 +56,7 @@ $(STAMP): pyproject.toml | $(IFACE_STAMP)
 
 venv: $(STAMP)
 
-# the linter, the format check and the engine's type check first (seconds), then the suite
+# the linter, the format check and the type check first (seconds), then the suite
 # on one worker more than the cores (pytest-xdist; tests/conftest.py says why). A test file
 # stays in one worker (--dist loadgroup would not: with pytest 9 xdist 3.8's group marks no
 # longer reach the scheduler, and every test is sent alone), except the runs of minutes,
