@@ -12,7 +12,7 @@ import concurrent.futures
 import logging
 import threading
 import time
-from typing import Any, Callable
+from typing import Any, Callable, TypeVar
 
 import greenlet
 
@@ -27,6 +27,8 @@ from .hub import Hub, TimerHandle, Waiter
 from .subsystem import SubSystem
 from .transaction import Transaction, TransactionTable
 from .watchdog import Watchdog
+
+_S = TypeVar("_S", bound=SubSystem)  # add_subsystem returns what it was given
 
 log = logging.getLogger("actorbt")
 
@@ -129,7 +131,7 @@ class Runtime(CallApi):
             value = self._extensions[key] = factory()
         return value
 
-    def add_subsystem(self, name: str, cls: type[SubSystem], *args: Any, **kwargs: Any) -> SubSystem:
+    def add_subsystem(self, name: str, cls: type[_S], *args: Any, **kwargs: Any) -> _S:
         """Create subsystem ``name`` of class ``cls`` under the root."""
         return self.run_on_hub(self.root.add_subsystem, name, cls, *args, **kwargs)
 

@@ -13,7 +13,7 @@ subsystems below the scope where it is looked up is ambiguous. A dotted name
 from __future__ import annotations
 
 import inspect
-from typing import Any, Callable
+from typing import Any, Callable, Self, TypeVar
 
 from .actor import SPEC_ATTR, ActorRef, ActorSpec, Safety
 from .api import CallApi
@@ -23,6 +23,9 @@ from .bus.transport import Publisher, silence
 from .errors import ActorbtError, AmbiguousActorError, UnknownActorError
 from .modes import Kind
 from .transaction import TransactionTable
+
+#: a SubSystem class, so that add_subsystem returns what it was given
+_S = TypeVar("_S", bound="SubSystem")
 
 _MISSING = object()
 
@@ -55,7 +58,7 @@ class SubSystem(CallApi):
     _rt: Any
 
     @classmethod
-    def _create(cls, rt: Any, name: str, parent: "SubSystem | None", *args: Any, **kwargs: Any) -> "SubSystem":
+    def _create(cls, rt: Any, name: str, parent: "SubSystem | None", *args: Any, **kwargs: Any) -> Self:
         obj = cls.__new__(cls)
         obj._bind(rt, name, parent)
         if not args and not kwargs and _wants_args(cls.__init__, 2):
@@ -103,7 +106,7 @@ class SubSystem(CallApi):
         return f"<{type(self).__name__} {self.path or '(root)'}>"
 
     # -- structure ---------------------------------------------------------------------
-    def add_subsystem(self, name: str, cls: type["SubSystem"], *args: Any, **kwargs: Any) -> "SubSystem":
+    def add_subsystem(self, name: str, cls: type[_S], *args: Any, **kwargs: Any) -> _S:
         """Create a child subsystem ``name`` of class ``cls`` and return it."""
         if not (isinstance(cls, type) and issubclass(cls, SubSystem)):
             raise ActorbtError(f"add_subsystem({name!r}, ...) needs a SubSystem class, got {cls!r}")

@@ -21,7 +21,7 @@ robot on the whole map from its scans (so ``actorbt call goto ...`` works on its
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any, TypeVar
+from typing import TYPE_CHECKING
 
 from bt_engine import ActorbtError, SubSystem, actor
 
@@ -33,15 +33,6 @@ if TYPE_CHECKING:
 
 #: [s] with no /initialpose this long after the first scan, localise globally
 GLOBAL_AFTER = 2.0
-
-_S = TypeVar("_S", bound=SubSystem)
-
-
-def _add(parent: SubSystem, name: str, cls: type[_S], **kwargs: Any) -> _S:
-    """``parent.add_subsystem``, typed as what it makes: an instance of ``cls``."""
-    child = parent.add_subsystem(name, cls, **kwargs)
-    assert isinstance(child, cls)
-    return child
 
 
 class NavStack(SubSystem):
@@ -69,8 +60,7 @@ class NavStack(SubSystem):
         mapper: dict | None = None,
     ) -> None:
         super().__init__()
-        self.localiser = _add(
-            self,
+        self.localiser = self.add_subsystem(
             "localiser",
             Localiser,
             params=localiser,
@@ -78,7 +68,7 @@ class NavStack(SubSystem):
             initial_pose=initial_pose,
             global_after=global_after,
         )
-        self.navigator = _add(self, "navigator", Navigator, params=navigator)
+        self.navigator = self.add_subsystem("navigator", Navigator, params=navigator)
         self.mapper: Mapper | None = None  # made by start_mapping
         self._mapper_args = dict(mapper or {})
 
@@ -96,7 +86,7 @@ class NavStack(SubSystem):
         args = dict(self._mapper_args)
         if start is not None:
             args.setdefault("start_pose", start)
-        self.mapper = _add(self, "mapper", Mapper, **args)
+        self.mapper = self.add_subsystem("mapper", Mapper, **args)
         return [float(v) for v in start] if start is not None else None
 
     @actor
