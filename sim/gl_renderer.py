@@ -36,12 +36,16 @@ import os
 import time
 from ctypes.util import find_library
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from common.quiet_pybullet import pybullet as p
 
 from . import gl_meshes
+
+if TYPE_CHECKING:  # an optional dependency: imported where a context is made
+    import moderngl
 
 log = logging.getLogger("sim.renderer")
 
@@ -143,15 +147,17 @@ def create_context():
         import moderngl
     except ImportError as e:
         raise GLUnavailable(f"moderngl is not installed ({e})") from None
-    kw = {}
+    # glcontext's settings, passed on as keywords. moderngl's stub types each ``**settings``
+    # value as a dict (it means the whole mapping); glcontext takes strings, ints, ...
+    settings: dict[str, Any] = {"backend": "egl"}
     if not os.environ.get("GLCONTEXT_LINUX_LIBGL") and find_library("GL") is None:
         # no libGL.so.1 (Debian's libgl1): the GL entry points come through
         # eglGetProcAddress anyway, glcontext only wants a library to open
         egl = find_library("EGL")
         if egl:
-            kw["libgl"] = egl
+            settings["libgl"] = egl
     try:
-        ctx = moderngl.create_standalone_context(require=330, backend="egl", **kw)
+        ctx = moderngl.create_standalone_context(require=330, **settings)
     except Exception as e:  # glcontext raises plain Exceptions
         raise GLUnavailable(f"no EGL OpenGL 3.3 context: {e}") from None
     return ctx
@@ -194,8 +200,8 @@ class _Batch:
 
     texture: str | None
     transparent: bool
-    vbo: object
-    vao: object
+    vbo: moderngl.Buffer
+    vao: moderngl.VertexArray
     runs: np.ndarray
 
 
@@ -259,18 +265,18 @@ class GLRenderer:
         self._dirty = True
         self._batches: list[_Batch] = []
         self._slots: list[tuple[int, int]] = []  # (body, link) of each row of u_xf
-        self._fbo = None
-        self._fbo_parts = ()
-        self._fbo_size = None
-        self._gl_textures: dict[str, object] = {}
-        self._xf = None
+        self._fbo: moderngl.Framebuffer | None = None
+        self._fbo_parts: tuple[moderngl.Renderbuffer, ...] = ()  # its colour, body id and depth buffers
+        self._fbo_size: tuple[int, int] | None = None
+        self._gl_textures: dict[str, moderngl.Texture] = {}
+        self._xf: moderngl.Texture | None = None  # the link transforms (u_xf), made by _rebuild
         self.frames = 0
         #: seconds spent: reading pybullet (bodies, poses), issuing the draws, waiting for
         #: the pixels (llvmpipe draws then)
         self.timing = {"scene": 0.0, "draw": 0.0, "read": 0.0}
         with self.ctx:
             self._prog = self.ctx.program(vertex_shader=_VERTEX, fragment_shader=_FRAGMENT)
-            self._white = self.ctx.texture((1, 1), 4, bytes([255, 255, 255, 255]))
+            self._white: moderngl.Texture = self.ctx.texture((1, 1), 4, bytes([255, 255, 255, 255]))
             self._prog["u_tex"].value = 0
             self._prog["u_xf"].value = 1
             self._prog["u_ambient"].value = AMBIENT
@@ -430,11 +436,12 @@ class GLRenderer:
         xf = self._xf_data
         xf[:, :, :3] = R
         xf[:, :, 3] = pos
+        assert self._xf is not None  # made by _rebuild, which _sync_bodies runs first (_dirty starts True)
         self._xf.write(xf.tobytes())
         return R, pos
 
     # ------------------------------------------------------------------ drawing
-    def _framebuffer(self, width, height):
+    def _framebuffer(self, width: int, height: int) -> moderngl.Framebuffer:
         if self._fbo_size != (width, height):
             if self._fbo is not None:
                 for a in self._fbo_parts:
@@ -447,9 +454,10 @@ class GLRenderer:
             self._fbo = ctx.framebuffer(color_attachments=[color, body], depth_attachment=depth)
             self._fbo_parts = (color, body, depth)
             self._fbo_size = (width, height)
+        assert self._fbo is not None  # made above for this size, if not at an earlier call
         return self._fbo
 
-    def _texture(self, path):
+    def _texture(self, path: str | None) -> moderngl.Texture:
         if path is None:
             return self._white
         tex = self._gl_textures.get(path)
@@ -508,6 +516,7 @@ class GLRenderer:
             light = DEFAULT_LIGHT if light_direction is None else light_direction
             prog["u_light"].value = tuple(float(x) for x in light)
             prog["u_cam"].value = tuple(float(x) for x in -Vm[:3, :3].T @ Vm[:3, 3])
+            assert self._xf is not None  # made by _rebuild (see _update_poses)
             self._xf.use(location=1)
             ctx.enable(ctx.DEPTH_TEST)
             # back faces are culled, as pybullet does: a camera inside a body sees out
@@ -535,7 +544,7 @@ class GLRenderer:
             rgb = np.frombuffer(fbo.read(components=3, attachment=0), np.uint8).reshape(height, width, 3)
             depth = np.frombuffer(fbo.read(components=1, attachment=-1, dtype="f4"), np.float32).reshape(height, width)
             # GL's rows run bottom-up
-            out = [np.ascontiguousarray(rgb[::-1]), np.ascontiguousarray(depth[::-1])]
+            out: list[np.ndarray] = [np.ascontiguousarray(rgb[::-1]), np.ascontiguousarray(depth[::-1])]
             if segmentation:
                 ids = np.frombuffer(fbo.read(components=1, attachment=1, dtype="f4"), np.float32).reshape(
                     height, width

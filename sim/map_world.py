@@ -295,7 +295,7 @@ class _Grid:
             return []
         xs, ys = self.xy(rr, cc)
         d = np.hypot(xs - start[0], ys - start[1])
-        out = []
+        out: list[tuple[float, float]] = []
         while len(out) < most:
             i = int(np.argmax(d))
             if d[i] < spacing and len(out) >= 2 or d[i] <= 0:

@@ -15,6 +15,7 @@ import os
 import queue
 import sys
 import threading
+from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -218,6 +219,11 @@ class Renderer:
             self.plugin = -1
 
 
+#: a call handed to the GL thread: fn, args, kwargs, a box for (ok, its result or exception),
+#: an event set once the box is filled
+_Call = tuple[Callable[..., object], tuple[object, ...], dict[str, object], list[tuple[bool, object]], threading.Event]
+
+
 class GLThread:
     """A thread that owns a world's OpenGL (EGL) context.
 
@@ -227,7 +233,7 @@ class GLThread:
     wait for their call, so pybullet is never used by two threads at once)."""
 
     def __init__(self, name="actorbt-sim-gl"):
-        self._q = queue.SimpleQueue()
+        self._q: queue.SimpleQueue[_Call | None] = queue.SimpleQueue()  # None: stop
         self._thread = threading.Thread(target=self._run, name=name, daemon=True)
         self._thread.start()
 

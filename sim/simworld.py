@@ -229,9 +229,10 @@ class SimWorld:
                 log.warning("--gui: no display found; running headless")
         if not self.gui:
             self.cid = p.connect(p.DIRECT)
-        if self.cid < 0:
-            raise RuntimeError("pybullet: could not connect a physics client")
         cid = self.cid
+        assert cid is not None  # connected above: GUI when it came up, DIRECT otherwise
+        if cid < 0:
+            raise RuntimeError("pybullet: could not connect a physics client")
         p.resetSimulation(physicsClientId=cid)
         p.setGravity(0, 0, -9.81, physicsClientId=cid)
         residual = {} if self.solver_residual is None else {"solverResidualThreshold": self.solver_residual}

@@ -229,6 +229,7 @@ class SimTopics:
         up), as its user would give it, until the robot has moved."""
         if self.sim.t < SETTLED:
             return
+        assert self.pub_initial is not None  # called by tick only when there is the publisher
         n = self.bus.subscription_count(INITIAL_POSE)
         if n > self._initial_subs:
             o = self.sim.odometry

@@ -49,7 +49,7 @@ def _hull(pts):
         return pts
 
     def half(seq):
-        out = []
+        out: list[tuple[float, ...]] = []  # the chain so far: (x, y) points
         for pt in seq:
             while (
                 len(out) >= 2

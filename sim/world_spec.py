@@ -50,8 +50,8 @@ class Box:
     def corners(self):
         c, s = math.cos(self.yaw), math.sin(self.yaw)
         out = []
-        for u, v in ((-1, -1), (1, -1), (1, 1), (-1, 1)):
-            u, v = u * self.sx / 2, v * self.sy / 2
+        for su, sv in ((-1, -1), (1, -1), (1, 1), (-1, 1)):
+            u, v = su * self.sx / 2, sv * self.sy / 2
             out.append((self.x + c * u - s * v, self.y + s * u + c * v))
         return out
 
