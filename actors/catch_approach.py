@@ -8,11 +8,10 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import replace
-from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from bt_engine import ActorbtError, SubSystem, actor
+from bt_engine import ActorbtError, actor
 
 from .catch_errors import ApproachError
 from .catch_geometry import (
@@ -30,12 +29,8 @@ from .catch_geometry import (
     target_marks,
     target_xy,
 )
+from .catch_parts import CatcherParts
 from .strategies import GraspPlan, Strategy
-
-if TYPE_CHECKING:
-    _CatcherBase = SubSystem  # the mixin runs only as a part of Catcher, which adds SubSystem
-else:
-    _CatcherBase = object
 
 HAND_HALF_WIDTH = 0.07  # half the open hand's width, with margin [m]
 CONFIRM_RANGE = (0.45, 1.2)  # [m] from this near, a close look that sees something else at
@@ -65,20 +60,8 @@ RAISED_SQUARE = math.radians(5)  # a box on a table is grasped straight in from 
 #                             finger runs into its corner and pushes it off the grasp)
 
 
-class Approaching(_CatcherBase):
+class Approaching(CatcherParts):
     """Catcher's approach (a mixin of it: it uses Catcher's shared helpers)."""
-
-    if TYPE_CHECKING:  # Catcher's shared helpers (actors/catch.py) the approach uses
-
-        def _strategy(self, target: Any, category: str | None) -> Strategy: ...
-        def _where_now(self, target: dict) -> dict: ...
-        @staticmethod
-        def _plan(strategy: Strategy, target: dict) -> GraspPlan: ...
-        def _face(self, xy: tuple[float, float], strategy: Strategy) -> float: ...
-        def _pass_over(self, xy: tuple[float, float], category: str) -> None: ...
-        def _fresh_views_first(
-            self, poses: list[tuple[float, float, float]], xy: tuple[float, float]
-        ) -> list[tuple[float, float, float]]: ...
 
     def _free_standoff(
         self,

@@ -5,20 +5,14 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
 from dataclasses import replace
-from typing import TYPE_CHECKING
 
-from bt_engine import ActorbtError, SubSystem, actor
+from bt_engine import ActorbtError, actor
 
 from .catch_errors import ApproachError, GraspError
 from .catch_geometry import BASE_MARGIN, BASE_OUTLINE, STANDOFF_CLEARANCE, surface_spots
-from .strategies import GraspPlan, Strategy, strategy_for
-
-if TYPE_CHECKING:
-    _CatcherBase = SubSystem  # the mixin runs only as a part of Catcher, which adds SubSystem
-else:
-    _CatcherBase = object
+from .catch_parts import CatcherParts
+from .strategies import GraspPlan, strategy_for
 
 #: place surface height and the part of the object held decide the release height
 RELEASE_CLEARANCE = 0.008  # [m] above the surface when the fingers open
@@ -37,25 +31,9 @@ STANDOFF_FARTHER = 0.30  # [m] how much farther back a standoff may move to find
 STANDOFF_STEP = 0.02  # [m] the steps it moves back in
 
 
-class Placing(_CatcherBase):
+class Placing(CatcherParts):
     """Catcher's carry and place (a mixin of it: it uses Catcher's shared helpers and
     the approach's ``_free_standoff``)."""
-
-    if TYPE_CHECKING:  # Catcher's shared helpers (actors/catch.py) and the approach's (Approaching)
-
-        def _face(self, xy: tuple[float, float], strategy: Strategy) -> float: ...
-        def _drive_in(self, distance: float) -> float: ...
-        def _free_standoff(
-            self,
-            robot_xy: tuple[float, float],
-            xy: tuple[float, float],
-            strategy: Strategy,
-            extra: float = 0.0,
-            others: Sequence[dict] = (),
-            corridor: bool = True,
-            object_yaw: float | None = None,
-            plan: GraspPlan | None = None,
-        ) -> list[tuple[float, float, float]]: ...
 
     @actor(moves=True)
     def carry_pose(self) -> None:
