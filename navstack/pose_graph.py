@@ -8,6 +8,11 @@ units 1/m^2 and 1/rad^2). The error of an edge is ``z^-1 * (X_i^-1 * X_j)`` as a
 :meth:`PoseGraph.optimize` minimises the sum of their squares with
 ``scipy.optimize.least_squares`` and an analytic sparse Jacobian (each edge touches six
 parameters), node 0 (or every node in ``fixed``) held still: it fixes the gauge.
+
+A **direction link** ``(j, z, sigma)`` says that node j's heading is ``z`` [rad] from
+the graph's :attr:`PoseGraph.direction`, one unknown angle shared by all such links and
+estimated with the nodes (the walls' direction in the map, seen from each keyframe: what
+every sighting agrees on, not the first sighting alone).
 """
 
 from __future__ import annotations
@@ -33,6 +38,17 @@ def compose(a, b) -> tuple:
     return (a[0] + c * b[0] - s * b[1], a[1] + s * b[0] + c * b[1], math.remainder(a[2] + b[2], 2 * math.pi))
 
 
+def _sqrt_information(info: np.ndarray) -> np.ndarray:
+    """W with W^T W = info: the Cholesky factor's transpose, or for an edge that constrains
+    only some directions (a heading-only link: zero information along x and y), the
+    eigenvectors scaled by the square roots of their eigenvalues."""
+    try:
+        return np.linalg.cholesky(info).T
+    except np.linalg.LinAlgError:
+        values, vectors = np.linalg.eigh(info)
+        return np.sqrt(np.clip(values, 0.0, None))[:, None] * vectors.T
+
+
 @dataclass
 class Edge:
     i: int
@@ -40,6 +56,13 @@ class Edge:
     z: tuple  # X_i^-1 X_j measured (x [m], y [m], yaw [rad])
     info: np.ndarray  # (3, 3) information matrix
     kind: str = "odom"  # odom, match, loop: for bookkeeping only
+
+
+@dataclass
+class DirectionLink:
+    j: int
+    z: float  # X_j's heading less the graph's direction [rad]
+    sigma: float  # [rad]
 
 
 @dataclass
@@ -57,6 +80,8 @@ class PoseGraph:
         self._poses: list[tuple] = []
         self.edges: list[Edge] = []
         self.fixed: set[int] = {0}
+        self.directions: list[DirectionLink] = []
+        self.direction = 0.0  # the direction links' shared angle [rad]
 
     def __len__(self) -> int:
         return len(self._poses)
@@ -79,6 +104,16 @@ class PoseGraph:
         self.edges.append(e)
         return e
 
+    def add_direction(self, j: int, z: float, sigma: float) -> DirectionLink:
+        """Constrain node j's heading to :attr:`direction` + ``z`` [rad], within ``sigma``."""
+        if not 0 <= j < len(self._poses):
+            raise ValueError(f"direction link to node {j}: the graph has {len(self._poses)} nodes")
+        if not sigma > 0:
+            raise ValueError(f"a direction link's sigma must be positive, not {sigma}")
+        link = DirectionLink(j, float(z), float(sigma))
+        self.directions.append(link)
+        return link
+
     def pose(self, i: int) -> tuple:
         return self._poses[i]
 
@@ -93,7 +128,7 @@ class PoseGraph:
     # -- least squares -------------------------------------------------------------------------
     def _whiteners(self) -> np.ndarray:
         # sqrt information: L^T with L L^T = info, so ||L^T e||^2 = e^T info e
-        return np.stack([np.linalg.cholesky(e.info).T for e in self.edges])
+        return np.stack([_sqrt_information(e.info) for e in self.edges])
 
     def _errors(self, X: np.ndarray, Ei: np.ndarray, Ej: np.ndarray, Z: np.ndarray):
         """Per edge: the error vector (E, 3) and the pieces of its Jacobian."""
@@ -130,15 +165,24 @@ class PoseGraph:
         Z = np.array([e.z for e in self.edges])
         W = self._whiteners()  # (E, 3, 3)
         X0 = self.poses
+        # the direction links: their nodes, headings and sigmas; the shared angle is the last parameter
+        Dj = np.array([d.j for d in self.directions], dtype=np.int64)
+        Dz = np.array([d.z for d in self.directions])
+        Ds = np.array([d.sigma for d in self.directions])
+        D, F = len(Dj), len(free)
 
         def unpack(v):
             X = X0.copy()
-            X[free] = v.reshape(-1, 3)
+            X[free] = v[: 3 * F].reshape(-1, 3)
             return X
 
         def fun(v):
             e, _ = self._errors(unpack(v), Ei, Ej, Z)
-            return np.einsum("eab,eb->ea", W, e).ravel()
+            r = np.einsum("eab,eb->ea", W, e).ravel()
+            if not D:
+                return r
+            yaw = unpack(v)[Dj, 2]
+            return np.concatenate([r, (np.remainder(yaw - v[-1] - Dz + np.pi, 2 * np.pi) - np.pi) / Ds])
 
         # the Jacobian's sparsity: rows 3e..3e+2 against the 3 columns of node i and of j
         E = len(self.edges)
@@ -167,11 +211,17 @@ class PoseGraph:
                 data.append(blk[ok].ravel())
                 rr.append(np.broadcast_to(rows_blk[ok], (ok.sum(), 3, 3)).ravel())
                 cc.append((3 * c[ok][:, None, None] + np.arange(3)[None, None, :]).repeat(3, 1).ravel())
+            if D:  # d/d(yaw_j) = 1 / sigma, d/d(direction) = -1 / sigma
+                c = col[Dj]
+                ok = c >= 0
+                data += [1 / Ds[ok], -1 / Ds]
+                rr += [3 * E + np.arange(D)[ok], 3 * E + np.arange(D)]
+                cc += [3 * c[ok] + 2, np.full(D, 3 * F)]
             return sparse.csr_matrix(
-                (np.concatenate(data), (np.concatenate(rr), np.concatenate(cc))), shape=(3 * E, 3 * len(free))
+                (np.concatenate(data), (np.concatenate(rr), np.concatenate(cc))), shape=(3 * E + D, 3 * F + (D > 0))
             )
 
-        v0 = X0[free].ravel()
+        v0 = np.concatenate([X0[free].ravel(), [self.direction] if D else []])
         cost0 = 0.5 * float(np.sum(fun(v0) ** 2))
         if len(free) == 0:
             return OptimizeResult(cost0, cost0, 0, True)
@@ -192,5 +242,7 @@ class PoseGraph:
         X = unpack(sol.x)
         X[:, 2] = np.remainder(X[:, 2] + np.pi, 2 * np.pi) - np.pi
         self._poses = [tuple(map(float, p)) for p in X]
-        cost1 = 0.5 * float(np.sum(fun(X[free].ravel()) ** 2))
+        if D:
+            self.direction = math.remainder(float(sol.x[-1]), 2 * math.pi)
+        cost1 = 0.5 * float(np.sum(fun(sol.x) ** 2))
         return OptimizeResult(cost0, cost1, int(sol.nfev), bool(sol.success))

@@ -27,6 +27,11 @@
   turn) where the match failed; and where the odometry's heading is a gyro's, a
   heading-only link to the previous keyframe by its turn (``gyro_links``), its scale
   error learnt from the pair links;
+* **the walls' direction** (``wall_heading``): each keyframe's heading is linked, modulo 90
+  degrees, to the direction of the walls its scan sees (:mod:`navstack.wall_heading`),
+  one unknown angle shared by all keyframes: indoors most walls are parallel or
+  perpendicular, so the heading cannot drift while the robot explores rooms with no loop
+  to close;
 * **loop closures**: a keyframe is matched against the submap around an old keyframe
   (``loop_min_travel`` back along the path but within ``loop_radius``), over a wide window;
   a good score, a refinement that stays within ``loop_max_refine_shift`` and a
@@ -68,6 +73,7 @@ from .scan_matcher import (
     scan_points,
     transform,
 )
+from .wall_heading import nearest_turn, wall_direction
 
 IDENTITY = (0.0, 0.0, 0.0)
 
@@ -106,11 +112,10 @@ class SlamParams:
     pair_all_scans: bool = True  # a link's reference: every scan of the older
     #   keyframe (each at its odometry offset), not only its first: 3-5 noisy scans of the same
     #   walls average out, and the links' shrink and heading noise drop (bench/mapping_replay.py)
-    pair_match: str = "gauss_newton"  # the pair links' match: "gauss_newton" (on the
-    #   keyframe's density map) or "icp_visible" (point-to-line ICP on the returns the
-    #   keyframe's beams reach, by 3 sigma of the noise: the links shrink less, and six house
-    #   replays' online error fell by a quarter, but in one live map build of four the loops
-    #   stopped closing)
+    pair_match: str = "icp_visible"  # the pair links' match: "icp_visible" (point-to-line
+    #   ICP on the returns the keyframe's beams reach, by 3 sigma of the noise) or
+    #   "gauss_newton" (on the keyframe's density map: its links come out 1.5 % short, as
+    #   the returns' density falls off along a wall, so the map shrinks by as much)
     pair_scan_turn: float = math.radians(5)  # but only the scans turned at most this much from it
     gyro_links: bool = True  # link each keyframe's heading to the last's by the
     #   odometry's turn where that is the gyro's (Slam.add's ``gyro``; GyroOdometry takes the
@@ -119,6 +124,14 @@ class SlamParams:
     #   per radian turned (what is left of the gyro's scale error once estimated), per second
     #   (its bias left after a stop) [rad/s]
     gyro_scale_prior: float = 0.02  # the gyro's scale error before any turn [sigma]
+    wall_heading: bool = True  # link each keyframe's heading to the walls' direction
+    #   (modulo 90 degrees), one unknown that every keyframe's scan measures: most indoor walls
+    #   are parallel or perpendicular, and that heading does not drift between loop closures
+    #   (navstack.wall_heading); walls further off than the gate (at an angle) add nothing
+    wall_heading_sigma: tuple = (math.radians(0.1), 2.0)  # its sigma: floor [rad], and
+    #   the factor on the lines' own scatter (the returns' noise is not all white)
+    wall_heading_gate: float = math.radians(1.5)  # further than this from the graph's heading
+    #   (plus 3 sigma): another direction (a wall at an angle, furniture), not the walls'
     optimize_every: int = 1  # keyframes between two graph optimisations
     #   when pair_edges > 0 (every one: the published pose is the newest keyframe's, which
     #   stands at its local-map match until the graph takes its links in)
@@ -307,6 +320,8 @@ class Slam:
         if pose is not None:  # the first keyframe
             self.graph.add_node(pose)
             self.keyframes.append(kf)
+            if p.wall_heading:
+                self._add_wall_heading(0, pts)
             self._integrated_at.append(tuple(pose))
             self._integrate(pose, scan)
             return
@@ -333,6 +348,8 @@ class Slam:
         if p.gyro_links and kf.gyro and self.keyframes[k - 1].gyro:
             self._learn_gyro_scale(k, pairs)
             self._add_gyro_link(k)
+        if p.wall_heading:
+            self._add_wall_heading(k, pts)
         if not pairs and matched is not None:
             self.graph.add_edge(k - 1, k, relative(self.graph.pose(k - 1), matched), _information(cov), "match")
         elif not pairs:
@@ -360,6 +377,28 @@ class Slam:
         sigma = math.sqrt(floor**2 + ((per_rad + scale_sigma) * z[2]) ** 2 + (per_s * (b.t - a.t)) ** 2)
         z = (z[0], z[1], z[2] * (1 + correction))
         self.graph.add_edge(k - 1, k, z, np.diag([1e-6, 1e-6, 1 / sigma**2]), "gyro")
+
+    def _add_wall_heading(self, k: int, pts: np.ndarray) -> None:
+        """Link keyframe k's heading to the walls' direction in the map (the graph's
+        :attr:`~navstack.pose_graph.PoseGraph.direction`, first set by the first keyframe
+        that saw walls) by the direction of its scan's walls in its base frame, at the
+        multiple of 90 degrees nearest the graph's heading."""
+        walls = self._wall_direction(pts)
+        if walls is None:
+            return
+        p = self.params
+        floor, factor = p.wall_heading_sigma
+        sigma = math.hypot(floor, factor * walls.sigma)
+        guess = self.graph.pose(k)[2]
+        if not self.graph.directions:
+            self.graph.direction = math.remainder(guess + walls.angle, math.pi / 2)
+        z = nearest_turn(-walls.angle, guess - self.graph.direction)
+        if abs(math.remainder(z - (guess - self.graph.direction), 2 * math.pi)) > p.wall_heading_gate + 3 * sigma:
+            return
+        self.graph.add_direction(k, z, sigma)
+
+    def _wall_direction(self, pts: np.ndarray):
+        return wall_direction(pts, self._range_sigma(pts))
 
     def gyro_scale(self) -> tuple[float, float]:
         """The factor the odometry's turns are off by, as the scan matches see it (a
@@ -670,12 +709,15 @@ class Slam:
         parts = [transform(self.graph.pose(i), self.keyframes[i].points) for i in indices]
         return np.vstack(parts) if parts else np.zeros((0, 2))
 
-    def _weights(self, pts: np.ndarray) -> np.ndarray:
-        """Base-frame returns' weights in a match: 1 / range noise^2, relative to the nearest's."""
+    def _range_sigma(self, pts: np.ndarray) -> np.ndarray:
+        """Base-frame returns' range noise [m] (SlamParams.range_noise)."""
         p = self.params
         sensor_xy = np.asarray(p.sensor_offset[:2], dtype=np.float64)
-        sigma = np.maximum(p.range_noise[0], p.range_noise[1] * np.hypot(*(pts - sensor_xy).T))
-        return (p.range_noise[0] / sigma) ** 2
+        return np.maximum(p.range_noise[0], p.range_noise[1] * np.hypot(*(pts - sensor_xy).T))
+
+    def _weights(self, pts: np.ndarray) -> np.ndarray:
+        """Base-frame returns' weights in a match: 1 / range noise^2, relative to the nearest's."""
+        return (self.params.range_noise[0] / self._range_sigma(pts)) ** 2
 
     def _weights_of(self, indices) -> np.ndarray:
         parts = [self.keyframes[i].weights for i in indices]

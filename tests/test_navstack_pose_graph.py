@@ -128,3 +128,39 @@ def test_bad_edges_are_refused():
     with pytest.raises(ValueError):
         g.add_edge(0, 1, (1, 0, 0), np.eye(2))
     assert g.optimize().success
+
+
+def test_direction_links_hold_a_drifting_chain_to_one_shared_direction():
+    # A straight corridor: every relative edge turns 0.5 degrees too far (a drift); each
+    # node also sees the walls, which say its heading is 0.2 rad from their direction.
+    n, drift = 30, math.radians(0.5)
+    truth = [(0.2 * k, 0.0, 0.3) for k in range(n)]
+    g = PoseGraph()
+    for p in truth:
+        g.add_node(p)
+    for k in range(1, n):
+        z = relative(truth[k - 1], truth[k])
+        g.add_edge(k - 1, k, (z[0], z[1], z[2] + drift), [1e4, 1e4, (1 / math.radians(0.3)) ** 2])
+    g.optimize()
+    assert abs(g.pose(n - 1)[2] - 0.3) > math.radians(10)  # the chain alone turns away
+    for k in range(n):
+        g.add_direction(k, -0.2, math.radians(0.2))
+    assert g.direction == 0.0  # a first guess; the optimisation finds the walls' direction
+    g.optimize()
+    assert g.direction == pytest.approx(0.5, abs=math.radians(0.25))
+    yaw_err = [abs(math.remainder(g.pose(k)[2] - 0.3, 2 * math.pi)) for k in range(n)]
+    assert max(yaw_err) < math.radians(3) and np.mean(yaw_err) < math.radians(1.5)
+
+
+def test_an_edge_on_the_heading_alone_leaves_the_position_free():
+    g = PoseGraph()
+    g.add_node((0, 0, 0))
+    g.add_node((1.0, 0.5, 0.2))
+    g.add_edge(0, 1, (0.0, 0.0, 0.1), np.diag([0.0, 0.0, 1e4]), "gyro")
+    g.add_edge(0, 1, (1.0, 0.0, 0.3), np.diag([1e4, 1e4, 0.0]), "position")
+    assert g.optimize().success
+    assert g.pose(1) == pytest.approx((math.cos(0.0) * 1.0, 0.0, 0.1), abs=1e-4)
+    with pytest.raises(ValueError):
+        g.add_direction(2, 0.0, 0.1)
+    with pytest.raises(ValueError):
+        g.add_direction(1, 0.0, 0.0)
