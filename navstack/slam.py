@@ -124,6 +124,16 @@ class SlamParams:
     #   per radian turned (what is left of the gyro's scale error once estimated), per second
     #   (its bias left after a stop) [rad/s]
     gyro_scale_prior: float = 0.02  # the gyro's scale error before any turn [sigma]
+    wheel_links: bool = True  # trust the wheels' distance times their scale, as learnt
+    #   from the pair links (a wheel radius is off by a per cent or two; once that is known,
+    #   the wheels measure 20 cm to a few millimetres, better than a match along a room with
+    #   little across the way): link each keyframe to the last by it unless the pair link
+    #   says the wheels slipped, follow it between keyframes unless the tracking does, and
+    #   place a keyframe's later scans by it (a 2 % error smears the pair links' references)
+    wheel_sigma: tuple = (0.002, 0.01)  # those links' sigma: floor [m], per metre
+    wheel_learn_travel: float = 1.0  # [m] of pair links to learn the scale from first
+    track_slip: float = 0.05  # the tracking says the wheels slipped: it is further than
+    #   this from them since the newest keyframe [m] (along the axes where it is firm)
     wall_heading: bool = True  # link each keyframe's heading to the walls' direction
     #   (modulo 90 degrees), one unknown that every keyframe's scan measures: most indoor walls
     #   are parallel or perpendicular, and that heading does not drift between loop closures
@@ -227,10 +237,13 @@ class Slam:
         self._since_closure = 1 << 30
         self._track_offset = IDENTITY  # the latest scan's pose from the newest keyframe
         self._track_odom = IDENTITY  # and the odometry there
+        self._wheel_offset = IDENTITY  # the latest scan's pose from the newest keyframe by the wheels
+        self._slipped = False  # the tracking found the wheels slipping since the newest keyframe
         self._local_map: _LocalMap | None = None
         self._kf_map: _LocalMap | None = None
         self._graph_version = 0  # bumped whenever the graph moves its nodes
         self._turns = [0.0, 0.0]  # the gyro's scale from the matches: sum g^2, sum (m - g) g
+        self._wheel = [0.0, 0.0, 0.0]  # the wheels' from the matches: sum d^2, sum m d, sum d
         self._gyro = False  # the latest odometry's heading is the gyro's
 
     # -- input ---------------------------------------------------------------------------------
@@ -258,9 +271,16 @@ class Slam:
             self._new_keyframe(t, odom, scan, p.initial_pose or odom)
             return True
         last = self.keyframes[-1]
-        offset = compose(self._track_offset, relative(self._track_odom, odom))  # the odometry's guess
+        step = self._wheel_step(relative(self._track_odom, odom))
+        self._wheel_offset = compose(self._wheel_offset, step)
+        offset = compose(self._track_offset, step)  # the odometry's guess
         if p.track_scans:
             offset = self._track(offset, scan)
+            if p.wheel_links and not self._slipped:
+                if math.hypot(offset[0] - self._wheel_offset[0], offset[1] - self._wheel_offset[1]) > p.track_slip:
+                    self._slipped = True
+                else:
+                    offset = self._wheel_offset
         self._travel += math.hypot(offset[0] - self._track_offset[0], offset[1] - self._track_offset[1])
         self._odom, self._track_offset, self._track_odom = odom, offset, odom
         if math.hypot(offset[0], offset[1]) < p.keyframe_dist and abs(offset[2]) < p.keyframe_angle:
@@ -270,7 +290,8 @@ class Slam:
                 self._integrate(compose(self.graph.pose(len(self.keyframes) - 1), delta), scan)
             return False
         self._new_keyframe(t, odom, scan, None, offset)
-        self._track_offset = IDENTITY
+        self._track_offset = self._wheel_offset = IDENTITY
+        self._slipped = False
         return True
 
     # -- output --------------------------------------------------------------------------------
@@ -345,6 +366,9 @@ class Slam:
         if pairs:
             for i, z in self._near_matches(k, pts, matched):
                 self.graph.add_edge(i, k, z, link_info, "near")
+        if p.wheel_links:
+            self._learn_wheel_scale(k, pairs)
+            self._add_wheel_link(k, pairs)
         if p.gyro_links and kf.gyro and self.keyframes[k - 1].gyro:
             self._learn_gyro_scale(k, pairs)
             self._add_gyro_link(k)
@@ -408,6 +432,54 @@ class Slam:
         prior = (match_sigma / self.params.gyro_scale_prior) ** 2  # no turn yet: no correction
         return mg / (gg + prior), match_sigma / math.sqrt(gg + prior)
 
+    def wheel_scale(self) -> tuple[float, float]:
+        """The factor the odometry's distances are off by, as the pair links see them (a
+        distance's true length is the odometry's times this; 1 before any travel), and the
+        travel it was learnt from [m]."""
+        dd, md, d = self._wheel
+        prior = 0.1  # [m^2]: a scale of 1, as much as half a metre of links says
+        return (md + prior) / (dd + prior), d
+
+    def _learn_wheel_scale(self, k: int, pairs) -> None:
+        """Add keyframe k's distance from k - 1 by the odometry and by its pair link to the
+        wheels' scale (left out: a short step, or a match far off both: the wheels slipped)."""
+        o = relative(self.keyframes[k - 1].odom, self.keyframes[k].odom)
+        z = next((z for i, z in pairs if i == k - 1), None)
+        d = math.hypot(o[0], o[1])
+        if z is None or d < 0.1:
+            return
+        m = math.hypot(z[0], z[1])
+        if abs(m - d) > 0.02 + 0.1 * d:
+            return
+        self._wheel[0] += d * d
+        self._wheel[1] += m * d
+        self._wheel[2] += d
+
+    def _add_wheel_link(self, k: int, pairs) -> None:
+        """Keyframe k from k - 1 by the odometry's distance times the learnt scale, on x
+        and y alone (the heading is the matches' and the gyro's), once the scale has been
+        learnt over ``wheel_learn_travel``; none where the pair link to k - 1 is further off
+        than ``slip_tolerance`` (the wheels slipped) or missing."""
+        p = self.params
+        z_pair = next((z for i, z in pairs if i == k - 1), None)
+        if self.wheel_scale()[1] < p.wheel_learn_travel or z_pair is None:
+            return
+        o = relative(self.keyframes[k - 1].odom, self.keyframes[k].odom)
+        z = self._wheel_step(o)
+        d = math.hypot(o[0], o[1])
+        if math.hypot(z[0] - z_pair[0], z[1] - z_pair[1]) > p.slip_tolerance + 0.1 * d:
+            return
+        sigma = p.wheel_sigma[0] + p.wheel_sigma[1] * d
+        self.graph.add_edge(k - 1, k, z, np.diag([1 / sigma**2, 1 / sigma**2, 0.0]), "wheels")
+
+    def _wheel_step(self, step) -> tuple:
+        """An odometry step with its distance times the wheels' learnt scale (once learnt,
+        with ``wheel_links``)."""
+        scale, learnt = self.wheel_scale()
+        if not self.params.wheel_links or learnt < self.params.wheel_learn_travel:
+            return step
+        return (scale * step[0], scale * step[1], step[2])
+
     def _learn_gyro_scale(self, k: int, pairs) -> None:
         """Add keyframe k's turn from k - 1, by the odometry and by its pair link, to the
         scale's estimate (a match far off both is left out: a wrong match)."""
@@ -435,25 +507,37 @@ class Slam:
 
     def _track(self, offset, scan: _Scan) -> tuple:
         """A scan's pose from the newest keyframe, matched against that keyframe's returns
-        in a small window around ``offset`` (the last scan's plus the odometry since);
-        ``offset`` itself when the match is too poor or too loose (a wall or two: it
-        slides along them) to trust. Against the keyframe alone, not the local map: a
-        short baseline, no shrink, and the keyframe's own place in the map is the
-        graph's business."""
+        in a small window around ``offset`` (the last scan's plus the odometry since).
+        Along an axis where the match is loose (wider than ``track_max_sigma``: a wall or
+        two, it slides along them) ``offset``'s, and ``offset`` itself when the match is
+        too poor or loose both ways. Against the keyframe alone, not the local map: a
+        short baseline, no shrink, and the keyframe's own place in the map is the graph's
+        business."""
         p = self.params
         pts = match_points(scan, p.match_max_range, p.sensor_offset)
         if len(pts) < 20 or len(self.keyframes[-1].points) < 20:
             return offset
         ref = self._keyframe_map()
         res = self.matcher.match(ref.coarse, pts, offset, p.track_window_xy, p.track_window_yaw)
-        if res.score < p.min_match_score or np.linalg.eigvalsh(res.covariance[:2, :2])[-1] > p.track_max_sigma**2:
+        if res.score < p.min_match_score:
             return offset
-        return self._refine_local(ref, pts, res.pose)
+        values, axes = np.linalg.eigh(res.covariance[:2, :2])
+        firm = values <= p.track_max_sigma**2
+        if not firm.any():
+            return offset
+        matched = self._refine_local(ref, pts, res.pose)
+        if firm.all():
+            return matched
+        axis = axes[:, 0]  # the firm one: the match's along it, the guess's across
+        shift = (matched[0] - offset[0]) * axis[0] + (matched[1] - offset[1]) * axis[1]
+        return (offset[0] + shift * axis[0], offset[1] + shift * axis[1], matched[2])
 
     def _scan_delta(self, tracked, by_odometry) -> tuple:
         """Where a keyframe's later scan goes, from the keyframe: the odometry's offset
-        (a match's is shrunk towards the reference, by a per cent or two) unless the
-        wheels slipped, i.e. the match disagrees with it by more than ``slip_tolerance``."""
+        (its distance times the wheels' learnt scale; a match's is shrunk towards the
+        reference, by a per cent or two) unless the wheels slipped, i.e. the match
+        disagrees with it by more than ``slip_tolerance``."""
+        by_odometry = self._wheel_step(by_odometry)
         slipped = math.hypot(tracked[0] - by_odometry[0], tracked[1] - by_odometry[1]) > self.params.slip_tolerance
         return tracked if slipped else by_odometry
 

@@ -232,20 +232,24 @@ def test_the_published_pose_follows_the_laser_when_the_wheels_slip():
 def _gyro_run(gyro: bool, scale: float = 1.015, seconds: float = 150.0, drift: float = 0.0, **params):
     """The synthetic house with an odometry whose heading is a gyro's: the true turns
     ``scale`` times too large (a gyro's scale error) plus ``drift`` [rad/s] (its bias),
-    the wheels' distance."""
+    and the position integrated along it by the wheels' distance (as GyroOdometry does)."""
     occ = read_map_yaml(FIXTURES / "house.yaml")
     world = SyntheticWorld(occ, world_boxes(FIXTURES / "house_world.yaml"), seed=0, start=0, reverse=False)
     slam = Slam(SlamParams(initial_pose=world.truth, **params))
-    heading, last, yaw_err = None, None, []
+    heading, x, y, last, yaw_err = 0.0, 0.0, 0.0, None, []
     while world.target < len(world.tour) + 2 and world.t < seconds:
         s = world.step()
         if last is None:
-            heading = s.odom[2]
+            x, y, heading = s.odom
         else:
-            heading += scale * math.remainder(s.truth[2] - last.truth[2], 2 * math.pi) + drift * (s.t - last.t)
+            turn = scale * math.remainder(s.truth[2] - last.truth[2], 2 * math.pi) + drift * (s.t - last.t)
+            moved = relative(last.odom, s.odom)[0]  # the wheels' distance, forwards
+            x += moved * math.cos(heading + turn / 2)
+            y += moved * math.sin(heading + turn / 2)
+            heading += turn
         last = s
         if s.scan is not None:
-            odom = (s.odom[0], s.odom[1], heading)
+            odom = (x, y, heading)
             slam.add(odom, s.scan.ranges, s.scan.angles, s.scan.range_max, s.t, s.scan.range_min, gyro=gyro)
             yaw_err.append(math.remainder(slam.pose()[2] - s.truth[2], 2 * math.pi))
     return slam, float(np.sqrt(np.mean(np.square(yaw_err))))
@@ -276,6 +280,28 @@ def test_the_walls_direction_holds_the_heading_of_a_drifting_gyro():
     assert abs(math.remainder(with_walls.graph.direction, math.pi / 2)) < math.radians(0.5)  # the house is square
     print(f"heading RMS {math.degrees(yaw_rms):.2f} deg with the walls, {math.degrees(yaw_rms_gyro):.2f} without")
     assert yaw_rms < math.radians(0.5) and yaw_rms < 0.7 * yaw_rms_gyro
+
+
+def test_the_wheels_scale_is_learned_and_links_the_keyframes():
+    occ = read_map_yaml(FIXTURES / "house.yaml")
+    world = SyntheticWorld(occ, world_boxes(FIXTURES / "house_world.yaml"), seed=0, start=0, reverse=False)
+    slam = Slam(SlamParams(initial_pose=world.truth))
+    odo = truth = 0.0
+    last = None
+    while world.t < 120:
+        s = world.step()
+        if last is not None:
+            odo += math.dist(s.odom[:2], last.odom[:2])
+            truth += math.dist(s.truth[:2], last.truth[:2])
+        last = s
+        if s.scan is not None:
+            slam.add(s.odom, s.scan.ranges, s.scan.angles, s.scan.range_max, s.t, s.scan.range_min)
+    scale, learnt = slam.wheel_scale()
+    assert abs(odo / truth - 1) > 0.01  # the synthetic odometry's distance is off
+    assert learnt > 10 and scale * odo / truth == pytest.approx(1.0, abs=0.006)
+    wheels = [e for e in slam.graph.edges if e.kind == "wheels"]
+    assert len(wheels) > 0.5 * len(slam.keyframes)
+    assert all(e.info[2, 2] == 0.0 for e in wheels)  # distance only: the heading is the gyro's and the matches'
 
 
 def test_icp_on_what_the_reference_saw_shrinks_the_pair_links_less():
