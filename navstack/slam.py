@@ -131,7 +131,8 @@ class SlamParams:
     #   says the wheels slipped, follow it between keyframes unless the tracking does, and
     #   place a keyframe's later scans by it (a 2 % error smears the pair links' references)
     wheel_sigma: tuple = (0.002, 0.01)  # those links' sigma: floor [m], per metre
-    wheel_learn_travel: float = 1.0  # [m] of pair links to learn the scale from first
+    wheel_match_sigma: float = 0.01  # a match's distance to the last keyframe, as the scale's
+    #   evidence [m]: a metre of steps gives the scale to 2 %, ten metres to 0.6 %
     track_slip: float = 0.05  # the tracking says the wheels slipped: it is further than
     #   this from them since the newest keyframe [m] (along the axes where it is firm)
     wall_heading: bool = True  # link each keyframe's heading to the walls' direction
@@ -192,6 +193,7 @@ class Keyframe:
     scans: list = field(default_factory=list)  # (relative pose to this keyframe, scan) to rebuild the map
     density: LikelihoodMap | None = None  # of its returns, for pair edges (lazily, once complete)
     pair_icp: IcpReference | None = None  # its returns for pair_match "icp_visible" (lazily, once complete)
+    scan_icp: IcpReference | None = None  # its own scan's returns alone, for the wheels' scale (lazily)
 
 
 @dataclass
@@ -243,7 +245,7 @@ class Slam:
         self._kf_map: _LocalMap | None = None
         self._graph_version = 0  # bumped whenever the graph moves its nodes
         self._turns = [0.0, 0.0]  # the gyro's scale from the matches: sum g^2, sum (m - g) g
-        self._wheel = [0.0, 0.0, 0.0]  # the wheels' from the matches: sum d^2, sum m d, sum d
+        self._wheel = [0.0, 0.0]  # the wheels' from the matches: sum d^2, sum m d
         self._gyro = False  # the latest odometry's heading is the gyro's
 
     # -- input ---------------------------------------------------------------------------------
@@ -433,50 +435,57 @@ class Slam:
         return mg / (gg + prior), match_sigma / math.sqrt(gg + prior)
 
     def wheel_scale(self) -> tuple[float, float]:
-        """The factor the odometry's distances are off by, as the pair links see them (a
-        distance's true length is the odometry's times this; 1 before any travel), and the
-        travel it was learnt from [m]."""
-        dd, md, d = self._wheel
-        prior = 0.1  # [m^2]: a scale of 1, as much as half a metre of links says
-        return (md + prior) / (dd + prior), d
+        """The factor the odometry's distances are off by, as the matches see them (a
+        distance's true length is the odometry's times this), and its sigma: 1 +- 3 %
+        before any travel (a wheel radius off by a per cent or two), then the least-squares
+        ratio over the steps learnt from, each match good to ``wheel_match_sigma``."""
+        dd, md = self._wheel
+        prior = (self.params.wheel_match_sigma / 0.03) ** 2  # [m^2]
+        return (md + prior) / (dd + prior), self.params.wheel_match_sigma / math.sqrt(dd + prior)
 
     def _learn_wheel_scale(self, k: int, pairs) -> None:
-        """Add keyframe k's distance from k - 1 by the odometry and by its pair link to the
-        wheels' scale (left out: a short step, or a match far off both: the wheels slipped)."""
+        """Add keyframe k's distance from k - 1 by the odometry and by matching to the
+        wheels' scale (left out: a short step, or a match far off both: the wheels slipped).
+        The match is against k - 1's own scan alone, not the pair link's reference: that
+        one's later scans are placed by the wheels, so its match would carry a third of
+        their scale error back into the scale."""
         o = relative(self.keyframes[k - 1].odom, self.keyframes[k].odom)
         z = next((z for i, z in pairs if i == k - 1), None)
         d = math.hypot(o[0], o[1])
         if z is None or d < 0.1:
             return
+        prev = self.keyframes[k - 1]
+        if prev.scan_icp is None:
+            prev.scan_icp = IcpReference(prev.points, neighbours=10)
+        z = self._align_visible(prev.scan_icp, prev.scans[0][1], self.keyframes[k].points, z)
         m = math.hypot(z[0], z[1])
         if abs(m - d) > 0.02 + 0.1 * d:
             return
         self._wheel[0] += d * d
         self._wheel[1] += m * d
-        self._wheel[2] += d
 
     def _add_wheel_link(self, k: int, pairs) -> None:
         """Keyframe k from k - 1 by the odometry's distance times the learnt scale, on x
-        and y alone (the heading is the matches' and the gyro's), once the scale has been
-        learnt over ``wheel_learn_travel``; none where the pair link to k - 1 is further off
-        than ``slip_tolerance`` (the wheels slipped) or missing."""
+        and y alone (the heading is the matches' and the gyro's), as loose as the scale is
+        uncertain; none where the pair link to k - 1 is further off than ``slip_tolerance``
+        (the wheels slipped) or missing."""
         p = self.params
         z_pair = next((z for i, z in pairs if i == k - 1), None)
-        if self.wheel_scale()[1] < p.wheel_learn_travel or z_pair is None:
+        if z_pair is None:
             return
         o = relative(self.keyframes[k - 1].odom, self.keyframes[k].odom)
         z = self._wheel_step(o)
         d = math.hypot(o[0], o[1])
         if math.hypot(z[0] - z_pair[0], z[1] - z_pair[1]) > p.slip_tolerance + 0.1 * d:
             return
-        sigma = p.wheel_sigma[0] + p.wheel_sigma[1] * d
+        sigma = p.wheel_sigma[0] + (p.wheel_sigma[1] + self.wheel_scale()[1]) * d
         self.graph.add_edge(k - 1, k, z, np.diag([1 / sigma**2, 1 / sigma**2, 0.0]), "wheels")
 
     def _wheel_step(self, step) -> tuple:
-        """An odometry step with its distance times the wheels' learnt scale (once learnt,
-        with ``wheel_links``)."""
-        scale, learnt = self.wheel_scale()
-        if not self.params.wheel_links or learnt < self.params.wheel_learn_travel:
+        """An odometry step with its distance times the wheels' learnt scale (with
+        ``wheel_links``)."""
+        scale = self.wheel_scale()[0]
+        if not self.params.wheel_links:
             return step
         return (scale * step[0], scale * step[1], step[2])
 
@@ -640,13 +649,17 @@ class Slam:
         kf = self.keyframes[i]
         if kf.pair_icp is None:
             kf.pair_icp = IcpReference(self._pair_reference(i)[0], neighbours=10)
-        scan = kf.scans[0][1]
+        return self._align_visible(kf.pair_icp, kf.scans[0][1], pts, z0)
+
+    def _align_visible(self, reference: IcpReference, scan: _Scan, pts: np.ndarray, z0) -> tuple:
+        """``pts`` aligned on ``reference`` by ICP from ``z0``, on those that ``scan`` (the
+        reference's laser) could have seen; ``z0`` when fewer than 20."""
         z = z0
         for _ in range(2):
             keep = _seen_from(scan, transform(z, pts), self.params.sensor_offset, self.params.range_noise)
             if keep.sum() < 20:
                 return z0
-            z = kf.pair_icp.align(pts[keep], z, iterations=30)[0]
+            z = reference.align(pts[keep], z, iterations=30)[0]
         return z
 
     def _pair_reference(self, i: int) -> tuple[np.ndarray, np.ndarray]:
