@@ -370,7 +370,7 @@ class Slam:
                 self.graph.add_edge(i, k, z, link_info, "near")
         if p.wheel_links:
             self._learn_wheel_scale(k, pairs)
-            self._add_wheel_link(k, pairs)
+            self._add_wheel_link(k)
         if p.gyro_links and kf.gyro and self.keyframes[k - 1].gyro:
             self._learn_gyro_scale(k, pairs)
             self._add_gyro_link(k)
@@ -464,22 +464,24 @@ class Slam:
         self._wheel[0] += d * d
         self._wheel[1] += m * d
 
-    def _add_wheel_link(self, k: int, pairs) -> None:
+    def _add_wheel_link(self, k: int) -> None:
         """Keyframe k from k - 1 by the odometry's distance times the learnt scale, on x
         and y alone (the heading is the matches' and the gyro's), as loose as the scale is
-        uncertain; none where the pair link to k - 1 is further off than ``slip_tolerance``
-        (the wheels slipped) or missing."""
+        uncertain; none where the wheels slipped (:meth:`_wheels_held`)."""
         p = self.params
-        z_pair = next((z for i, z in pairs if i == k - 1), None)
-        if z_pair is None:
+        if not self._wheels_held():
             return
         o = relative(self.keyframes[k - 1].odom, self.keyframes[k].odom)
         z = self._wheel_step(o)
         d = math.hypot(o[0], o[1])
-        if math.hypot(z[0] - z_pair[0], z[1] - z_pair[1]) > p.slip_tolerance + 0.1 * d:
-            return
         sigma = p.wheel_sigma[0] + (p.wheel_sigma[1] + self.wheel_scale()[1]) * d
         self.graph.add_edge(k - 1, k, z, np.diag([1 / sigma**2, 1 / sigma**2, 0.0]), "wheels")
+
+    def _wheels_held(self) -> bool:
+        """Whether the wheels did not slip since the newest keyframe: the tracking matches
+        stayed within ``track_slip`` of them (with ``wheel_links`` and ``track_scans``)."""
+        p = self.params
+        return p.wheel_links and p.track_scans and not self._slipped
 
     def _wheel_step(self, step) -> tuple:
         """An odometry step with its distance times the wheels' learnt scale (with
