@@ -14,9 +14,10 @@
 * **tracking** (``track_scans``): each scan between keyframes is matched against the newest
   keyframe's returns, in a small window around the last scan's pose plus the odometry
   since. :meth:`Slam.pose` (what the mapper publishes) and the next keyframe's guess
-  follow these matches, and keyframes are spaced by them: wheels that slip, or spin
-  while the robot is wedged against furniture, move neither. A loose match (a wall or
-  two) keeps the odometry;
+  follow these matches (or the wheels, below, while the two agree), and keyframes are
+  spaced by them: wheels that slip, or spin while the robot is wedged against
+  furniture, move neither. Along an axis where the match is loose (a wall or two) the
+  odometry's;
 * **a pose graph** (:class:`~navstack.pose_graph.PoseGraph`): per keyframe, links to the
   ``pair_edges`` keyframes before it and to the ``near_links`` nearest ones of the local
   stretch (a turn on the spot links back to where it began, not through a chain of
@@ -27,6 +28,10 @@
   turn) where the match failed; and where the odometry's heading is a gyro's, a
   heading-only link to the previous keyframe by its turn (``gyro_links``), its scale
   error learnt from the pair links;
+* **the wheels** (``wheel_links``): their distance times a scale learnt from the matches
+  links each keyframe to the last and carries the pose between keyframes, unless the
+  tracking saw them slip: a match in a room with little across the way wanders by
+  centimetres, the wheels by millimetres;
 * **the walls' direction** (``wall_heading``): each keyframe's heading is linked, modulo 90
   degrees, to the direction of the walls its scan sees (:mod:`navstack.wall_heading`),
   one unknown angle shared by all keyframes: indoors most walls are parallel or
@@ -127,9 +132,9 @@ class SlamParams:
     wheel_links: bool = True  # trust the wheels' distance times their scale, as learnt
     #   from the pair links (a wheel radius is off by a per cent or two; once that is known,
     #   the wheels measure 20 cm to a few millimetres, better than a match along a room with
-    #   little across the way): link each keyframe to the last by it unless the pair link
-    #   says the wheels slipped, follow it between keyframes unless the tracking does, and
-    #   place a keyframe's later scans by it (a 2 % error smears the pair links' references)
+    #   little across the way): link each keyframe to the last by it and follow it between
+    #   keyframes, unless the tracking saw the wheels slip, and place a keyframe's later
+    #   scans by it (a 2 % error smears the pair links' references)
     wheel_sigma: tuple = (0.002, 0.01)  # those links' sigma: floor [m], per metre
     wheel_match_sigma: float = 0.01  # a match's distance to the last keyframe, as the scale's
     #   evidence [m]: a metre of steps gives the scale to 2 %, ten metres to 0.6 %
@@ -486,9 +491,9 @@ class Slam:
     def _wheel_step(self, step) -> tuple:
         """An odometry step with its distance times the wheels' learnt scale (with
         ``wheel_links``)."""
-        scale = self.wheel_scale()[0]
         if not self.params.wheel_links:
             return step
+        scale = self.wheel_scale()[0]
         return (scale * step[0], scale * step[1], step[2])
 
     def _learn_gyro_scale(self, k: int, pairs) -> None:
