@@ -251,6 +251,7 @@ class Slam:
         self._graph_version = 0  # bumped whenever the graph moves its nodes
         self._turns = [0.0, 0.0]  # the gyro's scale from the matches: sum g^2, sum (m - g) g
         self._wheel = [0.0, 0.0]  # the wheels' from the matches: sum d^2, sum m d
+        self._wheel_edges: list = []  # [(edge, its odometry step)]: rescaled as the scale is learnt
         self._gyro = False  # the latest odometry's heading is the gyro's
 
     # -- input ---------------------------------------------------------------------------------
@@ -366,6 +367,16 @@ class Slam:
         # else the local-map match; the odometry only where matching failed (it slips
         # against obstacles, and as an extra link it pulls every good match off by its drift)
         pairs = self._pair_matches(k, pts, matched) if matched is not None and p.pair_edges else []
+        if not pairs and matched is not None and p.pair_edges and self._wheels_held():
+            # every pair match left the local map's pose: it slid along a wall, away from
+            # where the wheels (which held) put the keyframe; the pairs may agree with them
+            if math.hypot(matched[0] - predicted[0], matched[1] - predicted[1]) > p.track_slip:
+                self.graph.set_pose(k, predicted)
+                pairs = self._pair_matches(k, pts, predicted)
+                if pairs:
+                    matched = predicted
+                else:
+                    self.graph.set_pose(k, matched)
         sx, syaw = p.pair_sigma
         link_info = np.diag([1 / sx**2, 1 / sx**2, 1 / syaw**2])
         for i, z in pairs:
@@ -386,6 +397,7 @@ class Slam:
         elif not pairs:
             self.graph.add_edge(k - 1, k, z_odom, self._odom_information(z_odom), "odom")
         elif k % p.optimize_every == 0:
+            self._rescale_wheel_links()
             self.graph.optimize(max_iterations=10, loss="cauchy", f_scale=3.0)
             self._graph_version += 1
             self._dirty = self._dirty or self._map_moved()
@@ -480,7 +492,17 @@ class Slam:
         z = self._wheel_step(o)
         d = math.hypot(o[0], o[1])
         sigma = p.wheel_sigma[0] + (p.wheel_sigma[1] + self.wheel_scale()[1]) * d
-        self.graph.add_edge(k - 1, k, z, np.diag([1 / sigma**2, 1 / sigma**2, 0.0]), "wheels")
+        edge = self.graph.add_edge(k - 1, k, z, np.diag([1 / sigma**2, 1 / sigma**2, 0.0]), "wheels")
+        self._wheel_edges.append((edge, o))
+
+    def _rescale_wheel_links(self) -> None:
+        p = self.params
+        scale, scale_sigma = self.wheel_scale()
+        for edge, o in self._wheel_edges:
+            d = math.hypot(o[0], o[1])
+            sigma = p.wheel_sigma[0] + (p.wheel_sigma[1] + scale_sigma) * d
+            edge.z = (scale * o[0], scale * o[1], o[2])
+            edge.info = np.diag([1 / sigma**2, 1 / sigma**2, 0.0])
 
     def _wheels_held(self) -> bool:
         """Whether the wheels did not slip since the newest keyframe: the tracking matches
