@@ -303,6 +303,38 @@ def test_the_wheels_scale_is_learned_and_links_the_keyframes():
     wheels = [e for e in slam.graph.edges if e.kind == "wheels"]
     assert len(wheels) > 0.5 * len(slam.keyframes)
     assert all(e.info[2, 2] == 0.0 for e in wheels)  # distance only: the heading is the gyro's and the matches'
+    # every link by the wheels has the scale learnt since, not the one known when it was made
+    for e in wheels:
+        o = relative(slam.keyframes[e.i].odom, slam.keyframes[e.j].odom)
+        assert math.hypot(*e.z[:2]) == pytest.approx(scale * math.hypot(*o[:2]), abs=1e-9)
+
+
+def test_a_local_map_match_that_slid_away_from_the_wheels_is_not_a_keyframes_pose():
+    # One keyframe's match against the local map slides 25 cm along x (as it does along a
+    # wall that pins only the other axis); the matches against the keyframes before it,
+    # and the wheels, which held, put it where it is.
+    occ = read_map_yaml(FIXTURES / "house.yaml")
+    world = SyntheticWorld(occ, world_boxes(FIXTURES / "house_world.yaml"), seed=0, start=0, reverse=False)
+    slam = Slam(SlamParams(initial_pose=world.truth, sensor_offset=world.laser.pose))
+    match_local, slid = slam._match_local, {}
+
+    def sliding(pts, predicted):
+        matched, cov = match_local(pts, predicted)
+        if matched is not None and not slid and world.t > 20.0:
+            slid["keyframe"] = len(slam.keyframes)
+            matched = (matched[0] + 0.25, matched[1], matched[2])
+        return matched, cov
+
+    slam._match_local = sliding
+    truth_at = {}
+    while world.t < 30.0:
+        s = world.step()
+        if s.scan is not None:
+            truth_at[s.t] = s.truth
+            slam.add(s.odom, s.scan.ranges, s.scan.angles, s.scan.range_max, s.t, s.scan.range_min)
+    k = slid["keyframe"]
+    assert {e.kind for e in slam.graph.edges if e.j == k} >= {"pair", "wheels"}
+    assert math.dist(slam.graph.pose(k)[:2], truth_at[slam.keyframes[k].t][:2]) < 0.05
 
 
 def test_icp_on_what_the_reference_saw_shrinks_the_pair_links_less():
