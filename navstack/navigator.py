@@ -21,8 +21,10 @@ A goal is a pose in the map frame (or any frame tf can put into it). The server
    nothing stop the robot; if the obstacle is still there after ``obstacle_wait`` s, the
    path is planned again with the unmapped points marked, up to ``max_recoveries`` times;
 5. **recovers** from a start inside the inflated obstacles (the robot stands close to
-   something, after a pick or a place) by backing up ``backup_distance`` (when the scan
-   shows room behind) and planning again.
+   something, after a pick or a place): it plans out of it (:mod:`navstack.escape`:
+   straight to a free cell within ``escape_distance``, else the way it came, through
+   cells about as clear as the start, up to ``escape_winding``), or else backs up
+   ``backup_distance`` (when the scan shows room behind) and plans again.
 
 It sends feedback (current pose, times, distance remaining, recoveries) five times a
 second, and ends each goal once:
@@ -42,7 +44,7 @@ from __future__ import annotations
 
 import logging
 import math
-from dataclasses import dataclass, field, fields, replace
+from dataclasses import dataclass, field, fields
 from typing import TypedDict
 
 import numpy as np
@@ -60,6 +62,7 @@ from planning.grid import OccupancyGrid, inflate
 from planning.tf_buffer import planar
 
 from .depth_obstacles import DepthObstacleParams, depth_obstacle_points
+from .escape import plan_out_of
 from .odometry import Pose
 from .tf import TfListener, TransformError, to_stamp
 
@@ -128,6 +131,7 @@ class NavigatorParams:
     depth: DepthObstacleParams = field(default_factory=DepthObstacleParams)
     backup_distance: float = 0.15  # start inside the inflation: back up this far
     escape_distance: float = 0.3  # or else leave it through a free cell this near [m]
+    escape_winding: float = 1.5  # or else the way it came, about as clear as the start, this long [m]
     backup_speed: float = 0.08
     # patience
     tf_timeout: float = 5.0  # [s] without map -> base_footprint: abort
@@ -494,7 +498,7 @@ class Navigator(SubSystem):
         planner = self._planner(g.marks)
         path = planner.plan(g.pose[:2], g.goal[:2])
         if path.failure is FailureReason.START_INVALID and "outside" not in path.message:
-            path = plan_out_of(planner, g.pose[:2], g.goal[:2], p.escape_distance) or path
+            path = plan_out_of(planner, g.pose[:2], g.goal[:2], p.escape_distance, p.escape_winding) or path
         self.last_path = path
         now = self.runtime.now()
         if path.ok:
@@ -819,51 +823,4 @@ class Navigator(SubSystem):
         g.handle.publish_feedback(fb)
 
 
-def plan_out_of(planner: GridPlanner, start, goal, escape_distance: float) -> BasePath | None:
-    """A path from a start inside the inflation (the robot stands where the map says it
-    should not: a wall drawn thick, a speckle of a map being built): through the
-    nearest cell the robot may stand on, within ``escape_distance`` [m], if the straight
-    way there never comes nearer to an obstacle than the start. None when there is none."""
-    cm = planner.costmap
-    grid = cm.grid
-    res = grid.resolution
-    reach = int(math.ceil(escape_distance / res))
-    c0 = int(math.floor((start[0] - grid.origin[0]) / res))
-    r0 = int(math.floor((start[1] - grid.origin[1]) / res))
-    h, w = cm.lethal.shape
-    rows = slice(max(r0 - reach, 0), min(r0 + reach + 1, h))
-    cols = slice(max(c0 - reach, 0), min(c0 + reach + 1, w))
-    rr, cc = np.nonzero(~cm.lethal[rows, cols])
-    if not len(rr):
-        return None
-    xs = grid.origin[0] + (cc + cols.start + 0.5) * res
-    ys = grid.origin[1] + (rr + rows.start + 0.5) * res
-    d = np.hypot(xs - start[0], ys - start[1])
-    for i in np.argsort(d)[:20]:
-        if d[i] > escape_distance:
-            break
-        via = (float(xs[i]), float(ys[i]))
-        if not _never_closer(planner, start, via):
-            continue
-        rest = planner.plan(via, goal)
-        if rest.ok:
-            log.info(
-                "start (%.2f, %.2f) is inside the inflation: leaving through (%.2f, %.2f)", start[0], start[1], *via
-            )
-            return replace(
-                rest, waypoints=((float(start[0]), float(start[1])),) + rest.waypoints, length=rest.length + float(d[i])
-            )
-    return None
-
-
-def _never_closer(planner: GridPlanner, a, b) -> bool:
-    """Whether the straight way a -> b (x, y) [m] stays on the map and never comes nearer
-    to an obstacle than the robot is at ``a``."""
-    cells = planner.segment_cells(a, b)
-    if cells is None:
-        return False
-    clear = planner.costmap.clearance[cells]
-    return bool(clear[0] > 0 and clear.min() >= min(clear[0], planner.costmap.robot_radius) - 1e-6)
-
-
-__all__ = ["ACTION", "PERCEIVED", "Navigator", "NavigatorParams", "cloud_points", "lookahead_point", "plan_out_of"]
+__all__ = ["ACTION", "PERCEIVED", "Navigator", "NavigatorParams", "cloud_points", "lookahead_point"]

@@ -137,29 +137,6 @@ def test_an_obstacle_on_the_scan_but_not_on_the_map_is_driven_around(floor):
     world.set_object_pose(name, 2.5, 2.5)  # out of the way of the next tests
 
 
-def test_a_start_inside_the_inflation_leaves_through_the_nearest_free_cell():
-    import numpy as np
-
-    from navstack.navigator import plan_out_of
-    from planning.base_planner import GridPlanner
-    from planning.failure import FailureReason
-    from planning.grid import OccupancyGrid, inflate
-
-    data = np.zeros((40, 60), dtype=np.int8)  # 3 m x 2 m of floor, 5 cm cells
-    data[:, 30] = 100  # a wall across the middle, x = 1.5 m
-    data[28:, 30] = 0  # with a door at its top (y >= 1.4 m)
-    planner = GridPlanner(inflate(OccupancyGrid(data, 0.05, (0.0, 0.0)), 0.20))
-    start, goal = (1.35, 0.5), (2.5, 0.5)  # 0.15 m from the wall: inside the inflation
-    assert planner.plan(start, goal).failure is FailureReason.START_INVALID
-    path = plan_out_of(planner, start, goal, escape_distance=0.3)
-    assert path is not None and path.ok
-    assert path.waypoints[0] == start and path.waypoints[-1] == goal
-    via = path.waypoints[1]
-    assert 0.05 < math.dist(start, via) <= 0.3 and via[0] < start[0]  # away from the wall
-    # nothing free within reach: no way out
-    assert plan_out_of(planner, start, goal, escape_distance=0.04) is None
-
-
 @pytest.fixture(scope="module")
 def floor_with_camera():
     """_open_floor with the robot's depth camera."""
