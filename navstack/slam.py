@@ -484,25 +484,28 @@ class Slam:
     def _add_wheel_link(self, k: int) -> None:
         """Keyframe k from k - 1 by the odometry's distance times the learnt scale, on x
         and y alone (the heading is the matches' and the gyro's), as loose as the scale is
-        uncertain; none where the wheels slipped (:meth:`_wheels_held`)."""
-        p = self.params
+        uncertain (:meth:`_wheel_link`); none where the wheels slipped (:meth:`_wheels_held`)."""
         if not self._wheels_held():
             return
         o = relative(self.keyframes[k - 1].odom, self.keyframes[k].odom)
-        z = self._wheel_step(o)
-        d = math.hypot(o[0], o[1])
-        sigma = p.wheel_sigma[0] + (p.wheel_sigma[1] + self.wheel_scale()[1]) * d
-        edge = self.graph.add_edge(k - 1, k, z, np.diag([1 / sigma**2, 1 / sigma**2, 0.0]), "wheels")
+        edge = self.graph.add_edge(k - 1, k, *self._wheel_link(o), "wheels")
         self._wheel_edges.append((edge, o))
 
     def _rescale_wheel_links(self) -> None:
+        """Every link by the wheels with the scale as it is learnt now: the scale known when
+        a link was made (its first metres, in the first room) would leave the keyframes
+        that nothing else ties back to where the scale put them."""
+        for edge, o in self._wheel_edges:
+            edge.z, edge.info = self._wheel_link(o)
+
+    def _wheel_link(self, o) -> tuple[tuple, np.ndarray]:
+        """A link by the wheels for the odometry step ``o``: its distance times the learnt
+        scale, and x and y's information (sigma ``wheel_sigma`` plus the scale's own per
+        metre; none on the heading)."""
         p = self.params
         scale, scale_sigma = self.wheel_scale()
-        for edge, o in self._wheel_edges:
-            d = math.hypot(o[0], o[1])
-            sigma = p.wheel_sigma[0] + (p.wheel_sigma[1] + scale_sigma) * d
-            edge.z = (scale * o[0], scale * o[1], o[2])
-            edge.info = np.diag([1 / sigma**2, 1 / sigma**2, 0.0])
+        sigma = p.wheel_sigma[0] + (p.wheel_sigma[1] + scale_sigma) * math.hypot(o[0], o[1])
+        return (scale * o[0], scale * o[1], o[2]), np.diag([1 / sigma**2, 1 / sigma**2, 0.0])
 
     def _wheels_held(self) -> bool:
         """Whether the wheels did not slip since the newest keyframe: the tracking matches
