@@ -44,15 +44,14 @@ def _straight_out(planner: GridPlanner, start, goal, escape_distance: float) -> 
     grid = cm.grid
     res = grid.resolution
     reach = int(math.ceil(escape_distance / res))
-    r0, c0 = _cell(grid, start)
+    r0, c0 = grid.cell_of(*start[:2])
     h, w = cm.lethal.shape
     rows = slice(max(r0 - reach, 0), min(r0 + reach + 1, h))
     cols = slice(max(c0 - reach, 0), min(c0 + reach + 1, w))
     rr, cc = np.nonzero(~cm.lethal[rows, cols])
     if not len(rr):
         return None
-    xs = grid.origin[0] + (cc + cols.start + 0.5) * res
-    ys = grid.origin[1] + (rr + rows.start + 0.5) * res
+    xs, ys = grid.center_of(rr + rows.start, cc + cols.start)
     d = np.hypot(xs - start[0], ys - start[1])
     for i in np.argsort(d)[:20]:
         if d[i] > escape_distance:
@@ -94,8 +93,8 @@ def way_out(planner: GridPlanner, start, winding: float, tries: int = 5) -> list
     grid = cm.grid
     res = grid.resolution
     h, w = cm.lethal.shape
-    r0, c0 = _cell(grid, start)
-    if not (0 <= r0 < h and 0 <= c0 < w) or cm.obstacle[r0, c0]:
+    r0, c0 = grid.cell_of(*start[:2])
+    if not grid.contains(r0, c0) or cm.obstacle[r0, c0]:
         return []
     floor = min(cm.clearance[r0, c0], cm.robot_radius) - SQUEEZE_CELLS * res
     limit = winding / res
@@ -114,7 +113,7 @@ def way_out(planner: GridPlanner, start, winding: float, tries: int = 5) -> list
         for dr in (-1, 0, 1):
             for dc in (-1, 0, 1):
                 rn, cn = r + dr, c + dc
-                if (dr or dc) and 0 <= rn < h and 0 <= cn < w and cm.clearance[rn, cn] >= floor:
+                if (dr or dc) and grid.contains(rn, cn) and cm.clearance[rn, cn] >= floor:
                     dn = d + math.hypot(dr, dc)
                     if dn <= limit and dn < dist.get((rn, cn), math.inf):
                         dist[(rn, cn)], parent[(rn, cn)] = dn, (r, c)
@@ -124,7 +123,7 @@ def way_out(planner: GridPlanner, start, winding: float, tries: int = 5) -> list
         cells = [cell]
         while cells[-1] != (r0, c0):
             cells.append(parent[cells[-1]])
-        centres = [_centre(grid, rc) for rc in reversed(cells[:-1])]
+        centres = [grid.center_of(r, c) for r, c in reversed(cells[:-1])]
         ways.append([(float(start[0]), float(start[1]))] + centres)
     return ways
 
@@ -141,16 +140,6 @@ def _never_closer(planner: GridPlanner, a, b) -> bool:
 
 def _prepend(rest: BasePath, waypoints: list, length: float) -> BasePath:
     return replace(rest, waypoints=tuple(waypoints) + rest.waypoints, length=rest.length + length)
-
-
-def _cell(grid, xy) -> tuple[int, int]:
-    res = grid.resolution
-    return int(math.floor((xy[1] - grid.origin[1]) / res)), int(math.floor((xy[0] - grid.origin[0]) / res))
-
-
-def _centre(grid, rc) -> tuple[float, float]:
-    res = grid.resolution
-    return float(grid.origin[0] + (rc[1] + 0.5) * res), float(grid.origin[1] + (rc[0] + 0.5) * res)
 
 
 __all__ = ["plan_out_of", "way_out"]

@@ -252,6 +252,7 @@ class Slam:
         self._turns = [0.0, 0.0]  # the gyro's scale from the matches: sum g^2, sum (m - g) g
         self._wheel = [0.0, 0.0]  # the wheels' from the matches: sum d^2, sum m d
         self._wheel_edges: list = []  # [(edge, its odometry step)]: rescaled as the scale is learnt
+        self._wheel_links_scale: tuple | None = None  # the wheel_scale() they were last rescaled to
         self._gyro = False  # the latest odometry's heading is the gyro's
 
     # -- input ---------------------------------------------------------------------------------
@@ -494,7 +495,12 @@ class Slam:
     def _rescale_wheel_links(self) -> None:
         """Every link by the wheels with the scale as it is learnt now: the scale known when
         a link was made (its first metres, in the first room) would leave the keyframes
-        that nothing else ties back to where the scale put them."""
+        that nothing else ties back to where the scale put them. Nothing to do while the
+        scale has not changed since the last time (the newer links were made with it)."""
+        scale = self.wheel_scale()
+        if scale == self._wheel_links_scale:
+            return
+        self._wheel_links_scale = scale
         for edge, o in self._wheel_edges:
             edge.z, edge.info = self._wheel_link(o)
 
@@ -503,9 +509,8 @@ class Slam:
         scale, and x and y's information (sigma ``wheel_sigma`` plus the scale's own per
         metre; none on the heading)."""
         p = self.params
-        scale, scale_sigma = self.wheel_scale()
-        sigma = p.wheel_sigma[0] + (p.wheel_sigma[1] + scale_sigma) * math.hypot(o[0], o[1])
-        return (scale * o[0], scale * o[1], o[2]), np.diag([1 / sigma**2, 1 / sigma**2, 0.0])
+        sigma = p.wheel_sigma[0] + (p.wheel_sigma[1] + self.wheel_scale()[1]) * math.hypot(o[0], o[1])
+        return self._wheel_step(o), np.diag([1 / sigma**2, 1 / sigma**2, 0.0])
 
     def _wheels_held(self) -> bool:
         """Whether the wheels did not slip since the newest keyframe: the tracking matches
