@@ -3,9 +3,10 @@
 A frontier cell is a free cell next to unknown space. Neighbouring frontier cells form a
 frontier; one too short for the robot to see through is ignored. For each frontier the
 goal is the reachable cell nearest to its middle (the robot centre may stand there,
-reached through free space from the robot); the chosen frontier is the one with the
-shortest path there, discounted for its size, so that the robot finishes a room before
-it drives off to a small gap far away (Yamauchi's nearest-frontier rule, weighted).
+reached through free space from the robot) that leaves the robot room to turn round;
+the chosen frontier is the one with the shortest path there, discounted for its size,
+so that the robot finishes a room before it drives off to a small gap far away
+(Yamauchi's nearest-frontier rule, weighted).
 """
 
 from __future__ import annotations
@@ -84,6 +85,7 @@ def frontiers(
     min_size: float = 0.3,
     goal_radius: float = 1.0,
     min_unknown: float = 0.5,
+    goal_margin: float = 0.1,
 ) -> list[Frontier]:
     """Every frontier of ``costmap``'s grid at least ``min_size`` [m] long, nearest first.
 
@@ -98,8 +100,8 @@ def frontiers(
     """
     from scipy import ndimage
 
-    if not (min_size >= 0 and goal_radius > 0 and min_unknown >= 0):
-        raise InvalidInputError("min_size and min_unknown must be >= 0 and goal_radius > 0 m")
+    if not (min_size >= 0 and goal_radius > 0 and min_unknown >= 0 and goal_margin >= 0):
+        raise InvalidInputError("min_size, min_unknown and goal_margin must be >= 0 and goal_radius > 0 m")
     g = costmap.grid
     data = g.data
     free = (data >= 0) & (data < 50)
@@ -120,6 +122,7 @@ def frontiers(
     dist = path_distances(costmap, start)
     reach_rows, reach_cols = np.nonzero(np.isfinite(dist))
     reach_x, reach_y = g.center_of(reach_rows, reach_cols)  # arrays, elementwise
+    roomy = costmap.clearance[reach_rows, reach_cols] >= costmap.robot_radius + goal_margin
     sizes = ndimage.sum_labels(cells, labels, index=np.arange(1, n + 1))
     out = []
     for k in range(n):
@@ -135,7 +138,7 @@ def frontiers(
         if reach_rows.size:
             near = np.hypot(reach_x - mx, reach_y - my) <= goal_radius
             if near.any():
-                cand = np.nonzero(near)[0]
+                cand = np.nonzero(near & roomy if (near & roomy).any() else near)[0]
                 # the reachable cell nearest the frontier's middle: from there the robot
                 # sees furthest into the unknown
                 j = cand[np.argmin(np.hypot(reach_x[cand] - mx, reach_y[cand] - my))]

@@ -69,3 +69,24 @@ def test_a_small_unknown_pocket_is_not_worth_a_trip_a_closed_room_is():
     data[28, 55:63] = 0  # its door, open
     f = next_frontier(inflate(OccupancyGrid(data, RES, (0.0, 0.0)), 0.2), (3.0, 0.5))
     assert f is not None and f.middle[1] == pytest.approx(1.42, abs=0.1) and 2.7 < f.middle[0] < 3.2
+
+
+def test_a_goal_leaves_the_robot_room_to_turn_where_the_frontier_allows():
+    # a 3 m x 2.5 m room, seen; in its top wall a slot narrower than the robot (0.35 m,
+    # between a wardrobe and a wall stub) onto a space never seen
+    data = np.full((80, 60), -1, np.int8)
+    data[:50, :] = 0
+    data[0, :] = data[:50, 0] = data[:50, -1] = 100
+    data[49:51, :] = 100
+    data[49:60, 28:35] = 0  # the slot, seen into
+    data[49:60, 27] = data[49:60, 35] = 100  # its sides
+    cm = inflate(OccupancyGrid(data, RES, (0.0, 0.0)), 0.2)
+    f = next_frontier(cm, (1.5, 1.0))
+    assert f is not None and f.goal is not None and f.middle[1] > 2.5
+    goal_cell = cm.grid.cell_of(*f.goal[:2])
+    assert cm.clearance[goal_cell] >= 0.2 + 0.1 - 1e-9
+    # without the margin the goal is the nearest cell the robot may stand on, on the
+    # inflation's edge
+    tight = next_frontier(cm, (1.5, 1.0), goal_margin=0.0)
+    assert tight is not None and tight.goal is not None
+    assert cm.clearance[cm.grid.cell_of(*tight.goal[:2])] < 0.25
