@@ -81,9 +81,6 @@ from .scan_matcher import (
 from .wall_heading import nearest_turn, wall_direction
 
 IDENTITY = (0.0, 0.0, 0.0)
-#: [m] the wheel scale is learnt on returns this much nearer than the match range: a
-#: reference return just inside it may have been measured just outside
-SCALE_CUT_MARGIN = 0.1
 
 
 @dataclass
@@ -285,9 +282,7 @@ class Slam:
         last = self.keyframes[-1]
         step = self._wheel_step(relative(self._track_odom, odom))
         self._wheel_offset = compose(self._wheel_offset, step)
-        # the odometry's guess; once the wheels slipped, their turn alone (the gyro's): a
-        # robot caught on something the laser does not see stays put while they spin on
-        offset = compose(self._track_offset, (0.0, 0.0, step[2]) if self._slipped else step)
+        offset = compose(self._track_offset, step)  # the odometry's guess
         if p.track_scans:
             offset = self._track(offset, scan)
             if p.wheel_links and not self._slipped:
@@ -480,10 +475,7 @@ class Slam:
         prev = self.keyframes[k - 1]
         if prev.scan_icp is None:
             prev.scan_icp = IcpReference(prev.points, neighbours=10)
-        # k's returns beyond k - 1's match range have nothing to match in its points and
-        # pull the match short of the odometry: a scale learnt short by 0.3-1.5 %
-        cut = self.params.match_max_range - SCALE_CUT_MARGIN
-        z = self._align_visible(prev.scan_icp, prev.scans[0][1], self.keyframes[k].points, z, cut)
+        z = self._align_visible(prev.scan_icp, prev.scans[0][1], self.keyframes[k].points, z)
         m = math.hypot(z[0], z[1])
         if abs(m - d) > 0.02 + 0.1 * d:
             return
@@ -696,13 +688,12 @@ class Slam:
             kf.pair_icp = IcpReference(self._pair_reference(i)[0], neighbours=10)
         return self._align_visible(kf.pair_icp, kf.scans[0][1], pts, z0)
 
-    def _align_visible(self, reference: IcpReference, scan: _Scan, pts: np.ndarray, z0, cut: float = math.inf) -> tuple:
+    def _align_visible(self, reference: IcpReference, scan: _Scan, pts: np.ndarray, z0) -> tuple:
         """``pts`` aligned on ``reference`` by ICP from ``z0``, on those that ``scan`` (the
-        reference's laser) could have seen, nearer than ``cut`` [m] to it; ``z0`` when
-        fewer than 20."""
+        reference's laser) could have seen; ``z0`` when fewer than 20."""
         z = z0
         for _ in range(2):
-            keep = _seen_from(scan, transform(z, pts), self.params.sensor_offset, self.params.range_noise, cut=cut)
+            keep = _seen_from(scan, transform(z, pts), self.params.sensor_offset, self.params.range_noise)
             if keep.sum() < 20:
                 return z0
             z = reference.align(pts[keep], z, iterations=30)[0]
@@ -892,12 +883,10 @@ def match_points(scan: _Scan, max_range: float, sensor_offset) -> np.ndarray:
     return scan_points(np.where(keep, r, np.inf), scan.angles, scan.range_max, scan.range_min, sensor_offset)
 
 
-def _seen_from(
-    scan: _Scan, q: np.ndarray, sensor_offset, range_noise, k_sigma: float = 3.0, cut: float = math.inf
-) -> np.ndarray:
+def _seen_from(scan: _Scan, q: np.ndarray, sensor_offset, range_noise, k_sigma: float = 3.0) -> np.ndarray:
     """Which points q (the scan's base frame) the scan's laser could have seen: its beam at
     their bearing, or a neighbour, reaches at least to their range less k sigma of both
-    ranges' noise, and they are nearer than ``cut`` [m] to it."""
+    ranges' noise."""
     d = q - np.asarray(sensor_offset[:2])
     rho, bear = np.hypot(d[:, 0], d[:, 1]), np.arctan2(d[:, 1], d[:, 0]) - sensor_offset[2]
     inc = scan.angles[1] - scan.angles[0]
@@ -905,7 +894,7 @@ def _seen_from(
     r = np.where(np.isfinite(scan.ranges), scan.ranges, np.inf).astype(float)
     reach = np.maximum(np.maximum(r, np.roll(r, 1)), np.roll(r, -1))[idx]
     sigma = math.sqrt(2) * np.maximum(range_noise[0], range_noise[1] * rho)
-    return (rho <= reach + k_sigma * sigma) & (rho <= cut)
+    return rho <= reach + k_sigma * sigma
 
 
 def _information(cov: np.ndarray) -> np.ndarray:
