@@ -282,7 +282,9 @@ class Slam:
         last = self.keyframes[-1]
         step = self._wheel_step(relative(self._track_odom, odom))
         self._wheel_offset = compose(self._wheel_offset, step)
-        offset = compose(self._track_offset, step)  # the odometry's guess
+        # the odometry's guess; once the wheels slipped, their turn alone (the gyro's): a
+        # robot caught on something the laser does not see stays put while they spin on
+        offset = compose(self._track_offset, (0.0, 0.0, step[2]) if self._slipped else step)
         if p.track_scans:
             offset = self._track(offset, scan)
             if p.wheel_links and not self._slipped:

@@ -225,7 +225,9 @@ def _wedged_run(track_scans: bool) -> list[float]:
 
 def test_the_published_pose_follows_the_laser_when_the_wheels_slip():
     tracked = np.array(_wedged_run(track_scans=True))
-    assert np.sqrt(np.mean(tracked**2)) < 0.03 and tracked.max() < 0.1
+    # (the tracking's guess, once the wheels slipped, leaves out their distance: with it
+    # the worst was 5.3 cm)
+    assert np.sqrt(np.mean(tracked**2)) < 0.03 and tracked.max() < 0.045
     assert max(_wedged_run(track_scans=False)) > 0.2  # the odometry between keyframes
 
 
