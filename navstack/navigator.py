@@ -24,7 +24,8 @@ A goal is a pose in the map frame (or any frame tf can put into it). The server
    something, after a pick or a place): it plans out of it (:mod:`navstack.escape`:
    straight to a free cell within ``escape_distance``, else the way it came, through
    cells about as clear as the start, up to ``escape_winding``), or else backs up
-   ``backup_distance`` (when the scan shows room behind) and plans again.
+   ``backup_distance`` (when the scan shows room behind) and plans again; it backs up
+   so too, once a goal, when it has made no progress for ``progress_time``.
 
 It sends feedback (current pose, times, distance remaining, recoveries) five times a
 second, and ends each goal once:
@@ -514,14 +515,7 @@ class Navigator(SubSystem):
             return
         why = path.message
         if path.failure is FailureReason.START_INVALID and "outside" not in why:
-            if g.backups < 1 and g.recoveries < p.max_recoveries and self._room_behind():
-                g.backups += 1
-                g.recoveries += 1
-                self.stats["recoveries"] += 1
-                log.info("start (%.2f, %.2f) is too close to something: backing up", *g.pose[:2])
-                g.phase = "backup"
-                g.backup_from = None
-                g.deadline = now + 5.0 + 2 * p.backup_distance / p.backup_speed
+            if self._back_up(g, now, "stands too close to something"):
                 return
             self._abort(g, START_OCCUPIED, f"cannot leave the start: {why}")
         elif path.failure is FailureReason.START_INVALID:
@@ -540,6 +534,22 @@ class Navigator(SubSystem):
             self._abort(g, NO_VALID_PATH, why)
         else:
             self._abort(g, PLAN_UNKNOWN, why)
+
+    def _back_up(self, g: _Goal, now: float, why: str) -> bool:
+        """Back up backup_distance and plan again, once a goal, if the scan shows room
+        behind. Whether it does."""
+        p = self.params
+        if g.backups >= 1 or g.recoveries >= p.max_recoveries or not self._room_behind():
+            return False
+        assert g.pose is not None  # _tick has set it
+        g.backups += 1
+        g.recoveries += 1
+        self.stats["recoveries"] += 1
+        log.info("at (%.2f, %.2f) the robot %s: backing up", g.pose[0], g.pose[1], why)
+        g.phase = "backup"
+        g.backup_from = None
+        g.deadline = now + 5.0 + 2 * p.backup_distance / p.backup_speed
+        return True
 
     def _room_behind(self) -> bool:
         """No beam ends in the strip the base sweeps backing up backup_distance."""
@@ -692,6 +702,10 @@ class Navigator(SubSystem):
         if math.hypot(x - ref[0], y - ref[1]) >= p.progress_radius:
             g.progress = (g.pose, now)
         elif now - t_ref > p.progress_time and g.blocked_since is None:
+            # caught on something under the scan (a pallet's corner) while it turned, the
+            # base stays put however the wheels spin; backing off frees it
+            if self._back_up(g, now, f"made no progress for {p.progress_time:g} s"):
+                return
             self._abort(
                 g,
                 FAILED_TO_MAKE_PROGRESS,
