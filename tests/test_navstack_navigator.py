@@ -157,3 +157,34 @@ def test_an_obstacle_below_the_scan_is_seen_by_the_depth_camera_and_driven_aroun
     after = world.object_pose(name)
     assert math.hypot(after[0] - before[0], after[1] - before[1]) < 0.005, "the box was not touched"
     assert rt.bus.subscription_count("/camera/depth/image_raw") == 0  # only while driving
+
+
+def test_a_goal_that_makes_no_progress_backs_up_once_before_it_aborts():
+    import pybullet as pb
+    from geometry_msgs.msg import TwistStamped
+
+    from navstack.navigator import BASE_COMMAND
+
+    rt = Runtime(clock="virtual")
+    world = sim_mod.SimWorld(rt, "open_floor", seed=0, camera=False).start()
+    # (the localiser follows the spinning wheels part of the way: a wide progress radius)
+    rt.add_subsystem("navstack", NavStack, navigator={"progress_radius": 0.5, "progress_time": 4.0})
+    rt.root.register_action("nav", NavigateToPose, "/navigate_to_pose")
+    rt.bus.publisher("/initialpose", PoseWithCovarianceStamped).publish(initial_pose_msg(world.spec.robot_start))
+    rt.call("sleep", 0.5)
+    try:
+        # the wheels spin on ice: the base stays where it is, whatever it is told
+        for j in world.robot.wheel_idx:
+            pb.changeDynamics(world.robot.body, j, lateralFriction=0.0, physicsClientId=world.scene.cid)
+        commands = []
+        sub = rt.bus.subscribe(BASE_COMMAND, TwistStamped, commands.append)
+        x, y, _ = world.robot_pose()
+        with pytest.raises(ActorError) as e:
+            rt.call("nav", goal_msg(x + 1.5, y, 0.0), timeout=120)
+        sub.close()
+        assert "no progress for 4 s" in str(e.value)
+        assert rt.call("navigator_status")["recoveries"] == 1  # the back-up, once
+        assert min(c.twist.linear.x for c in commands) < -0.05
+    finally:
+        world.close()
+        rt.close()
