@@ -491,7 +491,7 @@ class Slam:
         if not self._wheels_held():
             return
         o = relative(self.keyframes[k - 1].odom, self.keyframes[k].odom)
-        edge = self.graph.add_edge(k - 1, k, *self._wheel_link(o), "wheels")
+        edge = self.graph.add_edge(k - 1, k, *self._wheel_link(o, self.wheel_scale()), "wheels")
         self._wheel_edges.append((edge, o))
 
     def _rescale_wheel_links(self) -> None:
@@ -504,15 +504,16 @@ class Slam:
             return
         self._wheel_links_scale = scale
         for edge, o in self._wheel_edges:
-            edge.z, edge.info = self._wheel_link(o)
+            edge.z, edge.info = self._wheel_link(o, scale)
 
-    def _wheel_link(self, o) -> tuple[tuple, np.ndarray]:
+    def _wheel_link(self, o, scale: tuple[float, float]) -> tuple[tuple, np.ndarray]:
         """A link by the wheels for the odometry step ``o``: its distance times the learnt
-        scale, and x and y's information (sigma ``wheel_sigma`` plus the scale's own per
-        metre; none on the heading)."""
+        ``scale`` (factor, sigma: :meth:`wheel_scale`), and x and y's information (sigma
+        ``wheel_sigma`` plus the scale's own per metre; none on the heading)."""
         p = self.params
-        sigma = p.wheel_sigma[0] + (p.wheel_sigma[1] + self.wheel_scale()[1]) * math.hypot(o[0], o[1])
-        return self._wheel_step(o), np.diag([1 / sigma**2, 1 / sigma**2, 0.0])
+        factor, scale_sigma = scale
+        sigma = p.wheel_sigma[0] + (p.wheel_sigma[1] + scale_sigma) * math.hypot(o[0], o[1])
+        return (factor * o[0], factor * o[1], o[2]), np.diag([1 / sigma**2, 1 / sigma**2, 0.0])
 
     def _wheels_held(self) -> bool:
         """Whether the wheels did not slip since the newest keyframe: the tracking matches

@@ -138,7 +138,8 @@ def frontiers(
         if reach_rows.size:
             near = np.hypot(reach_x - mx, reach_y - my) <= goal_radius
             if near.any():
-                cand = np.nonzero(near & roomy if (near & roomy).any() else near)[0]
+                near_roomy = near & roomy
+                cand = np.nonzero(near_roomy if near_roomy.any() else near)[0]
                 # the reachable cell nearest the frontier's middle: from there the robot
                 # sees furthest into the unknown
                 j = cand[np.argmin(np.hypot(reach_x[cand] - mx, reach_y[cand] - my))]
