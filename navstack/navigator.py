@@ -13,7 +13,11 @@ A goal is a pose in the map frame (or any frame tf can put into it). The server
 3. **follows** the path on the base's velocity command (:data:`BASE_COMMAND`) with pure pursuit, a control step on the
    odom -> base_footprint transforms on /tf at most ``controller_frequency`` (20 Hz: 15 Hz
    on the simulator's 30 Hz odometry), then turns in place to the goal's yaw; it succeeds
-   within ``xy_goal_tolerance`` and ``yaw_goal_tolerance``;
+   within ``xy_goal_tolerance`` and ``yaw_goal_tolerance``. No command is sent that would
+   sweep the base's box (``footprint``, :mod:`navstack.footprint`) into a point of the scan
+   or of the depth camera (the newest image's, and for ``depth_memory`` s those of earlier
+   images that are out of its view): a turn in place goes the other way round if that is
+   clear, else the base drives straight ahead or back a little until the turn is clear;
 4. **watches** ``/scan``, and while it drives the depth camera (``depth_topic``, with
    its ``camera_info_topic``) for what stands out of the floor below the scan's plane
    (:mod:`navstack.depth_obstacles`): points in the corridor of the path ahead (closer
@@ -64,6 +68,7 @@ from planning.tf_buffer import planar
 
 from .depth_obstacles import DepthObstacleParams, depth_obstacle_points
 from .escape import plan_out_of
+from .footprint import sweep_hits, turn_hits
 from .odometry import Pose
 from .tf import TfListener, TransformError, to_stamp
 
@@ -130,6 +135,15 @@ class NavigatorParams:
     camera_info_topic: str = "/camera/camera_info"
     depth_period: float = 0.5  # [s] between the depth images taken (0: every one)
     depth: DepthObstacleParams = field(default_factory=DepthObstacleParams)
+    depth_memory: float = 60.0  # [s] depth obstacle points are remembered this long once out of
+    #                             the camera's view: the base's rear swings into them as it turns
+    footprint: tuple = (-0.21, 0.08, 0.155)  # the base's box, as self_box: its rear corners
+    #                         are 0.26 m from the axle's middle, beyond robot_radius
+    sweep_pad: float = 0.02  # a command that brings an obstacle this near the footprint
+    #                         within sweep_horizon s is not sent as it is
+    sweep_horizon: float = 0.4
+    creep_speed: float = 0.06  # [m/s] ... the base drives straight instead, while a turn would
+    creep_limit: float = 0.15  # sweep into something, at most this far a goal [m]
     backup_distance: float = 0.15  # start inside the inflation: back up this far
     escape_distance: float = 0.3  # or else leave it through a free cell this near [m]
     escape_winding: float = 1.5  # or else the way it came, about as clear as the start, this long [m]
@@ -264,6 +278,10 @@ class _Goal:
         self.checked: tuple[int, int] | None = None  # (scan, path) the obstacle check last ran on
         self.obstacle = np.zeros((0, 2))  # ... and what it found
         self.backup_from: Pose | None = None
+        self.crept = 0.0  # [m] driven straight because a turn would have swept into something
+        self.swept = False  # whether that, or a turn the other way, has happened (logged once)
+        self.turn_way = 0.0  # the way round a turn in place goes: +1 counter-clockwise, -1, 0: none yet
+        self.commanded_at = -math.inf  # when the last velocity command was sent
         self.feedback_at = -math.inf
         self.ticked = -math.inf  # when the last control step ran
 
@@ -304,6 +322,7 @@ class Navigator(SubSystem):
         self._scan_pts: np.ndarray | None = None  # the newest scan's beams, map frame
         self._scan_seq = 0  # scans (and depth images) received
         self._depth_pts = np.zeros((0, 2))  # the newest depth image's obstacles, map frame
+        self._depth_memory = np.zeros((0, 3))  # x, y (map frame), time: those seen before
         self._depth_subs: list = []  # the depth camera's, while a goal runs
         self._camera_info: CameraInfo | None = None
         self.last_path: BasePath | None = None
@@ -447,10 +466,36 @@ class Navigator(SubSystem):
         k = info.k
         pb = depth_obstacle_points(depth, k[0], k[4], k[2], k[5], T_bc, self.params.depth)
         self._depth_pts = pb @ T_mb[:2, :2].T + T_mb[:2, 3]
+        self._remember_depth(T_mb @ T_bc, info)
         self._scan_seq += 1
         if self.params.depth_period > 0:
             self._watch_depth(False)
             self.runtime.call_later(self.params.depth_period, self._next_depth, self._goal)
+
+    def _remember_depth(self, T_map_cam: np.ndarray, info: CameraInfo) -> None:
+        """Keep the newest depth image's obstacle points, and forget the remembered ones
+        that are in its view (it shows what is there now) or older than depth_memory."""
+        p = self.params
+        now = self.runtime.now()
+        mem = self._depth_memory
+        mem = mem[now - mem[:, 2] <= p.depth_memory]
+        if len(mem):
+            # each remembered point just above the floor, in the camera's optical frame
+            T = np.linalg.inv(T_map_cam)
+            q = np.column_stack([mem[:, 0], mem[:, 1], np.full(len(mem), 0.03)]) @ T[:3, :3].T + T[:3, 3]
+            z = q[:, 2]
+            with np.errstate(divide="ignore", invalid="ignore"):
+                u = info.k[0] * q[:, 0] / z + info.k[2]
+                v = info.k[4] * q[:, 1] / z + info.k[5]
+            seen = (z > p.depth.min_range) & (z < p.depth.max_range)
+            seen &= (u >= 0) & (u < info.width) & (v >= 0) & (v < info.height)
+            mem = mem[~seen]
+        fresh = np.column_stack([self._depth_pts, np.full(len(self._depth_pts), now)])
+        mem = np.vstack([fresh, mem])
+        # one point per 2.5 cm cell (the newest), and none beyond a turn's reach of interest
+        mem = mem[np.hypot(mem[:, 0] - T_map_cam[0, 3], mem[:, 1] - T_map_cam[1, 3]) < 3.0]
+        _, first = np.unique(np.floor(mem[:, :2] / 0.025).astype(np.int64), axis=0, return_index=True)
+        self._depth_memory = mem[np.sort(first)]
 
     def _on_tf(self, msg) -> None:
         g = self._goal
@@ -721,7 +766,63 @@ class Navigator(SubSystem):
         else:
             v = min(p.max_speed, 0.8 * dist_goal + 0.03) * math.cos(heading)
         w = max(-p.max_turn, min(p.max_turn, 2.5 * heading))
+        self._drive(g, now, v, w, turn=heading if v == 0.0 else None)
+
+    def _drive(self, g: _Goal, now: float, v: float, w: float, turn: float | None = None, creep: bool = True) -> None:
+        """Command (v, w), unless it would sweep the footprint into something the scan or
+        the depth camera saw. A turn in place (``turn``: the angle still to turn [rad]) is
+        checked whole, and goes the other way round if only that is clear (and keeps to
+        it); an arc is checked over sweep_horizon. Blocked, the base drives straight ahead
+        or back (up to creep_limit a goal, if ``creep``) until the turn is clear; with no
+        clear way, (v, w) as it is."""
+        p = self.params
+        dt = min(max(now - g.commanded_at, 0.0), 0.5)
+        g.commanded_at = now
+        if w == 0.0:
+            self._cmd.publish(_twist(v, w))
+            return
+        assert g.pose is not None  # _tick has set it
+        pose, pts = g.pose, self._sweep_points(g.pose)
+        if turn is None:
+            g.turn_way = 0.0
+            if not sweep_hits(pts, pose, v, w, p.sweep_horizon, p.footprint, pad=p.sweep_pad):
+                self._cmd.publish(_twist(v, w))
+                return
+        else:
+            ways = [turn, turn - math.copysign(2 * math.pi, turn)]
+            if g.turn_way and math.copysign(1.0, ways[1]) == g.turn_way:
+                ways.reverse()  # keep to the way round taken
+            for angle in ways:
+                if not turn_hits(pts, pose, angle, p.footprint, pad=p.sweep_pad):
+                    g.turn_way = math.copysign(1.0, angle)
+                    if angle != turn:
+                        self._swept(g, "turning the other way round")
+                        w = math.copysign(p.max_turn, angle)
+                    self._cmd.publish(_twist(0.0, w))
+                    return
+        if creep and g.crept < p.creep_limit:
+            for cv in (p.creep_speed, -p.creep_speed):
+                if not sweep_hits(pts, pose, cv, 0.0, p.sweep_horizon, p.footprint, pad=p.sweep_pad):
+                    self._swept(g, "driving straight first")
+                    g.crept += abs(cv) * dt
+                    self._cmd.publish(_twist(cv, 0.0))
+                    return
         self._cmd.publish(_twist(v, w))
+
+    def _swept(self, g: _Goal, how: str) -> None:
+        if not g.swept:
+            g.swept = True
+            assert g.pose is not None  # _tick has set it
+            log.info("at (%.2f, %.2f) a turn would sweep the base into something: %s", *g.pose[:2], how)
+
+    def _sweep_points(self, pose) -> np.ndarray:
+        """What the turning base could hit: the newest scan's points, the newest depth
+        image's and the remembered ones, within half a metre (map frame)."""
+        parts = [self._depth_pts, self._depth_memory[:, :2]]
+        if self._scan_pts is not None:
+            parts.append(self._scan_pts)
+        pts = np.vstack(parts)
+        return pts[np.hypot(pts[:, 0] - pose[0], pts[:, 1] - pose[1]) < 0.5]
 
     def _blocked(self, g: _Goal, now: float) -> bool:
         """Is something the map does not show on the path ahead? Stops the base, and
@@ -814,7 +915,7 @@ class Navigator(SubSystem):
             self._abort(g, CONTROLLER_TIMED_OUT, f"turn timed out {math.degrees(err):.1f} deg short")
             return
         w = math.copysign(min(p.max_turn, max(0.05, 2.0 * abs(err))), err)
-        self._cmd.publish(_twist(0.0, w))
+        self._drive(g, now, 0.0, w, turn=err, creep=False)  # creeping would leave the goal
 
     def _feedback(self, g: _Goal, now: float) -> None:
         fb = NavigateToPose.Feedback()
