@@ -322,7 +322,7 @@ class Navigator(SubSystem):
         self._scan_pts: np.ndarray | None = None  # the newest scan's beams, map frame
         self._scan_seq = 0  # scans (and depth images) received
         self._depth_pts = np.zeros((0, 2))  # the newest depth image's obstacles, map frame
-        self._depth_memory = np.zeros((0, 3))  # x, y (map frame), time: those seen before
+        self._depth_memory = np.zeros((0, 3))  # x, y (odom frame), time: those seen before
         self._depth_subs: list = []  # the depth camera's, while a goal runs
         self._camera_info: CameraInfo | None = None
         self.last_path: BasePath | None = None
@@ -466,22 +466,28 @@ class Navigator(SubSystem):
         k = info.k
         pb = depth_obstacle_points(depth, k[0], k[4], k[2], k[5], T_bc, self.params.depth)
         self._depth_pts = pb @ T_mb[:2, :2].T + T_mb[:2, 3]
-        self._remember_depth(T_mb @ T_bc, info)
+        try:  # remembered in the odometry's frame, which does not jump when the localiser corrects
+            T_ob = self.tf.buffer.lookup(ODOM_FRAME, BASE_FRAME, msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9)
+        except TransformError:
+            T_ob = None
+        if T_ob is not None:
+            self._remember_depth(pb @ T_ob[:2, :2].T + T_ob[:2, 3], T_ob @ T_bc, info)
         self._scan_seq += 1
         if self.params.depth_period > 0:
             self._watch_depth(False)
             self.runtime.call_later(self.params.depth_period, self._next_depth, self._goal)
 
-    def _remember_depth(self, T_map_cam: np.ndarray, info: CameraInfo) -> None:
-        """Keep the newest depth image's obstacle points, and forget the remembered ones
-        that are in its view (it shows what is there now) or older than depth_memory."""
+    def _remember_depth(self, pts: np.ndarray, T_odom_cam: np.ndarray, info: CameraInfo) -> None:
+        """Keep the newest depth image's obstacle points ``pts`` (odom frame), and forget
+        the remembered ones that are in its view (it shows what is there now) or older than
+        depth_memory."""
         p = self.params
         now = self.runtime.now()
         mem = self._depth_memory
         mem = mem[now - mem[:, 2] <= p.depth_memory]
         if len(mem):
             # each remembered point just above the floor, in the camera's optical frame
-            T = np.linalg.inv(T_map_cam)
+            T = np.linalg.inv(T_odom_cam)
             q = np.column_stack([mem[:, 0], mem[:, 1], np.full(len(mem), 0.03)]) @ T[:3, :3].T + T[:3, 3]
             z = q[:, 2]
             with np.errstate(divide="ignore", invalid="ignore"):
@@ -490,10 +496,9 @@ class Navigator(SubSystem):
             seen = (z > p.depth.min_range) & (z < p.depth.max_range)
             seen &= (u >= 0) & (u < info.width) & (v >= 0) & (v < info.height)
             mem = mem[~seen]
-        fresh = np.column_stack([self._depth_pts, np.full(len(self._depth_pts), now)])
-        mem = np.vstack([fresh, mem])
+        mem = np.vstack([np.column_stack([pts, np.full(len(pts), now)]), mem])
         # one point per 2.5 cm cell (the newest), and none beyond a turn's reach of interest
-        mem = mem[np.hypot(mem[:, 0] - T_map_cam[0, 3], mem[:, 1] - T_map_cam[1, 3]) < 3.0]
+        mem = mem[np.hypot(mem[:, 0] - T_odom_cam[0, 3], mem[:, 1] - T_odom_cam[1, 3]) < 3.0]
         _, first = np.unique(np.floor(mem[:, :2] / 0.025).astype(np.int64), axis=0, return_index=True)
         self._depth_memory = mem[np.sort(first)]
 
@@ -818,7 +823,7 @@ class Navigator(SubSystem):
     def _sweep_points(self, pose) -> np.ndarray:
         """What the turning base could hit: the newest scan's points, the newest depth
         image's and the remembered ones, within half a metre (map frame)."""
-        parts = [self._depth_pts, self._depth_memory[:, :2]]
+        parts = [self._depth_pts, self._remembered()]
         if self._scan_pts is not None:
             parts.append(self._scan_pts)
         pts = np.vstack(parts)
@@ -864,12 +869,23 @@ class Navigator(SubSystem):
         self._plan(g)
         return True
 
+    def _remembered(self) -> np.ndarray:
+        """The remembered depth obstacle points, map frame (none without map -> odom)."""
+        mem = self._depth_memory
+        if not len(mem):
+            return mem[:, :2]
+        try:
+            T = self.tf.buffer.lookup(GLOBAL_FRAME, ODOM_FRAME)
+        except TransformError:
+            return mem[:0, :2]
+        return mem[:, :2] @ T[:2, :2].T + T[:2, 3]
+
     def _near(self, g: _Goal, radius: float) -> np.ndarray:
-        """The newest scan's points, and the newest depth image's obstacle points, within
-        ``radius`` of the robot (map frame)."""
+        """The newest scan's points, and the depth camera's obstacle points (the newest
+        image's and the remembered ones: near the base, below the camera's view, a can is
+        seen no more), within ``radius`` of the robot (map frame)."""
         pts = self._scan_pts if self._scan_pts is not None else np.zeros((0, 2))
-        if len(self._depth_pts):
-            pts = np.vstack([pts, self._depth_pts])
+        pts = np.vstack([pts, self._depth_pts, self._remembered()])
         if not len(pts):
             return np.zeros((0, 2))
         assert g.pose is not None  # _tick has set it
