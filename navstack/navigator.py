@@ -466,16 +466,25 @@ class Navigator(SubSystem):
         k = info.k
         pb = depth_obstacle_points(depth, k[0], k[4], k[2], k[5], T_bc, self.params.depth)
         self._depth_pts = pb @ T_mb[:2, :2].T + T_mb[:2, 3]
-        try:  # remembered in the odometry's frame, which does not jump when the localiser corrects
-            T_ob = self.tf.buffer.lookup(ODOM_FRAME, BASE_FRAME, msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9)
-        except TransformError:
-            T_ob = None
+        # remembered in the odometry's frame, which does not jump when the localiser corrects
+        T_ob = self._odom_pose(msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9)
         if T_ob is not None:
             self._remember_depth(pb @ T_ob[:2, :2].T + T_ob[:2, 3], T_ob @ T_bc, info)
         self._scan_seq += 1
         if self.params.depth_period > 0:
             self._watch_depth(False)
             self.runtime.call_later(self.params.depth_period, self._next_depth, self._goal)
+
+    def _odom_pose(self, t: float) -> np.ndarray | None:
+        """odom -> base_footprint at ``t``, or the newest; None when tf has none."""
+        buf = self.tf.buffer
+        try:
+            try:
+                return buf.lookup(ODOM_FRAME, BASE_FRAME, t)
+            except TransformError:
+                return buf.lookup(ODOM_FRAME, BASE_FRAME)
+        except TransformError:
+            return None
 
     def _remember_depth(self, pts: np.ndarray, T_odom_cam: np.ndarray, info: CameraInfo) -> None:
         """Keep the newest depth image's obstacle points ``pts`` (odom frame), and forget
