@@ -16,14 +16,16 @@ A goal is a pose in the map frame (or any frame tf can put into it). The server
    within ``xy_goal_tolerance`` and ``yaw_goal_tolerance``. No command is sent that would
    sweep the base's box (``footprint``, :mod:`navstack.footprint`) into a point of the scan
    or of the depth camera (the newest image's, and for ``depth_memory`` s those of earlier
-   images that are out of its view): a turn in place goes the other way round if that is
-   clear, else the base drives straight ahead or back a little until the turn is clear;
+   images that are out of its view, :mod:`navstack.obstacle_memory`): a turn in place goes
+   the other way round if that is clear, else the base drives straight ahead or back a
+   little until the turn is clear;
 4. **watches** ``/scan``, and while it drives the depth camera (``depth_topic``, with
    its ``camera_info_topic``) for what stands out of the floor below the scan's plane
-   (:mod:`navstack.depth_obstacles`): points in the corridor of the path ahead (closer
-   than ``collision_radius`` to it, over ``collision_lookahead``) where the map has
-   nothing stop the robot; if the obstacle is still there after ``obstacle_wait`` s, the
-   path is planned again with the unmapped points marked, up to ``max_recoveries`` times;
+   (:mod:`navstack.depth_obstacles`; and the points remembered): points in the corridor
+   of the path ahead (closer than ``collision_radius`` to it, over
+   ``collision_lookahead``) where the map has nothing stop the robot; if the obstacle is
+   still there after ``obstacle_wait`` s, the path is planned again with the unmapped
+   points marked, up to ``max_recoveries`` times;
 5. **recovers** from a start inside the inflated obstacles (the robot stands close to
    something, after a pick or a place): it plans out of it (:mod:`navstack.escape`:
    straight to a free cell within ``escape_distance``, else the way it came, through
@@ -69,6 +71,7 @@ from planning.tf_buffer import planar
 from .depth_obstacles import DepthObstacleParams, depth_obstacle_points
 from .escape import plan_out_of
 from .footprint import sweep_hits, turn_hits
+from .obstacle_memory import ObstacleMemory
 from .odometry import Pose
 from .tf import TfListener, TransformError, to_stamp
 
@@ -322,7 +325,8 @@ class Navigator(SubSystem):
         self._scan_pts: np.ndarray | None = None  # the newest scan's beams, map frame
         self._scan_seq = 0  # scans (and depth images) received
         self._depth_pts = np.zeros((0, 2))  # the newest depth image's obstacles, map frame
-        self._depth_memory = np.zeros((0, 3))  # x, y (odom frame), time: those seen before
+        depth = self.params.depth
+        self._depth_memory = ObstacleMemory(p.depth_memory, depth.min_range, depth.max_range)  # odom frame
         self._depth_subs: list = []  # the depth camera's, while a goal runs
         self._camera_info: CameraInfo | None = None
         self.last_path: BasePath | None = None
@@ -469,7 +473,8 @@ class Navigator(SubSystem):
         # remembered in the odometry's frame, which does not jump when the localiser corrects
         T_ob = self._odom_pose(msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9)
         if T_ob is not None:
-            self._remember_depth(pb @ T_ob[:2, :2].T + T_ob[:2, 3], T_ob @ T_bc, info)
+            pts = pb @ T_ob[:2, :2].T + T_ob[:2, 3]
+            self._depth_memory.update(pts, T_ob @ T_bc, k, info.width, info.height, self.runtime.now())
         self._scan_seq += 1
         if self.params.depth_period > 0:
             self._watch_depth(False)
@@ -485,31 +490,6 @@ class Navigator(SubSystem):
                 return buf.lookup(ODOM_FRAME, BASE_FRAME)
         except TransformError:
             return None
-
-    def _remember_depth(self, pts: np.ndarray, T_odom_cam: np.ndarray, info: CameraInfo) -> None:
-        """Keep the newest depth image's obstacle points ``pts`` (odom frame), and forget
-        the remembered ones that are in its view (it shows what is there now) or older than
-        depth_memory."""
-        p = self.params
-        now = self.runtime.now()
-        mem = self._depth_memory
-        mem = mem[now - mem[:, 2] <= p.depth_memory]
-        if len(mem):
-            # each remembered point just above the floor, in the camera's optical frame
-            T = np.linalg.inv(T_odom_cam)
-            q = np.column_stack([mem[:, 0], mem[:, 1], np.full(len(mem), 0.03)]) @ T[:3, :3].T + T[:3, 3]
-            z = q[:, 2]
-            with np.errstate(divide="ignore", invalid="ignore"):
-                u = info.k[0] * q[:, 0] / z + info.k[2]
-                v = info.k[4] * q[:, 1] / z + info.k[5]
-            seen = (z > p.depth.min_range) & (z < p.depth.max_range)
-            seen &= (u >= 0) & (u < info.width) & (v >= 0) & (v < info.height)
-            mem = mem[~seen]
-        mem = np.vstack([np.column_stack([pts, np.full(len(pts), now)]), mem])
-        # one point per 2.5 cm cell (the newest), and none beyond a turn's reach of interest
-        mem = mem[np.hypot(mem[:, 0] - T_odom_cam[0, 3], mem[:, 1] - T_odom_cam[1, 3]) < 3.0]
-        _, first = np.unique(np.floor(mem[:, :2] / 0.025).astype(np.int64), axis=0, return_index=True)
-        self._depth_memory = mem[np.sort(first)]
 
     def _on_tf(self, msg) -> None:
         g = self._goal
@@ -880,14 +860,14 @@ class Navigator(SubSystem):
 
     def _remembered(self) -> np.ndarray:
         """The remembered depth obstacle points, map frame (none without map -> odom)."""
-        mem = self._depth_memory
+        mem = self._depth_memory.points()
         if not len(mem):
-            return mem[:, :2]
+            return mem
         try:
             T = self.tf.buffer.lookup(GLOBAL_FRAME, ODOM_FRAME)
         except TransformError:
-            return mem[:0, :2]
-        return mem[:, :2] @ T[:2, :2].T + T[:2, 3]
+            return mem[:0]
+        return mem @ T[:2, :2].T + T[:2, 3]
 
     def _near(self, g: _Goal, radius: float) -> np.ndarray:
         """The newest scan's points, and the depth camera's obstacle points (the newest
