@@ -776,7 +776,7 @@ class Navigator(SubSystem):
             self._cmd.publish(_twist(v, w))
             return
         assert g.pose is not None  # _tick has set it
-        pose, pts = g.pose, self._sweep_points(g.pose)
+        pose, pts = g.pose, self._near(g, 0.5)  # what the turning base could hit
         if turn is None:
             g.turn_way = 0.0
             if not sweep_hits(pts, pose, v, w, p.sweep_horizon, p.footprint, pad=p.sweep_pad):
@@ -808,15 +808,6 @@ class Navigator(SubSystem):
             g.swept = True
             assert g.pose is not None  # _tick has set it
             log.info("at (%.2f, %.2f) a turn would sweep the base into something: %s", *g.pose[:2], how)
-
-    def _sweep_points(self, pose) -> np.ndarray:
-        """What the turning base could hit: the newest scan's points, the newest depth
-        image's and the remembered ones, within half a metre (map frame)."""
-        parts = [self._depth_pts, self._remembered()]
-        if self._scan_pts is not None:
-            parts.append(self._scan_pts)
-        pts = np.vstack(parts)
-        return pts[np.hypot(pts[:, 0] - pose[0], pts[:, 1] - pose[1]) < 0.5]
 
     def _blocked(self, g: _Goal, now: float) -> bool:
         """Is something the map does not show on the path ahead? Stops the base, and
