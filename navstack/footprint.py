@@ -51,11 +51,9 @@ def sweep_hits(
     if not len(pts):
         return False
     dx, dy = pts[:, 0] - x, pts[:, 1] - y
-    d0 = box_distance(
-        np.column_stack([math.cos(yaw) * dx + math.sin(yaw) * dy, -math.sin(yaw) * dx + math.cos(yaw) * dy]), box
-    )
+    d0 = None  # the points' distances now (t = 0)
     steps = max(1, math.ceil(max(abs(v) * duration / 0.02, abs(w) * duration / math.radians(3))))
-    for t in np.linspace(duration / steps, duration, steps):
+    for t in np.linspace(0.0, duration, steps + 1):
         # the unicycle's displacement after t, in the start's frame
         th = w * t
         if abs(w) > 1e-9:
@@ -66,7 +64,9 @@ def sweep_hits(
         c, s = math.cos(yaw + th), math.sin(yaw + th)
         qx, qy = dx - ox, dy - oy
         d = box_distance(np.column_stack([c * qx + s * qy, -s * qx + c * qy]), box)
-        if np.any((d < pad) & (d < d0 - 1e-3)):
+        if d0 is None:
+            d0 = d
+        elif np.any((d < pad) & (d < d0 - 1e-3)):
             return True
     return False
 

@@ -420,17 +420,18 @@ class Navigator(SubSystem):
     def _sensor_poses(self, header, frame: str) -> tuple[np.ndarray, np.ndarray] | None:
         """(sensor ``frame`` in base_footprint, base_footprint in the map at the header's
         stamp, or the newest) from tf; None when tf cannot tell."""
-        t = header.stamp.sec + header.stamp.nanosec * 1e-9
-        buf = self.tf.buffer
         try:
-            T_bs = buf.lookup(BASE_FRAME, frame)
-            try:
-                T_mb = buf.lookup(GLOBAL_FRAME, BASE_FRAME, t)
-            except TransformError:
-                T_mb = buf.lookup(GLOBAL_FRAME, BASE_FRAME)
+            return self.tf.buffer.lookup(BASE_FRAME, frame), self._base_in(GLOBAL_FRAME, header.stamp)
         except TransformError:
             return None
-        return T_bs, T_mb
+
+    def _base_in(self, frame: str, stamp) -> np.ndarray:
+        """base_footprint in ``frame`` at ``stamp`` or, when tf has none then (a camera's
+        stamp is often ahead of the odometry's), the newest; TransformError without."""
+        try:
+            return self.tf.buffer.lookup(frame, BASE_FRAME, stamp.sec + stamp.nanosec * 1e-9)
+        except TransformError:
+            return self.tf.buffer.lookup(frame, BASE_FRAME)
 
     def _watch_depth(self, on: bool) -> None:
         """Take depth images while a goal runs, one each depth_period: between them the
@@ -470,26 +471,17 @@ class Navigator(SubSystem):
         k = info.k
         pb = depth_obstacle_points(depth, k[0], k[4], k[2], k[5], T_bc, self.params.depth)
         self._depth_pts = pb @ T_mb[:2, :2].T + T_mb[:2, 3]
-        # remembered in the odometry's frame, which does not jump when the localiser corrects
-        T_ob = self._odom_pose(msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9)
-        if T_ob is not None:
+        try:  # remembered in the odometry's frame, which does not jump when the localiser corrects
+            T_ob = self._base_in(ODOM_FRAME, msg.header.stamp)
+        except TransformError:
+            pass
+        else:
             pts = pb @ T_ob[:2, :2].T + T_ob[:2, 3]
             self._depth_memory.update(pts, T_ob @ T_bc, k, info.width, info.height, self.runtime.now())
         self._scan_seq += 1
         if self.params.depth_period > 0:
             self._watch_depth(False)
             self.runtime.call_later(self.params.depth_period, self._next_depth, self._goal)
-
-    def _odom_pose(self, t: float) -> np.ndarray | None:
-        """odom -> base_footprint at ``t``, or the newest; None when tf has none."""
-        buf = self.tf.buffer
-        try:
-            try:
-                return buf.lookup(ODOM_FRAME, BASE_FRAME, t)
-            except TransformError:
-                return buf.lookup(ODOM_FRAME, BASE_FRAME)
-        except TransformError:
-            return None
 
     def _on_tf(self, msg) -> None:
         g = self._goal
